@@ -1,0 +1,198 @@
+//! Commands: argument parsing and the turning of library results into output
+//! and exit codes.
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use anyhow::{Context, Result, bail};
+use clap::{Parser, Subcommand};
+
+use ternary::bench::{self, WorkPrecisionOptions};
+use ternary::config::Study;
+use ternary::pipeline::executor::{self, Action, Freshness, RunOptions, Verbosity};
+use ternary::pipeline::store::Store;
+use ternary::{report, stages};
+
+/// Three-body thermalization of dilute 1D gases: collision kernels, rates and
+/// archival Parquet datasets, computed as a content-addressed DAG.
+#[derive(Parser)]
+#[command(name = "ternary", version, about)]
+struct Cli {
+    /// The study definition.
+    #[arg(long, global = true, default_value = "pipeline.toml")]
+    config: PathBuf,
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Execute the stale part of the DAG and print the result tables.
+    Run {
+        /// Run only instances of this stage (repeatable).
+        #[arg(long, value_name = "STAGE")]
+        only: Vec<String>,
+        /// Recompute instances of this stage even when fresh (repeatable).
+        #[arg(long, value_name = "STAGE")]
+        force: Vec<String>,
+        /// Worker threads (default: all cores). Results do not depend on it.
+        #[arg(long, value_name = "N")]
+        threads: Option<usize>,
+        /// Print only errors.
+        #[arg(long)]
+        quiet: bool,
+    },
+    /// Show each stage instance as fresh, stale or missing, and why.
+    Status,
+    /// Print the DAG of stage instances.
+    Dag,
+    /// Re-hash every artifact; exit non-zero on any mismatch.
+    Verify,
+    /// Remove artifacts that no stage instance of the current study references.
+    Gc,
+    /// Show an artifact (key or key prefix) or a Parquet file: metadata and first rows.
+    Show {
+        /// Artifact key (or a unique prefix of at least 6 characters) or a path.
+        target: String,
+        /// Rows to print per table.
+        #[arg(long, default_value_t = 10)]
+        rows: usize,
+    },
+    /// Benchmarks (not tests); results go to docs/benchmarks.md.
+    Bench {
+        #[command(subcommand)]
+        which: BenchCommand,
+    },
+}
+
+#[derive(Subcommand)]
+enum BenchCommand {
+    /// Work-precision of the integrators on thermally sampled scenes.
+    Integrators {
+        /// Potential exponent n of U = x^-n.
+        #[arg(long, default_value_t = 6.0)]
+        n: f64,
+        /// Thermal scenes per measurement.
+        #[arg(long, default_value_t = 2000)]
+        scenes: usize,
+        /// Seed of the scene sample.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+    },
+}
+
+/// Runs the command line and maps errors to exit code 1 (2 for usage errors, by clap).
+pub fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match dispatch(cli) {
+        Ok(code) => code,
+        Err(error) => {
+            eprintln!("error: {error:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn load(config: &Path) -> Result<(Study, Store)> {
+    let study = Study::load(config)?;
+    let store = Store::open(&study.store_path())
+        .with_context(|| format!("opening the store {}", study.store_path().display()))?;
+    Ok((study, store))
+}
+
+fn dispatch(cli: Cli) -> Result<ExitCode> {
+    match cli.command {
+        Command::Run {
+            only,
+            force,
+            threads,
+            quiet,
+        } => {
+            if let Some(threads) = threads {
+                if threads == 0 {
+                    bail!("--threads must be at least 1");
+                }
+                rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build_global()?;
+            }
+            let (study, store) = load(&cli.config)?;
+            let plan = stages::plan(&study);
+            let verbosity = if quiet {
+                Verbosity::Quiet
+            } else {
+                Verbosity::Normal
+            };
+            let options = RunOptions {
+                only,
+                force,
+                verbosity,
+            };
+            let reports = executor::run(&store, &plan, &options)?;
+            let computed = reports
+                .iter()
+                .filter(|r| matches!(r.action, Action::Computed(_)))
+                .count();
+            let fresh = reports.iter().filter(|r| r.action == Action::Fresh).count();
+            let skipped = reports
+                .iter()
+                .filter(|r| r.action == Action::Skipped)
+                .count();
+            if !quiet {
+                println!(
+                    "run: {computed} computed, {fresh} fresh, {skipped} skipped (store {})",
+                    store.root().display()
+                );
+                print!("{}", report::summary(&store, &reports)?);
+            }
+            Ok(ExitCode::SUCCESS)
+        }
+        Command::Status => {
+            let (study, store) = load(&cli.config)?;
+            for line in executor::status(&store, &stages::plan(&study))? {
+                let id = line.id;
+                let line = match line.freshness {
+                    Freshness::Fresh => "fresh".to_string(),
+                    Freshness::Stale(reasons) => format!("stale: {}", reasons.join("; ")),
+                    Freshness::Missing(reason) => format!("missing: {reason}"),
+                };
+                println!("{:<24} {line}", id.to_string());
+            }
+            Ok(ExitCode::SUCCESS)
+        }
+        Command::Dag => {
+            let study = Study::load(&cli.config)?;
+            print!("{}", report::dag(&stages::plan(&study)));
+            Ok(ExitCode::SUCCESS)
+        }
+        Command::Verify => {
+            let (_, store) = load(&cli.config)?;
+            let (text, damaged) = report::verify(&store)?;
+            print!("{text}");
+            Ok(if damaged == 0 {
+                ExitCode::SUCCESS
+            } else {
+                ExitCode::FAILURE
+            })
+        }
+        Command::Gc => {
+            let (study, store) = load(&cli.config)?;
+            print!("{}", report::gc(&store, &stages::plan(&study))?);
+            Ok(ExitCode::SUCCESS)
+        }
+        Command::Show { target, rows } => {
+            let store = Study::load(&cli.config)
+                .ok()
+                .and_then(|study| Store::open(&study.store_path()).ok());
+            print!("{}", report::show(store.as_ref(), &target, rows)?);
+            Ok(ExitCode::SUCCESS)
+        }
+        Command::Bench {
+            which: BenchCommand::Integrators { n, scenes, seed },
+        } => {
+            let options = WorkPrecisionOptions { n, scenes, seed };
+            print!("{}", bench::integrators(&options));
+            Ok(ExitCode::SUCCESS)
+        }
+    }
+}

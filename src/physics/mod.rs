@@ -1,0 +1,7 @@
+//! Pure physics in scaled units (physics.md §1): lengths in `l`, velocities in
+//! `v_th`, times in `l / v_th`, energies in `kT`. No IO, no tables, no CLI.
+
+pub mod launch;
+pub mod potential;
+pub mod scan;
+pub mod scene;

@@ -1,0 +1,240 @@
+//! Pair potentials in scaled units (physics.md §1).
+//!
+//! Energies are in units of `kT`, separations in units of `l = l0 (eps/kT)^(1/n)`
+//! (`n = 6` for Lennard-Jones), forces in `kT / l`. A [`Potential`] is the
+//! configuration-facing description; the scene engine dispatches it once to a
+//! concrete [`PairPotential`] so that hot loops are monomorphic.
+
+use serde::{Deserialize, Serialize};
+
+/// A repulsive-core pair interaction `U(x)` between two particles at scaled
+/// separation `x > 0`.
+pub trait PairPotential: Copy + Send + Sync {
+    /// `U(x) / kT`.
+    fn energy(&self, x: f64) -> f64;
+    /// `-dU/dx` in `kT / l`; positive pushes the pair apart.
+    fn force(&self, x: f64) -> f64;
+    /// `Phi(x) = integral_x^inf U(s) ds` in `kT l`: the first-order position
+    /// shift of a pair in its free-flight tail is `Phi / w^2` (numerics.md).
+    fn tail_integral(&self, x: f64) -> f64;
+    /// Depth `-min U` of the attractive well in `kT` (0 when purely repulsive).
+    fn well_depth(&self) -> f64;
+    /// A separation beyond which `|U(x)| <= level` for every larger `x`.
+    fn range(&self, level: f64) -> f64;
+}
+
+/// Inverse power law `U = x^-n` with any real exponent `n > 1`.
+#[derive(Clone, Copy, Debug)]
+pub struct InversePower {
+    /// Exponent `n`.
+    pub n: f64,
+}
+
+impl PairPotential for InversePower {
+    fn energy(&self, x: f64) -> f64 {
+        x.powf(-self.n)
+    }
+    fn force(&self, x: f64) -> f64 {
+        self.n * x.powf(-self.n - 1.0)
+    }
+    fn tail_integral(&self, x: f64) -> f64 {
+        x.powf(1.0 - self.n) / (self.n - 1.0)
+    }
+    fn well_depth(&self) -> f64 {
+        0.0
+    }
+    fn range(&self, level: f64) -> f64 {
+        level.powf(-1.0 / self.n)
+    }
+}
+
+/// Inverse power law `U = x^-n` with an integer exponent: the same physics as
+/// [`InversePower`], evaluated with repeated multiplication instead of `powf`.
+#[derive(Clone, Copy, Debug)]
+pub struct InverseIntegerPower {
+    /// Exponent `n >= 2`.
+    pub n: i32,
+}
+
+impl PairPotential for InverseIntegerPower {
+    fn energy(&self, x: f64) -> f64 {
+        x.recip().powi(self.n)
+    }
+    fn force(&self, x: f64) -> f64 {
+        let inverse = x.recip();
+        f64::from(self.n) * inverse.powi(self.n + 1)
+    }
+    fn tail_integral(&self, x: f64) -> f64 {
+        x.recip().powi(self.n - 1) / f64::from(self.n - 1)
+    }
+    fn well_depth(&self) -> f64 {
+        0.0
+    }
+    fn range(&self, level: f64) -> f64 {
+        level.powf(-1.0 / f64::from(self.n))
+    }
+}
+
+/// Lennard-Jones `U = theta x^-12 - x^-6` with `theta = kT / eps`
+/// (physics.md §1: length unit `l = l0 (eps/kT)^(1/6)`).
+#[derive(Clone, Copy, Debug)]
+pub struct LennardJones {
+    /// `theta = kT / eps`.
+    pub theta: f64,
+}
+
+impl PairPotential for LennardJones {
+    fn energy(&self, x: f64) -> f64 {
+        let inverse6 = x.recip().powi(6);
+        (self.theta * inverse6 - 1.0) * inverse6
+    }
+    fn force(&self, x: f64) -> f64 {
+        let inverse = x.recip();
+        let inverse6 = inverse.powi(6);
+        (12.0 * self.theta * inverse6 - 6.0) * inverse6 * inverse
+    }
+    fn tail_integral(&self, x: f64) -> f64 {
+        let inverse = x.recip();
+        let inverse5 = inverse.powi(5);
+        (self.theta * inverse.powi(6) / 11.0 - 0.2) * inverse5
+    }
+    /// The minimum sits at `x^6 = 2 theta` with `U = -1 / (4 theta)`.
+    fn well_depth(&self) -> f64 {
+        0.25 / self.theta
+    }
+    /// Each of the two terms is below `level / 2` beyond this separation.
+    fn range(&self, level: f64) -> f64 {
+        (2.0 * self.theta / level)
+            .powf(1.0 / 12.0)
+            .max((2.0 / level).powf(1.0 / 6.0))
+    }
+}
+
+/// A pair potential as configured by a study.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum Potential {
+    /// `U = eps (l0/d)^n`; scaled `U/kT = x^-n`.
+    InversePower {
+        /// Exponent `n > 1` (any real value).
+        n: f64,
+    },
+    /// `U = eps ((l0/d)^12 - (l0/d)^6)`; scaled `U/kT = theta x^-12 - x^-6`.
+    LennardJones {
+        /// `theta = kT / eps > 0`.
+        theta: f64,
+    },
+}
+
+impl Potential {
+    /// Short stable identifier, e.g. `ipp-6` or `lj-0.05`.
+    pub fn id(&self) -> String {
+        match self {
+            Potential::InversePower { n } => format!("ipp-{n}"),
+            Potential::LennardJones { theta } => format!("lj-{theta}"),
+        }
+    }
+
+    /// The exponent `n` that defines the length unit `l` (6 for Lennard-Jones).
+    pub fn length_exponent(&self) -> f64 {
+        match self {
+            Potential::InversePower { n } => *n,
+            Potential::LennardJones { .. } => 6.0,
+        }
+    }
+
+    /// `true` for the integrable Calogero case `U = x^-2`, whose outgoing
+    /// velocities are an exact permutation of the incoming ones.
+    pub fn is_integrable(&self) -> bool {
+        matches!(self, Potential::InversePower { n } if *n == 2.0)
+    }
+
+    /// Calls `visitor` with the concrete potential: the one dispatch point.
+    pub fn visit<V: PotentialVisitor>(&self, visitor: V) -> V::Output {
+        match *self {
+            Potential::InversePower { n } if n.fract() == 0.0 && n.abs() < 1e6 => {
+                visitor.visit(InverseIntegerPower { n: n as i32 })
+            }
+            Potential::InversePower { n } => visitor.visit(InversePower { n }),
+            Potential::LennardJones { theta } => visitor.visit(LennardJones { theta }),
+        }
+    }
+}
+
+/// Generic code to run with a concrete [`PairPotential`] (see [`Potential::visit`]).
+pub trait PotentialVisitor {
+    /// What the visit returns.
+    type Output;
+    /// Runs with the concrete potential.
+    fn visit<P: PairPotential>(self, potential: P) -> Self::Output;
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Central difference of the energy, for checking forces.
+    fn numerical_force<P: PairPotential>(potential: P, x: f64) -> f64 {
+        let h = 1e-6 * x;
+        -(potential.energy(x + h) - potential.energy(x - h)) / (2.0 * h)
+    }
+
+    /// Trapezoid-free check of `Phi`: `-dPhi/dx = U`.
+    fn numerical_tail_derivative<P: PairPotential>(potential: P, x: f64) -> f64 {
+        let h = 1e-6 * x;
+        -(potential.tail_integral(x + h) - potential.tail_integral(x - h)) / (2.0 * h)
+    }
+
+    fn check_consistency<P: PairPotential>(potential: P) {
+        for &x in &[0.7, 1.0, 1.3, 2.0, 5.0] {
+            let force = potential.force(x);
+            // Central differences are exact to O(h^2) ~ 1e-12 relative; 1e-7 leaves room for cancellation.
+            assert!((force - numerical_force(potential, x)).abs() <= 1e-7 * force.abs().max(1e-3));
+            let energy = potential.energy(x);
+            let tail = numerical_tail_derivative(potential, x);
+            assert!((energy - tail).abs() <= 1e-7 * energy.abs().max(1e-3));
+        }
+    }
+
+    #[test]
+    fn force_is_minus_energy_gradient_and_tail_integrates_energy() {
+        check_consistency(InversePower { n: 6.5 });
+        check_consistency(InverseIntegerPower { n: 2 });
+        check_consistency(InverseIntegerPower { n: 12 });
+        check_consistency(LennardJones { theta: 0.05 });
+        check_consistency(LennardJones { theta: 10.0 });
+    }
+
+    #[test]
+    fn integer_and_real_exponents_agree() {
+        let real = InversePower { n: 6.0 };
+        let integer = InverseIntegerPower { n: 6 };
+        for &x in &[0.5, 1.0, 3.0] {
+            assert!((real.energy(x) / integer.energy(x) - 1.0).abs() < 1e-14);
+            assert!((real.force(x) / integer.force(x) - 1.0).abs() < 1e-14);
+        }
+    }
+
+    #[test]
+    fn range_bounds_the_energy() {
+        let potentials = [LennardJones { theta: 0.05 }, LennardJones { theta: 10.0 }];
+        for potential in potentials {
+            for &level in &[1e-3, 1e-8, 1e-14] {
+                let x = potential.range(level);
+                for k in 0..100 {
+                    let beyond = x * (1.0 + 0.1 * f64::from(k));
+                    assert!(potential.energy(beyond).abs() <= level);
+                }
+            }
+        }
+        assert!((InverseIntegerPower { n: 6 }.range(1e-12) - 100.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn lennard_jones_well_depth_is_minus_minimum() {
+        let potential = LennardJones { theta: 0.05 };
+        let x_min = (2.0 * potential.theta).powf(1.0 / 6.0);
+        assert!((potential.energy(x_min) + potential.well_depth()).abs() < 1e-12);
+        assert!(potential.force(x_min).abs() < 1e-10);
+    }
+}

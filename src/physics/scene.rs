@@ -1,0 +1,600 @@
+//! The three-body scattering scene (physics.md §3, numerics.md "Integrating a
+//! three-body scene").
+//!
+//! A scene is given by three free asymptotic-in trajectories `x_i(t) = p_i + u_i t`
+//! in scaled units. The engine back-propagates them in free flight until every
+//! pair has `|U| / w^2 <= epsilon` (`w` the pair's relative speed), applies the
+//! first-order tail correction for the interaction felt since `t = -inf`,
+//! integrates gaps and gap rates (centre-of-mass velocity conserved by
+//! construction) with an embedded high-order pair, jumps analytically across
+//! free flight, and stops when the order is final, every neighbour recedes and
+//! `|U| / w^2 <= epsilon` again, where the forward tail correction gives the
+//! asymptotic-out velocities. The tail corrections leave errors of order
+//! `epsilon^2`, which is why `n = 2` (long-ranged) is handled exactly enough.
+
+use serde::{Deserialize, Serialize};
+
+use super::potential::{PairPotential, Potential, PotentialVisitor};
+use crate::integrate::{Acceleration, Dop853, Dopri5, Dprkn12, Integrator};
+
+/// A free asymptotic trajectory `x(t) = position + velocity * t` (scaled units:
+/// lengths in `l`, velocities in `v_th`, times in `l / v_th`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FreeLine {
+    /// Position at `t = 0` of the free (non-interacting) asymptote.
+    pub position: f64,
+    /// Asymptotic velocity.
+    pub velocity: f64,
+}
+
+/// Embedded pair used to integrate a scene.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Method {
+    /// Dormand-Prince 5(4): the baseline.
+    Dopri5,
+    /// Hairer's DOP853 8(5,3).
+    Dop853,
+    /// Dormand, El-Mikkawy & Prince Runge-Kutta-Nystrom 12(10).
+    Dprkn12,
+}
+
+impl Method {
+    /// Every method, baseline first.
+    pub const ALL: [Method; 3] = [Method::Dopri5, Method::Dop853, Method::Dprkn12];
+
+    /// The name used in configuration files and tables.
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Dopri5 => Dopri5::NAME,
+            Method::Dop853 => Dop853::NAME,
+            Method::Dprkn12 => Dprkn12::NAME,
+        }
+    }
+}
+
+/// How a scene is integrated.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EngineSettings {
+    /// Integration method.
+    pub method: Method,
+    /// Local error per step relative to the smallest gap (positions) and to the
+    /// relative-speed scale (velocities).
+    pub tolerance: f64,
+    /// Step attempts (accepted and rejected) before a scene counts as failed.
+    pub max_steps: u32,
+}
+
+impl EngineSettings {
+    /// `epsilon`, the largest `|U| / w^2` of any pair when a scene starts or
+    /// stops: the first-order tail correction leaves `O(epsilon^2)`, chosen
+    /// 100x below the tolerance.
+    pub fn tail_level(&self) -> f64 {
+        0.1 * self.tolerance.sqrt()
+    }
+}
+
+/// How a scene ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Outcome {
+    /// Three free particles leave.
+    Scattered,
+    /// A bound pair and a free particle leave (attractive potentials only).
+    Recombined,
+    /// The step budget ran out.
+    StepBudgetExhausted,
+    /// Two asymptotes are parallel (equal velocities): no free in-state exists.
+    ParallelAsymptotes,
+    /// The step size underflowed or the state became non-finite.
+    Breakdown,
+}
+
+impl Outcome {
+    /// The name used in tables.
+    pub fn name(self) -> &'static str {
+        match self {
+            Outcome::Scattered => "scattered",
+            Outcome::Recombined => "recombined",
+            Outcome::StepBudgetExhausted => "failed_step_budget",
+            Outcome::ParallelAsymptotes => "failed_parallel_asymptotes",
+            Outcome::Breakdown => "failed_breakdown",
+        }
+    }
+
+    /// `true` for every failure class.
+    pub fn is_failure(self) -> bool {
+        !matches!(self, Outcome::Scattered | Outcome::Recombined)
+    }
+}
+
+/// Result of one scene.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Collision {
+    /// Asymptotic incoming velocities, ascending.
+    pub incoming: [f64; 3],
+    /// Asymptotic outgoing velocities, ascending. The members of a recombined
+    /// pair both carry the pair's centre-of-mass velocity (their time average).
+    pub outgoing: [f64; 3],
+    /// How the scene ended; `outgoing` is meaningless for failures.
+    pub outcome: Outcome,
+    /// Internal energy `w^2/4 + U` of the recombined pair in `kT` (0 otherwise).
+    pub binding_energy: f64,
+    /// `(E_out - E_in) / (E_in + D)`: `E` the relative-motion energy, `D` the
+    /// well depth (0 for inverse power laws), so that the scale is the largest
+    /// kinetic energy a pair reaches.
+    pub energy_error: f64,
+    /// `|P_out - P_in|` in units of the relative-speed scale.
+    pub momentum_error: f64,
+    /// Accepted steps.
+    pub steps: u32,
+    /// Rejected step attempts.
+    pub rejected_steps: u32,
+    /// Analytic free-flight jumps.
+    pub jumps: u32,
+    /// Force evaluations (each evaluates all three pairs).
+    pub evaluations: u32,
+}
+
+impl Collision {
+    /// The special particle's own change of velocity: sorted outgoing matched to
+    /// sorted incoming, taken at the rank of `special` among the incoming
+    /// velocities (physics.md §3, "self" part).
+    pub fn self_kick(&self, special: f64) -> f64 {
+        let rank = self.incoming.iter().filter(|&&u| u < special).count();
+        self.outgoing[rank] - self.incoming[rank]
+    }
+}
+
+/// Integrates one scene given by three free asymptotic-in trajectories.
+pub fn collide(
+    potential: &Potential,
+    settings: &EngineSettings,
+    lines: [FreeLine; 3],
+) -> Collision {
+    potential.visit(SceneRun { settings, lines })
+}
+
+struct SceneRun<'a> {
+    settings: &'a EngineSettings,
+    lines: [FreeLine; 3],
+}
+
+impl PotentialVisitor for SceneRun<'_> {
+    type Output = Collision;
+    fn visit<P: PairPotential>(self, potential: P) -> Collision {
+        match self.settings.method {
+            Method::Dopri5 => run_scene::<P, Dopri5>(potential, self.settings, self.lines),
+            Method::Dop853 => run_scene::<P, Dop853>(potential, self.settings, self.lines),
+            Method::Dprkn12 => run_scene::<P, Dprkn12>(potential, self.settings, self.lines),
+        }
+    }
+}
+
+/// Fraction of the free-flight time to contact that one step may cover: a step
+/// never carries two approaching neighbours past each other.
+const APPROACH_FRACTION: f64 = 0.5;
+/// Step-size controller: safety factor and bounds on the change per step.
+const SAFETY: f64 = 0.9;
+const MIN_STEP_FACTOR: f64 = 0.2;
+const MAX_STEP_FACTOR: f64 = 5.0;
+
+/// Relative acceleration of the two gaps `g1 = x_b - x_a`, `g2 = x_c - x_b`
+/// (equal unit masses, all three pairs interacting):
+/// `g1'' = 2 f(g1) - f(g2) + f(g1 + g2)`, `g2'' = 2 f(g2) - f(g1) + f(g1 + g2)`.
+struct GapAcceleration<P>(P);
+
+impl<P: PairPotential> Acceleration<2> for GapAcceleration<P> {
+    fn acceleration(&self, gaps: &[f64; 2]) -> [f64; 2] {
+        let inner = self.0.force(gaps[0]);
+        let outer = self.0.force(gaps[1]);
+        let across = self.0.force(gaps[0] + gaps[1]);
+        [2.0 * inner - outer + across, 2.0 * outer - inner + across]
+    }
+}
+
+/// Gaps and gap rates of the three pairs `(a,b)`, `(b,c)`, `(a,c)`.
+fn pairs(gaps: &[f64; 2], rates: &[f64; 2]) -> [(f64, f64); 3] {
+    [
+        (gaps[0], rates[0]),
+        (gaps[1], rates[1]),
+        (gaps[0] + gaps[1], rates[0] + rates[1]),
+    ]
+}
+
+/// Distributes per-pair quantities (pushing the right member up, the left one
+/// down) onto the particles `a, b, c`.
+fn onto_particles(per_pair: [f64; 3]) -> [f64; 3] {
+    let [ab, bc, ac] = per_pair;
+    [-ab - ac, ab - bc, bc + ac]
+}
+
+/// Particle velocities from the centre-of-mass velocity and the gap rates.
+fn velocities(centre: f64, rates: &[f64; 2]) -> [f64; 3] {
+    [
+        centre - (2.0 * rates[0] + rates[1]) / 3.0,
+        centre + (rates[0] - rates[1]) / 3.0,
+        centre + (rates[0] + 2.0 * rates[1]) / 3.0,
+    ]
+}
+
+/// Relative-motion kinetic energy `sum_{i<j} (v_i - v_j)^2 / 6` of three unit masses.
+fn relative_kinetic_energy(velocities: &[f64; 3]) -> f64 {
+    let [a, b, c] = *velocities;
+    ((a - b).powi(2) + (b - c).powi(2) + (a - c).powi(2)) / 6.0
+}
+
+/// Adds per-pair changes (right member up, left member down) of displacement
+/// and velocity to the gaps and gap rates.
+fn apply_pair_changes(
+    gaps: &mut [f64; 2],
+    rates: &mut [f64; 2],
+    displacement: [f64; 3],
+    impulse: [f64; 3],
+) {
+    let dx = onto_particles(displacement);
+    let dv = onto_particles(impulse);
+    for k in 0..2 {
+        gaps[k] += dx[k + 1] - dx[k];
+        rates[k] += dv[k + 1] - dv[k];
+    }
+}
+
+/// Impulse `U(g) / |r|` a pair receives between a weak state and `t = +-inf`
+/// (first order in `U`; the right member gains it, the left one loses it).
+fn tail_impulses<P: PairPotential>(potential: P, gaps: &[f64; 2], rates: &[f64; 2]) -> [f64; 3] {
+    pairs(gaps, rates).map(|(gap, rate)| potential.energy(gap) / rate.abs())
+}
+
+/// Free flight of duration `t` with the tail of every pair to first order in
+/// `U`: pair impulse `J = -(U(g') - U(g)) / r` and extra displacement
+/// `D = t U(g) / r - (Phi(g) - Phi(g')) / r^2`, where `g' = g + r t`
+/// (from `integral (t - s) f(g(s)) ds` along the free line).
+fn drift_tails<P: PairPotential>(potential: P, gaps: &mut [f64; 2], rates: &mut [f64; 2], t: f64) {
+    let mut impulse = [0.0; 3];
+    let mut displacement = [0.0; 3];
+    for (k, (gap, rate)) in pairs(gaps, rates).into_iter().enumerate() {
+        let later = gap + rate * t;
+        let energy = potential.energy(gap);
+        impulse[k] = -(potential.energy(later) - energy) / rate;
+        displacement[k] = t * energy / rate
+            - (potential.tail_integral(gap) - potential.tail_integral(later)) / (rate * rate);
+    }
+    for k in 0..2 {
+        gaps[k] += rates[k] * t;
+    }
+    apply_pair_changes(gaps, rates, displacement, impulse);
+}
+
+/// Largest `|U(g)| / r^2` over the three pairs (infinite when a pair is at rest).
+fn tail_strength<P: PairPotential>(potential: P, gaps: &[f64; 2], rates: &[f64; 2]) -> f64 {
+    pairs(gaps, rates)
+        .into_iter()
+        .map(|(gap, rate)| potential.energy(gap).abs() / (rate * rate))
+        .fold(0.0, f64::max)
+}
+
+/// Time until the first approaching pair enters the range where
+/// `|U| / r^2 > epsilon` (0 if one already has; infinite if none approaches).
+fn free_flight_time<P: PairPotential>(
+    potential: P,
+    gaps: &[f64; 2],
+    rates: &[f64; 2],
+    epsilon: f64,
+) -> f64 {
+    pairs(gaps, rates)
+        .into_iter()
+        .filter(|&(_, rate)| rate < 0.0)
+        .map(|(gap, rate)| ((gap - potential.range(epsilon * rate * rate)) / -rate).max(0.0))
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// Largest step allowed by the free-flight time to contact of approaching neighbours.
+fn approach_limit(gaps: &[f64; 2], rates: &[f64; 2]) -> f64 {
+    (0..2)
+        .filter(|&k| rates[k] < 0.0)
+        .map(|k| APPROACH_FRACTION * gaps[k] / -rates[k])
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// The state at which integration starts: asymptotic-in lines ordered as at
+/// `t = -inf` (fastest leftmost), propagated back until every pair is weak, with
+/// the tail felt since `t = -inf` added.
+struct InState {
+    incoming: [f64; 3],
+    centre: f64,
+    gaps: [f64; 2],
+    rates: [f64; 2],
+}
+
+fn in_state<P: PairPotential>(potential: P, lines: [FreeLine; 3], epsilon: f64) -> Option<InState> {
+    let mut ordered = lines;
+    ordered.sort_by(|p, q| {
+        q.velocity
+            .total_cmp(&p.velocity)
+            .then(p.position.total_cmp(&q.position))
+    });
+    let [a, b, c] = ordered;
+    // Each pair (left, right) closes at w = u_left - u_right >= 0 with gap d - w t.
+    let closing = |left: FreeLine, right: FreeLine| {
+        let speed = left.velocity - right.velocity;
+        let gap_at_zero = right.position - left.position;
+        (gap_at_zero, speed)
+    };
+    let line_pairs = [closing(a, b), closing(b, c), closing(a, c)];
+    if line_pairs.iter().any(|&(_, speed)| speed <= 0.0) {
+        return None;
+    }
+    let start = line_pairs
+        .iter()
+        .map(|&(gap, speed)| (gap - potential.range(epsilon * speed * speed)) / speed)
+        .fold(f64::INFINITY, f64::min);
+    let mut gaps = [
+        line_pairs[0].0 - line_pairs[0].1 * start,
+        line_pairs[1].0 - line_pairs[1].1 * start,
+    ];
+    let mut rates = [b.velocity - a.velocity, c.velocity - b.velocity];
+    // Interaction felt since t = -inf: velocity U/|r| and position Phi/r^2
+    // gained by the right member of each approaching pair.
+    let impulse = tail_impulses(potential, &gaps, &rates);
+    let displacement =
+        pairs(&gaps, &rates).map(|(gap, rate)| potential.tail_integral(gap) / (rate * rate));
+    apply_pair_changes(&mut gaps, &mut rates, displacement, impulse);
+    let mut incoming = [a.velocity, b.velocity, c.velocity];
+    incoming.sort_by(f64::total_cmp);
+    Some(InState {
+        incoming,
+        centre: (a.velocity + b.velocity + c.velocity) / 3.0,
+        gaps,
+        rates,
+    })
+}
+
+/// What the scene does after an accepted step.
+enum Next {
+    Integrate,
+    Jump(f64),
+    Scattered,
+    Recombined { pair: usize },
+}
+
+fn classify<P: PairPotential>(
+    potential: P,
+    gaps: &[f64; 2],
+    rates: &[f64; 2],
+    epsilon: f64,
+    step: f64,
+) -> Next {
+    if tail_strength(potential, gaps, rates) <= epsilon {
+        if rates[0] > 0.0 && rates[1] > 0.0 {
+            return Next::Scattered;
+        }
+        let flight = free_flight_time(potential, gaps, rates, epsilon);
+        if flight > step && flight.is_finite() {
+            return Next::Jump(flight);
+        }
+    }
+    if potential.well_depth() > 0.0
+        && let Some(pair) = recombined_pair(potential, gaps, rates, epsilon)
+    {
+        return Next::Recombined { pair };
+    }
+    Next::Integrate
+}
+
+/// A neighbour pair `k` (0: `ab`, 1: `bc`) with negative internal energy
+/// `r^2/4 + U(g)` whose third particle recedes from the pair's centre and no
+/// longer feels it (`|U_3a| + |U_3b| <= epsilon s^2`, `s` the receding speed).
+fn recombined_pair<P: PairPotential>(
+    potential: P,
+    gaps: &[f64; 2],
+    rates: &[f64; 2],
+    epsilon: f64,
+) -> Option<usize> {
+    (0..2).find(|&k| {
+        let other = 1 - k;
+        let internal = 0.25 * rates[k] * rates[k] + potential.energy(gaps[k]);
+        let receding = rates[other] + 0.5 * rates[k];
+        let coupling =
+            potential.energy(gaps[other]).abs() + potential.energy(gaps[0] + gaps[1]).abs();
+        internal < 0.0 && receding > 0.0 && coupling <= epsilon * receding * receding
+    })
+}
+
+/// Outgoing velocities when pair `k` is bound: both members carry the pair's
+/// centre-of-mass velocity, the free particle gets its first-order tail impulse.
+fn recombined_velocities<P: PairPotential>(
+    potential: P,
+    centre: f64,
+    gaps: &[f64; 2],
+    rates: &[f64; 2],
+    pair: usize,
+) -> [f64; 3] {
+    let other = 1 - pair;
+    let receding = rates[other] + 0.5 * rates[pair];
+    let impulse = (potential.energy(gaps[other]) + potential.energy(gaps[0] + gaps[1])) / receding;
+    let v = velocities(centre, rates);
+    let free = if pair == 0 { 2 } else { 0 };
+    let sign = if pair == 0 { 1.0 } else { -1.0 };
+    let pair_velocity = (3.0 * centre - v[free]) / 2.0 - 0.5 * sign * impulse;
+    let mut out = [pair_velocity; 3];
+    out[free] = v[free] + sign * impulse;
+    out
+}
+
+/// Relative-motion energy (kinetic plus all three pair energies).
+fn relative_energy<P: PairPotential>(
+    potential: P,
+    centre: f64,
+    gaps: &[f64; 2],
+    rates: &[f64; 2],
+) -> f64 {
+    relative_kinetic_energy(&velocities(centre, rates))
+        + pairs(gaps, rates)
+            .into_iter()
+            .map(|(gap, _)| potential.energy(gap))
+            .sum::<f64>()
+}
+
+fn run_scene<P: PairPotential, I: Integrator>(
+    potential: P,
+    settings: &EngineSettings,
+    lines: [FreeLine; 3],
+) -> Collision {
+    let epsilon = settings.tail_level();
+    let Some(start) = in_state(potential, lines, epsilon) else {
+        let mut incoming = lines.map(|line| line.velocity);
+        incoming.sort_by(f64::total_cmp);
+        return failed(incoming, Outcome::ParallelAsymptotes, Counters::default());
+    };
+    let InState {
+        incoming,
+        centre,
+        mut gaps,
+        mut rates,
+    } = start;
+    let scales = Scales {
+        speed: (incoming[2] - incoming[0]).max((4.0 * potential.well_depth()).sqrt()),
+        well_depth: potential.well_depth(),
+    };
+    let acceleration = GapAcceleration(potential);
+    let mut accel = acceleration.acceleration(&gaps);
+    let mut counters = Counters {
+        evaluations: 1,
+        ..Counters::default()
+    };
+    let mut step = approach_limit(&gaps, &rates);
+    let exponent = -1.0 / f64::from(I::ERROR_ORDER + 1);
+    loop {
+        if counters.steps + counters.rejected_steps >= settings.max_steps {
+            return failed(incoming, Outcome::StepBudgetExhausted, counters);
+        }
+        step = step.min(approach_limit(&gaps, &rates));
+        let smallest_gap = gaps[0].min(gaps[1]);
+        let position_scale = [settings.tolerance * smallest_gap; 2];
+        let velocity_scale = [settings.tolerance * scales.speed; 2];
+        let trial = I::step(
+            &acceleration,
+            &gaps,
+            &rates,
+            &accel,
+            step,
+            &position_scale,
+            &velocity_scale,
+        );
+        counters.evaluations += I::EVALUATIONS_PER_STEP;
+        let admissible = trial.error <= 1.0 && trial.y.iter().all(|&g| g > 0.0);
+        if !admissible {
+            counters.rejected_steps += 1;
+            // A step that crossed two particles is halved even if its error looked fine.
+            let factor = if trial.error > 1.0 && trial.error.is_finite() {
+                (SAFETY * trial.error.powf(exponent)).clamp(MIN_STEP_FACTOR, SAFETY)
+            } else if trial.error <= 1.0 {
+                0.5
+            } else {
+                MIN_STEP_FACTOR
+            };
+            step *= factor;
+            if step.is_nan() || step <= f64::MIN_POSITIVE * 1e10 {
+                return failed(incoming, Outcome::Breakdown, counters);
+            }
+            continue;
+        }
+        counters.steps += 1;
+        (gaps, rates, accel) = (trial.y, trial.v, trial.a);
+        step *= (SAFETY * trial.error.powf(exponent)).clamp(MIN_STEP_FACTOR, MAX_STEP_FACTOR);
+        match classify(potential, &gaps, &rates, epsilon, step) {
+            Next::Integrate => {}
+            Next::Jump(duration) => {
+                drift_tails(potential, &mut gaps, &mut rates, duration);
+                accel = acceleration.acceleration(&gaps);
+                counters.evaluations += 1;
+                counters.jumps += 1;
+                step = f64::INFINITY;
+            }
+            Next::Scattered => {
+                let impulse = tail_impulses(potential, &gaps, &rates);
+                apply_pair_changes(&mut gaps, &mut rates, [0.0; 3], impulse);
+                let outgoing = velocities(centre, &rates);
+                let end = End {
+                    outgoing,
+                    outcome: Outcome::Scattered,
+                    binding_energy: 0.0,
+                    energy: relative_kinetic_energy(&outgoing),
+                };
+                return end.into_collision(incoming, scales, counters);
+            }
+            Next::Recombined { pair } => {
+                let mut outgoing = recombined_velocities(potential, centre, &gaps, &rates, pair);
+                outgoing.sort_by(f64::total_cmp);
+                let end = End {
+                    outgoing,
+                    outcome: Outcome::Recombined,
+                    binding_energy: 0.25 * rates[pair] * rates[pair] + potential.energy(gaps[pair]),
+                    energy: relative_energy(potential, centre, &gaps, &rates),
+                };
+                return end.into_collision(incoming, scales, counters);
+            }
+        }
+    }
+}
+
+/// Scales of a scene: the largest relative speed (asymptotic spread, or the
+/// speed gained falling into the well) and the well depth.
+#[derive(Clone, Copy, Debug)]
+struct Scales {
+    speed: f64,
+    well_depth: f64,
+}
+
+#[derive(Clone, Copy, Debug, Default)]
+struct Counters {
+    steps: u32,
+    rejected_steps: u32,
+    jumps: u32,
+    evaluations: u32,
+}
+
+/// The asymptotic-out state of a completed scene.
+struct End {
+    outgoing: [f64; 3],
+    outcome: Outcome,
+    binding_energy: f64,
+    /// Relative-motion energy of the out-state.
+    energy: f64,
+}
+
+impl End {
+    fn into_collision(self, incoming: [f64; 3], scales: Scales, counters: Counters) -> Collision {
+        let momentum = |v: &[f64; 3]| v.iter().sum::<f64>();
+        let energy_in = relative_kinetic_energy(&incoming);
+        Collision {
+            incoming,
+            outgoing: self.outgoing,
+            outcome: self.outcome,
+            binding_energy: self.binding_energy,
+            energy_error: (self.energy - energy_in) / (energy_in + scales.well_depth),
+            momentum_error: (momentum(&self.outgoing) - momentum(&incoming)).abs() / scales.speed,
+            steps: counters.steps,
+            rejected_steps: counters.rejected_steps,
+            jumps: counters.jumps,
+            evaluations: counters.evaluations,
+        }
+    }
+}
+
+fn failed(incoming: [f64; 3], outcome: Outcome, counters: Counters) -> Collision {
+    Collision {
+        incoming,
+        outgoing: [f64::NAN; 3],
+        outcome,
+        binding_energy: 0.0,
+        energy_error: f64::NAN,
+        momentum_error: f64::NAN,
+        steps: counters.steps,
+        rejected_steps: counters.rejected_steps,
+        jumps: counters.jumps,
+        evaluations: counters.evaluations,
+    }
+}

@@ -1,0 +1,430 @@
+//! Runs the stale part of a DAG of stage instances, and explains what is
+//! fresh, stale or missing (`status`).
+//!
+//! Instances are given in topological order. An instance's key is computed from
+//! its stage name, version, parameters and the file hashes of its inputs; if the
+//! store holds an intact artifact under that key it is fresh, otherwise it is
+//! computed and committed atomically.
+
+use std::collections::BTreeMap;
+use std::io::IsTerminal;
+use std::time::Instant;
+
+use indicatif::{ProgressBar, ProgressStyle};
+
+use super::key::{InputRecord, changed_params, stage_key};
+use super::store::{InstanceRef, Manifest, Store, StoreError};
+use super::table::{TableError, read_parquet};
+use super::{Input, InstanceId, Progress, Stage, StageError};
+
+/// A run could not proceed.
+#[derive(Debug, thiserror::Error)]
+pub enum ExecError {
+    /// The store failed.
+    #[error(transparent)]
+    Store(#[from] StoreError),
+    /// A stage failed.
+    #[error("{id}: {source}")]
+    Stage {
+        /// The instance.
+        id: InstanceId,
+        /// The cause.
+        source: StageError,
+    },
+    /// An input artifact could not be read.
+    #[error("{id}: reading input: {source}")]
+    Input {
+        /// The instance.
+        id: InstanceId,
+        /// The cause.
+        source: TableError,
+    },
+    /// The DAG or the options are inconsistent.
+    #[error("{0}")]
+    Plan(String),
+}
+
+/// How a run reports progress.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Verbosity {
+    /// Progress bars on a terminal, one line per instance otherwise.
+    Normal,
+    /// Only errors.
+    Quiet,
+}
+
+/// Options of `ternary run`.
+#[derive(Clone, Debug)]
+pub struct RunOptions {
+    /// Run only instances of these stages (all when empty).
+    pub only: Vec<String>,
+    /// Recompute instances of these stages even when fresh.
+    pub force: Vec<String>,
+    /// Reporting.
+    pub verbosity: Verbosity,
+}
+
+/// What the executor did with one instance.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Action {
+    /// An intact artifact with the current key existed.
+    Fresh,
+    /// Computed and committed, in this many seconds.
+    Computed(f64),
+    /// Not selected by `--only` and not fresh.
+    Skipped,
+}
+
+/// One line of a run report.
+#[derive(Clone, Debug)]
+pub struct InstanceReport {
+    /// The instance.
+    pub id: InstanceId,
+    /// Its key, when its inputs were available.
+    pub key: Option<String>,
+    /// What happened.
+    pub action: Action,
+}
+
+/// Freshness of one instance, as `status` reports it.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Freshness {
+    /// Up to date.
+    Fresh,
+    /// Computed before, but something it depends on changed.
+    Stale(Vec<String>),
+    /// Never computed, or its artifact is gone.
+    Missing(String),
+}
+
+/// Checks that ids are unique, inputs precede their consumers, and stage names
+/// in `names` exist.
+pub fn check_plan(stages: &[Box<dyn Stage>], names: &[String]) -> Result<(), ExecError> {
+    let mut seen: Vec<InstanceId> = Vec::new();
+    for stage in stages {
+        let id = stage.id();
+        if seen.contains(&id) {
+            return Err(ExecError::Plan(format!("{id} is defined twice")));
+        }
+        if let Some(input) = stage
+            .inputs()
+            .into_iter()
+            .find(|input| !seen.contains(input))
+        {
+            return Err(ExecError::Plan(format!(
+                "{id} reads {input}, which is not defined before it"
+            )));
+        }
+        seen.push(id);
+    }
+    for name in names {
+        if !seen.iter().any(|id| &id.stage == name) {
+            let mut known: Vec<&str> = seen.iter().map(|id| id.stage.as_str()).collect();
+            known.dedup();
+            return Err(ExecError::Plan(format!(
+                "unknown stage `{name}`; stages are: {}",
+                known.join(", ")
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// Input records of `stage` from the manifests resolved so far; `None` while an
+/// input is unavailable.
+fn input_records(
+    stage: &dyn Stage,
+    resolved: &BTreeMap<InstanceId, Manifest>,
+) -> Option<Vec<InputRecord>> {
+    stage
+        .inputs()
+        .iter()
+        .map(|input| {
+            let manifest = resolved.get(input)?;
+            let mut files: Vec<(String, String)> = manifest
+                .files
+                .iter()
+                .map(|f| (f.name.clone(), f.sha256.clone()))
+                .collect();
+            files.sort();
+            Some(InputRecord {
+                stage: input.stage.clone(),
+                instance: input.instance.clone(),
+                key: manifest.key.clone(),
+                files,
+            })
+        })
+        .collect()
+}
+
+/// Executes the stale instances in order.
+pub fn run(
+    store: &Store,
+    stages: &[Box<dyn Stage>],
+    options: &RunOptions,
+) -> Result<Vec<InstanceReport>, ExecError> {
+    check_plan(
+        stages,
+        &[options.only.clone(), options.force.clone()].concat(),
+    )?;
+    let lock = store.lock()?;
+    store.clean_staging(&lock)?;
+    let mut resolved: BTreeMap<InstanceId, Manifest> = BTreeMap::new();
+    let mut reports = Vec::new();
+    for stage in stages {
+        let id = stage.id();
+        let selected = options.only.is_empty() || options.only.contains(&id.stage);
+        let Some(inputs) = input_records(stage.as_ref(), &resolved) else {
+            if selected {
+                return Err(ExecError::Plan(format!(
+                    "{id}: an input is not available; run its upstream stages first (without --only)"
+                )));
+            }
+            reports.push(InstanceReport {
+                id,
+                key: None,
+                action: Action::Skipped,
+            });
+            continue;
+        };
+        let key = stage_key(&id.stage, stage.version(), &stage.params(), &inputs);
+        let forced = options.force.contains(&id.stage);
+        let existing = store.intact_manifest(&id.stage, &key);
+        let action = match existing {
+            Some(manifest) if !(forced && selected) => {
+                resolved.insert(id.clone(), manifest);
+                Action::Fresh
+            }
+            _ if !selected => Action::Skipped,
+            _ => {
+                let (manifest, seconds) =
+                    compute(store, stage.as_ref(), &key, inputs, &resolved, options)?;
+                resolved.insert(id.clone(), manifest);
+                Action::Computed(seconds)
+            }
+        };
+        if options.verbosity == Verbosity::Normal {
+            println!("{}", report_line(&id, &key, &action));
+        }
+        reports.push(InstanceReport {
+            id,
+            key: Some(key),
+            action,
+        });
+    }
+    Ok(reports)
+}
+
+fn report_line(id: &InstanceId, key: &str, action: &Action) -> String {
+    let what = match action {
+        Action::Fresh => "fresh".to_string(),
+        Action::Computed(seconds) => format!("computed in {seconds:.2} s"),
+        Action::Skipped => "skipped (not selected, not fresh)".to_string(),
+    };
+    format!("{:<24} {:<28} key {}", id.to_string(), what, &key[..12])
+}
+
+fn progress_for(stage: &dyn Stage, verbosity: Verbosity) -> Progress {
+    if verbosity == Verbosity::Quiet || !std::io::stderr().is_terminal() {
+        return Progress::hidden();
+    }
+    let bar = ProgressBar::new(stage.work_units());
+    let style =
+        ProgressStyle::with_template("{prefix:<24} [{bar:30}] {pos}/{len} {elapsed} eta {eta}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar());
+    bar.set_style(style.progress_chars("=> "));
+    bar.set_prefix(stage.id().to_string());
+    Progress { bar: Some(bar) }
+}
+
+fn load_inputs(
+    store: &Store,
+    stage: &dyn Stage,
+    resolved: &BTreeMap<InstanceId, Manifest>,
+) -> Result<Vec<Input>, ExecError> {
+    let id = stage.id();
+    stage
+        .inputs()
+        .into_iter()
+        .map(|input| {
+            let manifest = &resolved[&input];
+            let dir = store.artifact_dir(&input.stage, &manifest.key);
+            let mut tables = BTreeMap::new();
+            for file in &manifest.files {
+                let (batch, _) =
+                    read_parquet(&dir.join(&file.name)).map_err(|source| ExecError::Input {
+                        id: id.clone(),
+                        source,
+                    })?;
+                tables.insert(file.name.trim_end_matches(".parquet").to_string(), batch);
+            }
+            Ok(Input { id: input, tables })
+        })
+        .collect()
+}
+
+fn compute(
+    store: &Store,
+    stage: &dyn Stage,
+    key: &str,
+    inputs: Vec<InputRecord>,
+    resolved: &BTreeMap<InstanceId, Manifest>,
+    options: &RunOptions,
+) -> Result<(Manifest, f64), ExecError> {
+    let id = stage.id();
+    let started = Instant::now();
+    let mut staging = store.begin(&id.stage, key)?;
+    let loaded = load_inputs(store, stage, resolved)?;
+    let progress = progress_for(stage, options.verbosity);
+    let tables = stage
+        .run(&loaded, &progress)
+        .map_err(|source| ExecError::Stage {
+            id: id.clone(),
+            source,
+        })?;
+    if let Some(bar) = progress.bar {
+        bar.finish_and_clear();
+    }
+    let params = stage.params();
+    let provenance: BTreeMap<String, String> = [
+        ("ternary.stage", id.stage.clone()),
+        ("ternary.stage_version", stage.version().to_string()),
+        ("ternary.key", key.to_string()),
+        ("ternary.params", super::key::canonical_json(&params)),
+        (
+            "ternary.inputs",
+            serde_json::to_string(&inputs).unwrap_or_default(),
+        ),
+        ("ternary.tool", tool_version()),
+    ]
+    .into_iter()
+    .map(|(k, v)| (k.to_string(), v))
+    .collect();
+    for table in &tables {
+        let bytes = table
+            .to_parquet(&provenance)
+            .map_err(|source| ExecError::Stage {
+                id: id.clone(),
+                source: source.into(),
+            })?;
+        staging.write_file(&format!("{}.parquet", table.name), &bytes, table.rows())?;
+    }
+    let seconds = started.elapsed().as_secs_f64();
+    let manifest = Manifest {
+        key: key.to_string(),
+        stage: id.stage.clone(),
+        version: stage.version(),
+        instance: id.instance.clone(),
+        params: params.clone(),
+        inputs: inputs.clone(),
+        files: staging.files().to_vec(),
+        tool: tool_version(),
+        wall_seconds: seconds,
+    };
+    staging.commit(&manifest)?;
+    let entry = InstanceRef {
+        key: key.to_string(),
+        version: stage.version(),
+        params,
+        inputs,
+    };
+    store.write_ref(&id.stage, &id.instance, &entry)?;
+    Ok((manifest, seconds))
+}
+
+/// `ternary <crate version>`.
+pub fn tool_version() -> String {
+    format!("ternary {}", env!("CARGO_PKG_VERSION"))
+}
+
+/// One line of `status`.
+#[derive(Clone, Debug)]
+pub struct StatusLine {
+    /// The instance.
+    pub id: InstanceId,
+    /// Its current key, when its inputs are available.
+    pub key: Option<String>,
+    /// Fresh, stale or missing, and why.
+    pub freshness: Freshness,
+}
+
+/// Freshness of every instance, with reasons, without computing anything.
+pub fn status(store: &Store, stages: &[Box<dyn Stage>]) -> Result<Vec<StatusLine>, ExecError> {
+    check_plan(stages, &[])?;
+    let mut resolved: BTreeMap<InstanceId, Manifest> = BTreeMap::new();
+    let mut lines = Vec::new();
+    for stage in stages {
+        let id = stage.id();
+        let previous = store.read_ref(&id.stage, &id.instance);
+        let mut key = None;
+        let freshness = match input_records(stage.as_ref(), &resolved) {
+            None => {
+                let waiting: Vec<String> = stage
+                    .inputs()
+                    .iter()
+                    .filter(|input| !resolved.contains_key(input))
+                    .map(ToString::to_string)
+                    .collect();
+                let reason = format!("waiting on {}", waiting.join(", "));
+                match previous {
+                    Some(_) => Freshness::Stale(vec![reason]),
+                    None => Freshness::Missing(reason),
+                }
+            }
+            Some(inputs) => {
+                let current = stage_key(&id.stage, stage.version(), &stage.params(), &inputs);
+                let freshness = match store.intact_manifest(&id.stage, &current) {
+                    Some(manifest) => {
+                        resolved.insert(id.clone(), manifest);
+                        Freshness::Fresh
+                    }
+                    None => explain(stage.as_ref(), &current, &inputs, previous),
+                };
+                key = Some(current);
+                freshness
+            }
+        };
+        lines.push(StatusLine { id, key, freshness });
+    }
+    Ok(lines)
+}
+
+fn explain(
+    stage: &dyn Stage,
+    key: &str,
+    inputs: &[InputRecord],
+    previous: Option<InstanceRef>,
+) -> Freshness {
+    let Some(previous) = previous else {
+        return Freshness::Missing("never computed".to_string());
+    };
+    if previous.key == key {
+        return Freshness::Missing("its artifact is missing or damaged".to_string());
+    }
+    let mut reasons = Vec::new();
+    if previous.version != stage.version() {
+        reasons.push(format!(
+            "stage version {} -> {}",
+            previous.version,
+            stage.version()
+        ));
+    }
+    reasons.extend(
+        changed_params(&previous.params, &stage.params())
+            .into_iter()
+            .map(|c| format!("parameter {c}")),
+    );
+    for input in inputs {
+        let before = previous
+            .inputs
+            .iter()
+            .find(|p| p.stage == input.stage && p.instance == input.instance);
+        if before.map(|p| &p.files) != Some(&input.files) {
+            reasons.push(format!("input {}[{}] changed", input.stage, input.instance));
+        }
+    }
+    if reasons.is_empty() {
+        reasons.push("key changed".to_string());
+    }
+    Freshness::Stale(reasons)
+}

@@ -1,0 +1,174 @@
+//! Content keys: SHA-256 over a canonical encoding of what determines an
+//! artifact (stage name, stage version, resolved parameters, and the content
+//! hashes of the input files). Identical inputs give identical keys; a
+//! recomputed input with identical bytes leaves downstream keys unchanged
+//! (early cutoff).
+
+use std::fmt::Write as _;
+
+use serde::{Deserialize, Serialize};
+use serde_json::Value;
+use sha2::{Digest, Sha256};
+
+/// Lower-case hex SHA-256 of `bytes`.
+pub fn sha256_hex(bytes: &[u8]) -> String {
+    let digest = Sha256::digest(bytes);
+    digest
+        .iter()
+        .fold(String::with_capacity(64), |mut hex, byte| {
+            let _ = write!(hex, "{byte:02x}");
+            hex
+        })
+}
+
+/// JSON with object keys sorted at every level and no whitespace: the
+/// canonical form that keys hash (independent of map implementations).
+pub fn canonical_json(value: &Value) -> String {
+    let mut out = String::new();
+    write_canonical(value, &mut out);
+    out
+}
+
+fn write_canonical(value: &Value, out: &mut String) {
+    match value {
+        Value::Object(map) => {
+            let mut entries: Vec<(&String, &Value)> = map.iter().collect();
+            entries.sort_by(|a, b| a.0.cmp(b.0));
+            out.push('{');
+            for (k, (name, item)) in entries.into_iter().enumerate() {
+                if k > 0 {
+                    out.push(',');
+                }
+                out.push_str(&Value::String(name.clone()).to_string());
+                out.push(':');
+                write_canonical(item, out);
+            }
+            out.push('}');
+        }
+        Value::Array(items) => {
+            out.push('[');
+            for (k, item) in items.iter().enumerate() {
+                if k > 0 {
+                    out.push(',');
+                }
+                write_canonical(item, out);
+            }
+            out.push(']');
+        }
+        scalar => out.push_str(&scalar.to_string()),
+    }
+}
+
+/// One input of a stage instance as it enters the key: the upstream instance
+/// and the content hashes of its files.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct InputRecord {
+    /// Upstream stage name.
+    pub stage: String,
+    /// Upstream instance name.
+    pub instance: String,
+    /// Upstream artifact key.
+    pub key: String,
+    /// `(file name, sha256)` of every upstream output file, sorted by name.
+    pub files: Vec<(String, String)>,
+}
+
+/// The key of a stage instance. The upstream keys themselves are left out so
+/// that only file contents matter.
+pub fn stage_key(stage: &str, version: u32, params: &Value, inputs: &[InputRecord]) -> String {
+    let inputs: Vec<Value> = inputs
+        .iter()
+        .map(|input| serde_json::json!({ "stage": input.stage, "files": input.files }))
+        .collect();
+    let document = serde_json::json!({
+        "encoding": "ternary-stage-key/1",
+        "stage": stage,
+        "version": version,
+        "params": params,
+        "inputs": inputs,
+    });
+    sha256_hex(canonical_json(&document).as_bytes())
+}
+
+/// Dotted paths of the leaves that differ between two parameter documents,
+/// with old and new values (for `status`).
+pub fn changed_params(old: &Value, new: &Value) -> Vec<String> {
+    let mut changes = Vec::new();
+    diff(old, new, String::new(), &mut changes);
+    changes
+}
+
+fn diff(old: &Value, new: &Value, path: String, changes: &mut Vec<String>) {
+    match (old, new) {
+        (Value::Object(a), Value::Object(b)) => {
+            let mut names: Vec<&String> = a.keys().chain(b.keys()).collect();
+            names.sort();
+            names.dedup();
+            for name in names {
+                let child = if path.is_empty() {
+                    name.clone()
+                } else {
+                    format!("{path}.{name}")
+                };
+                diff(
+                    a.get(name).unwrap_or(&Value::Null),
+                    b.get(name).unwrap_or(&Value::Null),
+                    child,
+                    changes,
+                );
+            }
+        }
+        _ if old != new => changes.push(format!("{path}: {old} -> {new}")),
+        _ => {}
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use serde_json::json;
+
+    #[test]
+    fn canonical_json_sorts_keys_at_every_level() {
+        let a = json!({"b": 1, "a": {"y": [1.5, 2], "x": "s"}});
+        assert_eq!(canonical_json(&a), r#"{"a":{"x":"s","y":[1.5,2]},"b":1}"#);
+    }
+
+    #[test]
+    fn key_depends_on_params_version_and_input_files_but_not_upstream_keys() {
+        let params = json!({"n": 6.0});
+        let input = |key: &str, sha: &str| InputRecord {
+            stage: "scan".into(),
+            instance: "ipp-6".into(),
+            key: key.into(),
+            files: vec![("curve.parquet".into(), sha.into())],
+        };
+        let base = stage_key("table", 1, &params, &[input("k1", "aa")]);
+        assert_eq!(base.len(), 64);
+        assert_eq!(base, stage_key("table", 1, &params, &[input("k2", "aa")]));
+        assert_ne!(base, stage_key("table", 2, &params, &[input("k1", "aa")]));
+        assert_ne!(
+            base,
+            stage_key("table", 1, &json!({"n": 8.0}), &[input("k1", "aa")])
+        );
+        assert_ne!(base, stage_key("table", 1, &params, &[input("k1", "ab")]));
+    }
+
+    #[test]
+    fn changed_params_lists_leaf_paths() {
+        let old = json!({"grid": {"points": 11, "offset_min": -5.0}, "n": 6.0});
+        let new = json!({"grid": {"points": 21, "offset_min": -5.0}, "n": 6.0});
+        assert_eq!(
+            changed_params(&old, &new),
+            vec!["grid.points: 11 -> 21".to_string()]
+        );
+    }
+
+    #[test]
+    fn sha256_matches_known_vector() {
+        assert_eq!(
+            sha256_hex(b"abc"),
+            "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad"
+        );
+    }
+}

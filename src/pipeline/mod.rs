@@ -1,0 +1,100 @@
+//! The generic staged DAG: stage instances, content keys, the artifact store,
+//! Parquet tables and the executor. This module knows nothing of physics: a
+//! stage is a pure function from its parameters and input tables to output
+//! tables, and the executor owns caching, keys, progress, atomic writes and
+//! logging (stages never touch the store).
+
+pub mod executor;
+pub mod key;
+pub mod store;
+pub mod table;
+
+use std::collections::BTreeMap;
+use std::fmt;
+
+use arrow::array::RecordBatch;
+use indicatif::ProgressBar;
+use serde_json::Value;
+
+pub use table::{Column, Table, TableError};
+
+/// Names one stage instance, e.g. `scan[ipp-6]`.
+#[derive(Clone, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct InstanceId {
+    /// Stage name.
+    pub stage: String,
+    /// Instance name within the stage.
+    pub instance: String,
+}
+
+impl InstanceId {
+    /// Builds an id.
+    pub fn new(stage: &str, instance: &str) -> InstanceId {
+        InstanceId {
+            stage: stage.to_string(),
+            instance: instance.to_string(),
+        }
+    }
+}
+
+impl fmt::Display for InstanceId {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}[{}]", self.stage, self.instance)
+    }
+}
+
+/// The output tables of an upstream instance, handed to a stage by the executor.
+pub struct Input {
+    /// The upstream instance.
+    pub id: InstanceId,
+    /// Its tables by name.
+    pub tables: BTreeMap<String, RecordBatch>,
+}
+
+/// A stage failed to compute its outputs.
+#[derive(Debug, thiserror::Error)]
+pub enum StageError {
+    /// A table could not be built.
+    #[error(transparent)]
+    Table(#[from] TableError),
+    /// An input lacked what the stage needs.
+    #[error("{0}")]
+    Input(String),
+}
+
+/// Progress of a running stage, in the units of [`Stage::work_units`].
+pub struct Progress {
+    bar: Option<ProgressBar>,
+}
+
+impl Progress {
+    /// Progress that reports nowhere (tests, quiet runs).
+    pub fn hidden() -> Progress {
+        Progress { bar: None }
+    }
+
+    /// Records `units` more of finished work.
+    pub fn advance(&self, units: u64) {
+        if let Some(bar) = &self.bar {
+            bar.inc(units);
+        }
+    }
+}
+
+/// One instance of a stage: its identity, everything its output depends on,
+/// and the computation.
+pub trait Stage: Sync {
+    /// Stage and instance name.
+    fn id(&self) -> InstanceId;
+    /// Bumped whenever the stage's code changes its output.
+    fn version(&self) -> u32;
+    /// Resolved parameters: everything besides the inputs that the output depends on.
+    fn params(&self) -> Value;
+    /// Upstream instances whose tables this stage reads.
+    fn inputs(&self) -> Vec<InstanceId>;
+    /// Amount of work, in the units the stage reports through [`Progress`].
+    fn work_units(&self) -> u64;
+    /// Computes the output tables. Must be deterministic: the same parameters and
+    /// inputs give the same tables whatever the thread count.
+    fn run(&self, inputs: &[Input], progress: &Progress) -> Result<Vec<Table>, StageError>;
+}

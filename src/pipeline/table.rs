@@ -1,0 +1,197 @@
+//! Tables as stages produce them, and their Parquet encoding.
+//!
+//! Every column carries its unit and a one-line description as Arrow field
+//! metadata (`unit`, `description`); every file carries the stage's parameters
+//! and provenance as Parquet key-value metadata. Encoding is deterministic: the
+//! same table gives the same bytes.
+
+use std::collections::{BTreeMap, HashMap};
+use std::fs::File;
+use std::path::Path;
+use std::sync::Arc;
+
+use arrow::array::{ArrayRef, Float64Array, RecordBatch, StringArray, UInt32Array};
+use arrow::datatypes::{Field, Schema};
+use parquet::arrow::ArrowWriter;
+use parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder;
+use parquet::basic::{Compression, ZstdLevel};
+use parquet::file::metadata::KeyValue;
+use parquet::file::properties::WriterProperties;
+
+/// Rows per Parquet row group: large enough for compression, small enough to
+/// stream.
+const ROW_GROUP_ROWS: usize = 1 << 20;
+
+/// One column with its physical meaning.
+pub struct Column {
+    field: Field,
+    values: ArrayRef,
+}
+
+impl Column {
+    fn new(name: &str, unit: &str, description: &str, values: ArrayRef) -> Column {
+        let metadata = [
+            ("unit".to_string(), unit.to_string()),
+            ("description".to_string(), description.to_string()),
+        ];
+        let field = Field::new(name, values.data_type().clone(), false)
+            .with_metadata(HashMap::from(metadata));
+        Column { field, values }
+    }
+
+    /// A `float64` column; `unit` is e.g. `v_th`, `l/v_th` or `1` (dimensionless).
+    pub fn f64(name: &str, unit: &str, description: &str, values: Vec<f64>) -> Column {
+        Column::new(
+            name,
+            unit,
+            description,
+            Arc::new(Float64Array::from(values)),
+        )
+    }
+
+    /// A `uint32` column (counts).
+    pub fn u32(name: &str, unit: &str, description: &str, values: Vec<u32>) -> Column {
+        Column::new(name, unit, description, Arc::new(UInt32Array::from(values)))
+    }
+
+    /// A `utf8` column (labels).
+    pub fn text(name: &str, description: &str, values: Vec<String>) -> Column {
+        Column::new(name, "", description, Arc::new(StringArray::from(values)))
+    }
+}
+
+/// A named table with file-level metadata, as a stage returns it.
+pub struct Table {
+    /// File stem: the table is written as `<name>.parquet`.
+    pub name: String,
+    /// The data.
+    pub batch: RecordBatch,
+    /// Key-value metadata added by the stage (the executor adds provenance).
+    pub metadata: BTreeMap<String, String>,
+}
+
+/// A table could not be assembled or encoded.
+#[derive(Debug, thiserror::Error)]
+pub enum TableError {
+    /// Columns of different lengths or an Arrow failure.
+    #[error("table `{name}`: {source}")]
+    Arrow {
+        /// The table.
+        name: String,
+        /// The cause.
+        source: arrow::error::ArrowError,
+    },
+    /// Parquet encoding or decoding failed.
+    #[error("parquet: {0}")]
+    Parquet(#[from] parquet::errors::ParquetError),
+    /// The file could not be read.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file.
+        path: String,
+        /// The cause.
+        source: std::io::Error,
+    },
+}
+
+impl Table {
+    /// Assembles a table from equally long columns.
+    pub fn new(name: &str, columns: Vec<Column>) -> Result<Table, TableError> {
+        let (fields, arrays): (Vec<Field>, Vec<ArrayRef>) =
+            columns.into_iter().map(|c| (c.field, c.values)).unzip();
+        let batch =
+            RecordBatch::try_new(Arc::new(Schema::new(fields)), arrays).map_err(|source| {
+                TableError::Arrow {
+                    name: name.to_string(),
+                    source,
+                }
+            })?;
+        Ok(Table {
+            name: name.to_string(),
+            batch,
+            metadata: BTreeMap::new(),
+        })
+    }
+
+    /// Adds a key-value metadata entry.
+    pub fn with_metadata(mut self, key: &str, value: String) -> Table {
+        self.metadata.insert(key.to_string(), value);
+        self
+    }
+
+    /// Number of rows.
+    pub fn rows(&self) -> u64 {
+        self.batch.num_rows() as u64
+    }
+
+    /// Parquet bytes (zstd, deterministic). This table's metadata plus `extra`
+    /// are stored twice: as Parquet key-value metadata (for any Parquet reader,
+    /// e.g. DuckDB's `parquet_kv_metadata`) and as the Arrow schema's metadata
+    /// (which pyarrow and polars attach to the schema they read).
+    pub fn to_parquet(&self, extra: &BTreeMap<String, String>) -> Result<Vec<u8>, TableError> {
+        let entries: BTreeMap<String, String> = self
+            .metadata
+            .iter()
+            .chain(extra)
+            .map(|(k, v)| (k.clone(), v.clone()))
+            .collect();
+        let metadata: HashMap<String, String> = entries.clone().into_iter().collect();
+        let key_values = entries
+            .into_iter()
+            .map(|(k, v)| KeyValue::new(k, v))
+            .collect();
+        let schema = Arc::new(self.batch.schema().as_ref().clone().with_metadata(metadata));
+        let batch = self
+            .batch
+            .clone()
+            .with_schema(schema.clone())
+            .map_err(|source| TableError::Arrow {
+                name: self.name.clone(),
+                source,
+            })?;
+        let properties = WriterProperties::builder()
+            .set_compression(Compression::ZSTD(ZstdLevel::try_new(3)?))
+            .set_max_row_group_row_count(Some(ROW_GROUP_ROWS))
+            .set_key_value_metadata(Some(key_values))
+            .build();
+        let mut bytes = Vec::new();
+        let mut writer = ArrowWriter::try_new(&mut bytes, schema, Some(properties))?;
+        writer.write(&batch)?;
+        writer.close()?;
+        Ok(bytes)
+    }
+}
+
+/// Reads a whole Parquet file into one batch, with its key-value metadata.
+pub fn read_parquet(path: &Path) -> Result<(RecordBatch, BTreeMap<String, String>), TableError> {
+    let io = |source| TableError::Io {
+        path: path.display().to_string(),
+        source,
+    };
+    let builder = ParquetRecordBatchReaderBuilder::try_new(File::open(path).map_err(io)?)?;
+    let metadata = builder
+        .metadata()
+        .file_metadata()
+        .key_value_metadata()
+        .map(|entries| {
+            entries
+                .iter()
+                .map(|kv| (kv.key.clone(), kv.value.clone().unwrap_or_default()))
+                .collect()
+        })
+        .unwrap_or_default();
+    let schema = builder.schema().clone();
+    let batches = builder
+        .build()?
+        .collect::<Result<Vec<_>, _>>()
+        .map_err(|source| TableError::Arrow {
+            name: path.display().to_string(),
+            source,
+        })?;
+    let batch =
+        arrow::compute::concat_batches(&schema, &batches).map_err(|source| TableError::Arrow {
+            name: path.display().to_string(),
+            source,
+        })?;
+    Ok((batch, metadata))
+}

@@ -1,0 +1,238 @@
+//! What the command line prints: the run summary, the DAG, verification and
+//! garbage-collection reports, and artifact listings. Reads artifacts with
+//! polars, as any user would.
+
+use std::collections::BTreeSet;
+use std::fmt::Write as _;
+use std::fs::File;
+use std::path::Path;
+
+use anyhow::{Context, Result, bail};
+use polars::prelude::{DataFrame, ParquetReader, SerReader};
+
+use crate::pipeline::Stage;
+use crate::pipeline::executor::{self, InstanceReport};
+use crate::pipeline::store::Store;
+use crate::pipeline::table::read_parquet;
+
+/// `value ± error` with as many decimals as the error's leading two digits need.
+pub fn with_error(value: f64, error: f64) -> String {
+    if !error.is_finite() || !value.is_finite() {
+        return format!("{value} ± {error}");
+    }
+    let decimals = if error > 0.0 {
+        (1.0 - error.log10().floor()).clamp(0.0, 16.0) as usize
+    } else {
+        16
+    };
+    format!("{value:.decimals$} ± {error:.1e}")
+}
+
+fn read_frame(path: &Path) -> Result<DataFrame> {
+    let file = File::open(path).with_context(|| format!("opening {}", path.display()))?;
+    ParquetReader::new(file)
+        .finish()
+        .with_context(|| format!("reading {}", path.display()))
+}
+
+/// The scan peaks of the instances of a run, as a readable table.
+pub fn summary(store: &Store, reports: &[InstanceReport]) -> Result<String> {
+    let mut out = String::new();
+    let scans = reports.iter().filter(|r| r.id.stage == "scan");
+    for (k, report) in scans.enumerate() {
+        let Some(key) = &report.key else { continue };
+        if store.intact_manifest("scan", key).is_none() {
+            continue;
+        }
+        if k == 0 {
+            writeln!(
+                out,
+                "\nmono-energetic scans: largest |u1f| (error bound) and its arrival offset"
+            )?;
+            writeln!(
+                out,
+                "{:<10} {:<12} {:<34} {:<30} {:>6} {:>12}",
+                "potential",
+                "launch",
+                "|u1f,max| [v_th]",
+                "offset [l/v_th]",
+                "failed",
+                "max |dE/E|"
+            )?;
+        }
+        let frame = read_frame(&store.artifact_dir("scan", key).join("peak.parquet"))?;
+        for row in 0..frame.height() {
+            let text = |name: &str| -> Result<String> {
+                Ok(frame
+                    .column(name)?
+                    .str()?
+                    .get(row)
+                    .unwrap_or_default()
+                    .to_string())
+            };
+            let number = |name: &str| -> Result<f64> {
+                Ok(frame.column(name)?.f64()?.get(row).unwrap_or(f64::NAN))
+            };
+            let failed = frame.column("failed_scenes")?.u32()?.get(row).unwrap_or(0);
+            writeln!(
+                out,
+                "{:<10} {:<12} {:<34} {:<30} {:>6} {:>12.1e}",
+                report.id.instance,
+                text("launch")?,
+                with_error(
+                    number("u1_final_max_abs")?,
+                    number("u1_final_max_abs_error")?
+                ),
+                with_error(
+                    number("arrival_offset_at_max")?,
+                    number("arrival_offset_at_max_error")?
+                ),
+                failed,
+                number("worst_energy_error")?,
+            )?;
+        }
+    }
+    Ok(out)
+}
+
+/// The DAG as text: one line per instance with its inputs.
+pub fn dag(stages: &[Box<dyn Stage>]) -> String {
+    let mut out = String::new();
+    for stage in stages {
+        let inputs: Vec<String> = stage.inputs().iter().map(ToString::to_string).collect();
+        let from = if inputs.is_empty() {
+            "(source)".to_string()
+        } else {
+            format!("<- {}", inputs.join(", "))
+        };
+        let _ = writeln!(out, "{:<24} {from}", stage.id().to_string());
+    }
+    out
+}
+
+/// Re-hashes every artifact: the report and the number of damaged artifacts.
+pub fn verify(store: &Store) -> Result<(String, usize)> {
+    let mut out = String::new();
+    let mut damaged = 0;
+    let artifacts = store.artifacts()?;
+    for (stage, key) in &artifacts {
+        let report = store.verify_artifact(stage, key);
+        if report.problems.is_empty() {
+            writeln!(out, "ok       {stage}/{key}")?;
+        } else {
+            damaged += 1;
+            writeln!(
+                out,
+                "DAMAGED  {stage}/{key}: {}",
+                report.problems.join("; ")
+            )?;
+        }
+    }
+    let debris = store.staging_debris()?.len();
+    if debris > 0 {
+        writeln!(
+            out,
+            "{debris} staging directories from interrupted runs are ignored (the next run or gc removes them)"
+        )?;
+    }
+    writeln!(
+        out,
+        "verify: {} artifacts, {} intact, {} damaged",
+        artifacts.len(),
+        artifacts.len() - damaged,
+        damaged
+    )?;
+    Ok((out, damaged))
+}
+
+/// Removes artifacts that neither the current key nor the last computed key of
+/// a current instance names, and staging debris.
+pub fn gc(store: &Store, stages: &[Box<dyn Stage>]) -> Result<String> {
+    let lock = store.lock()?;
+    let mut keep: BTreeSet<(String, String)> = BTreeSet::new();
+    for line in executor::status(store, stages)? {
+        if let Some(key) = line.key {
+            keep.insert((line.id.stage.clone(), key));
+        }
+        if let Some(entry) = store.read_ref(&line.id.stage, &line.id.instance) {
+            keep.insert((line.id.stage, entry.key));
+        }
+    }
+    let mut removed = 0;
+    let mut bytes = 0;
+    for (stage, key) in store.artifacts()? {
+        if !keep.contains(&(stage.clone(), key.clone())) {
+            bytes += store.remove_artifact(&lock, &stage, &key)?;
+            removed += 1;
+        }
+    }
+    let debris = store.clean_staging(&lock)?;
+    Ok(format!(
+        "gc: removed {removed} artifacts ({bytes} bytes) and {debris} staging directories\n"
+    ))
+}
+
+/// Metadata, schema with units, and the first rows of a Parquet file.
+fn show_file(path: &Path, rows: usize) -> Result<String> {
+    let mut out = String::new();
+    let (batch, metadata) = read_parquet(path)?;
+    writeln!(out, "== {} ({} rows)", path.display(), batch.num_rows())?;
+    for (key, value) in metadata.iter().filter(|(k, _)| k.starts_with("ternary.")) {
+        writeln!(out, "  {key}: {value}")?;
+    }
+    writeln!(out, "  columns:")?;
+    for field in batch.schema().fields() {
+        let meta = field.metadata();
+        let unit = meta.get("unit").map(String::as_str).unwrap_or("");
+        let description = meta.get("description").map(String::as_str).unwrap_or("");
+        writeln!(
+            out,
+            "    {:<28} {:<8} [{unit}] {description}",
+            field.name(),
+            field.data_type().to_string()
+        )?;
+    }
+    writeln!(out, "{}", read_frame(path)?.head(Some(rows)))?;
+    Ok(out)
+}
+
+/// An artifact (by key or unique key prefix, or its directory) or a Parquet file.
+pub fn show(store: Option<&Store>, target: &str, rows: usize) -> Result<String> {
+    let path = Path::new(target);
+    if path.is_file() {
+        return show_file(path, rows);
+    }
+    let dir = if path.is_dir() {
+        path.to_path_buf()
+    } else {
+        let Some(store) = store else {
+            bail!("`{target}` is not a file, and no store is configured to look up keys")
+        };
+        if target.len() < 6 {
+            bail!("`{target}`: give at least 6 characters of a key, or a path");
+        }
+        let matches: Vec<(String, String)> = store
+            .artifacts()?
+            .into_iter()
+            .filter(|(_, key)| key.starts_with(target))
+            .collect();
+        match matches.as_slice() {
+            [(stage, key)] => store.artifact_dir(stage, key),
+            [] => bail!(
+                "no artifact key starts with `{target}` in {}",
+                store.root().display()
+            ),
+            _ => bail!("`{target}` is ambiguous: {} artifacts match", matches.len()),
+        }
+    };
+    let manifest_path = dir.join("manifest.json");
+    let manifest = std::fs::read_to_string(&manifest_path)
+        .with_context(|| format!("reading {}", manifest_path.display()))?;
+    let mut out = format!("{manifest}\n");
+    let value: serde_json::Value = serde_json::from_str(&manifest)?;
+    for file in value["files"].as_array().into_iter().flatten() {
+        let name = file["name"].as_str().unwrap_or_default();
+        out.push_str(&show_file(&dir.join(name), rows)?);
+    }
+    Ok(out)
+}

@@ -1,0 +1,188 @@
+//! Physics invariants of the scattering engine (physics.md §8, numerics.md):
+//! conservation laws, the integrable n = 2 case, mirror symmetry, agreement of
+//! independent integrators, and stress scenes.
+
+use ternary::bench::thermal_scenes;
+use ternary::physics::potential::Potential;
+use ternary::physics::scan::LaunchPair;
+use ternary::physics::scene::{Collision, EngineSettings, FreeLine, Method, Outcome, collide};
+
+fn engine(method: Method, tolerance: f64) -> EngineSettings {
+    EngineSettings {
+        method,
+        tolerance,
+        max_steps: 100_000,
+    }
+}
+
+fn default_engine() -> EngineSettings {
+    engine(Method::Dprkn12, 1e-12)
+}
+
+fn ipp(n: f64) -> Potential {
+    Potential::InversePower { n }
+}
+
+/// Relative energy error bound stated in README: 1e-11 at the default tolerance.
+const ENERGY_BOUND: f64 = 1e-11;
+/// Momentum is conserved by construction (centre-of-mass velocity is not
+/// integrated); only reconstruction rounding remains.
+const MOMENTUM_BOUND: f64 = 1e-13;
+
+fn assert_conserved(collision: &Collision, what: &str) {
+    assert!(!collision.outcome.is_failure(), "{what}: {collision:?}");
+    assert!(
+        collision.energy_error.abs() <= ENERGY_BOUND,
+        "{what}: energy {collision:?}"
+    );
+    assert!(
+        collision.momentum_error <= MOMENTUM_BOUND,
+        "{what}: momentum {collision:?}"
+    );
+}
+
+#[test]
+fn thermal_scenes_conserve_energy_and_momentum() {
+    let potentials = [
+        ipp(3.0),
+        ipp(4.0),
+        ipp(6.0),
+        ipp(7.5),
+        ipp(12.0),
+        Potential::LennardJones { theta: 1.0 },
+    ];
+    for potential in potentials {
+        for (k, lines) in thermal_scenes(1000, 7).into_iter().enumerate() {
+            let collision = collide(&potential, &default_engine(), lines);
+            assert_conserved(&collision, &format!("{} scene {k}", potential.id()));
+        }
+    }
+}
+
+/// Largest difference between sorted outgoing and sorted incoming velocities.
+fn permutation_defect(collision: &Collision) -> f64 {
+    (0..3)
+        .map(|k| (collision.outgoing[k] - collision.incoming[k]).abs())
+        .fold(0.0, f64::max)
+}
+
+#[test]
+fn calogero_outgoing_velocities_permute_incoming() {
+    let potential = ipp(2.0);
+    let mut worst: f64 = 0.0;
+    for lines in thermal_scenes(2000, 3) {
+        let collision = collide(&potential, &default_engine(), lines);
+        assert_conserved(&collision, "n = 2 thermal");
+        worst = worst.max(permutation_defect(&collision));
+    }
+    for launch in [
+        LaunchPair { u2: 1.0, u3: -1.0 },
+        LaunchPair { u2: 1.1, u3: -0.9 },
+    ] {
+        for k in 0..=400 {
+            let offset = -8.0 + 0.04 * f64::from(k);
+            let collision = collide(&potential, &default_engine(), launch.lines(offset));
+            assert_conserved(&collision, "n = 2 scan");
+            worst = worst.max(permutation_defect(&collision));
+        }
+    }
+    assert!(worst <= 1e-10, "worst permutation defect {worst:e}");
+}
+
+fn mirrored(lines: [FreeLine; 3]) -> [FreeLine; 3] {
+    lines.map(|line| FreeLine {
+        position: -line.position,
+        velocity: -line.velocity,
+    })
+}
+
+#[test]
+fn mirror_image_negates_every_outgoing_velocity() {
+    for potential in [ipp(6.0), ipp(12.0), Potential::LennardJones { theta: 0.5 }] {
+        for lines in thermal_scenes(500, 11) {
+            let direct = collide(&potential, &default_engine(), lines);
+            let mirror = collide(&potential, &default_engine(), mirrored(lines));
+            let speed = direct.incoming[2] - direct.incoming[0];
+            for k in 0..3 {
+                // Sorted ascending, so the mirror image reverses the order. The
+                // two integrations differ by rounding and the step control's
+                // local error, 1e-12 of the speed scale per step.
+                let difference = (direct.outgoing[k] + mirror.outgoing[2 - k]).abs();
+                assert!(
+                    difference <= 1e-10 * speed,
+                    "{potential:?}: {direct:?} vs {mirror:?}"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn independent_integrators_agree() {
+    let potential = ipp(6.0);
+    for lines in thermal_scenes(300, 5) {
+        let reference = collide(&potential, &engine(Method::Dprkn12, 1e-14), lines);
+        for method in [Method::Dop853, Method::Dopri5] {
+            let other = collide(&potential, &engine(method, 1e-13), lines);
+            let speed = reference.incoming[2] - reference.incoming[0];
+            for k in 0..3 {
+                let difference = (reference.outgoing[k] - other.outgoing[k]).abs();
+                assert!(
+                    difference <= 1e-10 * speed,
+                    "{method:?}: {reference:?} vs {other:?}"
+                );
+            }
+        }
+    }
+}
+
+/// Stress scenes: each must end in the right class with conservation intact.
+#[test]
+fn head_on_at_eight_thermal_speeds() {
+    let launch = LaunchPair { u2: 8.0, u3: -8.0 };
+    for potential in [
+        ipp(2.0),
+        ipp(6.0),
+        ipp(12.0),
+        Potential::LennardJones { theta: 0.05 },
+    ] {
+        for offset in [-0.05, 0.0, 0.01, 0.1] {
+            let collision = collide(&potential, &default_engine(), launch.lines(offset));
+            assert_eq!(collision.outcome, Outcome::Scattered);
+            assert_conserved(
+                &collision,
+                &format!("{} head-on at {offset}", potential.id()),
+            );
+        }
+    }
+}
+
+#[test]
+fn slow_collision_at_relative_speed_one_thousandth() {
+    let launch = LaunchPair {
+        u2: 1e-3,
+        u3: -1e-3,
+    };
+    for potential in [
+        ipp(2.0),
+        ipp(6.0),
+        ipp(12.0),
+        Potential::LennardJones { theta: 10.0 },
+    ] {
+        for offset in [-500.0, 0.0, 300.0] {
+            let collision = collide(&potential, &default_engine(), launch.lines(offset));
+            assert_conserved(&collision, &format!("{} slow at {offset}", potential.id()));
+        }
+    }
+}
+
+#[test]
+fn lennard_jones_shallow_and_deep_wells_conserve_energy() {
+    for theta in [0.05, 10.0] {
+        let potential = Potential::LennardJones { theta };
+        for lines in thermal_scenes(500, 13) {
+            let collision = collide(&potential, &default_engine(), lines);
+            assert_conserved(&collision, &format!("theta = {theta}"));
+        }
+    }
+}

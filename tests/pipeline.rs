@@ -1,0 +1,398 @@
+//! The pipeline driven through the `ternary` binary: caching, early cutoff,
+//! atomicity under kill, verification, strict configuration, determinism, and
+//! artifacts read back by polars and by pyarrow.
+
+use std::fs;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+const BINARY: &str = env!("CARGO_BIN_EXE_ternary");
+
+/// A fresh directory for one test.
+fn workspace(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("ternary-test-{name}-{}", std::process::id()));
+    let _ = fs::remove_dir_all(&dir);
+    fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn config(points: u32, extra: &str) -> String {
+    format!(
+        r#"
+[potentials]
+inverse_power = [2, 6]
+
+[engine]
+tolerance = 1e-12
+
+[scan]
+offset_min = -3.0
+offset_max = 3.0
+points = {points}
+
+[[scan.launch]]
+name = "symmetric"
+u2 = 1.0
+u3 = -1.0
+
+[[scan.launch]]
+name = "asymmetric"
+u2 = 1.1
+u3 = -0.9
+{extra}
+"#
+    )
+}
+
+fn write_config(dir: &Path, text: &str) -> PathBuf {
+    let path = dir.join("pipeline.toml");
+    fs::write(&path, text).unwrap();
+    path
+}
+
+fn ternary(config: &Path, args: &[&str]) -> Output {
+    Command::new(BINARY)
+        .arg("--config")
+        .arg(config)
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+fn stdout(output: &Output) -> String {
+    String::from_utf8_lossy(&output.stdout).into_owned()
+}
+
+fn stderr(output: &Output) -> String {
+    String::from_utf8_lossy(&output.stderr).into_owned()
+}
+
+/// Runs `ternary run` and returns (computed, fresh) from its closing line.
+fn run_counts(config: &Path, args: &[&str]) -> (usize, usize) {
+    let output = ternary(config, &[&["run"], args].concat());
+    assert!(output.status.success(), "run failed: {}", stderr(&output));
+    let text = stdout(&output);
+    let line = text
+        .lines()
+        .find(|l| l.starts_with("run: "))
+        .expect("closing line");
+    let number = |word: &str| -> usize {
+        let before = line.split(word).next().unwrap();
+        before
+            .split_whitespace()
+            .last()
+            .unwrap()
+            .trim_start_matches("run:")
+            .parse()
+            .unwrap()
+    };
+    (number(" computed"), number(" fresh"))
+}
+
+fn artifact_dirs(store: &Path) -> Vec<PathBuf> {
+    let scan = store.join("artifacts").join("scan");
+    let mut dirs: Vec<PathBuf> = fs::read_dir(&scan)
+        .map(|entries| entries.map(|e| e.unwrap().path()).collect())
+        .unwrap_or_default();
+    dirs.sort();
+    dirs
+}
+
+#[test]
+fn second_run_recomputes_nothing() {
+    let dir = workspace("cache");
+    let path = write_config(&dir, &config(7, ""));
+    assert_eq!(run_counts(&path, &[]), (2, 0));
+    assert_eq!(run_counts(&path, &[]), (0, 2));
+    assert_eq!(run_counts(&path, &["--force", "scan"]), (2, 0));
+    let status = stdout(&ternary(&path, &["status"]));
+    assert_eq!(status.matches("fresh").count(), 2, "{status}");
+}
+
+#[test]
+fn changing_one_potentials_scan_setting_reruns_only_that_instance() {
+    let dir = workspace("override");
+    let path = write_config(&dir, &config(7, ""));
+    assert_eq!(run_counts(&path, &[]), (2, 0));
+    write_config(&dir, &config(7, "[scan.overrides.ipp-6]\npoints = 9\n"));
+    let status = stdout(&ternary(&path, &["status"]));
+    assert!(
+        status.contains("scan[ipp-2]              fresh"),
+        "{status}"
+    );
+    assert!(
+        status.contains("stale: parameter grid.points: 7 -> 9"),
+        "{status}"
+    );
+    let output = ternary(&path, &["run"]);
+    let text = stdout(&output);
+    assert!(text.contains("run: 1 computed, 1 fresh"), "{text}");
+    assert!(
+        text.lines()
+            .any(|l| l.starts_with("scan[ipp-6]") && l.contains("computed")),
+        "{text}"
+    );
+    // The old ipp-6 artifact is no longer referenced: gc removes exactly it.
+    assert_eq!(artifact_dirs(&dir.join("data")).len(), 3);
+    let gc = stdout(&ternary(&path, &["gc"]));
+    assert!(gc.contains("removed 1 artifacts"), "{gc}");
+    assert_eq!(artifact_dirs(&dir.join("data")).len(), 2);
+    assert_eq!(run_counts(&path, &[]), (0, 2));
+}
+
+#[test]
+fn killed_run_leaves_nothing_trusted_and_next_run_completes() {
+    let dir = workspace("kill");
+    // Large enough that the kill lands inside the stage (seconds of work).
+    let path = write_config(&dir, &config(400_001, ""));
+    let store = dir.join("data");
+    let mut child = Command::new(BINARY)
+        .arg("--config")
+        .arg(&path)
+        .args(["run", "--quiet"])
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let started = Instant::now();
+    let staging = store.join("tmp");
+    while fs::read_dir(&staging)
+        .map(|mut e| e.next().is_none())
+        .unwrap_or(true)
+    {
+        assert!(
+            started.elapsed() < Duration::from_secs(60),
+            "the stage never started"
+        );
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    child.kill().unwrap();
+    child.wait().unwrap();
+    assert!(
+        artifact_dirs(&store).is_empty(),
+        "a killed stage left an artifact"
+    );
+    let verify = ternary(&path, &["verify"]);
+    assert!(verify.status.success());
+    assert!(
+        stdout(&verify).contains("verify: 0 artifacts"),
+        "{}",
+        stdout(&verify)
+    );
+    assert!(stdout(&verify).contains("staging directories from interrupted runs are ignored"));
+    let status = stdout(&ternary(&path, &["status"]));
+    assert!(
+        status.contains("scan[ipp-2]              missing"),
+        "{status}"
+    );
+    // Finish with a smaller grid: the run cleans the debris and completes.
+    write_config(&dir, &config(7, ""));
+    assert_eq!(run_counts(&path, &[]), (2, 0));
+    assert!(fs::read_dir(&staging).unwrap().next().is_none());
+    assert!(ternary(&path, &["verify"]).status.success());
+}
+
+#[test]
+fn flipped_byte_in_a_parquet_file_fails_verify() {
+    let dir = workspace("flip");
+    let path = write_config(&dir, &config(7, ""));
+    run_counts(&path, &[]);
+    assert!(ternary(&path, &["verify"]).status.success());
+    let file = artifact_dirs(&dir.join("data"))[0].join("curve.parquet");
+    let mut bytes = fs::read(&file).unwrap();
+    let middle = bytes.len() / 2;
+    bytes[middle] ^= 0x01;
+    fs::write(&file, bytes).unwrap();
+    let verify = ternary(&path, &["verify"]);
+    assert!(!verify.status.success());
+    assert!(stdout(&verify).contains("DAMAGED"), "{}", stdout(&verify));
+    assert!(
+        stdout(&verify).contains("curve.parquet: sha256"),
+        "{}",
+        stdout(&verify)
+    );
+}
+
+#[test]
+fn invalid_configs_are_rejected_naming_key_and_line() {
+    let dir = workspace("invalid");
+    let cases = [
+        (
+            "tolerance = 1e-12",
+            "tolerance = 0.01",
+            "`engine.tolerance`",
+            ":6:",
+        ),
+        (
+            "inverse_power = [2, 6]",
+            "inverse_power = [2, -6]",
+            "`potentials.inverse_power[1]`",
+            ":3:",
+        ),
+        ("points = 5", "points = 5\npionts = 3", "pionts", ":12:"),
+        ("points = 5", "points = 5.5", "`scan.points`", ":11:"),
+        (
+            "offset_min = -3.0",
+            "offset_min = -3.0\nlaunch_length = -90.0",
+            "`scan.launch_length`",
+            ":10:",
+        ),
+    ];
+    for (from, to, key, line) in cases {
+        let path = write_config(&dir, &config(5, "").replace(from, to));
+        let output = ternary(&path, &["run"]);
+        assert!(!output.status.success(), "accepted: {to}");
+        let message = stderr(&output);
+        assert!(
+            message.contains(key) && message.contains(line),
+            "{to}: {message}"
+        );
+    }
+    let output = ternary(
+        &write_config(&dir, &config(5, "")),
+        &["run", "--only", "scna"],
+    );
+    assert!(
+        stderr(&output).contains("unknown stage `scna`"),
+        "{}",
+        stderr(&output)
+    );
+}
+
+fn manifest_files(store: &Path) -> Vec<String> {
+    artifact_dirs(store)
+        .iter()
+        .map(|dir| {
+            let manifest: serde_json::Value =
+                serde_json::from_str(&fs::read_to_string(dir.join("manifest.json")).unwrap())
+                    .unwrap();
+            manifest["files"].to_string()
+        })
+        .collect()
+}
+
+#[test]
+fn same_key_gives_same_bytes_for_any_thread_count() {
+    let one = workspace("threads-1");
+    let two = workspace("threads-2");
+    run_counts(&write_config(&one, &config(31, "")), &["--threads", "1"]);
+    run_counts(&write_config(&two, &config(31, "")), &["--threads", "2"]);
+    let (a, b) = (
+        manifest_files(&one.join("data")),
+        manifest_files(&two.join("data")),
+    );
+    assert_eq!(a.len(), 2);
+    assert_eq!(a, b);
+}
+
+#[test]
+fn concurrent_runs_on_one_store_compute_each_instance_once() {
+    let dir = workspace("concurrent");
+    let path = write_config(&dir, &config(20_001, ""));
+    let spawn = || {
+        Command::new(BINARY)
+            .arg("--config")
+            .arg(&path)
+            .arg("run")
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap()
+    };
+    let (first, second) = (spawn(), spawn());
+    let outputs = [
+        first.wait_with_output().unwrap(),
+        second.wait_with_output().unwrap(),
+    ];
+    let computed: usize = outputs
+        .iter()
+        .map(|o| {
+            assert!(o.status.success(), "{}", stderr(o));
+            stdout(o)
+                .lines()
+                .filter(|l| l.starts_with("scan[") && l.contains("computed"))
+                .count()
+        })
+        .sum();
+    assert_eq!(computed, 2);
+    assert!(ternary(&path, &["verify"]).status.success());
+}
+
+#[test]
+fn artifacts_read_back_with_polars_and_show() {
+    use polars::prelude::{ParquetReader, SerReader};
+    let dir = workspace("polars");
+    let path = write_config(&dir, &config(41, ""));
+    run_counts(&path, &[]);
+    for artifact in artifact_dirs(&dir.join("data")) {
+        let frame = ParquetReader::new(fs::File::open(artifact.join("curve.parquet")).unwrap())
+            .finish()
+            .unwrap();
+        assert_eq!(frame.height(), 82);
+        let energy = frame.column("energy_error").unwrap().f64().unwrap();
+        assert!((0..frame.height()).all(|row| energy.get(row).unwrap().abs() <= 1e-11));
+        let manifest: serde_json::Value =
+            serde_json::from_str(&fs::read_to_string(artifact.join("manifest.json")).unwrap())
+                .unwrap();
+        if manifest["params"]["potential"]["n"] == 2.0 {
+            // Integrable Calogero case: no kick at all, to the engine's error floor.
+            let kicks = frame.column("u1_final").unwrap().f64().unwrap();
+            assert!((0..frame.height()).all(|row| kicks.get(row).unwrap().abs() <= 1e-10));
+        }
+        let key = manifest["key"].as_str().unwrap();
+        let shown = stdout(&ternary(&path, &["show", &key[..10]]));
+        assert!(
+            shown.contains("u1_final_max_abs") && shown.contains("[v_th]"),
+            "{shown}"
+        );
+    }
+}
+
+const PYARROW_CHECK: &str = r#"
+import json, sys
+import pyarrow.parquet as pq
+artifact = sys.argv[1]
+manifest = json.load(open(artifact + "/manifest.json"))
+table = pq.read_table(artifact + "/peak.parquet")
+meta = {k.decode(): v.decode() for k, v in table.schema.metadata.items()}
+raw = {k.decode(): v.decode() for k, v in pq.read_metadata(artifact + "/peak.parquet").metadata.items()}
+assert raw["ternary.key"] == manifest["key"], "parquet key-value metadata"
+assert meta["ternary.key"] == manifest["key"], "key metadata"
+assert json.loads(meta["ternary.params"]) == manifest["params"], "params metadata"
+assert table.schema.field("u1_final_max_abs").metadata[b"unit"] == b"v_th", "unit"
+assert table.column("launch").to_pylist() == ["symmetric", "asymmetric"], "launch names"
+peaks = table.column("u1_final_max_abs").to_pylist()
+errors = table.column("u1_final_max_abs_error").to_pylist()
+n = manifest["params"]["potential"]["n"]
+for peak, error in zip(peaks, errors):
+    assert 0 <= error < 1e-9, error
+    if n == 2:
+        assert peak < 1e-10, peak
+    else:
+        assert 0.01 < peak < 0.1, peak
+curve = pq.read_table(artifact + "/curve.parquet")
+assert curve.num_rows == 2 * manifest["params"]["grid"]["points"], "rows"
+print("pyarrow ok", n)
+"#;
+
+#[test]
+fn artifacts_read_back_with_pyarrow() {
+    let dir = workspace("pyarrow");
+    let path = write_config(&dir, &config(41, ""));
+    run_counts(&path, &[]);
+    for artifact in artifact_dirs(&dir.join("data")) {
+        let output = Command::new("python3")
+            .arg("-c")
+            .arg(PYARROW_CHECK)
+            .arg(&artifact)
+            .output()
+            .expect("python3");
+        assert!(
+            output.status.success(),
+            "pyarrow check failed (install pyarrow: python3 -m pip install pyarrow): {}",
+            stderr(&output)
+        );
+        assert!(stdout(&output).starts_with("pyarrow ok"));
+    }
+}
