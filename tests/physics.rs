@@ -186,3 +186,65 @@ fn lennard_jones_shallow_and_deep_wells_conserve_energy() {
         }
     }
 }
+
+/// Widely separated arrivals are two binary encounters joined by an analytic
+/// free-flight jump with first-order tail impulses; for n = 2 the outcome must
+/// still be an exact permutation, for any n energy must be conserved.
+#[test]
+fn free_flight_jumps_keep_integrability_and_conservation() {
+    let launches = [
+        LaunchPair { u2: 1.0, u3: -1.0 },
+        LaunchPair { u2: 1.1, u3: 0.4 },
+        LaunchPair { u2: -0.3, u3: 2.0 },
+    ];
+    let mut jumps = 0;
+    for launch in launches {
+        for offset in [-300.0, -40.0, -12.0, 12.0, 40.0, 300.0] {
+            let calogero = collide(&ipp(2.0), &default_engine(), launch.lines(offset));
+            assert_conserved(&calogero, "n = 2 with jump");
+            assert!(permutation_defect(&calogero) <= 1e-10, "{calogero:?}");
+            for potential in [ipp(6.0), Potential::LennardJones { theta: 1.0 }] {
+                let collision = collide(&potential, &default_engine(), launch.lines(offset));
+                assert_conserved(
+                    &collision,
+                    &format!("{} at offset {offset}", potential.id()),
+                );
+                jumps += collision.jumps;
+            }
+        }
+    }
+    assert!(jumps > 0, "no scene exercised the free-flight jump");
+}
+
+/// A thermal scene in a deep Lennard-Jones well (theta = 0.05, depth 5 kT)
+/// that leaves a bound pair: the pair members share the pair's centre-of-mass
+/// velocity, its internal energy lies inside the well, and energy including
+/// the binding energy is conserved.
+#[test]
+fn deep_lennard_jones_well_recombines_a_pair() {
+    let potential = Potential::LennardJones { theta: 0.05 };
+    let lines = [
+        FreeLine {
+            position: 0.0,
+            velocity: 0.0,
+        },
+        FreeLine {
+            position: 0.0,
+            velocity: 0.8400737840527969,
+        },
+        FreeLine {
+            position: -0.02467460864074322,
+            velocity: -0.7965549477643259,
+        },
+    ];
+    let collision = collide(&potential, &default_engine(), lines);
+    assert_eq!(collision.outcome, Outcome::Recombined, "{collision:?}");
+    assert_conserved(&collision, "recombination");
+    assert!(collision.binding_energy < 0.0 && collision.binding_energy > -5.0);
+    let [slow, middle, fast] = collision.outgoing;
+    assert!(middle == fast || middle == slow, "{collision:?}");
+    // The free particle carries away the released binding energy.
+    let energy_in: f64 = collision.incoming.iter().map(|u| u * u / 2.0).sum();
+    let kinetic_out: f64 = collision.outgoing.iter().map(|u| u * u / 2.0).sum();
+    assert!((kinetic_out + collision.binding_energy - energy_in).abs() < 1e-10);
+}

@@ -179,6 +179,8 @@ const APPROACH_FRACTION: f64 = 0.5;
 const SAFETY: f64 = 0.9;
 const MIN_STEP_FACTOR: f64 = 0.2;
 const MAX_STEP_FACTOR: f64 = 5.0;
+/// First step in units of the local time scale; the controller corrects it.
+const INITIAL_STEP_RATIO: f64 = 0.1;
 
 /// Relative acceleration of the two gaps `g1 = x_b - x_a`, `g2 = x_c - x_b`
 /// (equal unit masses, all three pairs interacting):
@@ -287,6 +289,19 @@ fn free_flight_time<P: PairPotential>(
         .into_iter()
         .filter(|&(_, rate)| rate < 0.0)
         .map(|(gap, rate)| ((gap - potential.range(epsilon * rate * rate)) / -rate).max(0.0))
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// Time over which the neighbour gaps change appreciably:
+/// `min_k g_k / sqrt(g_k'^2 + g_k |g_k''|)`, the time to contact in free
+/// approach and `sqrt(g / |g''|)` at a turning point. The local error of a
+/// step of size `h` is a steep function of `h / tau` (the force is analytic
+/// within a radius of order `tau` in complex time), so the controller adapts
+/// `h / tau` rather than `h`: the step then follows the geometry of approach
+/// and separation instead of lagging behind it.
+fn local_time_scale(gaps: &[f64; 2], rates: &[f64; 2], accel: &[f64; 2]) -> f64 {
+    (0..2)
+        .map(|k| gaps[k] / (rates[k] * rates[k] + gaps[k] * accel[k].abs()).sqrt())
         .fold(f64::INFINITY, f64::min)
 }
 
@@ -464,13 +479,17 @@ fn run_scene<P: PairPotential, I: Integrator>(
         evaluations: 1,
         ..Counters::default()
     };
-    let mut step = approach_limit(&gaps, &rates);
+    // The controller adapts the step in units of the local time scale, the
+    // quantity the error actually depends on (see `local_time_scale`).
+    let mut step_ratio = INITIAL_STEP_RATIO;
+    let mut just_rejected = false;
     let exponent = -1.0 / f64::from(I::ERROR_ORDER + 1);
     loop {
         if counters.steps + counters.rejected_steps >= settings.max_steps {
             return failed(incoming, Outcome::StepBudgetExhausted, counters);
         }
-        step = step.min(approach_limit(&gaps, &rates));
+        let step = (step_ratio * local_time_scale(&gaps, &rates, &accel))
+            .min(approach_limit(&gaps, &rates));
         let smallest_gap = gaps[0].min(gaps[1]);
         let position_scale = [settings.tolerance * smallest_gap; 2];
         let velocity_scale = [settings.tolerance * scales.speed; 2];
@@ -487,6 +506,7 @@ fn run_scene<P: PairPotential, I: Integrator>(
         let admissible = trial.error <= 1.0 && trial.y.iter().all(|&g| g > 0.0);
         if !admissible {
             counters.rejected_steps += 1;
+            just_rejected = true;
             // A step that crossed two particles is halved even if its error looked fine.
             let factor = if trial.error > 1.0 && trial.error.is_finite() {
                 (SAFETY * trial.error.powf(exponent)).clamp(MIN_STEP_FACTOR, SAFETY)
@@ -495,15 +515,18 @@ fn run_scene<P: PairPotential, I: Integrator>(
             } else {
                 MIN_STEP_FACTOR
             };
-            step *= factor;
-            if step.is_nan() || step <= f64::MIN_POSITIVE * 1e10 {
+            step_ratio *= factor;
+            if step_ratio.is_nan() || step_ratio <= f64::EPSILON {
                 return failed(incoming, Outcome::Breakdown, counters);
             }
             continue;
         }
         counters.steps += 1;
         (gaps, rates, accel) = (trial.y, trial.v, trial.a);
-        step *= (SAFETY * trial.error.powf(exponent)).clamp(MIN_STEP_FACTOR, MAX_STEP_FACTOR);
+        // No growth right after a rejection (Hairer, Norsett & Wanner, II.4).
+        let growth_cap = if just_rejected { 1.0 } else { MAX_STEP_FACTOR };
+        just_rejected = false;
+        step_ratio *= (SAFETY * trial.error.powf(exponent)).clamp(MIN_STEP_FACTOR, growth_cap);
         match classify(potential, &gaps, &rates, epsilon, step) {
             Next::Integrate => {}
             Next::Jump(duration) => {
@@ -511,7 +534,6 @@ fn run_scene<P: PairPotential, I: Integrator>(
                 accel = acceleration.acceleration(&gaps);
                 counters.evaluations += 1;
                 counters.jumps += 1;
-                step = f64::INFINITY;
             }
             Next::Scattered => {
                 let impulse = tail_impulses(potential, &gaps, &rates);
