@@ -144,7 +144,7 @@ fn input_records(
             let mut files: Vec<(String, String)> = manifest
                 .files
                 .iter()
-                .map(|f| (f.name.clone(), f.sha256.clone()))
+                .map(|f| (f.name.clone(), f.content_sha256.clone()))
                 .collect();
             files.sort();
             Some(InputRecord {
@@ -307,7 +307,16 @@ fn compute(
                 id: id.clone(),
                 source: source.into(),
             })?;
-        staging.write_file(&format!("{}.parquet", table.name), &bytes, table.rows())?;
+        let content = table.content_sha256().map_err(|source| ExecError::Stage {
+            id: id.clone(),
+            source: source.into(),
+        })?;
+        staging.write_file(
+            &format!("{}.parquet", table.name),
+            &bytes,
+            table.rows(),
+            content,
+        )?;
     }
     let seconds = started.elapsed().as_secs_f64();
     let manifest = Manifest {
@@ -427,4 +436,163 @@ fn explain(
         reasons.push("key changed".to_string());
     }
     Freshness::Stale(reasons)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::pipeline::{Column, Table};
+    use serde_json::json;
+
+    /// A source whose `label` does not change its output bytes.
+    struct Source {
+        label: &'static str,
+        value: f64,
+    }
+
+    /// Doubles the source's value.
+    struct Double;
+
+    impl Stage for Source {
+        fn id(&self) -> InstanceId {
+            InstanceId::new("source", "a")
+        }
+        fn version(&self) -> u32 {
+            1
+        }
+        fn params(&self) -> serde_json::Value {
+            json!({ "label": self.label, "value": self.value })
+        }
+        fn inputs(&self) -> Vec<InstanceId> {
+            Vec::new()
+        }
+        fn work_units(&self) -> u64 {
+            1
+        }
+        fn run(&self, _: &[Input], _: &Progress) -> Result<Vec<Table>, StageError> {
+            Ok(vec![Table::new(
+                "value",
+                vec![Column::f64("x", "1", "value", vec![self.value])],
+            )?])
+        }
+    }
+
+    impl Stage for Double {
+        fn id(&self) -> InstanceId {
+            InstanceId::new("double", "a")
+        }
+        fn version(&self) -> u32 {
+            1
+        }
+        fn params(&self) -> serde_json::Value {
+            json!({})
+        }
+        fn inputs(&self) -> Vec<InstanceId> {
+            vec![InstanceId::new("source", "a")]
+        }
+        fn work_units(&self) -> u64 {
+            1
+        }
+        fn run(&self, inputs: &[Input], _: &Progress) -> Result<Vec<Table>, StageError> {
+            let column = inputs[0].tables["value"].column(0).clone();
+            let values = column
+                .as_any()
+                .downcast_ref::<arrow::array::Float64Array>()
+                .ok_or_else(|| StageError::Input("x is not float64".into()))?;
+            let doubled = values.iter().map(|v| 2.0 * v.unwrap_or(f64::NAN)).collect();
+            Ok(vec![Table::new(
+                "value",
+                vec![Column::f64("x", "1", "doubled", doubled)],
+            )?])
+        }
+    }
+
+    fn plan(label: &'static str, value: f64) -> Vec<Box<dyn Stage>> {
+        vec![Box::new(Source { label, value }), Box::new(Double)]
+    }
+
+    fn computed(store: &Store, stages: &[Box<dyn Stage>], force: &[&str]) -> Vec<String> {
+        let options = RunOptions {
+            only: Vec::new(),
+            force: force.iter().map(ToString::to_string).collect(),
+            verbosity: Verbosity::Quiet,
+        };
+        run(store, stages, &options)
+            .unwrap()
+            .into_iter()
+            .filter(|r| matches!(r.action, Action::Computed(_)))
+            .map(|r| r.id.stage)
+            .collect()
+    }
+
+    fn temporary_store(name: &str) -> Store {
+        let root =
+            std::env::temp_dir().join(format!("ternary-executor-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&root);
+        Store::open(&root).unwrap()
+    }
+
+    #[test]
+    fn identical_input_bytes_cut_off_downstream_recomputation() {
+        let store = temporary_store("cutoff");
+        assert_eq!(
+            computed(&store, &plan("first", 1.5), &[]),
+            ["source", "double"]
+        );
+        // A parameter that leaves the source's bytes unchanged: only the source reruns.
+        assert_eq!(computed(&store, &plan("second", 1.5), &[]), ["source"]);
+        assert_eq!(
+            computed(&store, &plan("second", 1.5), &["source"]),
+            ["source"]
+        );
+        // A real change propagates, and the reason is reported before the run.
+        let lines = status(&store, &plan("second", 2.5)).unwrap();
+        assert_eq!(
+            lines[0].freshness,
+            Freshness::Stale(vec!["parameter value: 1.5 -> 2.5".into()])
+        );
+        assert_eq!(
+            lines[1].freshness,
+            Freshness::Stale(vec!["waiting on source[a]".into()])
+        );
+        assert_eq!(
+            computed(&store, &plan("second", 2.5), &[]),
+            ["source", "double"]
+        );
+        assert!(computed(&store, &plan("second", 2.5), &[]).is_empty());
+    }
+
+    #[test]
+    fn downstream_reads_upstream_tables() {
+        let store = temporary_store("read");
+        computed(&store, &plan("x", 3.0), &[]);
+        let lines = status(&store, &plan("x", 3.0)).unwrap();
+        let key = lines[1].key.clone().unwrap();
+        let (batch, metadata) = crate::pipeline::table::read_parquet(
+            &store.artifact_dir("double", &key).join("value.parquet"),
+        )
+        .unwrap();
+        let values = batch
+            .column(0)
+            .as_any()
+            .downcast_ref::<arrow::array::Float64Array>()
+            .unwrap();
+        assert_eq!(values.value(0), 6.0);
+        assert_eq!(metadata["ternary.key"], key);
+    }
+
+    #[test]
+    fn unknown_stage_in_only_is_rejected() {
+        let store = temporary_store("unknown");
+        let options = RunOptions {
+            only: vec!["sorce".into()],
+            force: Vec::new(),
+            verbosity: Verbosity::Quiet,
+        };
+        let error = run(&store, &plan("x", 1.0), &options).unwrap_err();
+        assert!(
+            error.to_string().contains("unknown stage `sorce`"),
+            "{error}"
+        );
+    }
 }

@@ -69,7 +69,7 @@ pub struct InputRecord {
     pub instance: String,
     /// Upstream artifact key.
     pub key: String,
-    /// `(file name, sha256)` of every upstream output file, sorted by name.
+    /// `(file name, content sha256)` of every upstream output file, sorted by name.
     pub files: Vec<(String, String)>,
 }
 

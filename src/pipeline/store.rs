@@ -58,8 +58,11 @@ fn io_error(path: &Path) -> impl FnOnce(io::Error) -> StoreError + '_ {
 pub struct FileRecord {
     /// File name inside the artifact directory.
     pub name: String,
-    /// SHA-256 of the file's bytes.
+    /// SHA-256 of the file's bytes (what `verify` checks).
     pub sha256: String,
+    /// SHA-256 of the table's data and its own metadata, without the
+    /// executor's provenance (what downstream keys depend on: early cutoff).
+    pub content_sha256: String,
     /// Size in bytes.
     pub bytes: u64,
     /// Data rows.
@@ -318,13 +321,20 @@ pub struct Staging {
 }
 
 impl Staging {
-    /// Writes and fsyncs one output file.
-    pub fn write_file(&mut self, name: &str, bytes: &[u8], rows: u64) -> Result<(), StoreError> {
+    /// Writes and fsyncs one output file whose table content hashes to `content_sha256`.
+    pub fn write_file(
+        &mut self,
+        name: &str,
+        bytes: &[u8],
+        rows: u64,
+        content_sha256: String,
+    ) -> Result<(), StoreError> {
         let path = self.dir.join(name);
         write_synced(&path, bytes)?;
         self.files.push(FileRecord {
             name: name.to_string(),
             sha256: sha256_hex(bytes),
+            content_sha256,
             bytes: bytes.len() as u64,
             rows,
         });

@@ -17,6 +17,7 @@ use parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder;
 use parquet::basic::{Compression, ZstdLevel};
 use parquet::file::metadata::KeyValue;
 use parquet::file::properties::WriterProperties;
+use sha2::{Digest, Sha256};
 
 /// Rows per Parquet row group: large enough for compression, small enough to
 /// stream.
@@ -117,6 +118,62 @@ impl Table {
     pub fn with_metadata(mut self, key: &str, value: String) -> Table {
         self.metadata.insert(key.to_string(), value);
         self
+    }
+
+    /// SHA-256 over a canonical encoding of the data: table name, metadata,
+    /// and per column its name, type, field metadata and values (little-endian
+    /// bits; strings length-prefixed). Independent of the Parquet encoding and of
+    /// the provenance the executor adds, so a recomputation that reproduces the
+    /// data leaves downstream keys unchanged.
+    pub fn content_sha256(&self) -> Result<String, TableError> {
+        let mut hasher = Sha256::new();
+        let mut feed = |bytes: &[u8]| {
+            hasher.update((bytes.len() as u64).to_le_bytes());
+            hasher.update(bytes);
+        };
+        feed(self.name.as_bytes());
+        for (key, value) in &self.metadata {
+            feed(key.as_bytes());
+            feed(value.as_bytes());
+        }
+        let schema = self.batch.schema();
+        for (field, column) in schema.fields().iter().zip(self.batch.columns()) {
+            feed(field.name().as_bytes());
+            feed(field.data_type().to_string().as_bytes());
+            let metadata: BTreeMap<&String, &String> = field.metadata().iter().collect();
+            for (key, value) in metadata {
+                feed(key.as_bytes());
+                feed(value.as_bytes());
+            }
+            let any = column.as_any();
+            if let Some(values) = any.downcast_ref::<Float64Array>() {
+                values
+                    .iter()
+                    .for_each(|v| feed(&v.map_or(u64::MAX, f64::to_bits).to_le_bytes()));
+            } else if let Some(values) = any.downcast_ref::<UInt32Array>() {
+                values
+                    .iter()
+                    .for_each(|v| feed(&v.map_or(u64::MAX, u64::from).to_le_bytes()));
+            } else if let Some(values) = any.downcast_ref::<StringArray>() {
+                values
+                    .iter()
+                    .for_each(|v| feed(v.unwrap_or("\u{0}null").as_bytes()));
+            } else {
+                return Err(TableError::Arrow {
+                    name: self.name.clone(),
+                    source: arrow::error::ArrowError::NotYetImplemented(format!(
+                        "content hash of column `{}` of type {}",
+                        field.name(),
+                        field.data_type()
+                    )),
+                });
+            }
+        }
+        Ok(hasher
+            .finalize()
+            .iter()
+            .map(|b| format!("{b:02x}"))
+            .collect())
     }
 
     /// Number of rows.
