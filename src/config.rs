@@ -12,6 +12,7 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 
 use crate::physics::potential::Potential;
+use crate::physics::sampling::{OffsetProposal, SamplingPlan};
 use crate::physics::scene::{EngineSettings, Method};
 
 /// A rejected configuration: file, key path, line (when known) and reason.
@@ -53,6 +54,97 @@ pub struct Config {
     pub engine: EngineConfig,
     /// Mono-energetic kick curves.
     pub scan: ScanConfig,
+    /// Monte Carlo scenes for the collision kernel.
+    #[serde(default)]
+    pub collisions: CollisionsConfig,
+    /// Kernel, moments and table settings.
+    #[serde(default)]
+    pub kernel: KernelConfig,
+}
+
+/// `[collisions]`: how kernel scenes are sampled (numerics.md "Sampling scenes").
+#[derive(Clone, Copy, Debug, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct CollisionsConfig {
+    /// Seed of every randomization.
+    pub seed: u64,
+    /// Independent randomizations (replicates); standard errors come from their spread.
+    pub randomizations: u32,
+    /// Scenes per randomization (both strata together); each stratum's share is
+    /// rounded to the nearest power of two.
+    pub points: u32,
+    /// Fraction of the scenes drawn in the same-side stratum.
+    pub same_side_fraction: f64,
+    /// Mixture proposal of the arrival offset (`[collisions.proposal]`).
+    pub proposal: OffsetProposal,
+}
+
+impl Default for CollisionsConfig {
+    fn default() -> Self {
+        CollisionsConfig {
+            seed: 1,
+            randomizations: 16,
+            points: 4096,
+            same_side_fraction: 0.15,
+            proposal: OffsetProposal::default(),
+        }
+    }
+}
+
+/// `[kernel]`.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct KernelConfig {
+    /// Velocities `u'` of the special particle (units of `v_th`).
+    pub u_prime: Vec<f64>,
+    /// Densities `rho * l`; 0 is the dilute limit.
+    pub density: Vec<f64>,
+    /// Total width of the velocity window around `u'`.
+    pub window: f64,
+    /// Histogram bin width.
+    pub bin_width: f64,
+    /// Observation region length `L` (in `l`), for the finite-density weight.
+    pub launch_length: f64,
+}
+
+impl Default for KernelConfig {
+    fn default() -> Self {
+        KernelConfig {
+            u_prime: vec![0.0],
+            density: vec![0.0],
+            window: 0.2,
+            bin_width: 0.1 / 2000.0,
+            launch_length: 90.0,
+        }
+    }
+}
+
+/// Resolved parameters of a `collisions` instance.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct CollisionsParams {
+    /// The potential.
+    pub potential: Potential,
+    /// Engine settings.
+    pub engine: EngineSettings,
+    /// What to draw.
+    pub sampling: SamplingPlan,
+}
+
+/// Resolved parameters of a `kernel` or `moments` instance.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct KernelParams {
+    /// The potential (identifies the input).
+    pub potential: Potential,
+    /// `u'`.
+    pub u_prime: f64,
+    /// `rho * l`.
+    pub density: f64,
+    /// Window width.
+    pub window: f64,
+    /// Bin width.
+    pub bin_width: f64,
+    /// `L`.
+    pub launch_length: f64,
 }
 
 /// `[store]`.
@@ -284,6 +376,52 @@ impl Study {
         }
     }
 
+    /// Resolved parameters of the collision scenes of `potential`.
+    pub fn collisions_params(&self, potential: Potential) -> CollisionsParams {
+        let sampling = &self.config.collisions;
+        let same_side = f64::from(sampling.points) * sampling.same_side_fraction;
+        let opposite = f64::from(sampling.points) - same_side;
+        CollisionsParams {
+            potential,
+            engine: self.engine(),
+            sampling: SamplingPlan {
+                seed: sampling.seed,
+                randomizations: sampling.randomizations,
+                opposite_points: nearest_power_of_two(opposite),
+                same_side_points: nearest_power_of_two(same_side),
+                proposal: sampling.proposal,
+            },
+        }
+    }
+
+    /// Every `(u', density)` the kernel is evaluated at, with `(0, 0)` (which
+    /// defines `a_n`) always first.
+    pub fn kernel_targets(&self) -> Vec<(f64, f64)> {
+        let kernel = &self.config.kernel;
+        let mut targets = vec![(0.0, 0.0)];
+        for &u in &kernel.u_prime {
+            for &density in &kernel.density {
+                if !targets.contains(&(u, density)) {
+                    targets.push((u, density));
+                }
+            }
+        }
+        targets
+    }
+
+    /// Resolved kernel parameters of `potential` at `(u', density)`.
+    pub fn kernel_params(&self, potential: Potential, u_prime: f64, density: f64) -> KernelParams {
+        let kernel = &self.config.kernel;
+        KernelParams {
+            potential,
+            u_prime,
+            density,
+            window: kernel.window,
+            bin_width: kernel.bin_width,
+            launch_length: kernel.launch_length,
+        }
+    }
+
     /// Resolved parameters of the scan of `potential`.
     pub fn scan_params(&self, potential: Potential) -> ScanParams {
         let scan = &self.config.scan;
@@ -295,6 +433,12 @@ impl Study {
             launches: scan.launch.clone(),
         }
     }
+}
+
+/// The power of two nearest to `count` (at least 2) in the logarithm: scrambled
+/// Sobol' points converge fastest as complete nets of `2^m` points.
+fn nearest_power_of_two(count: f64) -> u32 {
+    2u32.pow(count.max(2.0).log2().round().clamp(1.0, 31.0) as u32)
 }
 
 /// A validation failure: key path and message.
@@ -324,7 +468,109 @@ fn validate(config: &Config) -> Result<(), Invalid> {
         "engine.max_steps",
         "must be at least 1",
     )?;
-    validate_scan(config)
+    validate_scan(config)?;
+    validate_collisions(&config.collisions)?;
+    validate_kernel(&config.kernel)
+}
+
+fn validate_collisions(sampling: &CollisionsConfig) -> Result<(), Invalid> {
+    check(
+        sampling.randomizations >= 2,
+        "collisions.randomizations",
+        "at least 2 randomizations are needed for a standard error",
+    )?;
+    check(
+        sampling.points >= 2,
+        "collisions.points",
+        "must be at least 2",
+    )?;
+    check(
+        sampling.same_side_fraction > 0.0 && sampling.same_side_fraction < 1.0,
+        "collisions.same_side_fraction",
+        format!(
+            "{} must lie in (0, 1): both strata need scenes",
+            sampling.same_side_fraction
+        ),
+    )?;
+    let proposal = &sampling.proposal;
+    for (key, value) in [
+        ("core_weight", proposal.core_weight),
+        ("tail_weight", proposal.tail_weight),
+        ("uniform_weight", proposal.uniform_weight),
+    ] {
+        check(
+            value.is_finite() && value >= 0.0,
+            format!("collisions.proposal.{key}"),
+            format!("{value} must be a finite weight >= 0"),
+        )?;
+    }
+    check(
+        proposal.tail_weight > 0.0,
+        "collisions.proposal.tail_weight",
+        "must be > 0: only the Cauchy tail covers every offset, so no scene is left out",
+    )?;
+    for (key, value) in [
+        ("core_width", proposal.core_width),
+        ("tail_width", proposal.tail_width),
+        ("uniform_range", proposal.uniform_range),
+    ] {
+        check(
+            value.is_finite() && value > 0.0,
+            format!("collisions.proposal.{key}"),
+            format!("{value} must be a finite width > 0 (in collision times)"),
+        )?;
+    }
+    Ok(())
+}
+
+fn validate_kernel(kernel: &KernelConfig) -> Result<(), Invalid> {
+    check(
+        !kernel.u_prime.is_empty(),
+        "kernel.u_prime",
+        "lists no velocity",
+    )?;
+    for (k, &u) in kernel.u_prime.iter().enumerate() {
+        check(
+            u.is_finite() && u.abs() <= 5.0,
+            format!("kernel.u_prime[{k}]"),
+            format!("{u} is outside [-5, 5] thermal velocities"),
+        )?;
+    }
+    check(
+        !kernel.density.is_empty(),
+        "kernel.density",
+        "lists no density",
+    )?;
+    for (k, &density) in kernel.density.iter().enumerate() {
+        check(
+            density.is_finite() && (0.0..=0.1).contains(&density),
+            format!("kernel.density[{k}]"),
+            format!("rho*l = {density} is outside [0, 0.1] (the model is for dilute gases)"),
+        )?;
+    }
+    check(
+        kernel.bin_width.is_finite() && kernel.bin_width > 0.0,
+        "kernel.bin_width",
+        format!("{} must be > 0", kernel.bin_width),
+    )?;
+    check(
+        kernel.window.is_finite() && kernel.window >= 3.0 * kernel.bin_width,
+        "kernel.window",
+        format!(
+            "{} must hold at least 3 bins of kernel.bin_width",
+            kernel.window
+        ),
+    )?;
+    check(
+        kernel.window / kernel.bin_width <= 1e6,
+        "kernel.bin_width",
+        "more than a million bins: widen the bins or narrow the window",
+    )?;
+    check(
+        kernel.launch_length.is_finite() && kernel.launch_length > 0.0,
+        "kernel.launch_length",
+        format!("L = {} must be > 0", kernel.launch_length),
+    )
 }
 
 fn validate_potentials(potentials: &PotentialsConfig) -> Result<(), Invalid> {

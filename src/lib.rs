@@ -3,6 +3,7 @@
 //! * [`physics`]: pure physics (potentials, the three-body scattering engine,
 //!   mono-energetic scans); no IO.
 //! * [`integrate`]: embedded Runge-Kutta(-Nystrom) steps for tiny systems.
+//! * [`kernel`]: the collision kernel and its moments from integrated scenes.
 //! * [`pipeline`]: the generic content-addressed DAG (keys, store, executor,
 //!   Parquet tables); no physics.
 //! * [`stages`]: one adapter per stage between the two.
@@ -13,6 +14,7 @@
 pub mod bench;
 pub mod config;
 pub mod integrate;
+pub mod kernel;
 pub mod physics;
 pub mod pipeline;
 pub mod report;

@@ -35,9 +35,9 @@ fn read_frame(path: &Path) -> Result<DataFrame> {
         .with_context(|| format!("reading {}", path.display()))
 }
 
-/// The scan peaks of the instances of a run, as a readable table.
+/// The study table (when computed) and the scan peaks of a run, readable.
 pub fn summary(store: &Store, reports: &[InstanceReport]) -> Result<String> {
-    let mut out = String::new();
+    let mut out = study_table(store, reports)?;
     let scans = reports.iter().filter(|r| r.id.stage == "scan");
     for (k, report) in scans.enumerate() {
         let Some(key) = &report.key else { continue };
@@ -91,6 +91,64 @@ pub fn summary(store: &Store, reports: &[InstanceReport]) -> Result<String> {
                 number("worst_energy_error")?,
             )?;
         }
+    }
+    Ok(out)
+}
+
+/// The `table` stage's output: `a_n` with standard errors per potential.
+fn study_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
+    let mut out = String::new();
+    let Some(key) = reports
+        .iter()
+        .find(|r| r.id.stage == "table")
+        .and_then(|r| r.key.as_ref())
+    else {
+        return Ok(out);
+    };
+    if store.intact_manifest("table", key).is_none() {
+        return Ok(out);
+    }
+    let frame = read_frame(&store.artifact_dir("table", key).join("table.parquet"))?;
+    writeln!(
+        out,
+        "\nthermalization constants: a_n = self variance rate at u' = 0 [rho^2 l v_th^3], dilute limit (+- standard error)"
+    )?;
+    writeln!(
+        out,
+        "{:<10} {:<28} {:>8} {:<28} {:<26} {:>9}",
+        "potential",
+        "a_n (|u-u'| <= window/2)",
+        "rel.err",
+        "a_n untruncated",
+        "self drift (0 expected)",
+        "failed"
+    )?;
+    for row in 0..frame.height() {
+        let number = |name: &str| -> Result<f64> {
+            Ok(frame.column(name)?.f64()?.get(row).unwrap_or(f64::NAN))
+        };
+        let potential = frame
+            .column("potential")?
+            .str()?
+            .get(row)
+            .unwrap_or_default()
+            .to_string();
+        let (a, a_err) = (number("a_n")?, number("a_n_stderr")?);
+        let failed = frame.column("failed_events")?.u32()?.get(row).unwrap_or(0);
+        let events = frame.column("events")?.u32()?.get(row).unwrap_or(0);
+        writeln!(
+            out,
+            "{:<10} {:<28} {:>7.3}% {:<28} {:<26} {:>9}",
+            potential,
+            with_error(a, a_err),
+            100.0 * a_err / a.abs(),
+            with_error(
+                number("a_n_untruncated")?,
+                number("a_n_untruncated_stderr")?
+            ),
+            with_error(number("self_drift")?, number("self_drift_stderr")?),
+            format!("{failed}/{events}"),
+        )?;
     }
     Ok(out)
 }

@@ -40,6 +40,10 @@ u3 = -1.0
 name = "asymmetric"
 u2 = 1.1
 u3 = -0.9
+
+[collisions]
+randomizations = 2
+points = 64
 {extra}
 "#
     )
@@ -90,31 +94,46 @@ fn run_counts(config: &Path, args: &[&str]) -> (usize, usize) {
     (number(" computed"), number(" fresh"))
 }
 
-fn artifact_dirs(store: &Path) -> Vec<PathBuf> {
-    let scan = store.join("artifacts").join("scan");
-    let mut dirs: Vec<PathBuf> = fs::read_dir(&scan)
+/// Every instance of the default DAG: per potential scan, collisions, kernel and
+/// moments at (u' = 0, dilute), plus the table.
+const INSTANCES: usize = 9;
+
+fn stage_dirs(store: &Path, stage: &str) -> Vec<PathBuf> {
+    let mut dirs: Vec<PathBuf> = fs::read_dir(store.join("artifacts").join(stage))
         .map(|entries| entries.map(|e| e.unwrap().path()).collect())
         .unwrap_or_default();
     dirs.sort();
     dirs
 }
 
+fn artifact_dirs(store: &Path) -> Vec<PathBuf> {
+    stage_dirs(store, "scan")
+}
+
+fn all_artifact_dirs(store: &Path) -> Vec<PathBuf> {
+    ["scan", "collisions", "kernel", "moments", "table"]
+        .iter()
+        .flat_map(|stage| stage_dirs(store, stage))
+        .collect()
+}
+
 #[test]
 fn second_run_recomputes_nothing() {
     let dir = workspace("cache");
     let path = write_config(&dir, &config(7, ""));
-    assert_eq!(run_counts(&path, &[]), (2, 0));
-    assert_eq!(run_counts(&path, &[]), (0, 2));
-    assert_eq!(run_counts(&path, &["--force", "scan"]), (2, 0));
+    assert_eq!(run_counts(&path, &[]), (INSTANCES, 0));
+    assert_eq!(run_counts(&path, &[]), (0, INSTANCES));
+    // Recomputed scans reproduce their data: the table downstream stays fresh.
+    assert_eq!(run_counts(&path, &["--force", "scan"]), (2, INSTANCES - 2));
     let status = stdout(&ternary(&path, &["status"]));
-    assert_eq!(status.matches("fresh").count(), 2, "{status}");
+    assert_eq!(status.matches("fresh").count(), INSTANCES, "{status}");
 }
 
 #[test]
 fn changing_one_potentials_scan_setting_reruns_only_that_instance() {
     let dir = workspace("override");
     let path = write_config(&dir, &config(7, ""));
-    assert_eq!(run_counts(&path, &[]), (2, 0));
+    assert_eq!(run_counts(&path, &[]), (INSTANCES, 0));
     write_config(&dir, &config(7, "[scan.overrides.ipp-6]\npoints = 9\n"));
     let status = stdout(&ternary(&path, &["status"]));
     assert!(
@@ -127,18 +146,25 @@ fn changing_one_potentials_scan_setting_reruns_only_that_instance() {
     );
     let output = ternary(&path, &["run"]);
     let text = stdout(&output);
-    assert!(text.contains("run: 1 computed, 1 fresh"), "{text}");
+    // The changed scan, and the table that reads it; nothing else.
     assert!(
-        text.lines()
-            .any(|l| l.starts_with("scan[ipp-6]") && l.contains("computed")),
+        text.contains(&format!("run: 2 computed, {} fresh", INSTANCES - 2)),
         "{text}"
     );
-    // The old ipp-6 artifact is no longer referenced: gc removes exactly it.
+    let computed = |prefix: &str| {
+        text.lines()
+            .any(|l| l.starts_with(prefix) && l.contains("computed"))
+    };
+    assert!(
+        computed("scan[ipp-6]") && computed("table[study]"),
+        "{text}"
+    );
+    // The old ipp-6 scan and the old table are no longer referenced: gc removes exactly them.
     assert_eq!(artifact_dirs(&dir.join("data")).len(), 3);
     let gc = stdout(&ternary(&path, &["gc"]));
-    assert!(gc.contains("removed 1 artifacts"), "{gc}");
+    assert!(gc.contains("removed 2 artifacts"), "{gc}");
     assert_eq!(artifact_dirs(&dir.join("data")).len(), 2);
-    assert_eq!(run_counts(&path, &[]), (0, 2));
+    assert_eq!(run_counts(&path, &[]), (0, INSTANCES));
 }
 
 #[test]
@@ -188,7 +214,7 @@ fn killed_run_leaves_nothing_trusted_and_next_run_completes() {
     );
     // Finish with a smaller grid: the run cleans the debris and completes.
     write_config(&dir, &config(7, ""));
-    assert_eq!(run_counts(&path, &[]), (2, 0));
+    assert_eq!(run_counts(&path, &[]), (INSTANCES, 0));
     assert!(fs::read_dir(&staging).unwrap().next().is_none());
     assert!(ternary(&path, &["verify"]).status.success());
 }
@@ -261,7 +287,7 @@ fn invalid_configs_are_rejected_naming_key_and_line() {
 }
 
 fn manifest_files(store: &Path) -> Vec<String> {
-    artifact_dirs(store)
+    all_artifact_dirs(store)
         .iter()
         .map(|dir| {
             let manifest: serde_json::Value =
@@ -282,7 +308,7 @@ fn same_key_gives_same_bytes_for_any_thread_count() {
         manifest_files(&one.join("data")),
         manifest_files(&two.join("data")),
     );
-    assert_eq!(a.len(), 2);
+    assert_eq!(a.len(), INSTANCES);
     assert_eq!(a, b);
 }
 
@@ -311,11 +337,11 @@ fn concurrent_runs_on_one_store_compute_each_instance_once() {
             assert!(o.status.success(), "{}", stderr(o));
             stdout(o)
                 .lines()
-                .filter(|l| l.starts_with("scan[") && l.contains("computed"))
+                .filter(|l| l.contains("] ") && l.contains("computed in"))
                 .count()
         })
         .sum();
-    assert_eq!(computed, 2);
+    assert_eq!(computed, INSTANCES);
     assert!(ternary(&path, &["verify"]).status.success());
 }
 

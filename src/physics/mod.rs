@@ -3,5 +3,7 @@
 
 pub mod launch;
 pub mod potential;
+pub mod quasi_random;
+pub mod sampling;
 pub mod scan;
 pub mod scene;

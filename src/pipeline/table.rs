@@ -219,6 +219,44 @@ impl Table {
     }
 }
 
+/// A named column of a batch as a concrete Arrow array type.
+pub fn column<'a, T: 'static>(batch: &'a RecordBatch, name: &str) -> Result<&'a T, TableError> {
+    let missing = || TableError::Arrow {
+        name: name.to_string(),
+        source: arrow::error::ArrowError::SchemaError(format!(
+            "column `{name}` is missing or has an unexpected type"
+        )),
+    };
+    batch
+        .column_by_name(name)
+        .and_then(|c| c.as_any().downcast_ref::<T>())
+        .ok_or_else(missing)
+}
+
+/// A `float64` column as a vector (nulls become NaN).
+pub fn f64_values(batch: &RecordBatch, name: &str) -> Result<Vec<f64>, TableError> {
+    Ok(column::<Float64Array>(batch, name)?
+        .iter()
+        .map(|v| v.unwrap_or(f64::NAN))
+        .collect())
+}
+
+/// A `uint32` column as a vector (nulls become 0).
+pub fn u32_values(batch: &RecordBatch, name: &str) -> Result<Vec<u32>, TableError> {
+    Ok(column::<UInt32Array>(batch, name)?
+        .iter()
+        .map(|v| v.unwrap_or(0))
+        .collect())
+}
+
+/// A `utf8` column as a vector (nulls become empty).
+pub fn text_values(batch: &RecordBatch, name: &str) -> Result<Vec<String>, TableError> {
+    Ok(column::<StringArray>(batch, name)?
+        .iter()
+        .map(|v| v.unwrap_or_default().to_string())
+        .collect())
+}
+
 /// Reads a whole Parquet file into one batch, with its key-value metadata.
 pub fn read_parquet(path: &Path) -> Result<(RecordBatch, BTreeMap<String, String>), TableError> {
     let io = |source| TableError::Io {

@@ -1,7 +1,11 @@
 //! The study's stages, one per file: thin adapters between the pipeline and the
 //! physics. [`plan`] is the one place where stages are registered.
 
+pub mod collisions;
+pub mod kernel;
+pub mod moments;
 pub mod scan;
+pub mod table;
 
 use crate::config::Study;
 use crate::pipeline::Stage;
@@ -9,8 +13,22 @@ use crate::pipeline::Stage;
 /// Every stage instance of a study, in topological order.
 pub fn plan(study: &Study) -> Vec<Box<dyn Stage>> {
     let mut stages: Vec<Box<dyn Stage>> = Vec::new();
-    for potential in study.potentials() {
+    let potentials = study.potentials();
+    for &potential in &potentials {
         stages.push(Box::new(scan::ScanStage::new(study.scan_params(potential))));
+        stages.push(Box::new(collisions::CollisionsStage::new(
+            study.collisions_params(potential),
+        )));
+        for (u_prime, density) in study.kernel_targets() {
+            let params = study.kernel_params(potential, u_prime, density);
+            stages.push(Box::new(kernel::KernelStage::new(params)));
+            stages.push(Box::new(moments::MomentsStage::new(params)));
+        }
     }
+    let rows = potentials
+        .iter()
+        .map(|&p| study.kernel_params(p, 0.0, 0.0))
+        .collect();
+    stages.push(Box::new(table::TableStage::new(rows)));
     stages
 }

@@ -1,0 +1,308 @@
+//! The collision kernel `G(u' -> u)` and its moments from integrated scenes
+//! (physics.md §3): reweighting one event set to any `u'` and density
+//! (Galilean invariance), the +-1 histogram rule, self/bath split by sorted
+//! matching, and replicate-based standard errors. Pure math: no IO.
+//!
+//! Units: velocities in `v_th`, `G` in `rho^2 l v_th` per unit velocity, rates
+//! (moments) in `rho^2 l v_th` (times `v_th` or `v_th^2`).
+
+use crate::physics::launch::{launch_rate, thermal_density};
+use crate::physics::sampling::{SceneRecord, Stratum};
+
+/// One integrated scene as the kernel needs it (special particle's frame).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Event {
+    /// Stratum it was drawn in.
+    pub stratum: Stratum,
+    /// Randomization (replicate) it belongs to.
+    pub randomization: u32,
+    /// Launch velocity of the first arrival.
+    pub u2: f64,
+    /// Launch velocity of the second arrival.
+    pub u3: f64,
+    /// Arrival offset `tau`.
+    pub offset: f64,
+    /// Proposal density of `(|u2|, |u3|, tau)`.
+    pub proposal_density: f64,
+    /// Outgoing velocities, ascending; `None` for a failed scene (it still
+    /// counts as drawn, contributing zero: failures are reported, never dropped silently).
+    pub outgoing: Option<[f64; 3]>,
+}
+
+/// The `u'` and density an event set is reweighted to.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Target {
+    /// Velocity `u'` of the special particle, `v_th`.
+    pub u_prime: f64,
+    /// `rho * l`; 0 is the dilute limit.
+    pub density: f64,
+    /// Observation region length `L` of the literal algorithm, in `l`: at finite
+    /// density the delay between launches is weighted by `exp(-r |delay|)`.
+    pub launch_length: f64,
+}
+
+impl Event {
+    /// The event of an integrated scene (failed scenes keep no velocities).
+    pub fn from_record(record: &SceneRecord) -> Event {
+        Event {
+            stratum: record.scene.stratum,
+            randomization: record.randomization,
+            u2: record.scene.u2,
+            u3: record.scene.u3,
+            offset: record.scene.offset,
+            proposal_density: record.scene.proposal_density,
+            outgoing: (!record.collision.outcome.is_failure()).then_some(record.collision.outgoing),
+        }
+    }
+}
+
+/// A scene's contribution seen from `u'`: velocities relative to `u'`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Contribution {
+    /// Importance weight (units of `rho^2 l v_th` per drawn point).
+    pub weight: f64,
+    /// Incoming velocities relative to `u'`: the special particle's 0 and the two launches.
+    pub incoming: [f64; 3],
+    /// Outgoing velocities relative to `u'`, ascending.
+    pub outgoing: [f64; 3],
+    /// Rank of the special particle among the sorted incoming velocities.
+    pub self_rank: usize,
+}
+
+impl Contribution {
+    /// The special particle's own velocity change (sorted matching).
+    pub fn self_kick(&self) -> f64 {
+        self.outgoing[self.self_rank]
+    }
+}
+
+/// Launch weight `w(u) = f0(u + u') |u|` of a thermal particle with relative velocity `u`.
+fn launch_weight(relative: f64, u_prime: f64) -> f64 {
+    thermal_density(relative + u_prime) * relative.abs()
+}
+
+/// The contributions of an event as seen from `target`: the event itself and,
+/// for the same-side stratum, its mirror image (which stands for the
+/// both-negative sign pattern). Empty for failed scenes.
+pub fn contributions(event: &Event, target: &Target) -> Vec<Contribution> {
+    let Some(outgoing) = event.outgoing else {
+        return Vec::new();
+    };
+    let images: &[f64] = match event.stratum {
+        Stratum::Opposite | Stratum::Literal => &[1.0],
+        Stratum::SameSide => &[1.0, -1.0],
+    };
+    let delay =
+        event.offset - 0.5 * target.launch_length * (1.0 / event.u3.abs() - 1.0 / event.u2.abs());
+    let survival = (-target.density * launch_rate(target.u_prime) * delay.abs()).exp();
+    images
+        .iter()
+        .map(|&sign| {
+            let (u2, u3) = (sign * event.u2, sign * event.u3);
+            let weight = event.stratum.multiplicity()
+                * launch_weight(u2, target.u_prime)
+                * launch_weight(u3, target.u_prime)
+                * survival
+                / event.proposal_density;
+            let mut out = outgoing.map(|v| sign * v);
+            out.sort_by(f64::total_cmp);
+            let incoming = [0.0, u2, u3];
+            let self_rank = incoming.iter().filter(|&&u| u < 0.0).count();
+            Contribution {
+                weight,
+                incoming,
+                outgoing: out,
+                self_rank,
+            }
+        })
+        .collect()
+}
+
+/// Velocity bins centred on `u' + k * width`, `|k| <= half_bins`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Bins {
+    /// Bin width, `v_th`.
+    pub width: f64,
+    /// Bins on each side of the centre bin.
+    pub half_bins: usize,
+}
+
+impl Bins {
+    /// Bins covering a window of total width `window` around `u'`.
+    pub fn for_window(window: f64, width: f64) -> Bins {
+        Bins {
+            width,
+            half_bins: (0.5 * window / width).round() as usize,
+        }
+    }
+
+    /// Number of bins.
+    pub fn len(&self) -> usize {
+        2 * self.half_bins + 1
+    }
+
+    /// `true` when there are no bins (never: the centre bin always exists).
+    pub fn is_empty(&self) -> bool {
+        false
+    }
+
+    /// Index of the bin holding relative velocity `x`, if inside the window.
+    pub fn index(&self, x: f64) -> Option<usize> {
+        let k = (x / self.width).round();
+        (k.abs() <= self.half_bins as f64).then_some((k + self.half_bins as f64) as usize)
+    }
+
+    /// Centre of bin `index` relative to `u'`.
+    pub fn centre(&self, index: usize) -> f64 {
+        (index as f64 - self.half_bins as f64) * self.width
+    }
+}
+
+/// Weighted +-1 histograms of one replicate, split into self and bath.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Histogram {
+    /// Self part per bin.
+    pub self_part: Vec<f64>,
+    /// Bath part per bin.
+    pub bath_part: Vec<f64>,
+}
+
+impl Histogram {
+    fn new(bins: &Bins) -> Histogram {
+        Histogram {
+            self_part: vec![0.0; bins.len()],
+            bath_part: vec![0.0; bins.len()],
+        }
+    }
+
+    /// Adds a contribution: -1 at every incoming, +1 at every outgoing velocity,
+    /// the special particle's pair into `self_part`, the others into `bath_part`.
+    pub fn add(&mut self, bins: &Bins, contribution: &Contribution, scale: f64) {
+        let weight = contribution.weight * scale;
+        let mut sorted_in = contribution.incoming;
+        sorted_in.sort_by(f64::total_cmp);
+        for (rank, (incoming, outgoing)) in sorted_in.iter().zip(contribution.outgoing).enumerate()
+        {
+            let part = if rank == contribution.self_rank {
+                &mut self.self_part
+            } else {
+                &mut self.bath_part
+            };
+            if let Some(k) = bins.index(*incoming) {
+                part[k] -= weight;
+            }
+            if let Some(k) = bins.index(outgoing) {
+                part[k] += weight;
+            }
+        }
+    }
+}
+
+/// Mean and standard error over independent replicates.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Estimate {
+    /// Mean over replicates.
+    pub mean: f64,
+    /// Standard error of the mean (sample standard deviation / sqrt(R)).
+    pub stderr: f64,
+}
+
+impl Estimate {
+    /// From one value per replicate (at least two).
+    pub fn from_replicates(values: &[f64]) -> Estimate {
+        let count = values.len() as f64;
+        let mean = values.iter().sum::<f64>() / count;
+        let variance = values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (count - 1.0);
+        Estimate {
+            mean,
+            stderr: (variance / count).sqrt(),
+        }
+    }
+}
+
+/// Points drawn per replicate and stratum (failed scenes included).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Draws {
+    counts: Vec<[u64; 3]>,
+}
+
+impl Draws {
+    /// Counts the events of every replicate and stratum.
+    pub fn count(events: &[Event], replicates: usize) -> Draws {
+        let mut counts = vec![[0u64; 3]; replicates];
+        for event in events {
+            counts[event.randomization as usize][event.stratum.index() as usize] += 1;
+        }
+        Draws { counts }
+    }
+
+    /// `1 / N` for the stratum of `event` in its replicate.
+    fn scale(&self, event: &Event) -> f64 {
+        1.0 / self.counts[event.randomization as usize][event.stratum.index() as usize] as f64
+    }
+
+    /// Number of replicates.
+    pub fn replicates(&self) -> usize {
+        self.counts.len()
+    }
+}
+
+/// The kernel on `bins` around `target.u_prime`, per replicate.
+pub fn histograms(events: &[Event], target: &Target, bins: &Bins, draws: &Draws) -> Vec<Histogram> {
+    let mut replicates = vec![Histogram::new(bins); draws.replicates()];
+    for event in events {
+        let scale = draws.scale(event);
+        for contribution in contributions(event, target) {
+            replicates[event.randomization as usize].add(bins, &contribution, scale);
+        }
+    }
+    replicates
+}
+
+/// Drift `sum x` and variance `sum x^2` rates of the special particle alone
+/// and of all particles, counting only velocities with `|x| <= truncation`
+/// (relative to `u'`), per replicate, in units of `rho^2 l v_th` (times `v_th`,
+/// `v_th^2`).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct MomentSums {
+    /// Self drift rate `int G_self (u - u') du`.
+    pub self_drift: f64,
+    /// Self variance rate `int G_self (u - u')^2 du`.
+    pub self_variance: f64,
+    /// Drift rate of all particles in the window.
+    pub window_drift: f64,
+    /// Variance rate of all particles in the window.
+    pub window_variance: f64,
+}
+
+/// Moment sums per replicate for each truncation half-width.
+pub fn moments(
+    events: &[Event],
+    target: &Target,
+    truncations: &[f64],
+    draws: &Draws,
+) -> Vec<Vec<MomentSums>> {
+    let mut sums = vec![vec![MomentSums::default(); truncations.len()]; draws.replicates()];
+    for event in events {
+        let scale = draws.scale(event);
+        for contribution in contributions(event, target) {
+            let weight = contribution.weight * scale;
+            let kick = contribution.self_kick();
+            for (slot, &limit) in sums[event.randomization as usize]
+                .iter_mut()
+                .zip(truncations)
+            {
+                let inside = |x: f64| if x.abs() <= limit { 1.0 } else { 0.0 };
+                slot.self_drift += weight * kick * inside(kick);
+                slot.self_variance += weight * kick * kick * inside(kick);
+                for (out, incoming) in contribution.outgoing.iter().zip(contribution.incoming) {
+                    slot.window_drift +=
+                        weight * (out * inside(*out) - incoming * inside(incoming));
+                    slot.window_variance += weight
+                        * (out * out * inside(*out) - incoming * incoming * inside(incoming));
+                }
+            }
+        }
+    }
+    sums
+}

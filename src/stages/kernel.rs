@@ -1,0 +1,170 @@
+//! `kernel`: the dimensionless collision kernel `G(u' -> u)` of one potential at
+//! one `u'` and density, reweighted from the `collisions` events and binned with
+//! the +-1 rule (physics.md §3), split into self and bath parts, with standard
+//! errors from the spread of independent randomizations.
+
+use serde_json::Value;
+
+use super::collisions::{CollisionsStage, read_events};
+use crate::config::KernelParams;
+use crate::kernel::{Bins, Draws, Estimate, Target, histograms};
+use crate::pipeline::{Column, Input, InstanceId, Progress, Stage, StageError, Table};
+
+/// The `kernel` stage for one potential, `u'` and density.
+pub struct KernelStage {
+    params: KernelParams,
+}
+
+impl KernelStage {
+    /// A kernel stage with resolved parameters.
+    pub fn new(params: KernelParams) -> KernelStage {
+        KernelStage { params }
+    }
+}
+
+/// Instance name of a per-`(potential, u', density)` stage, e.g. `ipp-6_u0_rho0`.
+pub fn target_instance(params: &KernelParams) -> String {
+    format!(
+        "{}_u{}_rho{}",
+        params.potential.id(),
+        params.u_prime,
+        params.density
+    )
+}
+
+/// The reweighting target of kernel parameters.
+pub fn target_of(params: &KernelParams) -> Target {
+    Target {
+        u_prime: params.u_prime,
+        density: params.density,
+        launch_length: params.launch_length,
+    }
+}
+
+/// Events of the single input, their draw counts, and failures.
+pub fn input_events(
+    inputs: &[Input],
+) -> Result<(Vec<crate::kernel::Event>, Draws, usize), StageError> {
+    let input = inputs
+        .first()
+        .ok_or_else(|| StageError::Input("no collisions input".into()))?;
+    let events = read_events(input)?;
+    let replicates = events
+        .iter()
+        .map(|e| e.randomization as usize + 1)
+        .max()
+        .unwrap_or(0);
+    if replicates < 2 {
+        return Err(StageError::Input(format!(
+            "{}: fewer than 2 randomizations",
+            input.id
+        )));
+    }
+    let failed = events.iter().filter(|e| e.outgoing.is_none()).count();
+    let draws = Draws::count(&events, replicates);
+    Ok((events, draws, failed))
+}
+
+impl Stage for KernelStage {
+    fn id(&self) -> InstanceId {
+        InstanceId::new("kernel", &target_instance(&self.params))
+    }
+
+    fn version(&self) -> u32 {
+        1
+    }
+
+    fn params(&self) -> Value {
+        serde_json::to_value(self.params).unwrap_or(Value::Null)
+    }
+
+    fn inputs(&self) -> Vec<InstanceId> {
+        vec![CollisionsStage::instance(&self.params.potential.id())]
+    }
+
+    fn work_units(&self) -> u64 {
+        1
+    }
+
+    fn run(&self, inputs: &[Input], progress: &Progress) -> Result<Vec<Table>, StageError> {
+        let (events, draws, failed) = input_events(inputs)?;
+        let bins = Bins::for_window(self.params.window, self.params.bin_width);
+        let replicates = histograms(&events, &target_of(&self.params), &bins, &draws);
+        let per_bin = |part: &dyn Fn(&crate::kernel::Histogram) -> f64| {
+            let values: Vec<f64> = replicates.iter().map(|h| part(h) / bins.width).collect();
+            Estimate::from_replicates(&values)
+        };
+        let mut columns: [Vec<f64>; 8] = Default::default();
+        for k in 0..bins.len() {
+            let total = per_bin(&|h| h.self_part[k] + h.bath_part[k]);
+            let own = per_bin(&|h| h.self_part[k]);
+            let bath = per_bin(&|h| h.bath_part[k]);
+            let row = [
+                self.params.u_prime + bins.centre(k),
+                bins.centre(k),
+                total.mean,
+                total.stderr,
+                own.mean,
+                own.stderr,
+                bath.mean,
+                bath.stderr,
+            ];
+            for (column, value) in columns.iter_mut().zip(row) {
+                column.push(value);
+            }
+        }
+        progress.advance(1);
+        let [u, du, g, g_err, g_self, g_self_err, g_bath, g_bath_err] = columns;
+        let unit = "rho^2 l v_th / v_th";
+        let table = Table::new(
+            "kernel",
+            vec![
+                Column::f64("u", "v_th", "bin centre (lab velocity)", u),
+                Column::f64("du", "v_th", "bin centre relative to u'", du),
+                Column::f64(
+                    "G",
+                    unit,
+                    "kernel G(u' -> u): rate per unit velocity, +-1 rule, self plus bath",
+                    g,
+                ),
+                Column::f64(
+                    "G_stderr",
+                    unit,
+                    "standard error of G from the spread of randomizations",
+                    g_err,
+                ),
+                Column::f64(
+                    "G_self",
+                    unit,
+                    "part of G from the special particle's own velocity",
+                    g_self,
+                ),
+                Column::f64(
+                    "G_self_stderr",
+                    unit,
+                    "standard error of G_self",
+                    g_self_err,
+                ),
+                Column::f64(
+                    "G_bath",
+                    unit,
+                    "part of G from the bath particles' velocities",
+                    g_bath,
+                ),
+                Column::f64(
+                    "G_bath_stderr",
+                    unit,
+                    "standard error of G_bath",
+                    g_bath_err,
+                ),
+            ],
+        )?
+        .with_metadata(
+            "ternary.description",
+            "collision kernel G(u' -> u) in units of rho^2 l v_th per v_th".into(),
+        )
+        .with_metadata("ternary.events", events.len().to_string())
+        .with_metadata("ternary.failed_events", failed.to_string());
+        Ok(vec![table])
+    }
+}
