@@ -8,8 +8,13 @@ use std::time::Instant;
 use rand::rngs::StdRng;
 use rand::{RngExt, SeedableRng};
 
+use rayon::prelude::*;
+
+use crate::config::DEFAULT_KICK_FLOOR;
+use crate::kernel::{Bins, Draws, Estimate, Event, Target, histograms, moments};
 use crate::physics::launch::thermal_launch_speed;
 use crate::physics::potential::Potential;
+use crate::physics::sampling::{OffsetProposal, SamplingPlan, SceneRecord};
 use crate::physics::scan::{LaunchPair, TIGHTEST_TOLERANCE};
 use crate::physics::scene::{Collision, EngineSettings, FreeLine, Method, collide};
 
@@ -225,6 +230,240 @@ fn speedups(measurements: &[Measurement], challenger: Method, baseline: Method) 
                 base.micros_per_scene / best.micros_per_scene
             );
         }
+    }
+    out
+}
+
+/// What `ternary bench kernel` measures.
+#[derive(Clone, Copy, Debug)]
+pub struct KernelBenchOptions {
+    /// Exponent of the inverse power law.
+    pub n: f64,
+    /// Randomizations (replicates) per run.
+    pub randomizations: u32,
+    /// Scenes per randomization in the sampler comparison.
+    pub points: u32,
+    /// Seed.
+    pub seed: u64,
+}
+
+/// A sampler variant of the comparison.
+struct Variant {
+    name: &'static str,
+    proposal: OffsetProposal,
+    same_side_fraction: f64,
+    quasi_random: bool,
+}
+
+/// Precision and cost of one sampler run.
+#[derive(Clone, Copy)]
+struct KernelRun {
+    seconds: f64,
+    scenes: u64,
+    a_n: Estimate,
+    /// Median relative standard error of `G` over bins with `|du|` in a band.
+    near_bins: f64,
+    far_bins: f64,
+}
+
+/// The baseline of numerics.md: offsets uniform within +-30 collision times.
+fn uniform_offsets() -> OffsetProposal {
+    OffsetProposal {
+        core_weight: 0.0,
+        tail_weight: 0.0,
+        uniform_weight: 1.0,
+        uniform_range: 30.0,
+        ..OffsetProposal::default()
+    }
+}
+
+fn plan_for(variant: &Variant, seed: u64, randomizations: u32, points: u32) -> SamplingPlan {
+    let same = (f64::from(points) * variant.same_side_fraction).max(1.0);
+    let power = |count: f64| 2u32.pow(count.log2().round().max(1.0) as u32);
+    SamplingPlan {
+        seed,
+        randomizations,
+        opposite_points: power(f64::from(points) - same),
+        same_side_points: power(same),
+        proposal: variant.proposal,
+        quasi_random: variant.quasi_random,
+    }
+}
+
+/// Median relative standard error of the kernel over bins with `low <= |du| <= high`.
+fn median_relative_error(events: &[Event], draws: &Draws, low: f64, high: f64) -> f64 {
+    let bins = Bins::for_window(0.2, 5e-5);
+    let target = Target {
+        u_prime: 0.0,
+        density: 0.0,
+        launch_length: 90.0,
+        kick_floor: DEFAULT_KICK_FLOOR,
+    };
+    let replicates = histograms(events, &target, &bins, draws);
+    let mut errors: Vec<f64> = (0..bins.len())
+        .filter(|&k| (low..=high).contains(&bins.centre(k).abs()))
+        .map(|k| {
+            let values: Vec<f64> = replicates
+                .iter()
+                .map(|h| h.self_part[k] + h.bath_part[k])
+                .collect();
+            let estimate = Estimate::from_replicates(&values);
+            estimate.stderr / estimate.mean.abs()
+        })
+        .filter(|e| e.is_finite())
+        .collect();
+    errors.sort_by(f64::total_cmp);
+    errors.get(errors.len() / 2).copied().unwrap_or(f64::NAN)
+}
+
+fn run_sampler(potential: &Potential, plan: &SamplingPlan) -> KernelRun {
+    let engine = EngineSettings {
+        method: Method::Dprkn12,
+        tolerance: 1e-12,
+        max_steps: MAX_STEPS,
+    };
+    let started = Instant::now();
+    let records: Vec<SceneRecord> = plan
+        .chunks()
+        .par_iter()
+        .map(|chunk| plan.integrate(chunk, potential, &engine))
+        .collect::<Vec<_>>()
+        .concat();
+    let events: Vec<Event> = records.iter().map(Event::from_record).collect();
+    let draws = Draws::count(&events, plan.randomizations as usize);
+    let target = Target {
+        u_prime: 0.0,
+        density: 0.0,
+        launch_length: 90.0,
+        kick_floor: DEFAULT_KICK_FLOOR,
+    };
+    let sums = moments(&events, &target, &[0.1], &draws);
+    let a_n =
+        Estimate::from_replicates(&sums.iter().map(|r| r[0].self_variance).collect::<Vec<_>>());
+    let seconds = started.elapsed().as_secs_f64();
+    KernelRun {
+        seconds,
+        scenes: plan.total(),
+        a_n,
+        near_bins: median_relative_error(&events, &draws, 1e-4, 2e-3),
+        far_bins: median_relative_error(&events, &draws, 1e-2, 5e-2),
+    }
+}
+
+/// Figure of merit `1 / (relative variance x seconds)`.
+fn merit(relative_error: f64, seconds: f64) -> f64 {
+    1.0 / (relative_error * relative_error * seconds)
+}
+
+/// Sampler comparison (each measure's gain as a ratio measured in this run) and
+/// the work-precision table of `a_n` for the default sampler.
+pub fn kernel(options: &KernelBenchOptions) -> String {
+    let potential = Potential::InversePower { n: options.n };
+    let defaults = OffsetProposal::default();
+    let variants = [
+        Variant {
+            name: "uniform offsets +-30 T, even strata, plain MC",
+            proposal: uniform_offsets(),
+            same_side_fraction: 0.5,
+            quasi_random: false,
+        },
+        Variant {
+            name: "+ mixture offset proposal",
+            proposal: defaults,
+            same_side_fraction: 0.5,
+            quasi_random: false,
+        },
+        Variant {
+            name: "+ strata 85/15 (opposite/same side)",
+            proposal: defaults,
+            same_side_fraction: 0.15,
+            quasi_random: false,
+        },
+        Variant {
+            name: "+ scrambled Sobol' points (default)",
+            proposal: defaults,
+            same_side_fraction: 0.15,
+            quasi_random: true,
+        },
+    ];
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "### Kernel sampler: n = {}, {} randomizations x ~{} scenes, seed {}\n",
+        options.n, options.randomizations, options.points, options.seed
+    );
+    let _ = writeln!(
+        out,
+        "Figure of merit FOM = 1 / (relative variance x wall seconds); gains are FOM ratios against the first row, all measured in this run. Bins: median relative error of G over bins with 1e-4 <= |du| <= 2e-3 (near) and 1e-2 <= |du| <= 5e-2 (far), bin width 5e-5.\n"
+    );
+    let _ = writeln!(
+        out,
+        "| sampler | scenes | seconds | a_n | rel. error | a_n gain | near-bin rel. error | near gain | far-bin rel. error | far gain |"
+    );
+    let _ = writeln!(out, "|---|---|---|---|---|---|---|---|---|---|");
+    let mut baseline: Option<KernelRun> = None;
+    for variant in &variants {
+        let run = run_sampler(
+            &potential,
+            &plan_for(
+                variant,
+                options.seed,
+                options.randomizations,
+                options.points,
+            ),
+        );
+        let relative = run.a_n.stderr / run.a_n.mean;
+        let base = *baseline.get_or_insert(run);
+        let gain = |error: f64, base_error: f64| {
+            merit(error, run.seconds) / merit(base_error, base.seconds)
+        };
+        let _ = writeln!(
+            out,
+            "| {} | {} | {:.2} | {:.6e} +- {:.1e} | {:.2e} | x{:.1} | {:.2e} | x{:.2} | {:.2e} | x{:.1} |",
+            variant.name,
+            run.scenes,
+            run.seconds,
+            run.a_n.mean,
+            run.a_n.stderr,
+            relative,
+            gain(relative, base.a_n.stderr / base.a_n.mean),
+            run.near_bins,
+            gain(run.near_bins, base.near_bins),
+            run.far_bins,
+            gain(run.far_bins, base.far_bins),
+        );
+    }
+    let _ = writeln!(
+        out,
+        "\nWork-precision of a_n with the default sampler ({} randomizations):\n",
+        options.randomizations
+    );
+    let _ = writeln!(
+        out,
+        "| scenes per randomization | scenes | seconds | a_n | relative standard error |"
+    );
+    let _ = writeln!(out, "|---|---|---|---|---|");
+    let default = &variants[3];
+    for power in [10, 12, 14, 16] {
+        let run = run_sampler(
+            &potential,
+            &plan_for(
+                default,
+                options.seed + 1,
+                options.randomizations,
+                1 << power,
+            ),
+        );
+        let _ = writeln!(
+            out,
+            "| {} | {} | {:.2} | {:.8e} +- {:.1e} | {:.2e} |",
+            1u32 << power,
+            run.scenes,
+            run.seconds,
+            run.a_n.mean,
+            run.a_n.stderr,
+            run.a_n.stderr / run.a_n.mean
+        );
     }
     out
 }

@@ -7,7 +7,7 @@ use std::process::ExitCode;
 use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand};
 
-use ternary::bench::{self, WorkPrecisionOptions};
+use ternary::bench::{self, KernelBenchOptions, WorkPrecisionOptions};
 use ternary::config::Study;
 use ternary::pipeline::executor::{self, Action, Freshness, RunOptions, Verbosity};
 use ternary::pipeline::store::Store;
@@ -76,6 +76,21 @@ enum BenchCommand {
         #[arg(long, default_value_t = 2000)]
         scenes: usize,
         /// Seed of the scene sample.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+    },
+    /// Precision of a_n and of the kernel per CPU second: what each sampling measure gains.
+    Kernel {
+        /// Potential exponent n of U = x^-n.
+        #[arg(long, default_value_t = 6.0)]
+        n: f64,
+        /// Randomizations (replicates).
+        #[arg(long, default_value_t = 16)]
+        randomizations: u32,
+        /// Scenes per randomization in the sampler comparison.
+        #[arg(long, default_value_t = 4096)]
+        points: u32,
+        /// Seed.
         #[arg(long, default_value_t = 1)]
         seed: u64,
     },
@@ -192,6 +207,24 @@ fn dispatch(cli: Cli) -> Result<ExitCode> {
         } => {
             let options = WorkPrecisionOptions { n, scenes, seed };
             print!("{}", bench::integrators(&options));
+            Ok(ExitCode::SUCCESS)
+        }
+        Command::Bench {
+            which:
+                BenchCommand::Kernel {
+                    n,
+                    randomizations,
+                    points,
+                    seed,
+                },
+        } => {
+            let options = KernelBenchOptions {
+                n,
+                randomizations,
+                points,
+                seed,
+            };
+            print!("{}", bench::kernel(&options));
             Ok(ExitCode::SUCCESS)
         }
     }

@@ -75,6 +75,8 @@ pub struct CollisionsConfig {
     pub points: u32,
     /// Fraction of the scenes drawn in the same-side stratum.
     pub same_side_fraction: f64,
+    /// Scrambled Sobol' points (default) or plain Monte Carlo points.
+    pub quasi_random: bool,
     /// Mixture proposal of the arrival offset (`[collisions.proposal]`).
     pub proposal: OffsetProposal,
 }
@@ -86,6 +88,7 @@ impl Default for CollisionsConfig {
             randomizations: 16,
             points: 4096,
             same_side_fraction: 0.15,
+            quasi_random: true,
             proposal: OffsetProposal::default(),
         }
     }
@@ -105,7 +108,15 @@ pub struct KernelConfig {
     pub bin_width: f64,
     /// Observation region length `L` (in `l`), for the finite-density weight.
     pub launch_length: f64,
+    /// Velocity changes up to this size (`v_th`) count as zero (engine error floor).
+    pub kick_floor: f64,
+    /// Range of `|u - u'|` of the shape fit, `[min, max]`.
+    pub fit_range: [f64; 2],
 }
+
+/// Default `kernel.kick_floor`: 1000x the engine's velocity error at the
+/// default tolerance (~1e-13 v_th, docs/benchmarks.md), far below any bin.
+pub const DEFAULT_KICK_FLOOR: f64 = 1e-10;
 
 impl Default for KernelConfig {
     fn default() -> Self {
@@ -115,6 +126,8 @@ impl Default for KernelConfig {
             window: 0.2,
             bin_width: 0.1 / 2000.0,
             launch_length: 90.0,
+            kick_floor: DEFAULT_KICK_FLOOR,
+            fit_range: [2e-4, 0.05],
         }
     }
 }
@@ -128,6 +141,17 @@ pub struct CollisionsParams {
     pub engine: EngineSettings,
     /// What to draw.
     pub sampling: SamplingPlan,
+}
+
+/// Resolved parameters of a `fit` instance.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct FitParams {
+    /// The kernel it fits.
+    pub kernel: KernelParams,
+    /// Smallest `|u - u'|` fitted.
+    pub range_min: f64,
+    /// Largest `|u - u'|` fitted.
+    pub range_max: f64,
 }
 
 /// Resolved parameters of a `kernel` or `moments` instance.
@@ -145,6 +169,8 @@ pub struct KernelParams {
     pub bin_width: f64,
     /// `L`.
     pub launch_length: f64,
+    /// Velocity changes up to this size count as zero.
+    pub kick_floor: f64,
 }
 
 /// `[store]`.
@@ -390,6 +416,7 @@ impl Study {
                 opposite_points: nearest_power_of_two(opposite),
                 same_side_points: nearest_power_of_two(same_side),
                 proposal: sampling.proposal,
+                quasi_random: sampling.quasi_random,
             },
         }
     }
@@ -419,6 +446,17 @@ impl Study {
             window: kernel.window,
             bin_width: kernel.bin_width,
             launch_length: kernel.launch_length,
+            kick_floor: kernel.kick_floor,
+        }
+    }
+
+    /// Resolved parameters of the shape fit of a kernel.
+    pub fn fit_params(&self, kernel: KernelParams) -> FitParams {
+        let [range_min, range_max] = self.config.kernel.fit_range;
+        FitParams {
+            kernel,
+            range_min,
+            range_max,
         }
     }
 
@@ -570,6 +608,17 @@ fn validate_kernel(kernel: &KernelConfig) -> Result<(), Invalid> {
         kernel.launch_length.is_finite() && kernel.launch_length > 0.0,
         "kernel.launch_length",
         format!("L = {} must be > 0", kernel.launch_length),
+    )?;
+    check(
+        kernel.kick_floor >= 0.0 && kernel.kick_floor < 0.5 * kernel.bin_width,
+        "kernel.kick_floor",
+        format!("{} must lie in [0, bin_width/2)", kernel.kick_floor),
+    )?;
+    let [low, high] = kernel.fit_range;
+    check(
+        low > 0.0 && low < high && high <= 0.5 * kernel.window,
+        "kernel.fit_range",
+        format!("[{low}, {high}] must satisfy 0 < min < max <= window/2"),
     )
 }
 

@@ -3,6 +3,7 @@
 //! the importance sampler with the literal algorithm, and honest error bars.
 
 use rayon::prelude::*;
+use ternary::config::DEFAULT_KICK_FLOOR;
 use ternary::kernel::{
     Bins, Draws, Estimate, Event, Histogram, MomentSums, Target, contributions, histograms, moments,
 };
@@ -29,6 +30,7 @@ fn plan(seed: u64, randomizations: u32, points: u32) -> SamplingPlan {
         opposite_points: points - same_side,
         same_side_points: same_side,
         proposal: OffsetProposal::default(),
+        quasi_random: true,
     }
 }
 
@@ -47,6 +49,7 @@ fn dilute(u_prime: f64) -> Target {
         u_prime,
         density: 0.0,
         launch_length: 90.0,
+        kick_floor: DEFAULT_KICK_FLOOR,
     }
 }
 
@@ -117,8 +120,13 @@ fn every_contribution_conserves_number_momentum_and_energy() {
     let events = draw(Potential::InversePower { n: 6.0 }, &plan(3, 2, 512));
     let wide = Bins::for_window(40.0, 0.01);
     for u_prime in [0.0, 0.7, -1.9] {
+        // No kick floor: the raw scenes, exact to rounding.
+        let raw = Target {
+            kick_floor: 0.0,
+            ..dilute(u_prime)
+        };
         for event in &events {
-            for c in contributions(event, &dilute(u_prime)) {
+            for c in contributions(event, &raw) {
                 let scale: f64 = c.incoming.iter().map(|u| u * u).sum::<f64>() + 1.0;
                 let momentum: f64 = c.outgoing.iter().sum::<f64>() - c.incoming.iter().sum::<f64>();
                 let energy: f64 = c.outgoing.iter().map(|u| u * u).sum::<f64>()
@@ -145,6 +153,23 @@ fn every_contribution_conserves_number_momentum_and_energy() {
                 // Each of the six entries sits at most half a bin from its velocity.
                 assert!((binned_momentum - momentum).abs() <= 3.0 * wide.width + 1e-12);
             }
+        }
+    }
+}
+
+/// Snapping changes below the kick floor to zero moves momentum by at most
+/// three floors per scene.
+#[test]
+fn kick_floor_changes_momentum_by_at_most_three_floors() {
+    let events = draw(Potential::InversePower { n: 6.0 }, &plan(3, 2, 512));
+    for event in &events {
+        for c in contributions(event, &dilute(0.3)) {
+            let momentum: f64 = c.outgoing.iter().sum::<f64>() - c.incoming.iter().sum::<f64>();
+            let scale: f64 = c.incoming.iter().map(|u| u.abs()).sum::<f64>() + 1.0;
+            assert!(
+                momentum.abs() <= 3.0 * DEFAULT_KICK_FLOOR + 1e-13 * scale,
+                "{momentum:e}"
+            );
         }
     }
 }
@@ -254,7 +279,7 @@ fn literal_events(density: f64, randomizations: u32, points: u32) -> Vec<Event> 
         .flat_map_iter(|randomization| {
             let set = ScrambledSobol::new(99, u64::from(randomization));
             (0..points).map(move |point| {
-                let scene = literal_scene(&set, point, density, 90.0);
+                let scene = literal_scene(set.point(point), density, 90.0);
                 let collision = collide(
                     &potential,
                     &engine(),
@@ -282,6 +307,7 @@ fn importance_sampler_agrees_with_the_literal_algorithm_at_finite_density() {
         u_prime: 0.0,
         density,
         launch_length: 90.0,
+        kick_floor: DEFAULT_KICK_FLOOR,
     };
     let sampled = draw(Potential::InversePower { n: 6.0 }, &plan(17, 16, 2048));
     let literal = literal_events(density, 16, 40_000);

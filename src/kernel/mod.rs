@@ -6,6 +6,8 @@
 //! Units: velocities in `v_th`, `G` in `rho^2 l v_th` per unit velocity, rates
 //! (moments) in `rho^2 l v_th` (times `v_th` or `v_th^2`).
 
+pub mod fit;
+
 use crate::physics::launch::{launch_rate, thermal_density};
 use crate::physics::sampling::{SceneRecord, Stratum};
 
@@ -39,6 +41,11 @@ pub struct Target {
     /// Observation region length `L` of the literal algorithm, in `l`: at finite
     /// density the delay between launches is weighted by `exp(-r |delay|)`.
     pub launch_length: f64,
+    /// Velocity changes at most this large (`v_th`) are the engine's error
+    /// floor and count as exactly zero. Without it, scenes at very large
+    /// offsets, whose importance weights grow like `tau^2`, would turn
+    /// integration noise into rare huge contributions.
+    pub kick_floor: f64,
 }
 
 impl Event {
@@ -107,6 +114,13 @@ pub fn contributions(event: &Event, target: &Target) -> Vec<Contribution> {
             let mut out = outgoing.map(|v| sign * v);
             out.sort_by(f64::total_cmp);
             let incoming = [0.0, u2, u3];
+            let mut sorted_in = incoming;
+            sorted_in.sort_by(f64::total_cmp);
+            for (velocity, matched) in out.iter_mut().zip(sorted_in) {
+                if (*velocity - matched).abs() <= target.kick_floor {
+                    *velocity = matched;
+                }
+            }
             let self_rank = incoming.iter().filter(|&&u| u < 0.0).count();
             Contribution {
                 weight,

@@ -164,14 +164,13 @@ pub struct SampledScene {
     pub proposal_density: f64,
 }
 
-/// Draws point `index` of randomization `points` in `stratum`.
+/// The scene in `stratum` at the unit-cube point `coordinates`.
 pub fn sample_scene(
-    points: &ScrambledSobol,
-    index: u32,
+    coordinates: [f64; 3],
     stratum: Stratum,
     proposal: &OffsetProposal,
 ) -> SampledScene {
-    let [x_offset, x_first, x_second] = points.point(index);
+    let [x_offset, x_first, x_second] = coordinates;
     let first = thermal_launch_speed(x_first);
     let second = thermal_launch_speed(x_second);
     let u3 = if stratum == Stratum::Opposite {
@@ -197,13 +196,8 @@ pub fn sample_scene(
 /// launch delay `dt` from `r exp(-r dt)` with `r = rho l sqrt(2/pi)`, entry at
 /// `-sign(u) L/2`. Its proposal density `P(u2) P(u3) r exp(-r dt)` makes the
 /// kernel weight `w w exp(-r dt) / density = r(0)^2 / r`, the literal estimator.
-pub fn literal_scene(
-    points: &ScrambledSobol,
-    index: u32,
-    density: f64,
-    launch_length: f64,
-) -> SampledScene {
-    let [x_delay, x_first, x_second] = points.point(index);
+pub fn literal_scene(coordinates: [f64; 3], density: f64, launch_length: f64) -> SampledScene {
+    let [x_delay, x_first, x_second] = coordinates;
     let velocity = |x: f64| {
         let speed = thermal_launch_speed((2.0 * x).fract());
         if x < 0.5 { speed } else { -speed }
@@ -239,6 +233,9 @@ pub struct SamplingPlan {
     pub same_side_points: u32,
     /// Offset proposal.
     pub proposal: OffsetProposal,
+    /// Scrambled Sobol' points (`true`) or independent uniform points (`false`,
+    /// plain Monte Carlo: only for measuring what quasi-random points gain).
+    pub quasi_random: bool,
 }
 
 /// A contiguous range of points of one randomization and stratum: the unit
@@ -302,12 +299,17 @@ impl SamplingPlan {
         chunks
     }
 
-    /// The point set of one randomization and stratum (independent streams).
-    fn point_set(&self, randomization: u32, stratum: Stratum) -> ScrambledSobol {
-        ScrambledSobol::new(
-            self.seed,
-            3 * u64::from(randomization) + u64::from(stratum.index()),
-        )
+    /// Unit-cube point `index` of one randomization and stratum. Each
+    /// (randomization, stratum) has its own Owen-scrambled Sobol' set; plain Monte
+    /// Carlo takes the first point of a separately scrambled set per index, which
+    /// is uniformly distributed and independent of all others.
+    pub fn coordinates(&self, randomization: u32, stratum: Stratum, index: u32) -> [f64; 3] {
+        let stream = 3 * u64::from(randomization) + u64::from(stratum.index());
+        if self.quasi_random {
+            ScrambledSobol::new(self.seed, stream).point(index)
+        } else {
+            ScrambledSobol::new(!self.seed, (stream << 32) | u64::from(index)).point(0)
+        }
     }
 
     /// Samples and integrates the scenes of one chunk.
@@ -317,12 +319,12 @@ impl SamplingPlan {
         potential: &Potential,
         engine: &EngineSettings,
     ) -> Vec<SceneRecord> {
-        let points = self.point_set(chunk.randomization, chunk.stratum);
         chunk
             .points
             .clone()
             .map(|point| {
-                let scene = sample_scene(&points, point, chunk.stratum, &self.proposal);
+                let coordinates = self.coordinates(chunk.randomization, chunk.stratum, point);
+                let scene = sample_scene(coordinates, chunk.stratum, &self.proposal);
                 let launch = LaunchPair {
                     u2: scene.u2,
                     u3: scene.u3,

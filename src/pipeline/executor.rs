@@ -24,7 +24,7 @@ pub enum ExecError {
     #[error(transparent)]
     Store(#[from] StoreError),
     /// A stage failed.
-    #[error("{id}: {source}")]
+    #[error("{id}")]
     Stage {
         /// The instance.
         id: InstanceId,
@@ -32,7 +32,7 @@ pub enum ExecError {
         source: StageError,
     },
     /// An input artifact could not be read.
-    #[error("{id}: reading input: {source}")]
+    #[error("{id}: reading input")]
     Input {
         /// The instance.
         id: InstanceId,

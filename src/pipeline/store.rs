@@ -29,7 +29,7 @@ use super::key::{InputRecord, sha256_hex};
 #[derive(Debug, thiserror::Error)]
 pub enum StoreError {
     /// Filesystem failure at a path.
-    #[error("{path}: {source}")]
+    #[error("{path}")]
     Io {
         /// The path.
         path: PathBuf,
@@ -37,7 +37,7 @@ pub enum StoreError {
         source: io::Error,
     },
     /// A manifest or ref could not be encoded or decoded.
-    #[error("{path}: {source}")]
+    #[error("{path}")]
     Json {
         /// The path.
         path: PathBuf,

@@ -75,7 +75,7 @@ pub struct Table {
 #[derive(Debug, thiserror::Error)]
 pub enum TableError {
     /// Columns of different lengths or an Arrow failure.
-    #[error("table `{name}`: {source}")]
+    #[error("table `{name}`")]
     Arrow {
         /// The table.
         name: String,
@@ -86,7 +86,7 @@ pub enum TableError {
     #[error("parquet: {0}")]
     Parquet(#[from] parquet::errors::ParquetError),
     /// The file could not be read.
-    #[error("{path}: {source}")]
+    #[error("{path}")]
     Io {
         /// The file.
         path: String,

@@ -38,6 +38,7 @@ pub fn target_of(params: &KernelParams) -> Target {
         u_prime: params.u_prime,
         density: params.density,
         launch_length: params.launch_length,
+        kick_floor: params.kick_floor,
     }
 }
 

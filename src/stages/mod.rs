@@ -2,6 +2,7 @@
 //! physics. [`plan`] is the one place where stages are registered.
 
 pub mod collisions;
+pub mod fit;
 pub mod kernel;
 pub mod moments;
 pub mod scan;
@@ -23,6 +24,7 @@ pub fn plan(study: &Study) -> Vec<Box<dyn Stage>> {
             let params = study.kernel_params(potential, u_prime, density);
             stages.push(Box::new(kernel::KernelStage::new(params)));
             stages.push(Box::new(moments::MomentsStage::new(params)));
+            stages.push(Box::new(fit::FitStage::new(study.fit_params(params))));
         }
     }
     let rows = potentials

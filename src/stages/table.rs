@@ -1,11 +1,13 @@
 //! `table`: the study's summary, one row per potential: the thermalization
 //! constant `a_n` (self variance rate at `u' = 0`, dilute limit, within the
 //! kernel window) with its standard error, the untruncated value, the self
-//! drift (zero by mirror symmetry: a check), and `|u1f,max|` of every scanned
-//! launch pair with its error bound.
+//! drift (zero by mirror symmetry: a check), the kernel shape `alpha, beta,
+//! sigma` with standard errors, and `|u1f,max|` of every scanned launch pair
+//! with its error bound.
 
 use serde_json::Value;
 
+use super::fit::FitStage;
 use super::moments::MomentsStage;
 use crate::config::KernelParams;
 use crate::physics::potential::Potential;
@@ -77,6 +79,7 @@ impl Stage for TableStage {
             .flat_map(|params| {
                 [
                     MomentsStage::instance(params),
+                    FitStage::instance(params),
                     scan_instance(&params.potential),
                 ]
             })
@@ -156,6 +159,31 @@ impl Stage for TableStage {
                 "standard error of self_drift",
                 drift_err,
             );
+            let fit = input(inputs, &FitStage::instance(params), "fit")?;
+            for (name, description) in [
+                (
+                    "alpha",
+                    "amplitude of the kernel shape fit alpha |x|^-beta exp(-x^2/2 sigma^2) at u' = 0",
+                ),
+                ("beta", "power-law exponent of the kernel near u'"),
+                (
+                    "sigma",
+                    "Gaussian cut-off of the kernel (largest momentum transfer), v_th",
+                ),
+            ] {
+                push(
+                    name,
+                    "see fit stage",
+                    description,
+                    f64_values(fit, name)?[0],
+                );
+                push(
+                    &format!("{name}_stderr"),
+                    "see fit stage",
+                    "standard error from refitting each randomization",
+                    f64_values(fit, &format!("{name}_stderr"))?[0],
+                );
+            }
             counts[0].push(u32_values(moments, "events")?[0]);
             counts[1].push(u32_values(moments, "failed_events")?[0]);
             let peaks = input(inputs, &scan_instance(&params.potential), "peak")?;
