@@ -60,6 +60,57 @@ pub struct Config {
     /// Kernel, moments and table settings.
     #[serde(default)]
     pub kernel: KernelConfig,
+    /// The `u'` sweep: rates, Fokker-Planck consistency, detailed balance.
+    #[serde(default)]
+    pub sweep: SweepConfig,
+}
+
+/// `[sweep]`.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SweepConfig {
+    /// Run the sweep stage.
+    pub enabled: bool,
+    /// Smallest `u'` of the grid.
+    pub u_prime_min: f64,
+    /// Largest `u'` of the grid.
+    pub u_prime_max: f64,
+    /// Grid points (>= 3).
+    pub points: u32,
+    /// Separations `b - a` of the detailed-balance pairs (rounded to whole bins).
+    pub balance_separations: Vec<f64>,
+    /// Bin width of the detailed-balance kernels.
+    pub balance_bin_width: f64,
+}
+
+impl Default for SweepConfig {
+    fn default() -> Self {
+        SweepConfig {
+            enabled: true,
+            u_prime_min: -3.0,
+            u_prime_max: 3.0,
+            points: 25,
+            balance_separations: vec![0.01, 0.02, 0.05],
+            balance_bin_width: 0.005,
+        }
+    }
+}
+
+/// Resolved parameters of a `sweep` instance.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct SweepParams {
+    /// Kernel settings (potential, window, `L`, kick floor; `u'` and density unused).
+    pub kernel: KernelParams,
+    /// Smallest `u'`.
+    pub u_prime_min: f64,
+    /// Largest `u'`.
+    pub u_prime_max: f64,
+    /// Grid points.
+    pub points: u32,
+    /// Detailed-balance separations.
+    pub balance_separations: Vec<f64>,
+    /// Detailed-balance bin width.
+    pub balance_bin_width: f64,
 }
 
 /// `[collisions]`: how kernel scenes are sampled (numerics.md "Sampling scenes").
@@ -460,6 +511,19 @@ impl Study {
         }
     }
 
+    /// Resolved parameters of the sweep of `potential`, if enabled.
+    pub fn sweep_params(&self, potential: Potential) -> Option<SweepParams> {
+        let sweep = &self.config.sweep;
+        sweep.enabled.then(|| SweepParams {
+            kernel: self.kernel_params(potential, 0.0, 0.0),
+            u_prime_min: sweep.u_prime_min,
+            u_prime_max: sweep.u_prime_max,
+            points: sweep.points,
+            balance_separations: sweep.balance_separations.clone(),
+            balance_bin_width: sweep.balance_bin_width,
+        })
+    }
+
     /// Resolved parameters of the scan of `potential`.
     pub fn scan_params(&self, potential: Potential) -> ScanParams {
         let scan = &self.config.scan;
@@ -508,7 +572,49 @@ fn validate(config: &Config) -> Result<(), Invalid> {
     )?;
     validate_scan(config)?;
     validate_collisions(&config.collisions)?;
-    validate_kernel(&config.kernel)
+    validate_kernel(&config.kernel)?;
+    validate_sweep(&config.sweep)
+}
+
+fn validate_sweep(sweep: &SweepConfig) -> Result<(), Invalid> {
+    check(
+        sweep.u_prime_min.is_finite()
+            && sweep.u_prime_max.is_finite()
+            && sweep.u_prime_min < sweep.u_prime_max,
+        "sweep.u_prime_max",
+        format!(
+            "must exceed sweep.u_prime_min ({} >= {})",
+            sweep.u_prime_min, sweep.u_prime_max
+        ),
+    )?;
+    check(
+        sweep.u_prime_min >= -5.0 && sweep.u_prime_max <= 5.0,
+        "sweep.u_prime_min",
+        "the grid must lie within [-5, 5] thermal velocities",
+    )?;
+    check(
+        sweep.points >= 3,
+        "sweep.points",
+        "at least 3 points are needed for derivatives",
+    )?;
+    check(
+        sweep.balance_bin_width.is_finite() && sweep.balance_bin_width > 0.0,
+        "sweep.balance_bin_width",
+        format!("{} must be > 0", sweep.balance_bin_width),
+    )?;
+    check(
+        !sweep.balance_separations.is_empty(),
+        "sweep.balance_separations",
+        "lists no separation",
+    )?;
+    for (k, &separation) in sweep.balance_separations.iter().enumerate() {
+        check(
+            separation >= sweep.balance_bin_width && separation <= 0.5,
+            format!("sweep.balance_separations[{k}]"),
+            format!("{separation} must lie in [balance_bin_width, 0.5]"),
+        )?;
+    }
+    Ok(())
 }
 
 fn validate_collisions(sampling: &CollisionsConfig) -> Result<(), Invalid> {

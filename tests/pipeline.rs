@@ -94,9 +94,9 @@ fn run_counts(config: &Path, args: &[&str]) -> (usize, usize) {
     (number(" computed"), number(" fresh"))
 }
 
-/// Every instance of the default DAG: per potential scan, collisions, kernel and
-/// moments at (u' = 0, dilute), plus the table.
-const INSTANCES: usize = 9;
+/// Every instance of the default DAG: per potential scan, collisions, sweep, and
+/// kernel, moments and fit at (u' = 0, dilute), plus the table.
+const INSTANCES: usize = 13;
 
 fn stage_dirs(store: &Path, stage: &str) -> Vec<PathBuf> {
     let mut dirs: Vec<PathBuf> = fs::read_dir(store.join("artifacts").join(stage))
@@ -111,10 +111,18 @@ fn artifact_dirs(store: &Path) -> Vec<PathBuf> {
 }
 
 fn all_artifact_dirs(store: &Path) -> Vec<PathBuf> {
-    ["scan", "collisions", "kernel", "moments", "table"]
-        .iter()
-        .flat_map(|stage| stage_dirs(store, stage))
-        .collect()
+    [
+        "scan",
+        "collisions",
+        "kernel",
+        "moments",
+        "fit",
+        "sweep",
+        "table",
+    ]
+    .iter()
+    .flat_map(|stage| stage_dirs(store, stage))
+    .collect()
 }
 
 #[test]

@@ -243,30 +243,56 @@ fn apply_pair_changes(
     }
 }
 
-/// Impulse `U(g) / |r|` a pair receives between a weak state and `t = +-inf`
-/// (first order in `U`; the right member gains it, the left one loses it).
-fn tail_impulses<P: PairPotential>(potential: P, gaps: &[f64; 2], rates: &[f64; 2]) -> [f64; 3] {
-    pairs(gaps, rates).map(|(gap, rate)| potential.energy(gap) / rate.abs())
+/// Which way [`shift_tails`] moves a weak state.
+#[derive(Clone, Copy, PartialEq)]
+enum Tails {
+    /// From the actual trajectory onto each pair's free asymptote (the line it
+    /// came from if approaching, the line it leaves on if receding).
+    Remove,
+    /// From the free asymptotes back onto the actual trajectory.
+    Restore,
 }
 
-/// Free flight of duration `t` with the tail of every pair to first order in
-/// `U`: pair impulse `J = -(U(g') - U(g)) / r` and extra displacement
-/// `D = t U(g) / r - (Phi(g) - Phi(g')) / r^2`, where `g' = g + r t`
-/// (from `integral (t - s) f(g(s)) ds` along the free line).
-fn drift_tails<P: PairPotential>(potential: P, gaps: &mut [f64; 2], rates: &mut [f64; 2], t: f64) {
+/// First-order tails of every pair (numerics.md): an approaching pair has gained
+/// velocity `U(g)/|r|` and position `Phi(g)/r^2` on its right member since
+/// `t = -inf`; a receding pair still lacks them until `t = +inf`. Removing or
+/// restoring them maps a weak state to free asymptotic lines and back with
+/// errors `O((U/r^2)^2)`, so free flight between weak states is exact motion on
+/// those lines: no error grows with the flight time.
+fn shift_tails<P: PairPotential>(
+    potential: P,
+    gaps: &mut [f64; 2],
+    rates: &mut [f64; 2],
+    direction: Tails,
+) {
+    let sign = if direction == Tails::Remove {
+        -1.0
+    } else {
+        1.0
+    };
     let mut impulse = [0.0; 3];
     let mut displacement = [0.0; 3];
     for (k, (gap, rate)) in pairs(gaps, rates).into_iter().enumerate() {
-        let later = gap + rate * t;
-        let energy = potential.energy(gap);
-        impulse[k] = -(potential.energy(later) - energy) / rate;
-        displacement[k] = t * energy / rate
-            - (potential.tail_integral(gap) - potential.tail_integral(later)) / (rate * rate);
-    }
-    for k in 0..2 {
-        gaps[k] += rates[k] * t;
+        let approaching = if rate < 0.0 { 1.0 } else { -1.0 };
+        impulse[k] = sign * approaching * potential.energy(gap) / rate.abs();
+        displacement[k] = sign * approaching * potential.tail_integral(gap) / (rate * rate);
     }
     apply_pair_changes(gaps, rates, displacement, impulse);
+}
+
+/// Free flight over `duration` between two weak states: onto the asymptotes,
+/// exact straight lines, back onto the trajectory.
+fn free_flight<P: PairPotential>(
+    potential: P,
+    gaps: &mut [f64; 2],
+    rates: &mut [f64; 2],
+    duration: f64,
+) {
+    shift_tails(potential, gaps, rates, Tails::Remove);
+    for k in 0..2 {
+        gaps[k] += rates[k] * duration;
+    }
+    shift_tails(potential, gaps, rates, Tails::Restore);
 }
 
 /// Largest `|U(g)| / r^2` over the three pairs (infinite when a pair is at rest).
@@ -350,12 +376,8 @@ fn in_state<P: PairPotential>(potential: P, lines: [FreeLine; 3], epsilon: f64) 
         line_pairs[1].0 - line_pairs[1].1 * start,
     ];
     let mut rates = [b.velocity - a.velocity, c.velocity - b.velocity];
-    // Interaction felt since t = -inf: velocity U/|r| and position Phi/r^2
-    // gained by the right member of each approaching pair.
-    let impulse = tail_impulses(potential, &gaps, &rates);
-    let displacement =
-        pairs(&gaps, &rates).map(|(gap, rate)| potential.tail_integral(gap) / (rate * rate));
-    apply_pair_changes(&mut gaps, &mut rates, displacement, impulse);
+    // Interaction felt since t = -inf.
+    shift_tails(potential, &mut gaps, &mut rates, Tails::Restore);
     let mut incoming = [a.velocity, b.velocity, c.velocity];
     incoming.sort_by(f64::total_cmp);
     Some(InState {
@@ -530,14 +552,13 @@ fn run_scene<P: PairPotential, I: Integrator>(
         match classify(potential, &gaps, &rates, epsilon, step) {
             Next::Integrate => {}
             Next::Jump(duration) => {
-                drift_tails(potential, &mut gaps, &mut rates, duration);
+                free_flight(potential, &mut gaps, &mut rates, duration);
                 accel = acceleration.acceleration(&gaps);
                 counters.evaluations += 1;
                 counters.jumps += 1;
             }
             Next::Scattered => {
-                let impulse = tail_impulses(potential, &gaps, &rates);
-                apply_pair_changes(&mut gaps, &mut rates, [0.0; 3], impulse);
+                shift_tails(potential, &mut gaps, &mut rates, Tails::Remove);
                 let outgoing = velocities(centre, &rates);
                 let end = End {
                     outgoing,

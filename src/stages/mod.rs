@@ -6,6 +6,7 @@ pub mod fit;
 pub mod kernel;
 pub mod moments;
 pub mod scan;
+pub mod sweep;
 pub mod table;
 
 use crate::config::Study;
@@ -25,6 +26,9 @@ pub fn plan(study: &Study) -> Vec<Box<dyn Stage>> {
             stages.push(Box::new(kernel::KernelStage::new(params)));
             stages.push(Box::new(moments::MomentsStage::new(params)));
             stages.push(Box::new(fit::FitStage::new(study.fit_params(params))));
+        }
+        if let Some(params) = study.sweep_params(potential) {
+            stages.push(Box::new(sweep::SweepStage::new(params)));
         }
     }
     let rows = potentials
