@@ -88,16 +88,20 @@ fn launch_weight(relative: f64, u_prime: f64) -> f64 {
     thermal_density(relative + u_prime) * relative.abs()
 }
 
-/// The contributions of an event as seen from `target`: the event itself and,
-/// for the same-side stratum, its mirror image (which stands for the
-/// both-negative sign pattern). Empty for failed scenes.
+/// The contributions of an event as seen from `target`: the event itself and
+/// its mirror image, with half the weight each. For the
+/// same-side stratum the mirror image stands for the both-negative sign
+/// pattern; for the opposite-side stratum it is another point of the same
+/// stratum with the same proposal density (an antithetic pair: the drift, odd
+/// under mirroring, loses the noise of its even part). The literal algorithm's
+/// scenes count once. Empty for failed scenes.
 pub fn contributions(event: &Event, target: &Target) -> Vec<Contribution> {
     let Some(outgoing) = event.outgoing else {
         return Vec::new();
     };
     let images: &[f64] = match event.stratum {
-        Stratum::Opposite | Stratum::Literal => &[1.0],
-        Stratum::SameSide => &[1.0, -1.0],
+        Stratum::Literal => &[1.0],
+        Stratum::Opposite | Stratum::SameSide => &[1.0, -1.0],
     };
     let delay =
         event.offset - 0.5 * target.launch_length * (1.0 / event.u3.abs() - 1.0 / event.u2.abs());
@@ -106,11 +110,9 @@ pub fn contributions(event: &Event, target: &Target) -> Vec<Contribution> {
         .iter()
         .map(|&sign| {
             let (u2, u3) = (sign * event.u2, sign * event.u3);
-            let weight = event.stratum.multiplicity()
-                * launch_weight(u2, target.u_prime)
-                * launch_weight(u3, target.u_prime)
-                * survival
-                / event.proposal_density;
+            let weight =
+                launch_weight(u2, target.u_prime) * launch_weight(u3, target.u_prime) * survival
+                    / (event.proposal_density * images.len() as f64);
             let mut out = outgoing.map(|v| sign * v);
             out.sort_by(f64::total_cmp);
             let incoming = [0.0, u2, u3];

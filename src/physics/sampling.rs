@@ -11,9 +11,10 @@
 //! (units of `rho^2 l v_th`; the 1/2 undoes counting each physical configuration
 //! under both labellings of the two thermal particles). The sign patterns of
 //! `(u2, u3)` split it into strata: `Opposite` (`u2 > 0 > u3`, which with the
-//! relabelled `u2 < 0 < u3` carries the factor 1 instead of 1/2) and
-//! `SameSide` (`u2, u3 > 0`, factor 1/2, whose exact mirror image supplies
-//! `u2, u3 < 0`). Speeds are drawn with the exact inverse CDF of the `u' = 0`
+//! relabelled `u2 < 0 < u3` cancels the 1/2) and `SameSide` (`u2, u3 > 0`,
+//! whose exact mirror image supplies `u2, u3 < 0`, together cancelling the 1/2).
+//! Every scene of either stratum is used with its mirror image at half weight
+//! each (see `kernel::contributions`). Speeds are drawn with the exact inverse CDF of the `u' = 0`
 //! launch density `|u| exp(-u^2/2)`, the offset from a mixture of a Gaussian
 //! core and a Cauchy tail on the collision time `T = 1/|u2| + 1/|u3|` and a
 //! defensive uniform component; the weight is target over the whole mixture
@@ -60,15 +61,6 @@ impl Stratum {
     /// Inverse of [`Stratum::index`].
     pub fn from_index(index: u32) -> Option<Stratum> {
         Stratum::ALL.into_iter().find(|s| s.index() == index)
-    }
-
-    /// Counting factor of the stratum in the kernel integral (see module doc;
-    /// the literal algorithm samples each configuration in one labelling only).
-    pub fn multiplicity(self) -> f64 {
-        match self {
-            Stratum::Opposite | Stratum::Literal => 1.0,
-            Stratum::SameSide => 0.5,
-        }
     }
 }
 
