@@ -287,6 +287,7 @@ fn plan_for(variant: &Variant, seed: u64, randomizations: u32, points: u32) -> S
         same_side_points: power(same),
         proposal: variant.proposal,
         quasi_random: variant.quasi_random,
+        launch_shift: 0.0,
     }
 }
 

@@ -128,6 +128,8 @@ pub struct CollisionsConfig {
     pub same_side_fraction: f64,
     /// Scrambled Sobol' points (default) or plain Monte Carlo points.
     pub quasi_random: bool,
+    /// `u'` the launch-speed proposal is tuned for.
+    pub launch_shift: f64,
     /// Mixture proposal of the arrival offset (`[collisions.proposal]`).
     pub proposal: OffsetProposal,
 }
@@ -140,6 +142,7 @@ impl Default for CollisionsConfig {
             points: 4096,
             same_side_fraction: 0.15,
             quasi_random: true,
+            launch_shift: 0.0,
             proposal: OffsetProposal::default(),
         }
     }
@@ -468,6 +471,7 @@ impl Study {
                 same_side_points: nearest_power_of_two(same_side),
                 proposal: sampling.proposal,
                 quasi_random: sampling.quasi_random,
+                launch_shift: sampling.launch_shift,
             },
         }
     }
@@ -635,6 +639,11 @@ fn validate_collisions(sampling: &CollisionsConfig) -> Result<(), Invalid> {
             "{} must lie in (0, 1): both strata need scenes",
             sampling.same_side_fraction
         ),
+    )?;
+    check(
+        sampling.launch_shift.is_finite() && sampling.launch_shift.abs() <= 3.0,
+        "collisions.launch_shift",
+        format!("{} is outside [-3, 3]", sampling.launch_shift),
     )?;
     let proposal = &sampling.proposal;
     for (key, value) in [

@@ -23,6 +23,10 @@ fn engine() -> EngineSettings {
 }
 
 fn plan(seed: u64, randomizations: u32, points: u32) -> SamplingPlan {
+    shifted_plan(seed, randomizations, points, 0.0)
+}
+
+fn shifted_plan(seed: u64, randomizations: u32, points: u32, launch_shift: f64) -> SamplingPlan {
     let same_side = (f64::from(points) * 0.15).round() as u32;
     SamplingPlan {
         seed,
@@ -31,6 +35,7 @@ fn plan(seed: u64, randomizations: u32, points: u32) -> SamplingPlan {
         same_side_points: same_side,
         proposal: OffsetProposal::default(),
         quasi_random: true,
+        launch_shift,
     }
 }
 
@@ -334,5 +339,30 @@ fn importance_sampler_agrees_with_the_literal_algorithm_at_finite_density() {
     assert!(
         dilute_value.mean - a.mean > 4.0 * a.stderr.hypot(dilute_value.stderr),
         "{dilute_value:?} vs {a:?}"
+    );
+}
+
+#[test]
+fn reweighted_kernel_agrees_with_direct_sampling_at_the_same_velocity() {
+    let potential = Potential::InversePower { n: 6.0 };
+    let reweighted = draw(potential, &plan(23, 16, 2048));
+    let direct = draw(potential, &shifted_plan(29, 16, 2048, 0.5));
+    let target = dilute(0.5);
+    let (a, b) = (
+        self_variance(&reweighted, &target, 0.1),
+        self_variance(&direct, &target, 0.1),
+    );
+    assert!(
+        (a.mean - b.mean).abs() < 4.0 * a.stderr.hypot(b.stderr),
+        "reweighted {a:?} vs direct {b:?}"
+    );
+    let bins = Bins::for_window(0.2, 0.004);
+    let (chi2, worst, dof) = compare(
+        &kernel(&reweighted, &target, &bins, total),
+        &kernel(&direct, &target, &bins, total),
+    );
+    assert!(
+        dof > 40 && chi2 < 2.0 && worst < 5.0,
+        "chi2/dof {chi2} worst {worst} dof {dof}"
     );
 }

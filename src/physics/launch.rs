@@ -25,9 +25,91 @@ pub fn thermal_launch_speed(uniform: f64) -> f64 {
     (-2.0 * (-uniform).ln_1p()).sqrt()
 }
 
+/// Normalization `Z(b) = int_0^inf v exp(-(v + b)^2 / 2) dv
+/// = exp(-b^2/2) - b sqrt(2 pi) Phi(-b)` of the shifted launch-speed density.
+fn shifted_normalization(shift: f64) -> f64 {
+    (-0.5 * shift * shift).exp() - shift * (2.0 * PI).sqrt() * standard_normal_cdf(-shift)
+}
+
+/// Density of a launch speed `v = |u| > 0` on one side of the special particle
+/// moving with `u'`: `v exp(-(v + b)^2/2) / Z(b)` with `b = sign(u) u'`, the
+/// shape of `f0(u + u') |u|` on that side (physics.md §3). `b = 0` is the
+/// Rayleigh density of [`thermal_launch_speed`].
+pub fn shifted_speed_density(speed: f64, shift: f64) -> f64 {
+    speed * (-0.5 * (speed + shift).powi(2)).exp() / shifted_normalization(shift)
+}
+
+/// Cumulative distribution of [`shifted_speed_density`]:
+/// `[exp(-b^2/2) - exp(-(v+b)^2/2) - b sqrt(2 pi) (Phi(v+b) - Phi(b))] / Z(b)`.
+fn shifted_speed_cdf(speed: f64, shift: f64) -> f64 {
+    let gaussian = (-0.5 * shift * shift).exp() - (-0.5 * (speed + shift).powi(2)).exp();
+    let drift = shift
+        * (2.0 * PI).sqrt()
+        * (standard_normal_cdf(-shift) - standard_normal_cdf(-(speed + shift)));
+    (gaussian - drift) / shifted_normalization(shift)
+}
+
+/// Inverse of the shifted launch-speed CDF (safeguarded Newton iteration on a
+/// bracket; exact to ~1e-13 relative for `|b| <= 3`, where `Z(b)` loses at most
+/// one digit to cancellation).
+pub fn shifted_launch_speed(uniform: f64, shift: f64) -> f64 {
+    if shift == 0.0 {
+        return thermal_launch_speed(uniform);
+    }
+    let (mut low, mut high) = (0.0, 1.0 + shift.abs());
+    while shifted_speed_cdf(high, shift) < uniform {
+        (low, high) = (high, 2.0 * high);
+    }
+    let mut speed = thermal_launch_speed(uniform).clamp(low, high);
+    for _ in 0..100 {
+        let residual = shifted_speed_cdf(speed, shift) - uniform;
+        if residual > 0.0 {
+            high = speed
+        } else {
+            low = speed
+        }
+        let newton = speed - residual / shifted_speed_density(speed, shift);
+        let next = if newton > low && newton < high {
+            newton
+        } else {
+            0.5 * (low + high)
+        };
+        if (next - speed).abs() <= 1e-15 * speed {
+            return next;
+        }
+        speed = next;
+    }
+    speed
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The shifted density is normalized, has the target shape, and the inverse
+    /// CDF inverts it.
+    #[test]
+    fn shifted_launch_speeds_follow_their_density() {
+        for &shift in &[-3.0, -0.5, 0.5, 3.0] {
+            let h = 1e-4;
+            let total: f64 = (0..200_000)
+                .map(|k| shifted_speed_density(h * (f64::from(k) + 0.5), shift))
+                .sum::<f64>()
+                * h;
+            assert!((total - 1.0).abs() < 1e-7, "{shift}: {total}");
+            for &uniform in &[1e-6, 0.1, 0.5, 0.9, 0.999_999] {
+                let speed = shifted_launch_speed(uniform, shift);
+                assert!(
+                    (shifted_speed_cdf(speed, shift) - uniform).abs() < 1e-13,
+                    "{shift} {uniform}"
+                );
+            }
+            let ratio = shifted_speed_density(1.3, shift) / shifted_speed_density(0.4, shift);
+            let expected =
+                (1.3 * thermal_density(1.3 + shift)) / (0.4 * thermal_density(0.4 + shift));
+            assert!((ratio / expected - 1.0).abs() < 1e-13);
+        }
+    }
 
     /// `r(u') = int f0(u + u') |u| du`, checked by quadrature; `r(0) = sqrt(2/pi)`.
     #[test]

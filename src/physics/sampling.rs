@@ -23,7 +23,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::launch::thermal_launch_speed;
+use super::launch::{shifted_launch_speed, shifted_speed_density, thermal_launch_speed};
 use super::potential::Potential;
 use super::quasi_random::{ScrambledSobol, standard_normal_quantile};
 use super::scan::LaunchPair;
@@ -136,11 +136,6 @@ impl OffsetProposal {
     }
 }
 
-/// Density of a launch speed `s = |u|` under the `u' = 0` proposal, `s exp(-s^2/2)`.
-pub fn speed_density(speed: f64) -> f64 {
-    speed * (-0.5 * speed * speed).exp()
-}
-
 /// One sampled scene with its proposal density.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SampledScene {
@@ -156,20 +151,24 @@ pub struct SampledScene {
     pub proposal_density: f64,
 }
 
-/// The scene in `stratum` at the unit-cube point `coordinates`.
+/// The scene in `stratum` at the unit-cube point `coordinates`, with launch
+/// speeds drawn for a special particle moving with `launch_shift` (`u'` the
+/// proposal is tuned for; the weights make any `u'` exact).
 pub fn sample_scene(
     coordinates: [f64; 3],
     stratum: Stratum,
     proposal: &OffsetProposal,
+    launch_shift: f64,
 ) -> SampledScene {
     let [x_offset, x_first, x_second] = coordinates;
-    let first = thermal_launch_speed(x_first);
-    let second = thermal_launch_speed(x_second);
-    let u3 = if stratum == Stratum::Opposite {
-        -second
+    let third_sign = if stratum == Stratum::Opposite {
+        -1.0
     } else {
-        second
+        1.0
     };
+    let first = shifted_launch_speed(x_first, launch_shift);
+    let second = shifted_launch_speed(x_second, third_sign * launch_shift);
+    let u3 = third_sign * second;
     let collision_time = 1.0 / first + 1.0 / second;
     let offset = proposal.offset(x_offset, collision_time);
     SampledScene {
@@ -177,8 +176,8 @@ pub fn sample_scene(
         u2: first,
         u3,
         offset,
-        proposal_density: speed_density(first)
-            * speed_density(second)
+        proposal_density: shifted_speed_density(first, launch_shift)
+            * shifted_speed_density(second, third_sign * launch_shift)
             * proposal.density(offset, collision_time),
     }
 }
@@ -204,8 +203,8 @@ pub fn literal_scene(coordinates: [f64; 3], density: f64, launch_length: f64) ->
         u3,
         offset,
         proposal_density: 0.25
-            * speed_density(u2.abs())
-            * speed_density(u3.abs())
+            * shifted_speed_density(u2.abs(), 0.0)
+            * shifted_speed_density(u3.abs(), 0.0)
             * rate
             * (-rate * delay).exp(),
     }
@@ -228,6 +227,8 @@ pub struct SamplingPlan {
     /// Scrambled Sobol' points (`true`) or independent uniform points (`false`,
     /// plain Monte Carlo: only for measuring what quasi-random points gain).
     pub quasi_random: bool,
+    /// `u'` the launch-speed proposal is tuned for (0: the `u' = 0` launch density).
+    pub launch_shift: f64,
 }
 
 /// A contiguous range of points of one randomization and stratum: the unit
@@ -316,7 +317,12 @@ impl SamplingPlan {
             .clone()
             .map(|point| {
                 let coordinates = self.coordinates(chunk.randomization, chunk.stratum, point);
-                let scene = sample_scene(coordinates, chunk.stratum, &self.proposal);
+                let scene = sample_scene(
+                    coordinates,
+                    chunk.stratum,
+                    &self.proposal,
+                    self.launch_shift,
+                );
                 let launch = LaunchPair {
                     u2: scene.u2,
                     u3: scene.u3,
