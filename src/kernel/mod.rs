@@ -8,6 +8,8 @@
 
 pub mod fit;
 
+use rayon::prelude::*;
+
 use crate::physics::launch::{launch_rate, thermal_density};
 use crate::physics::sampling::{SceneRecord, Stratum};
 
@@ -265,14 +267,40 @@ impl Draws {
 
 /// The kernel on `bins` around `target.u_prime`, per replicate.
 pub fn histograms(events: &[Event], target: &Target, bins: &Bins, draws: &Draws) -> Vec<Histogram> {
-    let mut replicates = vec![Histogram::new(bins); draws.replicates()];
-    for event in events {
-        let scale = draws.scale(event);
-        for contribution in contributions(event, target) {
-            replicates[event.randomization as usize].add(bins, &contribution, scale);
-        }
-    }
-    replicates
+    per_replicate(
+        events,
+        draws,
+        || Histogram::new(bins),
+        |histogram, event, scale| {
+            for contribution in contributions(event, target) {
+                histogram.add(bins, &contribution, scale);
+            }
+        },
+    )
+}
+
+/// Folds the events of every replicate, replicates in parallel. Each replicate
+/// adds its events in their stored order, so the sums are bit-identical for any
+/// thread count.
+fn per_replicate<T: Send>(
+    events: &[Event],
+    draws: &Draws,
+    start: impl Fn() -> T + Sync,
+    add: impl Fn(&mut T, &Event, f64) + Sync,
+) -> Vec<T> {
+    (0..draws.replicates())
+        .into_par_iter()
+        .map(|replicate| {
+            let mut sum = start();
+            for event in events
+                .iter()
+                .filter(|e| e.randomization as usize == replicate)
+            {
+                add(&mut sum, event, draws.scale(event));
+            }
+            sum
+        })
+        .collect()
 }
 
 /// Drift `sum x` and variance `sum x^2` rates of the special particle alone
@@ -298,16 +326,12 @@ pub fn moments(
     truncations: &[f64],
     draws: &Draws,
 ) -> Vec<Vec<MomentSums>> {
-    let mut sums = vec![vec![MomentSums::default(); truncations.len()]; draws.replicates()];
-    for event in events {
-        let scale = draws.scale(event);
+    let start = || vec![MomentSums::default(); truncations.len()];
+    per_replicate(events, draws, start, |sums, event, scale| {
         for contribution in contributions(event, target) {
             let weight = contribution.weight * scale;
             let kick = contribution.self_kick();
-            for (slot, &limit) in sums[event.randomization as usize]
-                .iter_mut()
-                .zip(truncations)
-            {
+            for (slot, &limit) in sums.iter_mut().zip(truncations) {
                 let inside = |x: f64| if x.abs() <= limit { 1.0 } else { 0.0 };
                 slot.self_drift += weight * kick * inside(kick);
                 slot.self_variance += weight * kick * kick * inside(kick);
@@ -319,6 +343,5 @@ pub fn moments(
                 }
             }
         }
-    }
-    sums
+    })
 }

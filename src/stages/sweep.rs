@@ -11,6 +11,7 @@
 //! Higher Kramers-Moyal terms (third moment of kicks of ~0.02 v_th) are not
 //! included, so differences of a few percent of `D1` are expected.
 
+use rayon::prelude::*;
 use serde_json::Value;
 
 use super::collisions::CollisionsStage;
@@ -51,7 +52,7 @@ impl SweepStage {
     /// Self drift and variance rates (within half the window) per replicate at every grid point.
     fn rates(&self, events: &[Event], draws: &Draws, grid: &[f64]) -> Vec<[Vec<f64>; 2]> {
         let edge = 0.5 * self.params.kernel.window;
-        grid.iter()
+        grid.par_iter()
             .map(|&u| {
                 let sums = moments(events, &self.target(u), &[edge], draws);
                 [
@@ -169,45 +170,53 @@ impl SweepStage {
             .copied()
             .fold(0.0, f64::max);
         let bins = Bins::for_window(2.0 * largest + 4.0 * width, width);
+        let rows: Vec<[f64; 9]> = grid
+            .par_iter()
+            .flat_map_iter(|&a| {
+                let forward = histograms(events, &self.target(a), &bins, draws);
+                self.params
+                    .balance_separations
+                    .iter()
+                    .map(move |&separation| {
+                        let steps = (separation / width).round() as usize;
+                        let b = a + steps as f64 * width;
+                        let backward = histograms(events, &self.target(b), &bins, draws);
+                        let there: Vec<f64> = forward
+                            .iter()
+                            .map(|h| h.self_part[bins.half_bins + steps] / width)
+                            .collect();
+                        let back: Vec<f64> = backward
+                            .iter()
+                            .map(|h| h.self_part[bins.half_bins - steps] / width)
+                            .collect();
+                        let imbalance: Vec<f64> = there
+                            .iter()
+                            .zip(&back)
+                            .map(|(x, y)| thermal_density(a) * x - thermal_density(b) * y)
+                            .collect();
+                        let [there, back, imbalance] =
+                            [&there, &back, &imbalance].map(|v| Estimate::from_replicates(v));
+                        let ratio = there.mean / back.mean;
+                        let ratio_error =
+                            ratio * (there.stderr / there.mean).hypot(back.stderr / back.mean);
+                        [
+                            a,
+                            b,
+                            there.mean,
+                            there.stderr,
+                            back.mean,
+                            back.stderr,
+                            ratio,
+                            ratio_error,
+                            imbalance.mean / imbalance.stderr,
+                        ]
+                    })
+            })
+            .collect();
         let mut columns: [Vec<f64>; 9] = Default::default();
-        for &a in grid {
-            let forward = histograms(events, &self.target(a), &bins, draws);
-            for &separation in &self.params.balance_separations {
-                let steps = (separation / width).round() as usize;
-                let b = a + steps as f64 * width;
-                let backward = histograms(events, &self.target(b), &bins, draws);
-                let there: Vec<f64> = forward
-                    .iter()
-                    .map(|h| h.self_part[bins.half_bins + steps] / width)
-                    .collect();
-                let back: Vec<f64> = backward
-                    .iter()
-                    .map(|h| h.self_part[bins.half_bins - steps] / width)
-                    .collect();
-                let imbalance: Vec<f64> = there
-                    .iter()
-                    .zip(&back)
-                    .map(|(x, y)| thermal_density(a) * x - thermal_density(b) * y)
-                    .collect();
-                let [there, back, imbalance] =
-                    [&there, &back, &imbalance].map(|v| Estimate::from_replicates(v));
-                let ratio = there.mean / back.mean;
-                let ratio_error =
-                    ratio * (there.stderr / there.mean).hypot(back.stderr / back.mean);
-                let row = [
-                    a,
-                    b,
-                    there.mean,
-                    there.stderr,
-                    back.mean,
-                    back.stderr,
-                    ratio,
-                    ratio_error,
-                    imbalance.mean / imbalance.stderr,
-                ];
-                for (column, value) in columns.iter_mut().zip(row) {
-                    column.push(value);
-                }
+        for row in rows {
+            for (column, value) in columns.iter_mut().zip(row) {
+                column.push(value);
             }
         }
         let [
