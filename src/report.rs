@@ -111,22 +111,25 @@ fn study_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
     let frame = read_frame(&store.artifact_dir("table", key).join("table.parquet"))?;
     writeln!(
         out,
-        "\nthermalization constants: a_n = self variance rate at u' = 0 [rho^2 l v_th^3], dilute limit (+- standard error)"
+        "\nthermalization constants a_n = self variance rate at u' = 0, dilute limit [rho^2 l v_th^3]; kernel shape near u' (+- standard errors)"
     )?;
     writeln!(
         out,
-        "{:<10} {:<28} {:>8} {:<28} {:<26} {:>9}",
+        "{:<10} {:<26} {:>8} {:<26} {:<20} {:<22} {:>13}",
         "potential",
         "a_n (|u-u'| <= window/2)",
         "rel.err",
         "a_n untruncated",
-        "self drift (0 expected)",
+        "beta",
+        "sigma [v_th]",
         "failed"
     )?;
     for row in 0..frame.height() {
         let number = |name: &str| -> Result<f64> {
             Ok(frame.column(name)?.f64()?.get(row).unwrap_or(f64::NAN))
         };
+        let count =
+            |name: &str| -> Result<u32> { Ok(frame.column(name)?.u32()?.get(row).unwrap_or(0)) };
         let potential = frame
             .column("potential")?
             .str()?
@@ -134,20 +137,24 @@ fn study_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
             .unwrap_or_default()
             .to_string();
         let (a, a_err) = (number("a_n")?, number("a_n_stderr")?);
-        let failed = frame.column("failed_events")?.u32()?.get(row).unwrap_or(0);
-        let events = frame.column("events")?.u32()?.get(row).unwrap_or(0);
+        let relative = if a == 0.0 {
+            "-".to_string()
+        } else {
+            format!("{:.3}%", 100.0 * a_err / a.abs())
+        };
         writeln!(
             out,
-            "{:<10} {:<28} {:>7.3}% {:<28} {:<26} {:>9}",
+            "{:<10} {:<26} {:>8} {:<26} {:<20} {:<22} {:>13}",
             potential,
             with_error(a, a_err),
-            100.0 * a_err / a.abs(),
+            relative,
             with_error(
                 number("a_n_untruncated")?,
                 number("a_n_untruncated_stderr")?
             ),
-            with_error(number("self_drift")?, number("self_drift_stderr")?),
-            format!("{failed}/{events}"),
+            with_error(number("beta")?, number("beta_stderr")?),
+            with_error(number("sigma")?, number("sigma_stderr")?),
+            format!("{}/{}", count("failed_events")?, count("events")?),
         )?;
     }
     Ok(out)

@@ -63,7 +63,7 @@ pub struct ScanPoint {
     pub collision: Collision,
 }
 
-/// Integrates the scenes at `offsets` in parallel-friendly independent calls.
+/// Integrates the scene of `launch` at one arrival offset.
 pub fn scan_point(
     potential: &Potential,
     settings: &EngineSettings,
@@ -84,9 +84,10 @@ pub struct Peak {
     /// Error bound on `kick`: tolerance sensitivity (tolerance vs. 100x tighter)
     /// plus the spread of `|u1f|` over the final bracket.
     pub kick_error: f64,
-    /// Arrival offset at the maximum.
+    /// Arrival offset at the maximum (NaN when the maximum is within three
+    /// error bounds of zero, as for the integrable n = 2).
     pub offset: f64,
-    /// Half-width of the final offset bracket.
+    /// Half-width of the final offset bracket (NaN with `offset`).
     pub offset_error: f64,
 }
 
@@ -128,11 +129,14 @@ pub fn refine_peak(
     let kick = kick_at(&tight, offset);
     let nominal = kick_at(settings, offset);
     let bracket_spread = (fc - fd).abs().max((kick_at(settings, a) - nominal).abs());
+    let kick_error = (kick - nominal).abs() + bracket_spread;
+    // A maximum indistinguishable from zero (n = 2) has no location.
+    let located = kick > 3.0 * kick_error;
     Peak {
         kick,
-        kick_error: (kick - nominal).abs() + bracket_spread,
-        offset,
-        offset_error: 0.5 * (b - a),
+        kick_error,
+        offset: if located { offset } else { f64::NAN },
+        offset_error: if located { 0.5 * (b - a) } else { f64::NAN },
     }
 }
 

@@ -73,7 +73,7 @@ impl Stage for ScanStage {
     }
 
     fn version(&self) -> u32 {
-        1
+        2
     }
 
     fn params(&self) -> Value {

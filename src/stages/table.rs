@@ -1,7 +1,6 @@
 //! `table`: the study's summary, one row per potential: the thermalization
 //! constant `a_n` (self variance rate at `u' = 0`, dilute limit, within the
-//! kernel window) with its standard error, the untruncated value, the self
-//! drift (zero by mirror symmetry: a check), the kernel shape `alpha, beta,
+//! kernel window) with its standard error, the untruncated value, the kernel shape `alpha, beta,
 //! sigma` with standard errors, and `|u1f,max|` of every scanned launch pair
 //! with its error bound.
 
@@ -66,7 +65,7 @@ impl Stage for TableStage {
     }
 
     fn version(&self) -> u32 {
-        1
+        2
     }
 
     fn params(&self) -> Value {
@@ -106,7 +105,6 @@ impl Stage for TableStage {
             let edge = 0.5 * params.window;
             let (a, a_err) = moment_at(moments, "self_variance", edge)?;
             let (a_all, a_all_err) = moment_at(moments, "self_variance", f64::INFINITY)?;
-            let (drift, drift_err) = moment_at(moments, "self_drift", edge)?;
             let (exponent, theta) = match params.potential {
                 Potential::InversePower { n } => (n, f64::NAN),
                 Potential::LennardJones { theta } => (6.0, theta),
@@ -146,18 +144,6 @@ impl Stage for TableStage {
                 "rho^2 l v_th^3",
                 "standard error of a_n_untruncated",
                 a_all_err,
-            );
-            push(
-                "self_drift",
-                "rho^2 l v_th^2",
-                "self drift rate at u' = 0 (zero by mirror symmetry: a check)",
-                drift,
-            );
-            push(
-                "self_drift_stderr",
-                "rho^2 l v_th^2",
-                "standard error of self_drift",
-                drift_err,
             );
             let fit = input(inputs, &FitStage::instance(params), "fit")?;
             for (name, description) in [
