@@ -63,6 +63,55 @@ pub struct Config {
     /// The `u'` sweep: rates, Fokker-Planck consistency, detailed balance.
     #[serde(default)]
     pub sweep: SweepConfig,
+    /// The convergence study of `a_n` under numerical settings.
+    #[serde(default)]
+    pub convergence: ConvergenceConfig,
+}
+
+/// `[convergence]`.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ConvergenceConfig {
+    /// Run the convergence stage.
+    pub enabled: bool,
+    /// Exponent `n` of the inverse power law studied (must be configured).
+    pub inverse_power: f64,
+    /// Densities `rho l` (finite-density correction).
+    pub densities: Vec<f64>,
+    /// Offset bounds `B`: only `|tau| <= B T` counts.
+    pub offset_bounds: Vec<f64>,
+    /// Integrator tolerances (scenes re-integrated at the same points).
+    pub tolerances: Vec<f64>,
+    /// Bin widths of the binned `a_n`.
+    pub bin_widths: Vec<f64>,
+}
+
+impl Default for ConvergenceConfig {
+    fn default() -> Self {
+        ConvergenceConfig {
+            enabled: false,
+            inverse_power: 6.0,
+            densities: vec![5e-5, 5e-4, 5e-3],
+            offset_bounds: vec![1.5, 3.0, 10.0, 30.0, 100.0],
+            tolerances: vec![1e-10, 1e-11, 1e-13],
+            bin_widths: vec![5e-5, 2e-4, 1e-3, 4e-3],
+        }
+    }
+}
+
+/// Resolved parameters of the `convergence` stage.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ConvergenceParams {
+    /// Default kernel settings of the potential (u' = 0, dilute).
+    pub kernel: KernelParams,
+    /// Densities.
+    pub densities: Vec<f64>,
+    /// Offset bounds in collision times.
+    pub offset_bounds: Vec<f64>,
+    /// Tolerances.
+    pub tolerances: Vec<f64>,
+    /// Bin widths.
+    pub bin_widths: Vec<f64>,
 }
 
 /// `[sweep]`.
@@ -528,6 +577,35 @@ impl Study {
         })
     }
 
+    /// Resolved convergence parameters and the collisions at each varied
+    /// tolerance, if the study is enabled.
+    pub fn convergence(&self) -> Option<(ConvergenceParams, Vec<CollisionsParams>)> {
+        let study = &self.config.convergence;
+        if !study.enabled {
+            return None;
+        }
+        let potential = Potential::InversePower {
+            n: study.inverse_power,
+        };
+        let variants = study
+            .tolerances
+            .iter()
+            .map(|&tolerance| {
+                let mut params = self.collisions_params(potential);
+                params.engine.tolerance = tolerance;
+                params
+            })
+            .collect();
+        let params = ConvergenceParams {
+            kernel: self.kernel_params(potential, 0.0, 0.0),
+            densities: study.densities.clone(),
+            offset_bounds: study.offset_bounds.clone(),
+            tolerances: study.tolerances.clone(),
+            bin_widths: study.bin_widths.clone(),
+        };
+        Some((params, variants))
+    }
+
     /// Resolved parameters of the scan of `potential`.
     pub fn scan_params(&self, potential: Potential) -> ScanParams {
         let scan = &self.config.scan;
@@ -577,7 +655,47 @@ fn validate(config: &Config) -> Result<(), Invalid> {
     validate_scan(config)?;
     validate_collisions(&config.collisions)?;
     validate_kernel(&config.kernel)?;
-    validate_sweep(&config.sweep)
+    validate_sweep(&config.sweep)?;
+    validate_convergence(config)
+}
+
+fn validate_convergence(config: &Config) -> Result<(), Invalid> {
+    let study = &config.convergence;
+    if !study.enabled {
+        return Ok(());
+    }
+    check(
+        config
+            .potentials
+            .inverse_power
+            .contains(&study.inverse_power),
+        "convergence.inverse_power",
+        format!(
+            "n = {} is not among potentials.inverse_power",
+            study.inverse_power
+        ),
+    )?;
+    let lists: [(&str, &Vec<f64>, f64, f64); 4] = [
+        ("densities", &study.densities, 0.0, 0.1),
+        ("offset_bounds", &study.offset_bounds, 1e-3, 1e6),
+        ("tolerances", &study.tolerances, 1e-16, 1e-3),
+        (
+            "bin_widths",
+            &study.bin_widths,
+            1e-7,
+            0.5 * config.kernel.window,
+        ),
+    ];
+    for (name, values, low, high) in lists {
+        for (k, &value) in values.iter().enumerate() {
+            check(
+                value.is_finite() && value > low && value <= high,
+                format!("convergence.{name}[{k}]"),
+                format!("{value} is outside ({low}, {high}]"),
+            )?;
+        }
+    }
+    check_unique(&study.tolerances, "convergence.tolerances")
 }
 
 fn validate_sweep(sweep: &SweepConfig) -> Result<(), Invalid> {

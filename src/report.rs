@@ -35,9 +35,11 @@ fn read_frame(path: &Path) -> Result<DataFrame> {
         .with_context(|| format!("reading {}", path.display()))
 }
 
-/// The study table (when computed) and the scan peaks of a run, readable.
+/// The study table (when computed), the convergence study and the scan peaks
+/// of a run, readable.
 pub fn summary(store: &Store, reports: &[InstanceReport]) -> Result<String> {
     let mut out = study_table(store, reports)?;
+    out.push_str(&convergence_table(store, reports)?);
     let scans = reports.iter().filter(|r| r.id.stage == "scan");
     for (k, report) in scans.enumerate() {
         let Some(key) = &report.key else { continue };
@@ -156,6 +158,56 @@ fn study_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
             with_error(number("sigma")?, number("sigma_stderr")?),
             format!("{}/{}", count("failed_events")?, count("events")?),
         )?;
+    }
+    Ok(out)
+}
+
+/// The `convergence` stage's output: shifts of `a_n` against the defaults.
+fn convergence_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
+    let mut out = String::new();
+    for report in reports.iter().filter(|r| r.id.stage == "convergence") {
+        let Some(key) = report
+            .key
+            .as_ref()
+            .filter(|key| store.intact_manifest("convergence", key).is_some())
+        else {
+            continue;
+        };
+        let frame = read_frame(
+            &store
+                .artifact_dir("convergence", key)
+                .join("convergence.parquet"),
+        )?;
+        writeln!(
+            out,
+            "\nconvergence of a_n for {} (shift = a_n - default, paired over randomizations)",
+            report.id.instance
+        )?;
+        writeln!(
+            out,
+            "{:<14} {:>10} {:<30} {:<28} {:>16}",
+            "parameter", "value", "a_n", "shift", "shift / a_n error"
+        )?;
+        for row in 0..frame.height() {
+            let number = |name: &str| -> Result<f64> {
+                Ok(frame.column(name)?.f64()?.get(row).unwrap_or(f64::NAN))
+            };
+            let parameter = frame
+                .column("parameter")?
+                .str()?
+                .get(row)
+                .unwrap_or_default()
+                .to_string();
+            writeln!(
+                out,
+                "{:<14} {:>10.3e} {:<30} {:<28} {:>16.3}",
+                parameter,
+                number("value")?,
+                with_error(number("a_n")?, number("a_n_stderr")?),
+                with_error(number("shift")?, number("shift_stderr")?),
+                number("shift_over_error")?,
+            )?;
+        }
     }
     Ok(out)
 }

@@ -430,3 +430,42 @@ fn artifacts_read_back_with_pyarrow() {
         assert!(stdout(&output).starts_with("pyarrow ok"));
     }
 }
+
+#[test]
+fn convergence_study_shows_defaults_converged() {
+    use polars::prelude::{ParquetReader, SerReader};
+    let dir = workspace("convergence");
+    let extra = "[convergence]\nenabled = true\ninverse_power = 6\ntolerances = [1e-10]\n";
+    let path = write_config(
+        &dir,
+        &config(7, extra).replace("points = 64", "points = 512"),
+    );
+    let (computed, _) = run_counts(&path, &[]);
+    // The default DAG, one re-integration at another tolerance, the study.
+    assert_eq!(computed, INSTANCES + 2);
+    let study = stage_dirs(&dir.join("data"), "convergence");
+    let file = fs::File::open(study[0].join("convergence.parquet")).unwrap();
+    let frame = ParquetReader::new(file).finish().unwrap();
+    let parameter = frame.column("parameter").unwrap().str().unwrap();
+    let value = frame.column("value").unwrap().f64().unwrap();
+    let shift = frame.column("shift").unwrap().f64().unwrap();
+    let shift_error = frame.column("shift_stderr").unwrap().f64().unwrap();
+    let relative = frame.column("shift_over_error").unwrap().f64().unwrap();
+    for row in 0..frame.height() {
+        let (name, x) = (parameter.get(row).unwrap(), value.get(row).unwrap());
+        let (s, e, r) = (
+            shift.get(row).unwrap(),
+            shift_error.get(row).unwrap(),
+            relative.get(row).unwrap(),
+        );
+        match name {
+            // A 100x looser tolerance and offsets beyond 10 T move a_n by far
+            // less than its statistical error.
+            "tolerance" => assert!(r.abs() < 1e-3, "tolerance {x}: {r}"),
+            "offset_bound" if x >= 10.0 => assert!(r.abs() < 1e-3, "bound {x}: {r}"),
+            // The finite-density factor exp(-r |delay|) lowers a_n, resolved.
+            "density" if x >= 5e-4 => assert!(s < -5.0 * e, "density {x}: {s} +- {e}"),
+            _ => {}
+        }
+    }
+}

@@ -20,12 +20,19 @@ use crate::pipeline::{Column, Input, InstanceId, Progress, Stage, StageError, Ta
 /// The `collisions` stage for one potential.
 pub struct CollisionsStage {
     params: CollisionsParams,
+    instance: String,
 }
 
 impl CollisionsStage {
-    /// A collisions stage with resolved parameters.
+    /// The collisions of a potential, named by the potential.
     pub fn new(params: CollisionsParams) -> CollisionsStage {
-        CollisionsStage { params }
+        let instance = params.potential.id();
+        CollisionsStage { params, instance }
+    }
+
+    /// A variant (e.g. another tolerance) under its own instance name.
+    pub fn variant(params: CollisionsParams, instance: String) -> CollisionsStage {
+        CollisionsStage { params, instance }
     }
 
     /// Instance id of the collisions of a potential id.
@@ -36,7 +43,7 @@ impl CollisionsStage {
 
 impl Stage for CollisionsStage {
     fn id(&self) -> InstanceId {
-        CollisionsStage::instance(&self.params.potential.id())
+        InstanceId::new("collisions", &self.instance)
     }
 
     fn version(&self) -> u32 {

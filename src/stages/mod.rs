@@ -2,6 +2,7 @@
 //! physics. [`plan`] is the one place where stages are registered.
 
 pub mod collisions;
+pub mod convergence;
 pub mod fit;
 pub mod kernel;
 pub mod moments;
@@ -30,6 +31,18 @@ pub fn plan(study: &Study) -> Vec<Box<dyn Stage>> {
         if let Some(params) = study.sweep_params(potential) {
             stages.push(Box::new(sweep::SweepStage::new(params)));
         }
+    }
+    if let Some((params, variants)) = study.convergence() {
+        for variant in variants {
+            let name = convergence::ConvergenceStage::tolerance_instance(
+                &variant.potential.id(),
+                variant.engine.tolerance,
+            );
+            stages.push(Box::new(collisions::CollisionsStage::variant(
+                variant, name,
+            )));
+        }
+        stages.push(Box::new(convergence::ConvergenceStage::new(params)));
     }
     let rows = potentials
         .iter()

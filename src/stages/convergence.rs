@@ -1,0 +1,196 @@
+//! `convergence`: `a_n` of one potential under changes of the numerical
+//! settings, to show the defaults are converged rather than assert it: the
+//! density `rho l` of the literal algorithm's `exp(-r |delay|)` (a physical
+//! finite-density correction, tabulated), a bound on the arrival offset
+//! `|tau| <= B T`, the integrator tolerance (scenes re-integrated at the same
+//! points), and the bin width when `a_n` is taken from the binned kernel.
+//! Every shift is a per-replicate difference against the default, so the
+//! shared randomness cancels and its standard error says whether it is resolved;
+//! `shift_over_error` compares it with the default's statistical error.
+
+use serde_json::Value;
+
+use super::collisions::{CollisionsStage, read_events};
+use super::kernel::target_of;
+use crate::config::ConvergenceParams;
+use crate::kernel::{Bins, Draws, Estimate, Event, Target, histograms, moments};
+use crate::pipeline::{Column, Input, InstanceId, Progress, Stage, StageError, Table};
+
+/// The `convergence` stage.
+pub struct ConvergenceStage {
+    params: ConvergenceParams,
+}
+
+impl ConvergenceStage {
+    /// A convergence stage with resolved parameters.
+    pub fn new(params: ConvergenceParams) -> ConvergenceStage {
+        ConvergenceStage { params }
+    }
+
+    /// Instance name of the collisions re-integrated at `tolerance`.
+    pub fn tolerance_instance(potential_id: &str, tolerance: f64) -> String {
+        format!("{potential_id}_tol{tolerance:e}")
+    }
+
+    fn edge(&self) -> f64 {
+        0.5 * self.params.kernel.window
+    }
+
+    /// `a_n` per replicate from unbinned self kicks within half the window.
+    fn self_variance(&self, events: &[Event], draws: &Draws, target: &Target) -> Vec<f64> {
+        moments(events, target, &[self.edge()], draws)
+            .iter()
+            .map(|r| r[0].self_variance)
+            .collect()
+    }
+
+    /// `a_n` per replicate from the binned self kernel: `sum_k G_self,k x_k^2 dx`.
+    fn binned_self_variance(&self, events: &[Event], draws: &Draws, width: f64) -> Vec<f64> {
+        let bins = Bins::for_window(self.params.kernel.window, width);
+        histograms(events, &target_of(&self.params.kernel), &bins, draws)
+            .iter()
+            .map(|h| {
+                (0..bins.len())
+                    .map(|k| h.self_part[k] * bins.centre(k).powi(2))
+                    .sum()
+            })
+            .collect()
+    }
+}
+
+/// One row: a setting, its `a_n` per replicate, compared with the default's.
+struct Row {
+    parameter: &'static str,
+    value: f64,
+    replicates: Vec<f64>,
+}
+
+impl Stage for ConvergenceStage {
+    fn id(&self) -> InstanceId {
+        InstanceId::new("convergence", &self.params.kernel.potential.id())
+    }
+
+    fn version(&self) -> u32 {
+        1
+    }
+
+    fn params(&self) -> Value {
+        serde_json::to_value(&self.params).unwrap_or(Value::Null)
+    }
+
+    fn inputs(&self) -> Vec<InstanceId> {
+        let id = self.params.kernel.potential.id();
+        let mut inputs = vec![CollisionsStage::instance(&id)];
+        inputs.extend(
+            self.params
+                .tolerances
+                .iter()
+                .map(|&t| InstanceId::new("collisions", &Self::tolerance_instance(&id, t))),
+        );
+        inputs
+    }
+
+    fn work_units(&self) -> u64 {
+        4
+    }
+
+    fn run(&self, inputs: &[Input], progress: &Progress) -> Result<Vec<Table>, StageError> {
+        let events = read_events(&inputs[0])?;
+        let replicates = events
+            .iter()
+            .map(|e| e.randomization as usize + 1)
+            .max()
+            .unwrap_or(0);
+        let draws = Draws::count(&events, replicates);
+        let target = target_of(&self.params.kernel);
+        let baseline = self.self_variance(&events, &draws, &target);
+        let mut rows = vec![Row {
+            parameter: "default",
+            value: f64::NAN,
+            replicates: baseline.clone(),
+        }];
+        for &density in &self.params.densities {
+            let dense = Target { density, ..target };
+            rows.push(Row {
+                parameter: "density",
+                value: density,
+                replicates: self.self_variance(&events, &draws, &dense),
+            });
+        }
+        progress.advance(1);
+        for &bound in &self.params.offset_bounds {
+            // Dropping scenes beyond the bound while counting them as drawn
+            // integrates over |tau| <= bound * T only.
+            let kept: Vec<Event> = events
+                .iter()
+                .filter(|e| e.offset.abs() <= bound * (1.0 / e.u2.abs() + 1.0 / e.u3.abs()))
+                .copied()
+                .collect();
+            rows.push(Row {
+                parameter: "offset_bound",
+                value: bound,
+                replicates: self.self_variance(&kept, &draws, &target),
+            });
+        }
+        progress.advance(1);
+        for (input, &tolerance) in inputs[1..].iter().zip(&self.params.tolerances) {
+            let events = read_events(input)?;
+            let draws = Draws::count(&events, replicates);
+            rows.push(Row {
+                parameter: "tolerance",
+                value: tolerance,
+                replicates: self.self_variance(&events, &draws, &target),
+            });
+        }
+        progress.advance(1);
+        for &width in &self.params.bin_widths {
+            rows.push(Row {
+                parameter: "bin_width",
+                value: width,
+                replicates: self.binned_self_variance(&events, &draws, width),
+            });
+        }
+        progress.advance(1);
+        Ok(vec![convergence_table(&rows, &baseline)?])
+    }
+}
+
+fn convergence_table(rows: &[Row], baseline: &[f64]) -> Result<Table, StageError> {
+    let default = Estimate::from_replicates(baseline);
+    let mut columns: [Vec<f64>; 6] = Default::default();
+    for row in rows {
+        let value = Estimate::from_replicates(&row.replicates);
+        let differences: Vec<f64> = row
+            .replicates
+            .iter()
+            .zip(baseline)
+            .map(|(a, b)| a - b)
+            .collect();
+        let shift = Estimate::from_replicates(&differences);
+        for (column, number) in columns.iter_mut().zip([
+            row.value,
+            value.mean,
+            value.stderr,
+            shift.mean,
+            shift.stderr,
+            shift.mean / default.stderr,
+        ]) {
+            column.push(number);
+        }
+    }
+    let [value, a, a_err, shift, shift_err, relative] = columns;
+    let unit = "rho^2 l v_th^3";
+    Ok(Table::new(
+        "convergence",
+        vec![
+            Column::text("parameter", "default, density (rho l), offset_bound (|tau| <= B T), tolerance, bin_width (a_n from the binned kernel)", rows.iter().map(|r| r.parameter.to_string()).collect()),
+            Column::f64("value", "as parameter", "the setting's value (NaN for the default)", value),
+            Column::f64("a_n", unit, "self variance rate at u' = 0 within half the window", a),
+            Column::f64("a_n_stderr", unit, "standard error (spread of randomizations)", a_err),
+            Column::f64("shift", unit, "a_n minus the default's, per replicate, averaged", shift),
+            Column::f64("shift_stderr", unit, "standard error of the paired shift", shift_err),
+            Column::f64("shift_over_error", "1", "shift divided by the default's standard error: |value| << 1 means converged", relative),
+        ],
+    )?
+    .with_metadata("ternary.description", "a_n under changes of the numerical settings".into()))
+}
