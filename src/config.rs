@@ -14,6 +14,7 @@ use serde::{Deserialize, Serialize};
 use crate::physics::potential::Potential;
 use crate::physics::sampling::{OffsetProposal, SamplingPlan};
 use crate::physics::scene::{EngineSettings, Method};
+use crate::physics::units::{Mass, PhysicalGas, ring_density_per_um};
 
 /// A rejected configuration: file, key path, line (when known) and reason.
 #[derive(Debug, Clone, PartialEq)]
@@ -66,6 +67,53 @@ pub struct Config {
     /// The convergence study of `a_n` under numerical settings.
     #[serde(default)]
     pub convergence: ConvergenceConfig,
+    /// Gases in physical units whose thermalization rates are tabulated.
+    #[serde(default)]
+    pub gas: Vec<GasConfig>,
+}
+
+/// `[[gas]]`: a gas in physical units.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GasConfig {
+    /// Label used in tables.
+    pub name: String,
+    /// Id of a configured potential (`ipp-6`, `lj-1`).
+    pub potential: String,
+    /// Potential length `l0`, um.
+    pub l0_um: f64,
+    /// Potential energy `eps`, eV.
+    pub eps_ev: f64,
+    /// Temperature `kT`, eV.
+    pub kt_ev: f64,
+    /// Mass in electron masses (give this or `mass_amu`).
+    pub mass_electron: Option<f64>,
+    /// Mass in atomic mass units.
+    pub mass_amu: Option<f64>,
+    /// Linear density, 1/um (give this or the ring).
+    pub density_per_um: Option<f64>,
+    /// Particles on a ring (with `ring_radius_um`): density `(N - 1) / (2 pi R)`.
+    pub ring_particles: Option<u32>,
+    /// Ring radius, um.
+    pub ring_radius_um: Option<f64>,
+}
+
+/// Resolved parameters of one gas.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct GasParams {
+    /// Label.
+    pub name: String,
+    /// The potential.
+    pub potential: Potential,
+    /// The gas.
+    pub gas: PhysicalGas,
+}
+
+impl GasParams {
+    /// The kernel parameters of this gas's density (`u' = 0`).
+    pub fn scaled_density(&self) -> f64 {
+        self.gas.scaled_density(self.potential.length_exponent())
+    }
 }
 
 /// `[convergence]`.
@@ -606,6 +654,43 @@ impl Study {
         Some((params, variants))
     }
 
+    /// The configured gases with their potentials.
+    pub fn gases(&self) -> Vec<GasParams> {
+        let potentials = self.potentials();
+        self.config
+            .gas
+            .iter()
+            .filter_map(|gas| {
+                let potential = *potentials.iter().find(|p| p.id() == gas.potential)?;
+                let mass = match (gas.mass_electron, gas.mass_amu) {
+                    (Some(m), _) => Mass::ElectronMasses(m),
+                    (None, Some(m)) => Mass::AtomicMassUnits(m),
+                    (None, None) => return None,
+                };
+                let density_per_um =
+                    match (gas.density_per_um, gas.ring_particles, gas.ring_radius_um) {
+                        (Some(density), _, _) => density,
+                        (None, Some(particles), Some(radius)) => {
+                            ring_density_per_um(particles, radius)
+                        }
+                        _ => return None,
+                    };
+                let physical = PhysicalGas {
+                    l0_um: gas.l0_um,
+                    eps_ev: gas.eps_ev,
+                    kt_ev: gas.kt_ev,
+                    mass,
+                    density_per_um,
+                };
+                Some(GasParams {
+                    name: gas.name.clone(),
+                    potential,
+                    gas: physical,
+                })
+            })
+            .collect()
+    }
+
     /// Resolved parameters of the scan of `potential`.
     pub fn scan_params(&self, potential: Potential) -> ScanParams {
         let scan = &self.config.scan;
@@ -656,7 +741,75 @@ fn validate(config: &Config) -> Result<(), Invalid> {
     validate_collisions(&config.collisions)?;
     validate_kernel(&config.kernel)?;
     validate_sweep(&config.sweep)?;
-    validate_convergence(config)
+    validate_convergence(config)?;
+    validate_gases(config)
+}
+
+fn validate_gases(config: &Config) -> Result<(), Invalid> {
+    let ids: Vec<String> = config.potentials.list().iter().map(Potential::id).collect();
+    for (k, gas) in config.gas.iter().enumerate() {
+        let key = |name: &str| format!("gas[{k}].{name}");
+        check(!gas.name.is_empty(), key("name"), "is empty")?;
+        check(
+            ids.contains(&gas.potential),
+            key("potential"),
+            format!(
+                "`{}` names no configured potential; known ids: {}",
+                gas.potential,
+                ids.join(", ")
+            ),
+        )?;
+        for (name, value) in [
+            ("l0_um", gas.l0_um),
+            ("eps_ev", gas.eps_ev),
+            ("kt_ev", gas.kt_ev),
+        ] {
+            check(
+                value.is_finite() && value > 0.0,
+                key(name),
+                format!("{value} must be > 0"),
+            )?;
+        }
+        let masses = [gas.mass_electron, gas.mass_amu];
+        check(
+            masses.iter().flatten().count() == 1
+                && masses.iter().flatten().all(|m| m.is_finite() && *m > 0.0),
+            key("mass_electron"),
+            "give exactly one positive mass: mass_electron or mass_amu",
+        )?;
+        let ring = gas.ring_particles.is_some() || gas.ring_radius_um.is_some();
+        check(
+            gas.density_per_um.is_some() != ring,
+            key("density_per_um"),
+            "give either density_per_um or ring_particles with ring_radius_um",
+        )?;
+        if let Some(density) = gas.density_per_um {
+            check(
+                density.is_finite() && density > 0.0,
+                key("density_per_um"),
+                format!("{density} must be > 0"),
+            )?;
+        } else {
+            check(
+                gas.ring_particles.is_some_and(|n| n >= 3),
+                key("ring_particles"),
+                "needs at least 3 particles",
+            )?;
+            check(
+                gas.ring_radius_um.is_some_and(|r| r.is_finite() && r > 0.0),
+                key("ring_radius_um"),
+                "needs a ring radius > 0",
+            )?;
+        }
+    }
+    check_unique(
+        &config
+            .gas
+            .iter()
+            .map(|g| g.name.as_str())
+            .collect::<Vec<_>>(),
+        "gas",
+    )
 }
 
 fn validate_convergence(config: &Config) -> Result<(), Invalid> {

@@ -39,6 +39,7 @@ fn read_frame(path: &Path) -> Result<DataFrame> {
 /// of a run, readable.
 pub fn summary(store: &Store, reports: &[InstanceReport]) -> Result<String> {
     let mut out = study_table(store, reports)?;
+    out.push_str(&gases_table(store, reports)?);
     out.push_str(&convergence_table(store, reports)?);
     let scans = reports.iter().filter(|r| r.id.stage == "scan");
     for (k, report) in scans.enumerate() {
@@ -157,6 +158,68 @@ fn study_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
             with_error(number("beta")?, number("beta_stderr")?),
             with_error(number("sigma")?, number("sigma_stderr")?),
             format!("{}/{}", count("failed_events")?, count("events")?),
+        )?;
+    }
+    Ok(out)
+}
+
+/// The `gases` stage's output: rates in physical units.
+fn gases_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
+    let mut out = String::new();
+    let Some(key) = reports
+        .iter()
+        .find(|r| r.id.stage == "gases")
+        .and_then(|r| r.key.as_ref())
+        .filter(|key| store.intact_manifest("gases", key).is_some())
+    else {
+        return Ok(out);
+    };
+    let frame = read_frame(&store.artifact_dir("gases", key).join("gases.parquet"))?;
+    writeln!(
+        out,
+        "\nthermalization rates in physical units (Gamma = a_n rho^2 l v_th, +- standard error)"
+    )?;
+    writeln!(
+        out,
+        "{:<22} {:<8} {:>9} {:>11} {:<26} {:<26} {:<24}",
+        "gas",
+        "potential",
+        "kT [eV]",
+        "rho l",
+        "Gamma [1/ns] (dilute)",
+        "Gamma at rho l [1/ns]",
+        "1/Gamma [ns]"
+    )?;
+    for row in 0..frame.height() {
+        let number = |name: &str| -> Result<f64> {
+            Ok(frame.column(name)?.f64()?.get(row).unwrap_or(f64::NAN))
+        };
+        let text = |name: &str| -> Result<String> {
+            Ok(frame
+                .column(name)?
+                .str()?
+                .get(row)
+                .unwrap_or_default()
+                .to_string())
+        };
+        writeln!(
+            out,
+            "{:<22} {:<8} {:>9.3} {:>11.3e} {:<26} {:<26} {:<24}",
+            text("gas")?,
+            text("potential")?,
+            number("kt")?,
+            number("rho_l")?,
+            format!("{:.5e} ± {:.1e}", number("gamma")?, number("gamma_stderr")?),
+            format!(
+                "{:.5e} ± {:.1e}",
+                number("gamma_at_density")?,
+                number("gamma_at_density_stderr")?
+            ),
+            format!(
+                "{:.5e} ± {:.1e}",
+                number("relaxation_time")?,
+                number("relaxation_time_stderr")?
+            ),
         )?;
     }
     Ok(out)

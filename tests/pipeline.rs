@@ -469,3 +469,37 @@ fn convergence_study_shows_defaults_converged() {
         }
     }
 }
+
+#[test]
+fn gases_differing_only_in_temperature_share_the_collision_artifact() {
+    use polars::prelude::{ParquetReader, SerReader};
+    let dir = workspace("gases");
+    let gas = |name: &str, kt: f64| {
+        format!(
+            "[[gas]]\nname = \"{name}\"\npotential = \"ipp-6\"\nl0_um = 1.0\neps_ev = 1.0\nkt_ev = {kt}\nmass_electron = 1.0\ndensity_per_um = 5e-4\n"
+        )
+    };
+    let extra = format!("{}{}", gas("cold", 0.1), gas("hot", 0.8));
+    let path = write_config(&dir, &config(7, &extra));
+    let dag = stdout(&ternary(&path, &["dag"]));
+    assert_eq!(
+        dag.lines()
+            .filter(|l| l.starts_with("collisions[ipp-6]"))
+            .count(),
+        1,
+        "{dag}"
+    );
+    run_counts(&path, &[]);
+    let file =
+        fs::File::open(stage_dirs(&dir.join("data"), "gases")[0].join("gases.parquet")).unwrap();
+    let frame = ParquetReader::new(file).finish().unwrap();
+    let gamma = frame.column("gamma").unwrap().f64().unwrap();
+    let a_n = frame.column("a_n").unwrap().f64().unwrap();
+    // Same scaled dynamics: the same a_n, and Gamma ~ T^(1/2 - 1/n) at fixed rho.
+    assert_eq!(a_n.get(0), a_n.get(1));
+    let ratio = gamma.get(1).unwrap() / gamma.get(0).unwrap();
+    assert!(
+        (ratio - 8f64.powf(0.5 - 1.0 / 6.0)).abs() < 1e-12,
+        "{ratio}"
+    );
+}

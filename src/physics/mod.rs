@@ -7,3 +7,4 @@ pub mod quasi_random;
 pub mod sampling;
 pub mod scan;
 pub mod scene;
+pub mod units;

@@ -4,6 +4,7 @@
 pub mod collisions;
 pub mod convergence;
 pub mod fit;
+pub mod gases;
 pub mod kernel;
 pub mod moments;
 pub mod scan;
@@ -31,6 +32,25 @@ pub fn plan(study: &Study) -> Vec<Box<dyn Stage>> {
         if let Some(params) = study.sweep_params(potential) {
             stages.push(Box::new(sweep::SweepStage::new(params)));
         }
+    }
+    let gases = study.gases();
+    for gas in &gases {
+        let dense = study.kernel_params(gas.potential, 0.0, gas.scaled_density());
+        let id = moments::MomentsStage::instance(&dense);
+        if !stages.iter().any(|stage| stage.id() == id) {
+            stages.push(Box::new(moments::MomentsStage::new(dense)));
+        }
+    }
+    if !gases.is_empty() {
+        let rows = gases
+            .into_iter()
+            .map(|gas| {
+                let dilute = study.kernel_params(gas.potential, 0.0, 0.0);
+                let dense = study.kernel_params(gas.potential, 0.0, gas.scaled_density());
+                (gas, dilute, dense)
+            })
+            .collect();
+        stages.push(Box::new(gases::GasesStage::new(rows)));
     }
     if let Some((params, variants)) = study.convergence() {
         for variant in variants {
