@@ -98,20 +98,38 @@ pub fn summary(store: &Store, reports: &[InstanceReport]) -> Result<String> {
     Ok(out)
 }
 
+/// The table `<stage>.parquet` of every intact artifact of `stage` in a run.
+fn stage_frames(
+    store: &Store,
+    reports: &[InstanceReport],
+    stage: &str,
+) -> Result<Vec<(String, DataFrame)>> {
+    reports
+        .iter()
+        .filter(|r| r.id.stage == stage)
+        .filter_map(|r| {
+            r.key
+                .as_ref()
+                .filter(|key| store.intact_manifest(stage, key).is_some())
+                .map(|key| (r, key))
+        })
+        .map(|(report, key)| {
+            let frame = read_frame(
+                &store
+                    .artifact_dir(stage, key)
+                    .join(format!("{stage}.parquet")),
+            )?;
+            Ok((report.id.instance.clone(), frame))
+        })
+        .collect()
+}
+
 /// The `table` stage's output: `a_n` with standard errors per potential.
 fn study_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
     let mut out = String::new();
-    let Some(key) = reports
-        .iter()
-        .find(|r| r.id.stage == "table")
-        .and_then(|r| r.key.as_ref())
-    else {
+    let Some((_, frame)) = stage_frames(store, reports, "table")?.into_iter().next() else {
         return Ok(out);
     };
-    if store.intact_manifest("table", key).is_none() {
-        return Ok(out);
-    }
-    let frame = read_frame(&store.artifact_dir("table", key).join("table.parquet"))?;
     writeln!(
         out,
         "\nthermalization constants a_n = self variance rate at u' = 0, dilute limit [rho^2 l v_th^3]; kernel shape near u' (+- standard errors)"
@@ -166,15 +184,9 @@ fn study_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
 /// The `gases` stage's output: rates in physical units.
 fn gases_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
     let mut out = String::new();
-    let Some(key) = reports
-        .iter()
-        .find(|r| r.id.stage == "gases")
-        .and_then(|r| r.key.as_ref())
-        .filter(|key| store.intact_manifest("gases", key).is_some())
-    else {
+    let Some((_, frame)) = stage_frames(store, reports, "gases")?.into_iter().next() else {
         return Ok(out);
     };
-    let frame = read_frame(&store.artifact_dir("gases", key).join("gases.parquet"))?;
     writeln!(
         out,
         "\nthermalization rates in physical units (Gamma = a_n rho^2 l v_th, +- standard error)"
@@ -228,23 +240,11 @@ fn gases_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
 /// The `convergence` stage's output: shifts of `a_n` against the defaults.
 fn convergence_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
     let mut out = String::new();
-    for report in reports.iter().filter(|r| r.id.stage == "convergence") {
-        let Some(key) = report
-            .key
-            .as_ref()
-            .filter(|key| store.intact_manifest("convergence", key).is_some())
-        else {
-            continue;
-        };
-        let frame = read_frame(
-            &store
-                .artifact_dir("convergence", key)
-                .join("convergence.parquet"),
-        )?;
+    for (instance, frame) in stage_frames(store, reports, "convergence")? {
         writeln!(
             out,
             "\nconvergence of a_n for {} (shift = a_n - default, paired over randomizations)",
-            report.id.instance
+            instance
         )?;
         writeln!(
             out,
