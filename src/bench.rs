@@ -278,17 +278,17 @@ fn uniform_offsets() -> OffsetProposal {
 }
 
 fn plan_for(variant: &Variant, seed: u64, randomizations: u32, points: u32) -> SamplingPlan {
-    let same = (f64::from(points) * variant.same_side_fraction).max(1.0);
-    let power = |count: f64| 2u32.pow(count.log2().round().max(1.0) as u32);
-    SamplingPlan {
+    let mut plan = SamplingPlan {
         seed,
         randomizations,
-        opposite_points: power(f64::from(points) - same),
-        same_side_points: power(same),
+        opposite_points: 0,
+        same_side_points: 0,
         proposal: variant.proposal,
         quasi_random: variant.quasi_random,
         launch_shift: 0.0,
-    }
+    };
+    plan.allocate(points, variant.same_side_fraction);
+    plan
 }
 
 /// Median relative standard error of the kernel over bins with `low <= |du| <= high`.
@@ -444,7 +444,62 @@ pub fn kernel(options: &KernelBenchOptions) -> String {
         "| scenes per randomization | scenes | seconds | a_n | relative standard error |"
     );
     let _ = writeln!(out, "|---|---|---|---|---|");
-    let default = &variants[3];
+    let engine = EngineSettings {
+        method: Method::Dprkn12,
+        tolerance: 1e-12,
+        max_steps: MAX_STEPS,
+    };
+    let target = Target {
+        u_prime: 0.0,
+        density: 0.0,
+        launch_length: 90.0,
+        kick_floor: DEFAULT_KICK_FLOOR,
+    };
+    let probe = plan_for(
+        &variants[3],
+        options.seed,
+        options.randomizations,
+        options.points,
+    );
+    let started = Instant::now();
+    let fraction =
+        crate::kernel::pilot_same_side_fraction(&probe, &potential, &engine, &target, 1024);
+    let pilot_seconds = started.elapsed().as_secs_f64();
+    let piloted = Variant {
+        name: "+ strata from a pilot (default)",
+        proposal: defaults,
+        same_side_fraction: fraction,
+        quasi_random: true,
+    };
+    let run = run_sampler(
+        &potential,
+        &plan_for(
+            &piloted,
+            options.seed,
+            options.randomizations,
+            options.points,
+        ),
+    );
+    let (seconds, relative) = (run.seconds + pilot_seconds, run.a_n.stderr / run.a_n.mean);
+    let base = baseline.unwrap_or(run);
+    let _ = writeln!(
+        out,
+        "| {} (same side {:.3}, pilot {:.2} s included) | {} | {:.2} | {:.6e} +- {:.1e} | {:.2e} | x{:.1} | {:.2e} | x{:.2} | {:.2e} | x{:.1} |",
+        piloted.name,
+        fraction,
+        pilot_seconds,
+        run.scenes,
+        seconds,
+        run.a_n.mean,
+        run.a_n.stderr,
+        relative,
+        merit(relative, seconds) / merit(base.a_n.stderr / base.a_n.mean, base.seconds),
+        run.near_bins,
+        merit(run.near_bins, seconds) / merit(base.near_bins, base.seconds),
+        run.far_bins,
+        merit(run.far_bins, seconds) / merit(base.far_bins, base.seconds),
+    );
+    let default = &piloted;
     for power in [10, 12, 14, 16] {
         let run = run_sampler(
             &potential,

@@ -221,8 +221,10 @@ pub struct CollisionsConfig {
     /// Scenes per randomization (both strata together); each stratum's share is
     /// rounded to the nearest power of two.
     pub points: u32,
-    /// Fraction of the scenes drawn in the same-side stratum.
+    /// Fraction of the scenes drawn in the same-side stratum when no pilot runs.
     pub same_side_fraction: f64,
+    /// Pilot scenes per stratum that set the strata allocation (Neyman); 0 disables.
+    pub pilot_points: u32,
     /// Scrambled Sobol' points (default) or plain Monte Carlo points.
     pub quasi_random: bool,
     /// `u'` the launch-speed proposal is tuned for.
@@ -238,6 +240,7 @@ impl Default for CollisionsConfig {
             randomizations: 16,
             points: 4096,
             same_side_fraction: 0.15,
+            pilot_points: 1024,
             quasi_random: true,
             launch_shift: 0.0,
             proposal: OffsetProposal::default(),
@@ -290,8 +293,12 @@ pub struct CollisionsParams {
     pub potential: Potential,
     /// Engine settings.
     pub engine: EngineSettings,
-    /// What to draw.
+    /// What to draw (strata split by `same_side_fraction` unless a pilot decides).
     pub sampling: SamplingPlan,
+    /// Scenes per randomization, both strata.
+    pub points: u32,
+    /// Pilot scenes per stratum for the Neyman allocation (0: keep the fraction).
+    pub pilot_points: u32,
 }
 
 /// Resolved parameters of a `fit` instance.
@@ -556,20 +563,22 @@ impl Study {
     /// Resolved parameters of the collision scenes of `potential`.
     pub fn collisions_params(&self, potential: Potential) -> CollisionsParams {
         let sampling = &self.config.collisions;
-        let same_side = f64::from(sampling.points) * sampling.same_side_fraction;
-        let opposite = f64::from(sampling.points) - same_side;
+        let mut plan = SamplingPlan {
+            seed: sampling.seed,
+            randomizations: sampling.randomizations,
+            opposite_points: 0,
+            same_side_points: 0,
+            proposal: sampling.proposal,
+            quasi_random: sampling.quasi_random,
+            launch_shift: sampling.launch_shift,
+        };
+        plan.allocate(sampling.points, sampling.same_side_fraction);
         CollisionsParams {
             potential,
             engine: self.engine(),
-            sampling: SamplingPlan {
-                seed: sampling.seed,
-                randomizations: sampling.randomizations,
-                opposite_points: nearest_power_of_two(opposite),
-                same_side_points: nearest_power_of_two(same_side),
-                proposal: sampling.proposal,
-                quasi_random: sampling.quasi_random,
-                launch_shift: sampling.launch_shift,
-            },
+            sampling: plan,
+            points: sampling.points,
+            pilot_points: sampling.pilot_points,
         }
     }
 
@@ -702,12 +711,6 @@ impl Study {
             launches: scan.launch.clone(),
         }
     }
-}
-
-/// The power of two nearest to `count` (at least 2) in the logarithm: scrambled
-/// Sobol' points converge fastest as complete nets of `2^m` points.
-fn nearest_power_of_two(count: f64) -> u32 {
-    2u32.pow(count.max(2.0).log2().round().clamp(1.0, 31.0) as u32)
 }
 
 /// A validation failure: key path and message.

@@ -11,7 +11,9 @@ pub mod fit;
 use rayon::prelude::*;
 
 use crate::physics::launch::{launch_rate, thermal_density};
-use crate::physics::sampling::{SceneRecord, Stratum};
+use crate::physics::potential::Potential;
+use crate::physics::sampling::{SamplingPlan, SceneRecord, Stratum};
+use crate::physics::scene::EngineSettings;
 
 /// One integrated scene as the kernel needs it (special particle's frame).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -344,4 +346,63 @@ pub fn moments(
             }
         }
     })
+}
+
+/// Pilot scenes are drawn from a seed derived from the main one by this mask.
+const PILOT_SEED_MASK: u64 = 0x5049_4c4f_545f_5345;
+
+/// Same-side fraction of the Neyman allocation for `a_n` (numerics.md):
+/// `N_s ~ sigma_s / sqrt(c_s)`, with `sigma_s` the standard deviation of one
+/// scene's contribution `sum w k^2` to the self variance rate at `target` and
+/// `c_s` its mean cost in force evaluations, both from `pilot_points` plain
+/// Monte Carlo scenes per stratum (a separate seed: the main points are not
+/// reused). Clamped to [0.02, 0.5] so that neither stratum starves.
+pub fn pilot_same_side_fraction(
+    plan: &SamplingPlan,
+    potential: &Potential,
+    engine: &EngineSettings,
+    target: &Target,
+    pilot_points: u32,
+) -> f64 {
+    let pilot = SamplingPlan {
+        seed: plan.seed ^ PILOT_SEED_MASK,
+        randomizations: 1,
+        opposite_points: pilot_points,
+        same_side_points: pilot_points,
+        quasi_random: false,
+        ..*plan
+    };
+    let records: Vec<SceneRecord> = pilot
+        .chunks()
+        .par_iter()
+        .map(|chunk| pilot.integrate(chunk, potential, engine))
+        .collect::<Vec<_>>()
+        .concat();
+    let merit = |stratum: Stratum| {
+        let scenes: Vec<&SceneRecord> = records
+            .iter()
+            .filter(|r| r.scene.stratum == stratum)
+            .collect();
+        let values: Vec<f64> = scenes
+            .iter()
+            .map(|r| {
+                contributions(&Event::from_record(r), target)
+                    .iter()
+                    .map(|c| c.weight * c.self_kick().powi(2))
+                    .sum()
+            })
+            .collect();
+        let count = values.len() as f64;
+        let mean = values.iter().sum::<f64>() / count;
+        let deviation =
+            (values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (count - 1.0)).sqrt();
+        let cost = scenes
+            .iter()
+            .map(|r| f64::from(r.collision.evaluations))
+            .sum::<f64>()
+            / count;
+        deviation / cost.sqrt()
+    };
+    let (opposite, same) = (merit(Stratum::Opposite), merit(Stratum::SameSide));
+    (same / (opposite + same)).clamp(0.02, 0.5)
 }

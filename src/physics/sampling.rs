@@ -259,7 +259,21 @@ pub struct SceneRecord {
 /// Points per chunk of work.
 const CHUNK_POINTS: u32 = 512;
 
+/// The power of two nearest to `count` (at least 2) in the logarithm: scrambled
+/// Sobol' points converge fastest as complete nets of `2^m` points.
+pub fn nearest_power_of_two(count: f64) -> u32 {
+    2u32.pow(count.max(2.0).log2().round().clamp(1.0, 31.0) as u32)
+}
+
 impl SamplingPlan {
+    /// Splits `points` per randomization between the strata, a fraction
+    /// `same_side` to the same-side stratum, each rounded to a power of two.
+    pub fn allocate(&mut self, points: u32, same_side: f64) {
+        let same = f64::from(points) * same_side;
+        self.opposite_points = nearest_power_of_two(f64::from(points) - same);
+        self.same_side_points = nearest_power_of_two(same);
+    }
+
     /// Scenes per randomization of a stratum.
     pub fn points(&self, stratum: Stratum) -> u32 {
         match stratum {

@@ -11,8 +11,9 @@
 use rayon::prelude::*;
 use serde_json::Value;
 
-use crate::config::CollisionsParams;
+use crate::config::{CollisionsParams, DEFAULT_KICK_FLOOR};
 use crate::kernel::Event;
+use crate::kernel::{Target, pilot_same_side_fraction};
 use crate::physics::sampling::{SceneRecord, Stratum};
 use crate::pipeline::table::{f64_values, text_values, u32_values};
 use crate::pipeline::{Column, Input, InstanceId, Progress, Stage, StageError, Table};
@@ -59,11 +60,28 @@ impl Stage for CollisionsStage {
     }
 
     fn work_units(&self) -> u64 {
-        self.params.sampling.total()
+        u64::from(self.params.sampling.randomizations) * u64::from(self.params.points)
     }
 
     fn run(&self, _inputs: &[Input], progress: &Progress) -> Result<Vec<Table>, StageError> {
-        let plan = &self.params.sampling;
+        let mut plan = self.params.sampling;
+        if self.params.pilot_points > 0 {
+            let target = Target {
+                u_prime: 0.0,
+                density: 0.0,
+                launch_length: 0.0,
+                kick_floor: DEFAULT_KICK_FLOOR,
+            };
+            let fraction = pilot_same_side_fraction(
+                &plan,
+                &self.params.potential,
+                &self.params.engine,
+                &target,
+                self.params.pilot_points,
+            );
+            plan.allocate(self.params.points, fraction);
+        }
+        let plan = &plan;
         let rows: Vec<SceneRecord> = plan
             .chunks()
             .par_iter()
@@ -74,7 +92,13 @@ impl Stage for CollisionsStage {
             })
             .collect::<Vec<_>>()
             .concat();
-        Ok(vec![events_table(&rows)?])
+        let allocation = format!(
+            "opposite {} same-side {} per randomization",
+            plan.opposite_points, plan.same_side_points
+        );
+        Ok(vec![
+            events_table(&rows)?.with_metadata("ternary.strata_allocation", allocation),
+        ])
     }
 }
 
