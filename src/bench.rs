@@ -453,7 +453,8 @@ pub fn kernel(options: &KernelBenchOptions) -> String {
     );
     let started = Instant::now();
     let fraction =
-        crate::kernel::pilot_same_side_fraction(&probe, &potential, &engine, &target, 1024);
+        crate::kernel::pilot_same_side_fraction(&probe, &potential, &engine, &target, 1024)
+            .unwrap_or(0.15);
     let pilot_seconds = started.elapsed().as_secs_f64();
     let piloted = Variant {
         name: "+ strata from a pilot (default)",

@@ -356,14 +356,15 @@ const PILOT_SEED_MASK: u64 = 0x5049_4c4f_545f_5345;
 /// scene's contribution `sum w k^2` to the self variance rate at `target` and
 /// `c_s` its mean cost in force evaluations, both from `pilot_points` plain
 /// Monte Carlo scenes per stratum (a separate seed: the main points are not
-/// reused). Clamped to [0.02, 0.5] so that neither stratum starves.
+/// reused). Clamped to [0.02, 0.5] so that neither stratum starves; `None`
+/// when neither stratum contributes (the integrable n = 2).
 pub fn pilot_same_side_fraction(
     plan: &SamplingPlan,
     potential: &Potential,
     engine: &EngineSettings,
     target: &Target,
     pilot_points: u32,
-) -> f64 {
+) -> Option<f64> {
     let pilot = SamplingPlan {
         seed: plan.seed ^ PILOT_SEED_MASK,
         randomizations: 1,
@@ -404,5 +405,6 @@ pub fn pilot_same_side_fraction(
         deviation / cost.sqrt()
     };
     let (opposite, same) = (merit(Stratum::Opposite), merit(Stratum::SameSide));
-    (same / (opposite + same)).clamp(0.02, 0.5)
+    let fraction = same / (opposite + same);
+    fraction.is_finite().then(|| fraction.clamp(0.02, 0.5))
 }

@@ -48,7 +48,7 @@ impl Stage for CollisionsStage {
     }
 
     fn version(&self) -> u32 {
-        1
+        2
     }
 
     fn params(&self) -> Value {
@@ -72,14 +72,16 @@ impl Stage for CollisionsStage {
                 launch_length: 0.0,
                 kick_floor: DEFAULT_KICK_FLOOR,
             };
-            let fraction = pilot_same_side_fraction(
+            // Without any contribution (n = 2) the configured split stays.
+            if let Some(fraction) = pilot_same_side_fraction(
                 &plan,
                 &self.params.potential,
                 &self.params.engine,
                 &target,
                 self.params.pilot_points,
-            );
-            plan.allocate(self.params.points, fraction);
+            ) {
+                plan.allocate(self.params.points, fraction);
+            }
         }
         let plan = &plan;
         let rows: Vec<SceneRecord> = plan

@@ -8,9 +8,12 @@ use serde_json::Value;
 use super::collisions::CollisionsStage;
 use super::kernel::{input_events, target_instance, target_of};
 use crate::config::{FitParams, KernelParams};
-use crate::kernel::fit::{FitData, Shape, ShapeFit, fit_shape};
+use crate::kernel::fit::{FitData, Shape, ShapeFit, fit_shape, log_groups};
 use crate::kernel::{Bins, Estimate, Histogram, histograms};
 use crate::pipeline::{Column, Input, InstanceId, Progress, Stage, StageError, Table};
+
+/// Log-spaced groups of bins in the fit range (about 14 per decade by default).
+const FIT_GROUPS: usize = 36;
 
 /// The `fit` stage for one potential, `u'` and density.
 pub struct FitStage {
@@ -52,7 +55,7 @@ impl Stage for FitStage {
     }
 
     fn version(&self) -> u32 {
-        1
+        3
     }
 
     fn params(&self) -> Value {
@@ -73,36 +76,47 @@ impl Stage for FitStage {
         let kernel = &self.params.kernel;
         let (events, draws, _) = input_events(inputs)?;
         let bins = Bins::for_window(kernel.window, kernel.bin_width);
-        let replicates: Vec<Vec<f64>> = histograms(&events, &target_of(kernel), &bins, &draws)
+        let fine: Vec<Vec<f64>> = histograms(&events, &target_of(kernel), &bins, &draws)
             .iter()
             .map(|h| kernel_of(h, &bins))
             .collect();
         let offsets: Vec<f64> = (0..bins.len()).map(|k| bins.centre(k)).collect();
-        let estimates: Vec<Estimate> = (0..bins.len())
-            .map(|k| {
-                Estimate::from_replicates(&replicates.iter().map(|r| r[k]).collect::<Vec<_>>())
+        let (low, high) = (self.params.range_min, self.params.range_max);
+        let groups = log_groups(&offsets, low, high, FIT_GROUPS);
+        let members: Vec<Vec<f64>> = groups
+            .iter()
+            .map(|g| g.iter().map(|&k| offsets[k]).collect())
+            .collect();
+        // Mean kernel over each group's bins, per replicate.
+        let replicates: Vec<Vec<f64>> = fine
+            .iter()
+            .map(|kernel| {
+                groups
+                    .iter()
+                    .map(|g| g.iter().map(|&k| kernel[k]).sum::<f64>() / g.len() as f64)
+                    .collect()
+            })
+            .collect();
+        let estimates: Vec<Estimate> = (0..groups.len())
+            .map(|j| {
+                Estimate::from_replicates(&replicates.iter().map(|r| r[j]).collect::<Vec<_>>())
             })
             .collect();
         let values: Vec<f64> = estimates.iter().map(|e| e.mean).collect();
         let errors: Vec<f64> = estimates.iter().map(|e| e.stderr).collect();
-        let (low, high) = (self.params.range_min, self.params.range_max);
         let mean_data = FitData {
-            offsets: &offsets,
+            members: &members,
             values: &values,
             errors: &errors,
         };
         progress.advance(1);
-        let Some(fit) = fit_shape(&mean_data, low, high) else {
+        let Some(fit) = fit_shape(&mean_data) else {
             // Nothing to fit (e.g. the integrable n = 2 kernel vanishes): say so.
-            let measured = offsets
-                .iter()
-                .zip(&errors)
-                .filter(|(x, e)| (low..=high).contains(&x.abs()) && **e > 0.0)
-                .count();
+            let measured = errors.iter().filter(|&&e| e > 0.0).count();
             let status = if measured == 0 {
                 "kernel vanishes in the fit range"
             } else {
-                "too few measured bins"
+                "too few measured groups"
             };
             return Ok(vec![fit_table(None, status, measured, &[], (low, high))?]);
         };
@@ -112,15 +126,11 @@ impl Stage for FitStage {
         let shapes: Vec<Shape> = replicates
             .iter()
             .filter_map(|values| {
-                fit_shape(
-                    &FitData {
-                        offsets: &offsets,
-                        values,
-                        errors: &replicate_errors,
-                    },
-                    low,
-                    high,
-                )
+                fit_shape(&FitData {
+                    members: &members,
+                    values,
+                    errors: &replicate_errors,
+                })
                 .map(|f| f.shape)
             })
             .collect();
@@ -153,11 +163,15 @@ fn fit_table(
         parameter(|s| s.beta),
         parameter(|s| s.sigma),
     );
+    // Scale factor sqrt(chi2/dof) when the shape misfits the kernel (as the
+    // Particle Data Group does): the replicate spread alone would ignore that the
+    // three parameters then depend on how the bins are weighted.
+    let scale = fit.map_or(1.0, |f| f.chi2_per_dof.max(1.0));
     let covariance = |a: &[f64], b: &[f64]| {
         if a.len() < 2 {
             f64::NAN
         } else {
-            covariance_of_mean(a, b)
+            scale * covariance_of_mean(a, b)
         }
     };
     let spread = |values: &[f64]| covariance(values, values).sqrt();
@@ -173,14 +187,14 @@ fn fit_table(
         Column::f64(
             "alpha_stderr",
             "as alpha",
-            "standard error from refitting each randomization",
+            "standard error: spread of per-randomization refits times the scale factor",
             one(spread(&alpha)),
         ),
         Column::f64("beta", "1", "power-law exponent near u'", mean(|s| s.beta)),
         Column::f64(
             "beta_stderr",
             "1",
-            "standard error from refitting each randomization",
+            "standard error: spread of per-randomization refits times the scale factor",
             one(spread(&beta)),
         ),
         Column::f64(
@@ -192,7 +206,7 @@ fn fit_table(
         Column::f64(
             "sigma_stderr",
             "v_th",
-            "standard error from refitting each randomization",
+            "standard error: spread of per-randomization refits times the scale factor",
             one(spread(&sigma)),
         ),
         Column::f64(
@@ -214,6 +228,12 @@ fn fit_table(
             one(covariance(&beta, &sigma)),
         ),
         Column::f64(
+            "scale_factor",
+            "1",
+            "sqrt(max(1, chi2/dof)) applied to the errors and covariances",
+            one(scale.sqrt()),
+        ),
+        Column::f64(
             "chi2_per_dof",
             "1",
             "chi-square per degree of freedom of the mean fit (bins treated as independent)",
@@ -222,7 +242,7 @@ fn fit_table(
         Column::u32(
             "bins",
             "1",
-            "bins in the fit range with a non-zero error",
+            "log-spaced groups of bins fitted (with a non-zero error)",
             vec![bins as u32],
         ),
         Column::u32(
