@@ -5,7 +5,8 @@
 use rayon::prelude::*;
 use ternary::config::DEFAULT_KICK_FLOOR;
 use ternary::kernel::{
-    Bins, Draws, Estimate, Event, Histogram, MomentSums, Target, contributions, histograms, moments,
+    Bins, Draws, Estimate, Event, Histogram, MomentSums, Target, contributions, histograms,
+    moments, pilot_same_side_fraction,
 };
 use ternary::physics::launch::thermal_density;
 use ternary::physics::potential::Potential;
@@ -365,4 +366,25 @@ fn reweighted_kernel_agrees_with_direct_sampling_at_the_same_velocity() {
         dof > 40 && chi2 < 2.0 && worst < 5.0,
         "chi2/dof {chi2} worst {worst} dof {dof}"
     );
+}
+
+#[test]
+fn pilot_allocation_favours_the_opposite_side_and_declines_without_kicks() {
+    let pilot_plan = plan(31, 1, 64);
+    let target = dilute(0.0);
+    let calogero = Potential::InversePower { n: 2.0 };
+    assert_eq!(
+        pilot_same_side_fraction(&pilot_plan, &calogero, &engine(), &target, 256),
+        None
+    );
+    // numerics.md: the opposite-side pattern carries ~90% of a_n; Neyman gives ~15% same-side.
+    let fraction = pilot_same_side_fraction(
+        &pilot_plan,
+        &Potential::InversePower { n: 6.0 },
+        &engine(),
+        &target,
+        1024,
+    )
+    .unwrap();
+    assert!((0.05..0.3).contains(&fraction), "{fraction}");
 }
