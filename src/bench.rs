@@ -102,11 +102,7 @@ fn measure(
     scenes: &[[FreeLine; 3]],
     reference: &[Collision],
 ) -> Measurement {
-    let settings = EngineSettings {
-        method,
-        tolerance,
-        max_steps: MAX_STEPS,
-    };
+    let settings = EngineSettings::new(method, tolerance, MAX_STEPS);
     let (collisions, seconds) = integrate_all(potential, &settings, scenes);
     let failures = collisions.iter().filter(|c| c.outcome.is_failure()).count();
     let mut errors: Vec<f64> = collisions
@@ -134,11 +130,7 @@ pub fn integrators(options: &WorkPrecisionOptions) -> String {
     let potential = Potential::InversePower { n: options.n };
     let scenes = thermal_scenes(options.scenes, options.seed);
     let reference_of = |method| {
-        let settings = EngineSettings {
-            method,
-            tolerance: TIGHTEST_TOLERANCE,
-            max_steps: MAX_STEPS,
-        };
+        let settings = EngineSettings::new(method, TIGHTEST_TOLERANCE, MAX_STEPS);
         scenes
             .iter()
             .map(|&lines| collide(&potential, &settings, lines))
@@ -318,11 +310,7 @@ fn median_relative_error(events: &[Event], draws: &Draws, low: f64, high: f64) -
 }
 
 fn run_sampler(potential: &Potential, plan: &SamplingPlan) -> KernelRun {
-    let engine = EngineSettings {
-        method: Method::Dprkn12,
-        tolerance: 1e-12,
-        max_steps: MAX_STEPS,
-    };
+    let engine = EngineSettings::new(Method::Dprkn12, 1e-12, MAX_STEPS);
     let started = Instant::now();
     let records: Vec<SceneRecord> = plan
         .chunks()
@@ -434,11 +422,7 @@ pub fn kernel(options: &KernelBenchOptions) -> String {
             gain(run.far_bins, base.far_bins),
         );
     }
-    let engine = EngineSettings {
-        method: Method::Dprkn12,
-        tolerance: 1e-12,
-        max_steps: MAX_STEPS,
-    };
+    let engine = EngineSettings::new(Method::Dprkn12, 1e-12, MAX_STEPS);
     let target = Target {
         u_prime: 0.0,
         density: 0.0,
@@ -522,5 +506,57 @@ pub fn kernel(options: &KernelBenchOptions) -> String {
             run.a_n.stderr / run.a_n.mean
         );
     }
+    out.push_str(&skipping(
+        &potential,
+        &plan_for(
+            &piloted,
+            options.seed,
+            options.randomizations,
+            options.points,
+        ),
+    ));
     out
+}
+
+/// Wall time of the default sampler's scenes with and without free-flight
+/// skipping (same points), and the largest difference of outgoing velocities.
+fn skipping(potential: &Potential, plan: &SamplingPlan) -> String {
+    let timed = |free_flight: bool| {
+        let engine = EngineSettings {
+            free_flight,
+            ..EngineSettings::new(Method::Dprkn12, 1e-12, MAX_STEPS)
+        };
+        let started = Instant::now();
+        let records: Vec<SceneRecord> = plan
+            .chunks()
+            .par_iter()
+            .map(|chunk| plan.integrate(chunk, potential, &engine))
+            .collect::<Vec<_>>()
+            .concat();
+        (records, started.elapsed().as_secs_f64())
+    };
+    let (skipped, fast) = timed(true);
+    let (integrated, slow) = timed(false);
+    let difference = skipped
+        .iter()
+        .zip(&integrated)
+        .map(|(a, b)| velocity_error(&a.collision, &b.collision))
+        .fold(0.0, f64::max);
+    let steps = |records: &[SceneRecord]| {
+        records
+            .iter()
+            .map(|r| f64::from(r.collision.steps))
+            .sum::<f64>()
+            / records.len() as f64
+    };
+    format!(
+        "\nFree-flight skipping on the default sampler's {} scenes: {:.2} s ({:.1} steps/scene) with, {:.2} s ({:.1} steps/scene) without: x{:.2}; largest outgoing-velocity difference {:.1e} v_th.\n",
+        skipped.len(),
+        fast,
+        steps(&skipped),
+        slow,
+        steps(&integrated),
+        slow / fast,
+        difference
+    )
 }

@@ -384,6 +384,8 @@ pub struct EngineConfig {
     pub tolerance: f64,
     /// Step attempts before a scene counts as failed.
     pub max_steps: u32,
+    /// Skip free flight analytically (exact along the asymptotes).
+    pub free_flight: bool,
 }
 
 impl Default for EngineConfig {
@@ -392,6 +394,7 @@ impl Default for EngineConfig {
             method: Method::Dprkn12,
             tolerance: 1e-12,
             max_steps: 100_000,
+            free_flight: true,
         }
     }
 }
@@ -557,6 +560,7 @@ impl Study {
             method: engine.method,
             tolerance: engine.tolerance,
             max_steps: engine.max_steps,
+            free_flight: engine.free_flight,
         }
     }
 

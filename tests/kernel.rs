@@ -16,11 +16,7 @@ use ternary::physics::scan::LaunchPair;
 use ternary::physics::scene::{EngineSettings, Method, collide};
 
 fn engine() -> EngineSettings {
-    EngineSettings {
-        method: Method::Dprkn12,
-        tolerance: 1e-12,
-        max_steps: 100_000,
-    }
+    EngineSettings::new(Method::Dprkn12, 1e-12, 100_000)
 }
 
 fn plan(seed: u64, randomizations: u32, points: u32) -> SamplingPlan {

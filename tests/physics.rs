@@ -8,11 +8,7 @@ use ternary::physics::scan::LaunchPair;
 use ternary::physics::scene::{Collision, EngineSettings, FreeLine, Method, Outcome, collide};
 
 fn engine(method: Method, tolerance: f64) -> EngineSettings {
-    EngineSettings {
-        method,
-        tolerance,
-        max_steps: 100_000,
-    }
+    EngineSettings::new(method, tolerance, 100_000)
 }
 
 fn default_engine() -> EngineSettings {
@@ -247,4 +243,38 @@ fn deep_lennard_jones_well_recombines_a_pair() {
     let energy_in: f64 = collision.incoming.iter().map(|u| u * u / 2.0).sum();
     let kinetic_out: f64 = collision.outgoing.iter().map(|u| u * u / 2.0).sum();
     assert!((kinetic_out + collision.binding_energy - energy_in).abs() < 1e-10);
+}
+
+/// The analytic free-flight step against integrating the same flight: two
+/// independent treatments of the tails must give the same outgoing velocities.
+#[test]
+fn free_flight_skipping_agrees_with_integrating_through() {
+    let through = EngineSettings {
+        free_flight: false,
+        ..default_engine()
+    };
+    let launches = [
+        LaunchPair { u2: 1.0, u3: -1.0 },
+        LaunchPair { u2: 1.1, u3: 0.4 },
+        LaunchPair { u2: -0.3, u3: 2.0 },
+    ];
+    for potential in [ipp(2.0), ipp(6.0), Potential::LennardJones { theta: 1.0 }] {
+        for launch in launches {
+            for offset in [-300.0, -40.0, -12.0, 12.0, 40.0, 300.0] {
+                let skipped = collide(&potential, &default_engine(), launch.lines(offset));
+                let integrated = collide(&potential, &through, launch.lines(offset));
+                assert_eq!(integrated.jumps, 0);
+                assert_conserved(&integrated, "integrated through");
+                let speed = skipped.incoming[2] - skipped.incoming[0];
+                for k in 0..3 {
+                    // Both are within the tolerance-level error of the exact result.
+                    let difference = (skipped.outgoing[k] - integrated.outgoing[k]).abs();
+                    assert!(
+                        difference <= 1e-10 * speed,
+                        "{potential:?} {launch:?} {offset}: {skipped:?} vs {integrated:?}"
+                    );
+                }
+            }
+        }
+    }
 }

@@ -64,9 +64,22 @@ pub struct EngineSettings {
     pub tolerance: f64,
     /// Step attempts (accepted and rejected) before a scene counts as failed.
     pub max_steps: u32,
+    /// Cross free flight between weak states in one exact step along the
+    /// asymptotes (`false`: integrate it, for validation and benchmarks).
+    pub free_flight: bool,
 }
 
 impl EngineSettings {
+    /// Settings with free-flight skipping on.
+    pub fn new(method: Method, tolerance: f64, max_steps: u32) -> EngineSettings {
+        EngineSettings {
+            method,
+            tolerance,
+            max_steps,
+            free_flight: true,
+        }
+    }
+
     /// `epsilon`, the largest `|U| / w^2` of any pair when a scene starts or
     /// stops: the first-order tail correction leaves `O(epsilon^2)`, chosen
     /// 100x below the tolerance.
@@ -402,13 +415,14 @@ fn classify<P: PairPotential>(
     rates: &[f64; 2],
     epsilon: f64,
     step: f64,
+    free_flight: bool,
 ) -> Next {
     if tail_strength(potential, gaps, rates) <= epsilon {
         if rates[0] > 0.0 && rates[1] > 0.0 {
             return Next::Scattered;
         }
         let flight = free_flight_time(potential, gaps, rates, epsilon);
-        if flight > step && flight.is_finite() {
+        if free_flight && flight > step && flight.is_finite() {
             return Next::Jump(flight);
         }
     }
@@ -549,7 +563,14 @@ fn run_scene<P: PairPotential, I: Integrator>(
         let growth_cap = if just_rejected { 1.0 } else { MAX_STEP_FACTOR };
         just_rejected = false;
         step_ratio *= (SAFETY * trial.error.powf(exponent)).clamp(MIN_STEP_FACTOR, growth_cap);
-        match classify(potential, &gaps, &rates, epsilon, step) {
+        match classify(
+            potential,
+            &gaps,
+            &rates,
+            epsilon,
+            step,
+            settings.free_flight,
+        ) {
             Next::Integrate => {}
             Next::Jump(duration) => {
                 free_flight(potential, &mut gaps, &mut rates, duration);
