@@ -108,6 +108,20 @@ pub fn main() -> ExitCode {
     }
 }
 
+/// Writes command output to stdout; a closed pipe (`ternary show ... | head`)
+/// ends the output quietly instead of panicking.
+fn emit(text: &str) {
+    use std::io::Write;
+    let mut stdout = std::io::stdout().lock();
+    if stdout
+        .write_all(text.as_bytes())
+        .and_then(|()| stdout.flush())
+        .is_err()
+    {
+        std::process::exit(0);
+    }
+}
+
 fn load(config: &Path) -> Result<(Study, Store)> {
     let study = Study::load(config)?;
     let store = Store::open(&study.store_path())
@@ -154,11 +168,11 @@ fn dispatch(cli: Cli) -> Result<ExitCode> {
                 .filter(|r| r.action == Action::Skipped)
                 .count();
             if !quiet {
-                println!(
-                    "run: {computed} computed, {fresh} fresh, {skipped} skipped (store {})",
+                emit(&format!(
+                    "run: {computed} computed, {fresh} fresh, {skipped} skipped (store {})\n",
                     store.root().display()
-                );
-                print!("{}", report::summary(&store, &reports)?);
+                ));
+                emit(&report::summary(&store, &reports)?);
             }
             Ok(ExitCode::SUCCESS)
         }
@@ -171,19 +185,19 @@ fn dispatch(cli: Cli) -> Result<ExitCode> {
                     Freshness::Stale(reasons) => format!("stale: {}", reasons.join("; ")),
                     Freshness::Missing(reason) => format!("missing: {reason}"),
                 };
-                println!("{:<24} {line}", id.to_string());
+                emit(&format!("{:<24} {line}\n", id.to_string()));
             }
             Ok(ExitCode::SUCCESS)
         }
         Command::Dag => {
             let study = Study::load(&cli.config)?;
-            print!("{}", report::dag(&stages::plan(&study)));
+            emit(&report::dag(&stages::plan(&study)));
             Ok(ExitCode::SUCCESS)
         }
         Command::Verify => {
             let (_, store) = load(&cli.config)?;
             let (text, damaged) = report::verify(&store)?;
-            print!("{text}");
+            emit(&text);
             Ok(if damaged == 0 {
                 ExitCode::SUCCESS
             } else {
@@ -192,21 +206,21 @@ fn dispatch(cli: Cli) -> Result<ExitCode> {
         }
         Command::Gc => {
             let (study, store) = load(&cli.config)?;
-            print!("{}", report::gc(&store, &stages::plan(&study))?);
+            emit(&report::gc(&store, &stages::plan(&study))?);
             Ok(ExitCode::SUCCESS)
         }
         Command::Show { target, rows } => {
             let store = Study::load(&cli.config)
                 .ok()
                 .and_then(|study| Store::open(&study.store_path()).ok());
-            print!("{}", report::show(store.as_ref(), &target, rows)?);
+            emit(&report::show(store.as_ref(), &target, rows)?);
             Ok(ExitCode::SUCCESS)
         }
         Command::Bench {
             which: BenchCommand::Integrators { n, scenes, seed },
         } => {
             let options = WorkPrecisionOptions { n, scenes, seed };
-            print!("{}", bench::integrators(&options));
+            emit(&bench::integrators(&options));
             Ok(ExitCode::SUCCESS)
         }
         Command::Bench {
@@ -224,7 +238,7 @@ fn dispatch(cli: Cli) -> Result<ExitCode> {
                 points,
                 seed,
             };
-            print!("{}", bench::kernel(&options));
+            emit(&bench::kernel(&options));
             Ok(ExitCode::SUCCESS)
         }
     }

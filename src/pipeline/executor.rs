@@ -7,7 +7,7 @@
 //! computed and committed atomically.
 
 use std::collections::BTreeMap;
-use std::io::IsTerminal;
+use std::io::{IsTerminal, Write};
 use std::time::Instant;
 
 use indicatif::{ProgressBar, ProgressStyle};
@@ -204,7 +204,12 @@ pub fn run(
             }
         };
         if options.verbosity == Verbosity::Normal {
-            println!("{}", report_line(&id, &key, &action));
+            // A closed stdout must not abort a run: the line is only a log.
+            let _ = writeln!(
+                std::io::stdout().lock(),
+                "{}",
+                report_line(&id, &key, &action)
+            );
         }
         reports.push(InstanceReport {
             id,
