@@ -299,6 +299,9 @@ pub struct CollisionsParams {
     pub points: u32,
     /// Pilot scenes per stratum for the Neyman allocation (0: keep the fraction).
     pub pilot_points: u32,
+    /// Engine of the pilot: the study's, also for re-integrations at other
+    /// tolerances, so that they get the same split and the same points.
+    pub pilot_engine: EngineSettings,
 }
 
 /// Resolved parameters of a `fit` instance.
@@ -583,6 +586,7 @@ impl Study {
             sampling: plan,
             points: sampling.points,
             pilot_points: sampling.pilot_points,
+            pilot_engine: self.engine(),
         }
     }
 
@@ -746,8 +750,8 @@ fn validate(config: &Config) -> Result<(), Invalid> {
     )?;
     validate_scan(config)?;
     validate_collisions(&config.collisions)?;
-    validate_kernel(&config.kernel)?;
-    validate_sweep(&config.sweep)?;
+    validate_kernel(&config.kernel, config.collisions.launch_shift)?;
+    validate_sweep(&config.sweep, config.collisions.launch_shift)?;
     validate_convergence(config)?;
     validate_gases(config)
 }
@@ -858,7 +862,7 @@ fn validate_convergence(config: &Config) -> Result<(), Invalid> {
     check_unique(&study.tolerances, "convergence.tolerances")
 }
 
-fn validate_sweep(sweep: &SweepConfig) -> Result<(), Invalid> {
+fn validate_sweep(sweep: &SweepConfig, shift: f64) -> Result<(), Invalid> {
     check(
         sweep.u_prime_min.is_finite()
             && sweep.u_prime_max.is_finite()
@@ -870,9 +874,12 @@ fn validate_sweep(sweep: &SweepConfig) -> Result<(), Invalid> {
         ),
     )?;
     check(
-        sweep.u_prime_min >= -5.0 && sweep.u_prime_max <= 5.0,
+        sweep.u_prime_min >= shift - REWEIGHTING_REACH
+            && sweep.u_prime_max <= shift + REWEIGHTING_REACH,
         "sweep.u_prime_min",
-        "the grid must lie within [-5, 5] thermal velocities",
+        format!(
+            "the grid must lie within {REWEIGHTING_REACH} v_th of collisions.launch_shift = {shift}"
+        ),
     )?;
     check(
         sweep.points >= 3,
@@ -954,7 +961,12 @@ fn validate_collisions(sampling: &CollisionsConfig) -> Result<(), Invalid> {
     Ok(())
 }
 
-fn validate_kernel(kernel: &KernelConfig) -> Result<(), Invalid> {
+/// Largest `|u' - launch_shift|` that reweighting covers: beyond it the launch
+/// speeds that matter lie past the largest speed the point set can draw (6.8
+/// v_th), biasing the kernel by > 0.5%, and the weights' variance explodes.
+const REWEIGHTING_REACH: f64 = 3.0;
+
+fn validate_kernel(kernel: &KernelConfig, shift: f64) -> Result<(), Invalid> {
     check(
         !kernel.u_prime.is_empty(),
         "kernel.u_prime",
@@ -962,9 +974,11 @@ fn validate_kernel(kernel: &KernelConfig) -> Result<(), Invalid> {
     )?;
     for (k, &u) in kernel.u_prime.iter().enumerate() {
         check(
-            u.is_finite() && u.abs() <= 5.0,
+            u.is_finite() && (u - shift).abs() <= REWEIGHTING_REACH,
             format!("kernel.u_prime[{k}]"),
-            format!("{u} is outside [-5, 5] thermal velocities"),
+            format!(
+                "{u} is more than {REWEIGHTING_REACH} v_th from collisions.launch_shift = {shift}: sample it with its own launch_shift"
+            ),
         )?;
     }
     check(

@@ -4,7 +4,8 @@
 //! matching, and replicate-based standard errors. Pure math: no IO.
 //!
 //! Units: velocities in `v_th`, `G` in `rho^2 l v_th` per unit velocity, rates
-//! (moments) in `rho^2 l v_th` (times `v_th` or `v_th^2`).
+//! of the scaled moments `d<u - u'>/dt`, `d<(u - u')^2>/dt` in `rho^2 l v_th`
+//! (physics.md §3: `Gamma = a_n rho^2 l v_th`).
 
 pub mod fit;
 
@@ -96,8 +97,10 @@ fn launch_weight(relative: f64, u_prime: f64) -> f64 {
 /// its mirror image, with half the weight each. For the
 /// same-side stratum the mirror image stands for the both-negative sign
 /// pattern; for the opposite-side stratum it is another point of the same
-/// stratum with the same proposal density (an antithetic pair: the drift, odd
-/// under mirroring, loses the noise of its even part). The literal algorithm's
+/// stratum (an antithetic pair: the drift, odd under mirroring, loses the noise
+/// of its even part). Either way the image keeps the drawn point's proposal
+/// density: `E_p[f(M x) / p(x)] = int f(M x) dx = int_{M S} f`, unbiased for any
+/// proposal (the two densities coincide only when `launch_shift = 0`). The literal algorithm's
 /// scenes count once. Empty for failed scenes.
 pub fn contributions(event: &Event, target: &Target) -> Vec<Contribution> {
     let Some(outgoing) = event.outgoing else {
@@ -307,8 +310,7 @@ fn per_replicate<T: Send>(
 
 /// Drift `sum x` and variance `sum x^2` rates of the special particle alone
 /// and of all particles, counting only velocities with `|x| <= truncation`
-/// (relative to `u'`), per replicate, in units of `rho^2 l v_th` (times `v_th`,
-/// `v_th^2`).
+/// (relative to `u'`), per replicate, in units of `rho^2 l v_th`.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct MomentSums {
     /// Self drift rate `int G_self (u - u') du`.

@@ -73,6 +73,13 @@ impl Progress {
         Progress { bar: None }
     }
 
+    /// Corrects the total amount of work once the stage knows it exactly.
+    pub fn set_total(&self, units: u64) {
+        if let Some(bar) = &self.bar {
+            bar.set_length(units);
+        }
+    }
+
     /// Records `units` more of finished work.
     pub fn advance(&self, units: u64) {
         if let Some(bar) = &self.bar {

@@ -59,8 +59,9 @@ impl Stage for CollisionsStage {
         Vec::new()
     }
 
+    /// The configured split's total; the pilot may change it (see `run`).
     fn work_units(&self) -> u64 {
-        u64::from(self.params.sampling.randomizations) * u64::from(self.params.points)
+        self.params.sampling.total()
     }
 
     fn run(&self, _inputs: &[Input], progress: &Progress) -> Result<Vec<Table>, StageError> {
@@ -76,13 +77,14 @@ impl Stage for CollisionsStage {
             if let Some(fraction) = pilot_same_side_fraction(
                 &plan,
                 &self.params.potential,
-                &self.params.engine,
+                &self.params.pilot_engine,
                 &target,
                 self.params.pilot_points,
             ) {
                 plan.allocate(self.params.points, fraction);
             }
         }
+        progress.set_total(plan.total());
         let plan = &plan;
         let rows: Vec<SceneRecord> = plan
             .chunks()

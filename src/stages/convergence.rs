@@ -71,7 +71,7 @@ impl Stage for ConvergenceStage {
     }
 
     fn version(&self) -> u32 {
-        1
+        2
     }
 
     fn params(&self) -> Value {
@@ -179,7 +179,7 @@ fn convergence_table(rows: &[Row], baseline: &[f64]) -> Result<Table, StageError
         }
     }
     let [value, a, a_err, shift, shift_err, relative] = columns;
-    let unit = "rho^2 l v_th^3";
+    let unit = "rho^2 l v_th";
     Ok(Table::new(
         "convergence",
         vec![

@@ -50,7 +50,7 @@ impl Stage for GasesStage {
     }
 
     fn version(&self) -> u32 {
-        1
+        2
     }
 
     fn params(&self) -> Value {
@@ -133,9 +133,9 @@ impl Stage for GasesStage {
                 Column::f64("thermal_speed", "um/ns", "v_th = sqrt(kT/m)", speed),
                 Column::f64("time_unit", "ns", "l / v_th", time),
                 Column::f64("rho_l", "1", "scaled density rho l (dilute when << 1)", rho_l),
-                Column::f64("a_n", "rho^2 l v_th^3", "self variance rate at u' = 0, dilute limit", a),
-                Column::f64("a_n_stderr", "rho^2 l v_th^3", "standard error", a_err),
-                Column::f64("gamma", "1/ns", "Gamma = a_n rho^2 l v_th: initial growth rate of <(u - u')^2> in v_th^2 per ns, dilute limit", gamma),
+                Column::f64("a_n", "rho^2 l v_th", "self variance rate at u' = 0, dilute limit", a),
+                Column::f64("a_n_stderr", "rho^2 l v_th", "standard error", a_err),
+                Column::f64("gamma", "1/ns", "Gamma = a_n rho^2 l v_th: initial growth rate of <(u - u')^2> (u in v_th) per ns, dilute limit", gamma),
                 Column::f64("gamma_stderr", "1/ns", "standard error", gamma_err),
                 Column::f64("gamma_at_density", "1/ns", "Gamma with the literal algorithm's exp(-r |delay|) at this rho l", gamma_dense),
                 Column::f64("gamma_at_density_stderr", "1/ns", "standard error", gamma_dense_err),

@@ -60,7 +60,7 @@ impl Stage for MomentsStage {
     }
 
     fn version(&self) -> u32 {
-        1
+        2
     }
 
     fn params(&self) -> Value {
@@ -90,25 +90,25 @@ impl Stage for MomentsStage {
         let parts: [MomentColumn; 4] = [
             (
                 "self_drift",
-                "rho^2 l v_th^2",
+                "rho^2 l v_th",
                 "drift rate d<u - u'>/dt of the special particle",
                 |m| m.self_drift,
             ),
             (
                 "self_variance",
-                "rho^2 l v_th^3",
+                "rho^2 l v_th",
                 "variance rate d<(u - u')^2>/dt of the special particle (a_n at u' = 0)",
                 |m| m.self_variance,
             ),
             (
                 "window_drift",
-                "rho^2 l v_th^2",
+                "rho^2 l v_th",
                 "drift rate of all particles within the truncation",
                 |m| m.window_drift,
             ),
             (
                 "window_variance",
-                "rho^2 l v_th^3",
+                "rho^2 l v_th",
                 "variance rate of all particles within the truncation",
                 |m| m.window_variance,
             ),

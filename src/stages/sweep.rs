@@ -106,7 +106,7 @@ impl SweepStage {
             predicted_err,
             z,
         ] = columns;
-        let rate = "rho^2 l v_th^2";
+        let rate = "rho^2 l v_th";
         Ok(Table::new(
             "rates",
             vec![
@@ -120,13 +120,13 @@ impl SweepStage {
                 Column::f64("self_drift_stderr", rate, "standard error", drift_err),
                 Column::f64(
                     "self_variance",
-                    "rho^2 l v_th^3",
+                    "rho^2 l v_th",
                     "D2 = d<(u - u')^2>/dt of the special particle",
                     variance,
                 ),
                 Column::f64(
                     "self_variance_stderr",
-                    "rho^2 l v_th^3",
+                    "rho^2 l v_th",
                     "standard error",
                     variance_err,
                 ),
@@ -197,8 +197,8 @@ impl SweepStage {
                         let [there, back, imbalance] =
                             [&there, &back, &imbalance].map(|v| Estimate::from_replicates(v));
                         let ratio = there.mean / back.mean;
-                        let ratio_error =
-                            ratio * (there.stderr / there.mean).hypot(back.stderr / back.mean);
+                        let ratio_error = ratio.abs()
+                            * (there.stderr / there.mean).hypot(back.stderr / back.mean);
                         [
                             a,
                             b,
@@ -261,7 +261,7 @@ impl Stage for SweepStage {
     }
 
     fn version(&self) -> u32 {
-        1
+        2
     }
 
     fn params(&self) -> Value {

@@ -65,7 +65,7 @@ impl Stage for TableStage {
     }
 
     fn version(&self) -> u32 {
-        2
+        3
     }
 
     fn params(&self) -> Value {
@@ -123,25 +123,25 @@ impl Stage for TableStage {
             );
             push(
                 "a_n",
-                "rho^2 l v_th^3",
+                "rho^2 l v_th",
                 "self variance rate at u' = 0, dilute limit, |u - u'| <= window/2",
                 a,
             );
             push(
                 "a_n_stderr",
-                "rho^2 l v_th^3",
+                "rho^2 l v_th",
                 "standard error of a_n (spread of randomizations)",
                 a_err,
             );
             push(
                 "a_n_untruncated",
-                "rho^2 l v_th^3",
+                "rho^2 l v_th",
                 "self variance rate without truncation",
                 a_all,
             );
             push(
                 "a_n_untruncated_stderr",
-                "rho^2 l v_th^3",
+                "rho^2 l v_th",
                 "standard error of a_n_untruncated",
                 a_all_err,
             );
