@@ -14,7 +14,7 @@ use crate::config::DEFAULT_KICK_FLOOR;
 use crate::kernel::{Bins, Draws, Estimate, Event, Target, histograms, moments};
 use crate::physics::launch::thermal_launch_speed;
 use crate::physics::potential::Potential;
-use crate::physics::sampling::{OffsetProposal, SamplingPlan, SceneRecord};
+use crate::physics::sampling::{LaunchProposal, OffsetProposal, SamplingPlan, SceneRecord};
 use crate::physics::scan::{LaunchPair, TIGHTEST_TOLERANCE};
 use crate::physics::scene::{Collision, EngineSettings, FreeLine, Method, collide};
 
@@ -277,7 +277,7 @@ fn plan_for(variant: &Variant, seed: u64, randomizations: u32, points: u32) -> S
         same_side_points: 0,
         proposal: variant.proposal,
         quasi_random: variant.quasi_random,
-        launch_shift: 0.0,
+        launch: LaunchProposal::THERMAL,
     };
     plan.allocate(points, variant.same_side_fraction);
     plan

@@ -12,7 +12,7 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 
 use crate::physics::potential::Potential;
-use crate::physics::sampling::{OffsetProposal, SamplingPlan};
+use crate::physics::sampling::{LaunchProposal, OffsetProposal, SamplingPlan};
 use crate::physics::scene::{EngineSettings, Method};
 use crate::physics::units::{Mass, PhysicalGas, ring_density_per_um};
 
@@ -178,6 +178,8 @@ pub struct SweepConfig {
     pub balance_separations: Vec<f64>,
     /// Bin width of the detailed-balance kernels.
     pub balance_bin_width: f64,
+    /// Launch-proposal spread of the sweep's own scenes (0: reuse the kernel's).
+    pub launch_spread: f64,
 }
 
 impl Default for SweepConfig {
@@ -189,6 +191,7 @@ impl Default for SweepConfig {
             points: 25,
             balance_separations: vec![0.01, 0.02, 0.05],
             balance_bin_width: 0.005,
+            launch_spread: 2.0,
         }
     }
 }
@@ -208,6 +211,8 @@ pub struct SweepParams {
     pub balance_separations: Vec<f64>,
     /// Detailed-balance bin width.
     pub balance_bin_width: f64,
+    /// Collisions instance the sweep reads (its own set when it has a launch spread).
+    pub collisions: String,
 }
 
 /// `[collisions]`: how kernel scenes are sampled (numerics.md "Sampling scenes").
@@ -229,6 +234,8 @@ pub struct CollisionsConfig {
     pub quasi_random: bool,
     /// `u'` the launch-speed proposal is tuned for.
     pub launch_shift: f64,
+    /// Side components of the launch proposal at `launch_shift +- launch_spread` (0: none).
+    pub launch_spread: f64,
     /// Mixture proposal of the arrival offset (`[collisions.proposal]`).
     pub proposal: OffsetProposal,
 }
@@ -243,6 +250,7 @@ impl Default for CollisionsConfig {
             pilot_points: 1024,
             quasi_random: true,
             launch_shift: 0.0,
+            launch_spread: 0.0,
             proposal: OffsetProposal::default(),
         }
     }
@@ -577,7 +585,10 @@ impl Study {
             same_side_points: 0,
             proposal: sampling.proposal,
             quasi_random: sampling.quasi_random,
-            launch_shift: sampling.launch_shift,
+            launch: LaunchProposal {
+                shift: sampling.launch_shift,
+                spread: sampling.launch_spread,
+            },
         };
         plan.allocate(sampling.points, sampling.same_side_fraction);
         CollisionsParams {
@@ -629,17 +640,36 @@ impl Study {
         }
     }
 
-    /// Resolved parameters of the sweep of `potential`, if enabled.
-    pub fn sweep_params(&self, potential: Potential) -> Option<SweepParams> {
+    /// Resolved parameters of the sweep of `potential`, if enabled, with the
+    /// sweep's own collisions (a defensive launch mixture) when it has a spread.
+    pub fn sweep_params(
+        &self,
+        potential: Potential,
+    ) -> Option<(SweepParams, Option<CollisionsParams>)> {
         let sweep = &self.config.sweep;
-        sweep.enabled.then(|| SweepParams {
+        if !sweep.enabled {
+            return None;
+        }
+        let own = (sweep.launch_spread > 0.0).then(|| {
+            let mut params = self.collisions_params(potential);
+            params.sampling.launch.spread = sweep.launch_spread;
+            params
+        });
+        let collisions = if own.is_some() {
+            format!("{}_sweep", potential.id())
+        } else {
+            potential.id()
+        };
+        let params = SweepParams {
             kernel: self.kernel_params(potential, 0.0, 0.0),
             u_prime_min: sweep.u_prime_min,
             u_prime_max: sweep.u_prime_max,
             points: sweep.points,
             balance_separations: sweep.balance_separations.clone(),
             balance_bin_width: sweep.balance_bin_width,
-        })
+            collisions,
+        };
+        Some((params, own))
     }
 
     /// Resolved convergence parameters and the collisions at each varied
@@ -750,8 +780,16 @@ fn validate(config: &Config) -> Result<(), Invalid> {
     )?;
     validate_scan(config)?;
     validate_collisions(&config.collisions)?;
-    validate_kernel(&config.kernel, config.collisions.launch_shift)?;
-    validate_sweep(&config.sweep, config.collisions.launch_shift)?;
+    let launch = LaunchProposal {
+        shift: config.collisions.launch_shift,
+        spread: config.collisions.launch_spread,
+    };
+    validate_kernel(&config.kernel, &launch)?;
+    let sweep_launch = LaunchProposal {
+        spread: config.sweep.launch_spread.max(launch.spread),
+        ..launch
+    };
+    validate_sweep(&config.sweep, &sweep_launch)?;
     validate_convergence(config)?;
     validate_gases(config)
 }
@@ -862,7 +900,7 @@ fn validate_convergence(config: &Config) -> Result<(), Invalid> {
     check_unique(&study.tolerances, "convergence.tolerances")
 }
 
-fn validate_sweep(sweep: &SweepConfig, shift: f64) -> Result<(), Invalid> {
+fn validate_sweep(sweep: &SweepConfig, launch: &LaunchProposal) -> Result<(), Invalid> {
     check(
         sweep.u_prime_min.is_finite()
             && sweep.u_prime_max.is_finite()
@@ -874,17 +912,19 @@ fn validate_sweep(sweep: &SweepConfig, shift: f64) -> Result<(), Invalid> {
         ),
     )?;
     check(
-        sweep.u_prime_min >= shift - REWEIGHTING_REACH
-            && sweep.u_prime_max <= shift + REWEIGHTING_REACH,
+        within_reach(launch, sweep.u_prime_min) && within_reach(launch, sweep.u_prime_max),
         "sweep.u_prime_min",
-        format!(
-            "the grid must lie within {REWEIGHTING_REACH} v_th of collisions.launch_shift = {shift}"
-        ),
+        "the grid must lie within reach of the launch proposal (collisions.launch_shift +- (launch_spread + 3))",
     )?;
     check(
         sweep.points >= 3,
         "sweep.points",
         "at least 3 points are needed for derivatives",
+    )?;
+    check(
+        sweep.launch_spread.is_finite() && (0.0..=3.0).contains(&sweep.launch_spread),
+        "sweep.launch_spread",
+        format!("{} is outside [0, 3]", sweep.launch_spread),
     )?;
     check(
         sweep.balance_bin_width.is_finite() && sweep.balance_bin_width > 0.0,
@@ -930,6 +970,11 @@ fn validate_collisions(sampling: &CollisionsConfig) -> Result<(), Invalid> {
         "collisions.launch_shift",
         format!("{} is outside [-3, 3]", sampling.launch_shift),
     )?;
+    check(
+        sampling.launch_spread.is_finite() && (0.0..=3.0).contains(&sampling.launch_spread),
+        "collisions.launch_spread",
+        format!("{} is outside [0, 3]", sampling.launch_spread),
+    )?;
     let proposal = &sampling.proposal;
     for (key, value) in [
         ("core_weight", proposal.core_weight),
@@ -966,7 +1011,12 @@ fn validate_collisions(sampling: &CollisionsConfig) -> Result<(), Invalid> {
 /// v_th), biasing the kernel by > 0.5%, and the weights' variance explodes.
 const REWEIGHTING_REACH: f64 = 3.0;
 
-fn validate_kernel(kernel: &KernelConfig, shift: f64) -> Result<(), Invalid> {
+/// `true` when `u'` lies within reach of a component of the launch proposal.
+fn within_reach(launch: &LaunchProposal, u_prime: f64) -> bool {
+    (u_prime - launch.shift).abs() <= REWEIGHTING_REACH + launch.spread
+}
+
+fn validate_kernel(kernel: &KernelConfig, launch: &LaunchProposal) -> Result<(), Invalid> {
     check(
         !kernel.u_prime.is_empty(),
         "kernel.u_prime",
@@ -974,10 +1024,11 @@ fn validate_kernel(kernel: &KernelConfig, shift: f64) -> Result<(), Invalid> {
     )?;
     for (k, &u) in kernel.u_prime.iter().enumerate() {
         check(
-            u.is_finite() && (u - shift).abs() <= REWEIGHTING_REACH,
+            u.is_finite() && within_reach(launch, u),
             format!("kernel.u_prime[{k}]"),
             format!(
-                "{u} is more than {REWEIGHTING_REACH} v_th from collisions.launch_shift = {shift}: sample it with its own launch_shift"
+                "{u} is beyond the reach of the launch proposal (launch_shift {} +- (launch_spread {} + {REWEIGHTING_REACH})): widen launch_spread",
+                launch.shift, launch.spread
             ),
         )?;
     }

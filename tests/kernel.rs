@@ -11,7 +11,9 @@ use ternary::kernel::{
 use ternary::physics::launch::thermal_density;
 use ternary::physics::potential::Potential;
 use ternary::physics::quasi_random::ScrambledSobol;
-use ternary::physics::sampling::{OffsetProposal, SamplingPlan, SceneRecord, literal_scene};
+use ternary::physics::sampling::{
+    LaunchProposal, OffsetProposal, SamplingPlan, SceneRecord, literal_scene,
+};
 use ternary::physics::scan::LaunchPair;
 use ternary::physics::scene::{EngineSettings, Method, collide};
 
@@ -32,7 +34,10 @@ fn shifted_plan(seed: u64, randomizations: u32, points: u32, launch_shift: f64) 
         same_side_points: same_side,
         proposal: OffsetProposal::default(),
         quasi_random: true,
-        launch_shift,
+        launch: LaunchProposal {
+            shift: launch_shift,
+            spread: 0.0,
+        },
     }
 }
 

@@ -94,9 +94,10 @@ fn run_counts(config: &Path, args: &[&str]) -> (usize, usize) {
     (number(" computed"), number(" fresh"))
 }
 
-/// Every instance of the default DAG: per potential scan, collisions, sweep, and
-/// kernel, moments and fit at (u' = 0, dilute), plus the table.
-const INSTANCES: usize = 13;
+/// Every instance of the default DAG: per potential scan, collisions, the
+/// sweep's own collisions, sweep, and kernel, moments and fit at (u' = 0,
+/// dilute), plus the table.
+const INSTANCES: usize = 15;
 
 fn stage_dirs(store: &Path, stage: &str) -> Vec<PathBuf> {
     let mut dirs: Vec<PathBuf> = fs::read_dir(store.join("artifacts").join(stage))

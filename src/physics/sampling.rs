@@ -151,14 +151,63 @@ pub struct SampledScene {
     pub proposal_density: f64,
 }
 
+/// Launch-speed proposal: the launch density of a special particle moving with
+/// `shift`, or, with `spread > 0`, an equal mixture of those for `shift - spread`,
+/// `shift` and `shift + spread` (defensive: reweighting to any `u'` within reach
+/// of one component stays efficient; the density is the whole mixture's).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LaunchProposal {
+    /// `u'` of the central component, `v_th`.
+    pub shift: f64,
+    /// Distance of the side components (0: a single component).
+    pub spread: f64,
+}
+
+impl LaunchProposal {
+    /// The `u' = 0` launch density alone.
+    pub const THERMAL: LaunchProposal = LaunchProposal {
+        shift: 0.0,
+        spread: 0.0,
+    };
+
+    fn components(&self) -> &'static [f64] {
+        if self.spread == 0.0 {
+            &[0.0]
+        } else {
+            &[-1.0, 0.0, 1.0]
+        }
+    }
+
+    /// Speed of a particle arriving from side `side` (+1: moving right) for a
+    /// uniform coordinate: the coordinate selects the component, its remainder
+    /// is inverted within it.
+    pub fn speed(&self, coordinate: f64, side: f64) -> f64 {
+        let components = self.components();
+        let scaled = coordinate * components.len() as f64;
+        let k = (scaled as usize).min(components.len() - 1);
+        let shift = self.shift + components[k] * self.spread;
+        shifted_launch_speed(scaled - k as f64, side * shift)
+    }
+
+    /// Density of `speed` on side `side` under the whole mixture.
+    pub fn density(&self, speed: f64, side: f64) -> f64 {
+        let components = self.components();
+        components
+            .iter()
+            .map(|c| shifted_speed_density(speed, side * (self.shift + c * self.spread)))
+            .sum::<f64>()
+            / components.len() as f64
+    }
+}
+
 /// The scene in `stratum` at the unit-cube point `coordinates`, with launch
-/// speeds drawn for a special particle moving with `launch_shift` (`u'` the
-/// proposal is tuned for; the weights make any `u'` exact).
+/// speeds from `launch` (the weights make any `u'` exact).
 pub fn sample_scene(
     coordinates: [f64; 3],
     stratum: Stratum,
     proposal: &OffsetProposal,
-    launch_shift: f64,
+    launch: &LaunchProposal,
 ) -> SampledScene {
     let [x_offset, x_first, x_second] = coordinates;
     let third_sign = if stratum == Stratum::Opposite {
@@ -166,8 +215,8 @@ pub fn sample_scene(
     } else {
         1.0
     };
-    let first = shifted_launch_speed(x_first, launch_shift);
-    let second = shifted_launch_speed(x_second, third_sign * launch_shift);
+    let first = launch.speed(x_first, 1.0);
+    let second = launch.speed(x_second, third_sign);
     let u3 = third_sign * second;
     let collision_time = 1.0 / first + 1.0 / second;
     let offset = proposal.offset(x_offset, collision_time);
@@ -176,8 +225,8 @@ pub fn sample_scene(
         u2: first,
         u3,
         offset,
-        proposal_density: shifted_speed_density(first, launch_shift)
-            * shifted_speed_density(second, third_sign * launch_shift)
+        proposal_density: launch.density(first, 1.0)
+            * launch.density(second, third_sign)
             * proposal.density(offset, collision_time),
     }
 }
@@ -227,8 +276,8 @@ pub struct SamplingPlan {
     /// Scrambled Sobol' points (`true`) or independent uniform points (`false`,
     /// plain Monte Carlo: only for measuring what quasi-random points gain).
     pub quasi_random: bool,
-    /// `u'` the launch-speed proposal is tuned for (0: the `u' = 0` launch density).
-    pub launch_shift: f64,
+    /// Launch-speed proposal.
+    pub launch: LaunchProposal,
 }
 
 /// A contiguous range of points of one randomization and stratum: the unit
@@ -331,12 +380,7 @@ impl SamplingPlan {
             .clone()
             .map(|point| {
                 let coordinates = self.coordinates(chunk.randomization, chunk.stratum, point);
-                let scene = sample_scene(
-                    coordinates,
-                    chunk.stratum,
-                    &self.proposal,
-                    self.launch_shift,
-                );
+                let scene = sample_scene(coordinates, chunk.stratum, &self.proposal, &self.launch);
                 let launch = LaunchPair {
                     u2: scene.u2,
                     u3: scene.u3,
@@ -383,6 +427,36 @@ mod tests {
                 "c = {c}: {fraction} vs {}",
                 integral + tail_below
             );
+        }
+    }
+
+    /// Speeds drawn through the launch mixture follow its density: the fraction
+    /// of a fine coordinate grid mapped below `v` equals the integral of the
+    /// density up to `v`, on both sides.
+    #[test]
+    fn launch_mixture_speeds_follow_its_density() {
+        let launch = LaunchProposal {
+            shift: 0.5,
+            spread: 2.0,
+        };
+        let grid = 200_000;
+        for side in [1.0, -1.0] {
+            let speeds: Vec<f64> = (0..grid)
+                .map(|k| launch.speed((f64::from(k) + 0.5) / f64::from(grid), side))
+                .collect();
+            for v in [0.3, 1.0, 2.0, 3.5] {
+                let fraction = speeds.iter().filter(|&&s| s <= v).count() as f64 / f64::from(grid);
+                let h = 1e-5;
+                let steps = (v / h) as u32;
+                let integral: f64 = (0..steps)
+                    .map(|k| launch.density(h * (f64::from(k) + 0.5), side))
+                    .sum::<f64>()
+                    * h;
+                assert!(
+                    (fraction - integral).abs() < 2e-5,
+                    "side {side} v {v}: {fraction} vs {integral}"
+                );
+            }
         }
     }
 

@@ -36,9 +36,9 @@ impl CollisionsStage {
         CollisionsStage { params, instance }
     }
 
-    /// Instance id of the collisions of a potential id.
-    pub fn instance(potential_id: &str) -> InstanceId {
-        InstanceId::new("collisions", potential_id)
+    /// Instance id of the collisions named `name` (a potential id, or a variant's name).
+    pub fn instance(name: &str) -> InstanceId {
+        InstanceId::new("collisions", name)
     }
 }
 

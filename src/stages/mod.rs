@@ -29,7 +29,13 @@ pub fn plan(study: &Study) -> Vec<Box<dyn Stage>> {
             stages.push(Box::new(moments::MomentsStage::new(params)));
             stages.push(Box::new(fit::FitStage::new(study.fit_params(params))));
         }
-        if let Some(params) = study.sweep_params(potential) {
+        if let Some((params, own)) = study.sweep_params(potential) {
+            if let Some(collisions) = own {
+                let name = params.collisions.clone();
+                stages.push(Box::new(collisions::CollisionsStage::variant(
+                    collisions, name,
+                )));
+            }
             stages.push(Box::new(sweep::SweepStage::new(params)));
         }
     }

@@ -261,7 +261,7 @@ impl Stage for SweepStage {
     }
 
     fn version(&self) -> u32 {
-        2
+        3
     }
 
     fn params(&self) -> Value {
@@ -269,9 +269,7 @@ impl Stage for SweepStage {
     }
 
     fn inputs(&self) -> Vec<InstanceId> {
-        vec![CollisionsStage::instance(
-            &self.params.kernel.potential.id(),
-        )]
+        vec![CollisionsStage::instance(&self.params.collisions)]
     }
 
     fn work_units(&self) -> u64 {
