@@ -8,9 +8,6 @@ use std::time::Instant;
 use rand::rngs::StdRng;
 use rand::{RngExt, SeedableRng};
 
-use rayon::prelude::*;
-
-use crate::config::DEFAULT_KICK_FLOOR;
 use crate::kernel::{Bins, Draws, Estimate, Event, Target, histograms, moments};
 use crate::physics::launch::thermal_launch_speed;
 use crate::physics::potential::Potential;
@@ -286,12 +283,7 @@ fn plan_for(variant: &Variant, seed: u64, randomizations: u32, points: u32) -> S
 /// Median relative standard error of the kernel over bins with `low <= |du| <= high`.
 fn median_relative_error(events: &[Event], draws: &Draws, low: f64, high: f64) -> f64 {
     let bins = Bins::for_window(0.2, 5e-5);
-    let target = Target {
-        u_prime: 0.0,
-        density: 0.0,
-        launch_length: 90.0,
-        kick_floor: DEFAULT_KICK_FLOOR,
-    };
+    let target = Target::dilute(0.0);
     let replicates = histograms(events, &target, &bins, draws);
     let mut errors: Vec<f64> = (0..bins.len())
         .filter(|&k| (low..=high).contains(&bins.centre(k).abs()))
@@ -312,20 +304,10 @@ fn median_relative_error(events: &[Event], draws: &Draws, low: f64, high: f64) -
 fn run_sampler(potential: &Potential, plan: &SamplingPlan) -> KernelRun {
     let engine = EngineSettings::new(Method::Dprkn12, 1e-12, MAX_STEPS);
     let started = Instant::now();
-    let records: Vec<SceneRecord> = plan
-        .chunks()
-        .par_iter()
-        .map(|chunk| plan.integrate(chunk, potential, &engine))
-        .collect::<Vec<_>>()
-        .concat();
+    let records = plan.integrate_all(potential, &engine, |_| ());
     let events: Vec<Event> = records.iter().map(Event::from_record).collect();
-    let draws = Draws::count(&events, plan.randomizations as usize);
-    let target = Target {
-        u_prime: 0.0,
-        density: 0.0,
-        launch_length: 90.0,
-        kick_floor: DEFAULT_KICK_FLOOR,
-    };
+    let draws = Draws::count(&events);
+    let target = Target::dilute(0.0);
     let sums = moments(&events, &target, &[0.1], &draws);
     let a_n =
         Estimate::from_replicates(&sums.iter().map(|r| r[0].self_variance).collect::<Vec<_>>());
@@ -423,12 +405,7 @@ pub fn kernel(options: &KernelBenchOptions) -> String {
         );
     }
     let engine = EngineSettings::new(Method::Dprkn12, 1e-12, MAX_STEPS);
-    let target = Target {
-        u_prime: 0.0,
-        density: 0.0,
-        launch_length: 90.0,
-        kick_floor: DEFAULT_KICK_FLOOR,
-    };
+    let target = Target::dilute(0.0);
     let probe = plan_for(
         &variants[3],
         options.seed,
@@ -527,12 +504,7 @@ fn skipping(potential: &Potential, plan: &SamplingPlan) -> String {
             ..EngineSettings::new(Method::Dprkn12, 1e-12, MAX_STEPS)
         };
         let started = Instant::now();
-        let records: Vec<SceneRecord> = plan
-            .chunks()
-            .par_iter()
-            .map(|chunk| plan.integrate(chunk, potential, &engine))
-            .collect::<Vec<_>>()
-            .concat();
+        let records = plan.integrate_all(potential, &engine, |_| ());
         (records, started.elapsed().as_secs_f64())
     };
     let (skipped, fast) = timed(true);

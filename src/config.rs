@@ -276,9 +276,7 @@ pub struct KernelConfig {
     pub fit_range: [f64; 2],
 }
 
-/// Default `kernel.kick_floor`: 1000x the engine's velocity error at the
-/// default tolerance (~1e-13 v_th, docs/benchmarks.md), far below any bin.
-pub const DEFAULT_KICK_FLOOR: f64 = 1e-10;
+pub use crate::kernel::DEFAULT_KICK_FLOOR;
 
 impl Default for KernelConfig {
     fn default() -> Self {

@@ -42,31 +42,16 @@ fn shifted_plan(seed: u64, randomizations: u32, points: u32, launch_shift: f64) 
 }
 
 fn draw(potential: Potential, plan: &SamplingPlan) -> Vec<Event> {
-    let records: Vec<SceneRecord> = plan
-        .chunks()
-        .par_iter()
-        .map(|chunk| plan.integrate(chunk, &potential, &engine()))
-        .collect::<Vec<_>>()
-        .concat();
+    let records = plan.integrate_all(&potential, &engine(), |_| ());
     records.iter().map(Event::from_record).collect()
 }
 
 fn dilute(u_prime: f64) -> Target {
-    Target {
-        u_prime,
-        density: 0.0,
-        launch_length: 90.0,
-        kick_floor: DEFAULT_KICK_FLOOR,
-    }
+    Target::dilute(u_prime)
 }
 
 fn replicates(events: &[Event]) -> Draws {
-    let count = events
-        .iter()
-        .map(|e| e.randomization as usize + 1)
-        .max()
-        .unwrap();
-    Draws::count(events, count)
+    Draws::count(events)
 }
 
 /// Self variance rate within `limit`, with its standard error.

@@ -36,6 +36,10 @@ pub struct Event {
     pub outgoing: Option<[f64; 3]>,
 }
 
+/// Default kick floor: 1000x the engine's velocity error at the default
+/// tolerance (~1e-13 v_th, docs/benchmarks.md), far below any bin.
+pub const DEFAULT_KICK_FLOOR: f64 = 1e-10;
+
 /// The `u'` and density an event set is reweighted to.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Target {
@@ -51,6 +55,18 @@ pub struct Target {
     /// offsets, whose importance weights grow like `tau^2`, would turn
     /// integration noise into rare huge contributions.
     pub kick_floor: f64,
+}
+
+impl Target {
+    /// The dilute limit at `u'` with the default kick floor (`L` is then unused).
+    pub fn dilute(u_prime: f64) -> Target {
+        Target {
+            u_prime,
+            density: 0.0,
+            launch_length: 0.0,
+            kick_floor: DEFAULT_KICK_FLOOR,
+        }
+    }
 }
 
 impl Event {
@@ -250,8 +266,13 @@ pub struct Draws {
 }
 
 impl Draws {
-    /// Counts the events of every replicate and stratum.
-    pub fn count(events: &[Event], replicates: usize) -> Draws {
+    /// Counts the events of every replicate (randomizations `0..=max`) and stratum.
+    pub fn count(events: &[Event]) -> Draws {
+        let replicates = events
+            .iter()
+            .map(|e| e.randomization as usize + 1)
+            .max()
+            .unwrap_or(0);
         let mut counts = vec![[0u64; 3]; replicates];
         for event in events {
             counts[event.randomization as usize][event.stratum.index() as usize] += 1;
@@ -375,12 +396,7 @@ pub fn pilot_same_side_fraction(
         quasi_random: false,
         ..*plan
     };
-    let records: Vec<SceneRecord> = pilot
-        .chunks()
-        .par_iter()
-        .map(|chunk| pilot.integrate(chunk, potential, engine))
-        .collect::<Vec<_>>()
-        .concat();
+    let records = pilot.integrate_all(potential, engine, |_| ());
     let merit = |stratum: Stratum| {
         let scenes: Vec<&SceneRecord> = records
             .iter()

@@ -21,6 +21,7 @@
 //! density (balance heuristic). Coordinates come from Owen-scrambled Sobol'
 //! points, one independent randomization per replicate.
 
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use super::launch::{shifted_launch_speed, shifted_speed_density, thermal_launch_speed};
@@ -366,6 +367,26 @@ impl SamplingPlan {
         } else {
             ScrambledSobol::new(!self.seed, (stream << 32) | u64::from(index)).point(0)
         }
+    }
+
+    /// Samples and integrates every scene, chunks in parallel, in the fixed chunk
+    /// order (the records do not depend on the thread count). `done` hears the
+    /// size of every finished chunk (progress).
+    pub fn integrate_all(
+        &self,
+        potential: &Potential,
+        engine: &EngineSettings,
+        done: impl Fn(usize) + Sync,
+    ) -> Vec<SceneRecord> {
+        self.chunks()
+            .par_iter()
+            .map(|chunk| {
+                let records = self.integrate(chunk, potential, engine);
+                done(records.len());
+                records
+            })
+            .collect::<Vec<_>>()
+            .concat()
     }
 
     /// Samples and integrates the scenes of one chunk.

@@ -8,10 +8,9 @@
 //! chunks run in parallel and are written in order, so the bytes do not depend
 //! on the thread count.
 
-use rayon::prelude::*;
 use serde_json::Value;
 
-use crate::config::{CollisionsParams, DEFAULT_KICK_FLOOR};
+use crate::config::CollisionsParams;
 use crate::kernel::Event;
 use crate::kernel::{Target, pilot_same_side_fraction};
 use crate::physics::sampling::{SceneRecord, Stratum};
@@ -67,12 +66,7 @@ impl Stage for CollisionsStage {
     fn run(&self, _inputs: &[Input], progress: &Progress) -> Result<Vec<Table>, StageError> {
         let mut plan = self.params.sampling;
         if self.params.pilot_points > 0 {
-            let target = Target {
-                u_prime: 0.0,
-                density: 0.0,
-                launch_length: 0.0,
-                kick_floor: DEFAULT_KICK_FLOOR,
-            };
+            let target = Target::dilute(0.0);
             // Without any contribution (n = 2) the configured split stays.
             if let Some(fraction) = pilot_same_side_fraction(
                 &plan,
@@ -85,17 +79,9 @@ impl Stage for CollisionsStage {
             }
         }
         progress.set_total(plan.total());
-        let plan = &plan;
-        let rows: Vec<SceneRecord> = plan
-            .chunks()
-            .par_iter()
-            .map(|chunk| {
-                let rows = plan.integrate(chunk, &self.params.potential, &self.params.engine);
-                progress.advance(rows.len() as u64);
-                rows
-            })
-            .collect::<Vec<_>>()
-            .concat();
+        let rows = plan.integrate_all(&self.params.potential, &self.params.engine, |count| {
+            progress.advance(count as u64)
+        });
         let allocation = format!(
             "opposite {} same-side {} per randomization",
             plan.opposite_points, plan.same_side_points

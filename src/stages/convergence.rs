@@ -10,8 +10,8 @@
 
 use serde_json::Value;
 
-use super::collisions::{CollisionsStage, read_events};
-use super::kernel::target_of;
+use super::collisions::CollisionsStage;
+use super::kernel::{collision_events, target_of};
 use crate::config::ConvergenceParams;
 use crate::kernel::{Bins, Draws, Estimate, Event, Target, histograms, moments};
 use crate::pipeline::{Column, Input, InstanceId, Progress, Stage, StageError, Table};
@@ -95,13 +95,7 @@ impl Stage for ConvergenceStage {
     }
 
     fn run(&self, inputs: &[Input], progress: &Progress) -> Result<Vec<Table>, StageError> {
-        let events = read_events(&inputs[0])?;
-        let replicates = events
-            .iter()
-            .map(|e| e.randomization as usize + 1)
-            .max()
-            .unwrap_or(0);
-        let draws = Draws::count(&events, replicates);
+        let (events, draws, _) = collision_events(&inputs[0])?;
         let target = target_of(&self.params.kernel);
         let baseline = self.self_variance(&events, &draws, &target);
         let mut rows = vec![Row {
@@ -134,8 +128,7 @@ impl Stage for ConvergenceStage {
         }
         progress.advance(1);
         for (input, &tolerance) in inputs[1..].iter().zip(&self.params.tolerances) {
-            let events = read_events(input)?;
-            let draws = Draws::count(&events, replicates);
+            let (events, draws, _) = collision_events(input)?;
             rows.push(Row {
                 parameter: "tolerance",
                 value: tolerance,

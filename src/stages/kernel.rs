@@ -7,7 +7,7 @@ use serde_json::Value;
 
 use super::collisions::{CollisionsStage, read_events};
 use crate::config::KernelParams;
-use crate::kernel::{Bins, Draws, Estimate, Target, histograms};
+use crate::kernel::{Bins, Draws, Estimate, Event, Target, histograms};
 use crate::pipeline::{Column, Input, InstanceId, Progress, Stage, StageError, Table};
 
 /// The `kernel` stage for one potential, `u'` and density.
@@ -42,28 +42,27 @@ pub fn target_of(params: &KernelParams) -> Target {
     }
 }
 
-/// Events of the single input, their draw counts, and failures.
-pub fn input_events(
-    inputs: &[Input],
-) -> Result<(Vec<crate::kernel::Event>, Draws, usize), StageError> {
-    let input = inputs
-        .first()
-        .ok_or_else(|| StageError::Input("no collisions input".into()))?;
+/// The events of a `collisions` input, their draw counts, and failures.
+pub fn collision_events(input: &Input) -> Result<(Vec<Event>, Draws, usize), StageError> {
     let events = read_events(input)?;
-    let replicates = events
-        .iter()
-        .map(|e| e.randomization as usize + 1)
-        .max()
-        .unwrap_or(0);
-    if replicates < 2 {
+    let draws = Draws::count(&events);
+    if draws.replicates() < 2 {
         return Err(StageError::Input(format!(
             "{}: fewer than 2 randomizations",
             input.id
         )));
     }
     let failed = events.iter().filter(|e| e.outgoing.is_none()).count();
-    let draws = Draws::count(&events, replicates);
     Ok((events, draws, failed))
+}
+
+/// The events of the single (first) input.
+pub fn input_events(inputs: &[Input]) -> Result<(Vec<Event>, Draws, usize), StageError> {
+    collision_events(
+        inputs
+            .first()
+            .ok_or_else(|| StageError::Input("no collisions input".into()))?,
+    )
 }
 
 impl Stage for KernelStage {
