@@ -28,6 +28,26 @@ pub fn with_error(value: f64, error: f64) -> String {
     format!("{value:.decimals$} ± {error:.1e}")
 }
 
+/// Cell `name` of `row` as a number (NaN when null).
+fn number(frame: &DataFrame, row: usize, name: &str) -> Result<f64> {
+    Ok(frame.column(name)?.f64()?.get(row).unwrap_or(f64::NAN))
+}
+
+/// Cell `name` of `row` as a count (0 when null).
+fn count(frame: &DataFrame, row: usize, name: &str) -> Result<u32> {
+    Ok(frame.column(name)?.u32()?.get(row).unwrap_or(0))
+}
+
+/// Cell `name` of `row` as text (empty when null).
+fn text(frame: &DataFrame, row: usize, name: &str) -> Result<String> {
+    Ok(frame
+        .column(name)?
+        .str()?
+        .get(row)
+        .unwrap_or_default()
+        .to_string())
+}
+
 fn read_frame(path: &Path) -> Result<DataFrame> {
     let file = File::open(path).with_context(|| format!("opening {}", path.display()))?;
     ParquetReader::new(file)
@@ -65,33 +85,22 @@ pub fn summary(store: &Store, reports: &[InstanceReport]) -> Result<String> {
         }
         let frame = read_frame(&store.artifact_dir("scan", key).join("peak.parquet"))?;
         for row in 0..frame.height() {
-            let text = |name: &str| -> Result<String> {
-                Ok(frame
-                    .column(name)?
-                    .str()?
-                    .get(row)
-                    .unwrap_or_default()
-                    .to_string())
-            };
-            let number = |name: &str| -> Result<f64> {
-                Ok(frame.column(name)?.f64()?.get(row).unwrap_or(f64::NAN))
-            };
-            let failed = frame.column("failed_scenes")?.u32()?.get(row).unwrap_or(0);
+            let failed = count(&frame, row, "failed_scenes")?;
             writeln!(
                 out,
                 "{:<10} {:<12} {:<34} {:<30} {:>6} {:>12.1e}",
                 report.id.instance,
-                text("launch")?,
+                text(&frame, row, "launch")?,
                 with_error(
-                    number("u1_final_max_abs")?,
-                    number("u1_final_max_abs_error")?
+                    number(&frame, row, "u1_final_max_abs")?,
+                    number(&frame, row, "u1_final_max_abs_error")?
                 ),
                 with_error(
-                    number("arrival_offset_at_max")?,
-                    number("arrival_offset_at_max_error")?
+                    number(&frame, row, "arrival_offset_at_max")?,
+                    number(&frame, row, "arrival_offset_at_max_error")?
                 ),
                 failed,
-                number("worst_energy_error")?,
+                number(&frame, row, "worst_energy_error")?,
             )?;
         }
     }
@@ -146,18 +155,11 @@ fn study_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
         "failed"
     )?;
     for row in 0..frame.height() {
-        let number = |name: &str| -> Result<f64> {
-            Ok(frame.column(name)?.f64()?.get(row).unwrap_or(f64::NAN))
-        };
-        let count =
-            |name: &str| -> Result<u32> { Ok(frame.column(name)?.u32()?.get(row).unwrap_or(0)) };
-        let potential = frame
-            .column("potential")?
-            .str()?
-            .get(row)
-            .unwrap_or_default()
-            .to_string();
-        let (a, a_err) = (number("a_n")?, number("a_n_stderr")?);
+        let potential = text(&frame, row, "potential")?;
+        let (a, a_err) = (
+            number(&frame, row, "a_n")?,
+            number(&frame, row, "a_n_stderr")?,
+        );
         let relative = if a == 0.0 {
             "-".to_string()
         } else {
@@ -170,12 +172,22 @@ fn study_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
             with_error(a, a_err),
             relative,
             with_error(
-                number("a_n_untruncated")?,
-                number("a_n_untruncated_stderr")?
+                number(&frame, row, "a_n_untruncated")?,
+                number(&frame, row, "a_n_untruncated_stderr")?
             ),
-            with_error(number("beta")?, number("beta_stderr")?),
-            with_error(number("sigma")?, number("sigma_stderr")?),
-            format!("{}/{}", count("failed_events")?, count("events")?),
+            with_error(
+                number(&frame, row, "beta")?,
+                number(&frame, row, "beta_stderr")?
+            ),
+            with_error(
+                number(&frame, row, "sigma")?,
+                number(&frame, row, "sigma_stderr")?
+            ),
+            format!(
+                "{}/{}",
+                count(&frame, row, "failed_events")?,
+                count(&frame, row, "events")?
+            ),
         )?;
     }
     Ok(out)
@@ -203,34 +215,27 @@ fn gases_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
         "1/Gamma [ns]"
     )?;
     for row in 0..frame.height() {
-        let number = |name: &str| -> Result<f64> {
-            Ok(frame.column(name)?.f64()?.get(row).unwrap_or(f64::NAN))
-        };
-        let text = |name: &str| -> Result<String> {
-            Ok(frame
-                .column(name)?
-                .str()?
-                .get(row)
-                .unwrap_or_default()
-                .to_string())
-        };
         writeln!(
             out,
             "{:<22} {:<8} {:>9.3} {:>11.3e} {:<26} {:<26} {:<24}",
-            text("gas")?,
-            text("potential")?,
-            number("kt")?,
-            number("rho_l")?,
-            format!("{:.5e} ± {:.1e}", number("gamma")?, number("gamma_stderr")?),
+            text(&frame, row, "gas")?,
+            text(&frame, row, "potential")?,
+            number(&frame, row, "kt")?,
+            number(&frame, row, "rho_l")?,
             format!(
                 "{:.5e} ± {:.1e}",
-                number("gamma_at_density")?,
-                number("gamma_at_density_stderr")?
+                number(&frame, row, "gamma")?,
+                number(&frame, row, "gamma_stderr")?
             ),
             format!(
                 "{:.5e} ± {:.1e}",
-                number("relaxation_time")?,
-                number("relaxation_time_stderr")?
+                number(&frame, row, "gamma_at_density")?,
+                number(&frame, row, "gamma_at_density_stderr")?
+            ),
+            format!(
+                "{:.5e} ± {:.1e}",
+                number(&frame, row, "relaxation_time")?,
+                number(&frame, row, "relaxation_time_stderr")?
             ),
         )?;
     }
@@ -252,23 +257,21 @@ fn convergence_table(store: &Store, reports: &[InstanceReport]) -> Result<String
             "parameter", "value", "a_n", "shift", "shift / a_n error"
         )?;
         for row in 0..frame.height() {
-            let number = |name: &str| -> Result<f64> {
-                Ok(frame.column(name)?.f64()?.get(row).unwrap_or(f64::NAN))
-            };
-            let parameter = frame
-                .column("parameter")?
-                .str()?
-                .get(row)
-                .unwrap_or_default()
-                .to_string();
+            let parameter = text(&frame, row, "parameter")?;
             writeln!(
                 out,
                 "{:<14} {:>10.3e} {:<30} {:<28} {:>16.3}",
                 parameter,
-                number("value")?,
-                with_error(number("a_n")?, number("a_n_stderr")?),
-                with_error(number("shift")?, number("shift_stderr")?),
-                number("shift_over_error")?,
+                number(&frame, row, "value")?,
+                with_error(
+                    number(&frame, row, "a_n")?,
+                    number(&frame, row, "a_n_stderr")?
+                ),
+                with_error(
+                    number(&frame, row, "shift")?,
+                    number(&frame, row, "shift_stderr")?
+                ),
+                number(&frame, row, "shift_over_error")?,
             )?;
         }
     }
