@@ -321,6 +321,27 @@ fn run_sampler(potential: &Potential, plan: &SamplingPlan) -> KernelRun {
     }
 }
 
+/// One row of the sampler comparison, gains as figure-of-merit ratios against `base`.
+fn comparison_row(name: &str, run: &KernelRun, base: &KernelRun) -> String {
+    let relative = |run: &KernelRun| run.a_n.stderr / run.a_n.mean;
+    let gain =
+        |error: f64, base_error: f64| merit(error, run.seconds) / merit(base_error, base.seconds);
+    format!(
+        "| {} | {} | {:.2} | {:.6e} +- {:.1e} | {:.2e} | x{:.1} | {:.2e} | x{:.2} | {:.2e} | x{:.1} |\n",
+        name,
+        run.scenes,
+        run.seconds,
+        run.a_n.mean,
+        run.a_n.stderr,
+        relative(run),
+        gain(relative(run), relative(base)),
+        run.near_bins,
+        gain(run.near_bins, base.near_bins),
+        run.far_bins,
+        gain(run.far_bins, base.far_bins),
+    )
+}
+
 /// Figure of merit `1 / (relative variance x seconds)`.
 fn merit(relative_error: f64, seconds: f64) -> f64 {
     1.0 / (relative_error * relative_error * seconds)
@@ -383,26 +404,8 @@ pub fn kernel(options: &KernelBenchOptions) -> String {
                 options.points,
             ),
         );
-        let relative = run.a_n.stderr / run.a_n.mean;
         let base = *baseline.get_or_insert(run);
-        let gain = |error: f64, base_error: f64| {
-            merit(error, run.seconds) / merit(base_error, base.seconds)
-        };
-        let _ = writeln!(
-            out,
-            "| {} | {} | {:.2} | {:.6e} +- {:.1e} | {:.2e} | x{:.1} | {:.2e} | x{:.2} | {:.2e} | x{:.1} |",
-            variant.name,
-            run.scenes,
-            run.seconds,
-            run.a_n.mean,
-            run.a_n.stderr,
-            relative,
-            gain(relative, base.a_n.stderr / base.a_n.mean),
-            run.near_bins,
-            gain(run.near_bins, base.near_bins),
-            run.far_bins,
-            gain(run.far_bins, base.far_bins),
-        );
+        out.push_str(&comparison_row(variant.name, &run, &base));
     }
     let engine = EngineSettings::new(Method::Dprkn12, 1e-12, MAX_STEPS);
     let target = Target::dilute(0.0);
@@ -423,34 +426,19 @@ pub fn kernel(options: &KernelBenchOptions) -> String {
         same_side_fraction: fraction,
         quasi_random: true,
     };
-    let run = run_sampler(
-        &potential,
-        &plan_for(
-            &piloted,
-            options.seed,
-            options.randomizations,
-            options.points,
-        ),
+    let piloted_plan = plan_for(
+        &piloted,
+        options.seed,
+        options.randomizations,
+        options.points,
     );
-    let (seconds, relative) = (run.seconds + pilot_seconds, run.a_n.stderr / run.a_n.mean);
-    let base = baseline.unwrap_or(run);
-    let _ = writeln!(
-        out,
-        "| {} (same side {:.3}, pilot {:.2} s included) | {} | {:.2} | {:.6e} +- {:.1e} | {:.2e} | x{:.1} | {:.2e} | x{:.2} | {:.2e} | x{:.1} |",
-        piloted.name,
-        fraction,
-        pilot_seconds,
-        run.scenes,
-        seconds,
-        run.a_n.mean,
-        run.a_n.stderr,
-        relative,
-        merit(relative, seconds) / merit(base.a_n.stderr / base.a_n.mean, base.seconds),
-        run.near_bins,
-        merit(run.near_bins, seconds) / merit(base.near_bins, base.seconds),
-        run.far_bins,
-        merit(run.far_bins, seconds) / merit(base.far_bins, base.seconds),
+    let mut run = run_sampler(&potential, &piloted_plan);
+    run.seconds += pilot_seconds;
+    let name = format!(
+        "{} (same side {fraction:.3}, pilot {pilot_seconds:.2} s included)",
+        piloted.name
     );
+    out.push_str(&comparison_row(&name, &run, &baseline.unwrap_or(run)));
     let _ = writeln!(
         out,
         "\nWork-precision of a_n with the default sampler ({} randomizations):\n",
@@ -483,15 +471,7 @@ pub fn kernel(options: &KernelBenchOptions) -> String {
             run.a_n.stderr / run.a_n.mean
         );
     }
-    out.push_str(&skipping(
-        &potential,
-        &plan_for(
-            &piloted,
-            options.seed,
-            options.randomizations,
-            options.points,
-        ),
-    ));
+    out.push_str(&skipping(&potential, &piloted_plan));
     out
 }
 
