@@ -67,6 +67,9 @@ pub struct Config {
     /// The convergence study of `a_n` under numerical settings.
     #[serde(default)]
     pub convergence: ConvergenceConfig,
+    /// Evolution of `h(u, t)` by the master and Fokker-Planck equations.
+    #[serde(default)]
+    pub evolve: EvolveConfig,
     /// Gases in physical units whose thermalization rates are tabulated.
     #[serde(default)]
     pub gas: Vec<GasConfig>,
@@ -160,6 +163,88 @@ pub struct ConvergenceParams {
     pub tolerances: Vec<f64>,
     /// Bin widths.
     pub bin_widths: Vec<f64>,
+}
+
+/// `[evolve]`: evolution of `h(u, t)` from `delta(u - u')` (physics.md §4).
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct EvolveConfig {
+    /// Run the evolve stage.
+    pub enabled: bool,
+    /// Id of the configured potential (`ipp-6`).
+    pub potential: String,
+    /// Start velocity `u'` (a node of the grid: a multiple of `grid_step`).
+    pub u_prime: f64,
+    /// Times of the master-equation evolution, in units of `1/Gamma`.
+    pub times: Vec<f64>,
+    /// Times of the translation-invariant (convolution) evolution, `1/Gamma`.
+    pub early_times: Vec<f64>,
+    /// Output bin width of the early `h` (an odd multiple of `kernel.bin_width`).
+    pub early_bin_width: f64,
+    /// Half-width of the early `h` output around `u'`.
+    pub early_range: f64,
+    /// The master-equation grid spans `[-velocity_range, velocity_range]`.
+    pub velocity_range: f64,
+    /// Node spacing of the master-equation grid.
+    pub grid_step: f64,
+    /// A configured `[[gas]]` whose physical times `times_ns` are added.
+    pub gas: Option<String>,
+    /// Times in ns for `gas` (converted with its `rho^2 l v_th`).
+    pub times_ns: Vec<f64>,
+}
+
+impl Default for EvolveConfig {
+    fn default() -> Self {
+        EvolveConfig {
+            enabled: false,
+            potential: "ipp-6".into(),
+            u_prime: 0.0,
+            times: vec![0.01, 0.1, 0.3, 1.0, 2.0, 4.0, 8.0],
+            early_times: vec![1e-4, 1e-3, 1e-2],
+            early_bin_width: 1.05e-3,
+            early_range: 0.3,
+            velocity_range: 4.0,
+            grid_step: 0.05,
+            gas: None,
+            times_ns: Vec::new(),
+        }
+    }
+}
+
+/// Resolved parameters of the `evolve` stage.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct EvolveParams {
+    /// Kernel settings at `u'` (potential, window, bin width, kick floor).
+    pub kernel: KernelParams,
+    /// Collisions instance of the early (translation-invariant) kernel.
+    pub collisions: String,
+    /// Collisions instance of the grid kernel (a launch mixture reaching the whole grid).
+    pub wide_collisions: String,
+    /// Master-equation times, `1/Gamma`.
+    pub times: Vec<f64>,
+    /// Convolution times, `1/Gamma`.
+    pub early_times: Vec<f64>,
+    /// Fine bins per early output bin (odd).
+    pub early_rebin: u32,
+    /// Half-width of the early output.
+    pub early_range: f64,
+    /// Grid half-range.
+    pub velocity_range: f64,
+    /// Grid step.
+    pub grid_step: f64,
+    /// Physical times: the gas, its times in ns, and the same in `1/(rho^2 l v_th)`.
+    pub physical: Option<PhysicalTimes>,
+}
+
+/// Times of a gas in physical units.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct PhysicalTimes {
+    /// Gas name.
+    pub gas: String,
+    /// Times, ns.
+    pub times_ns: Vec<f64>,
+    /// The same times in units of `1/(rho^2 l v_th)`.
+    pub times_scaled: Vec<f64>,
 }
 
 /// `[sweep]`.
@@ -638,26 +723,27 @@ impl Study {
         }
     }
 
-    /// Resolved parameters of the sweep of `potential`, if enabled, with the
-    /// sweep's own collisions (a defensive launch mixture) when it has a spread.
-    pub fn sweep_params(
-        &self,
-        potential: Potential,
-    ) -> Option<(SweepParams, Option<CollisionsParams>)> {
+    /// The collisions instance that reaches every `u'` of the sweep and of the
+    /// evolution grid: its name and, when it is not the main set, its
+    /// parameters (the main set with the sweep's launch spread).
+    pub fn wide_collisions(&self, potential: Potential) -> (String, Option<CollisionsParams>) {
+        let spread = self.config.sweep.launch_spread;
+        if spread > 0.0 {
+            let mut params = self.collisions_params(potential);
+            params.sampling.launch.spread = spread;
+            (format!("{}_sweep", potential.id()), Some(params))
+        } else {
+            (potential.id(), None)
+        }
+    }
+
+    /// Resolved parameters of the sweep of `potential`, if enabled.
+    pub fn sweep_params(&self, potential: Potential) -> Option<SweepParams> {
         let sweep = &self.config.sweep;
         if !sweep.enabled {
             return None;
         }
-        let own = (sweep.launch_spread > 0.0).then(|| {
-            let mut params = self.collisions_params(potential);
-            params.sampling.launch.spread = sweep.launch_spread;
-            params
-        });
-        let collisions = if own.is_some() {
-            format!("{}_sweep", potential.id())
-        } else {
-            potential.id()
-        };
+        let (collisions, _) = self.wide_collisions(potential);
         let params = SweepParams {
             kernel: self.kernel_params(potential, 0.0, 0.0),
             u_prime_min: sweep.u_prime_min,
@@ -667,7 +753,48 @@ impl Study {
             balance_bin_width: sweep.balance_bin_width,
             collisions,
         };
-        Some((params, own))
+        Some(params)
+    }
+
+    /// Resolved parameters of the evolve stage, if enabled.
+    pub fn evolve_params(&self) -> Option<EvolveParams> {
+        let evolve = &self.config.evolve;
+        if !evolve.enabled {
+            return None;
+        }
+        let potential = *self
+            .potentials()
+            .iter()
+            .find(|p| p.id() == evolve.potential)?;
+        let kernel = self.kernel_params(potential, evolve.u_prime, 0.0);
+        let sorted = |times: &[f64]| {
+            let mut sorted = times.to_vec();
+            sorted.sort_by(f64::total_cmp);
+            sorted.dedup();
+            sorted
+        };
+        let physical = evolve.gas.as_ref().and_then(|name| {
+            let gas = self.gases().into_iter().find(|g| &g.name == name)?;
+            let times_ns = sorted(&evolve.times_ns);
+            let unit = gas.gas.rate_per_ns(1.0, potential.length_exponent());
+            Some(PhysicalTimes {
+                gas: gas.name,
+                times_scaled: times_ns.iter().map(|t| t * unit).collect(),
+                times_ns,
+            })
+        });
+        Some(EvolveParams {
+            kernel,
+            collisions: potential.id(),
+            wide_collisions: self.wide_collisions(potential).0,
+            times: sorted(&evolve.times),
+            early_times: sorted(&evolve.early_times),
+            early_rebin: (evolve.early_bin_width / kernel.bin_width).round() as u32,
+            early_range: evolve.early_range,
+            velocity_range: evolve.velocity_range,
+            grid_step: evolve.grid_step,
+            physical,
+        })
     }
 
     /// Resolved convergence parameters and the collisions at each varied
@@ -789,7 +916,112 @@ fn validate(config: &Config) -> Result<(), Invalid> {
     };
     validate_sweep(&config.sweep, &sweep_launch)?;
     validate_convergence(config)?;
-    validate_gases(config)
+    validate_gases(config)?;
+    validate_evolve(config, &launch, &sweep_launch)
+}
+
+fn validate_evolve(
+    config: &Config,
+    launch: &LaunchProposal,
+    wide: &LaunchProposal,
+) -> Result<(), Invalid> {
+    let evolve = &config.evolve;
+    if !evolve.enabled {
+        return Ok(());
+    }
+    let ids: Vec<String> = config.potentials.list().iter().map(Potential::id).collect();
+    check(
+        ids.contains(&evolve.potential),
+        "evolve.potential",
+        format!(
+            "`{}` names no configured potential; known ids: {}",
+            evolve.potential,
+            ids.join(", ")
+        ),
+    )?;
+    let positive = |value: f64| value.is_finite() && value > 0.0;
+    for (name, value) in [
+        ("grid_step", evolve.grid_step),
+        ("velocity_range", evolve.velocity_range),
+        ("early_bin_width", evolve.early_bin_width),
+        ("early_range", evolve.early_range),
+    ] {
+        check(
+            positive(value),
+            format!("evolve.{name}"),
+            format!("{value} must be > 0"),
+        )?;
+    }
+    check(
+        evolve.velocity_range >= 2.0 * evolve.grid_step,
+        "evolve.velocity_range",
+        "must span at least two grid steps",
+    )?;
+    check(
+        within_reach(wide, evolve.velocity_range) && within_reach(wide, -evolve.velocity_range),
+        "evolve.velocity_range",
+        format!(
+            "{} is beyond the reach of the wide launch proposal (+- (sweep.launch_spread {} + {REWEIGHTING_REACH})): widen sweep.launch_spread",
+            evolve.velocity_range, wide.spread
+        ),
+    )?;
+    let nodes = evolve.u_prime / evolve.grid_step;
+    check(
+        evolve.u_prime.is_finite()
+            && (nodes - nodes.round()).abs() < 1e-9
+            && evolve.u_prime.abs() < evolve.velocity_range
+            && within_reach(launch, evolve.u_prime),
+        "evolve.u_prime",
+        format!(
+            "{} must be a multiple of evolve.grid_step ({}) inside the grid and within reach of the launch proposal",
+            evolve.u_prime, evolve.grid_step
+        ),
+    )?;
+    let ratio = evolve.early_bin_width / config.kernel.bin_width;
+    check(
+        (ratio - ratio.round()).abs() < 1e-6 && ratio.round() as u64 % 2 == 1,
+        "evolve.early_bin_width",
+        format!(
+            "{} must be an odd multiple of kernel.bin_width ({})",
+            evolve.early_bin_width, config.kernel.bin_width
+        ),
+    )?;
+    for (name, times) in [
+        ("times", &evolve.times),
+        ("early_times", &evolve.early_times),
+        ("times_ns", &evolve.times_ns),
+    ] {
+        for (k, &t) in times.iter().enumerate() {
+            check(
+                positive(t),
+                format!("evolve.{name}[{k}]"),
+                format!("{t} must be > 0"),
+            )?;
+        }
+    }
+    check(
+        !evolve.times.is_empty() || !evolve.times_ns.is_empty(),
+        "evolve.times",
+        "lists no time (give times or gas with times_ns)",
+    )?;
+    match &evolve.gas {
+        Some(name) => {
+            let gas = config.gas.iter().find(|g| &g.name == name);
+            check(
+                gas.is_some_and(|g| g.potential == evolve.potential),
+                "evolve.gas",
+                format!(
+                    "`{name}` names no [[gas]] with potential {}",
+                    evolve.potential
+                ),
+            )
+        }
+        None => check(
+            evolve.times_ns.is_empty(),
+            "evolve.times_ns",
+            "needs evolve.gas (the gas whose units convert them)",
+        ),
+    }
 }
 
 fn validate_gases(config: &Config) -> Result<(), Invalid> {

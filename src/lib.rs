@@ -13,6 +13,7 @@
 
 pub mod bench;
 pub mod config;
+pub mod evolve;
 pub mod integrate;
 pub mod kernel;
 pub mod physics;

@@ -61,6 +61,7 @@ pub fn summary(store: &Store, reports: &[InstanceReport]) -> Result<String> {
     let mut out = study_table(store, reports)?;
     out.push_str(&gases_table(store, reports)?);
     out.push_str(&convergence_table(store, reports)?);
+    out.push_str(&evolve_table(store, reports)?);
     let scans = reports.iter().filter(|r| r.id.stage == "scan");
     for (k, report) in scans.enumerate() {
         let Some(key) = &report.key else { continue };
@@ -113,6 +114,16 @@ fn stage_frames(
     reports: &[InstanceReport],
     stage: &str,
 ) -> Result<Vec<(String, DataFrame)>> {
+    table_frames(store, reports, stage, stage)
+}
+
+/// The table `<table>.parquet` of every intact artifact of `stage` in a run.
+fn table_frames(
+    store: &Store,
+    reports: &[InstanceReport],
+    stage: &str,
+    table: &str,
+) -> Result<Vec<(String, DataFrame)>> {
     reports
         .iter()
         .filter(|r| r.id.stage == stage)
@@ -126,7 +137,7 @@ fn stage_frames(
             let frame = read_frame(
                 &store
                     .artifact_dir(stage, key)
-                    .join(format!("{stage}.parquet")),
+                    .join(format!("{table}.parquet")),
             )?;
             Ok((report.id.instance.clone(), frame))
         })
@@ -272,6 +283,49 @@ fn convergence_table(store: &Store, reports: &[InstanceReport]) -> Result<String
                     number(&frame, row, "shift_stderr")?
                 ),
                 number(&frame, row, "shift_over_error")?,
+            )?;
+        }
+    }
+    Ok(out)
+}
+
+/// The `evolve` stage's summary: spread and approach to equilibrium of `h`.
+fn evolve_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
+    let mut out = String::new();
+    for (instance, frame) in table_frames(store, reports, "evolve", "evolution_summary")? {
+        writeln!(
+            out,
+            "\nevolution of h from delta(u - u') for {instance}: full = linearized operator, tagged = special particle, fokker_planck (+- jackknife errors)"
+        )?;
+        writeln!(
+            out,
+            "{:<14} {:>10} {:>9} {:<28} {:<26} {:<26}",
+            "process",
+            "t Gamma",
+            "t [ns]",
+            "<(u-u')^2>, |u-u'|<=X",
+            "<(u-u')^2>",
+            "L1 distance to equilibrium"
+        )?;
+        for row in 0..frame.height() {
+            writeln!(
+                out,
+                "{:<14} {:>10.3e} {:>9.0} {:<28} {:<26} {:<26}",
+                text(&frame, row, "process")?,
+                number(&frame, row, "time_gamma")?,
+                number(&frame, row, "time_ns")?,
+                with_error(
+                    number(&frame, row, "window_variance")?,
+                    number(&frame, row, "window_variance_stderr")?
+                ),
+                with_error(
+                    number(&frame, row, "variance")?,
+                    number(&frame, row, "variance_stderr")?
+                ),
+                with_error(
+                    number(&frame, row, "distance_to_equilibrium")?,
+                    number(&frame, row, "distance_to_equilibrium_stderr")?
+                ),
             )?;
         }
     }

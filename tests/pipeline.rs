@@ -504,3 +504,52 @@ fn gases_differing_only_in_temperature_share_the_collision_artifact() {
         "{ratio}"
     );
 }
+
+/// The evolve stage: same bytes for any thread count, and its tables report
+/// the conservation laws of the linearized operator (number 1, momentum and
+/// energy 0 for u' = 0) and the early closed form.
+#[test]
+fn evolve_stage_is_deterministic_and_conserves() {
+    let extra = "[evolve]\nenabled = true\npotential = \"ipp-6\"\ntimes = [0.1, 1.0]\nearly_times = [1e-3]\nvelocity_range = 2.0\ngrid_step = 0.1\n";
+    let text = config(7, extra).replace("points = 64", "points = 256");
+    let one = workspace("evolve-1");
+    let two = workspace("evolve-2");
+    run_counts(&write_config(&one, &text), &["--threads", "1"]);
+    run_counts(&write_config(&two, &text), &["--threads", "2"]);
+    let files = |dir: &Path| -> Vec<(String, Vec<u8>)> {
+        let artifact = &stage_dirs(&dir.join("data"), "evolve")[0];
+        let mut names: Vec<String> = fs::read_dir(artifact)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .filter(|n| n.ends_with(".parquet"))
+            .collect();
+        names.sort();
+        names
+            .into_iter()
+            .map(|n| (n.clone(), fs::read(artifact.join(&n)).unwrap()))
+            .collect()
+    };
+    let (a, b) = (files(&one), files(&two));
+    assert_eq!(a.len(), 4);
+    assert!(a == b, "evolve artifacts differ between 1 and 2 threads");
+    let artifact = &stage_dirs(&one.join("data"), "evolve")[0];
+    let script = r#"
+import sys, pyarrow.parquet as pq
+s = pq.read_table(sys.argv[1] + "/evolution_summary.parquet").to_pydict()
+for k, process in enumerate(s["process"]):
+    assert abs(s["number"][k] - 1) < 1e-9, s["number"][k]
+    if process == "full":
+        assert abs(s["momentum"][k]) < 1e-9 and abs(s["second_moment"][k]) < 1e-9
+e = pq.read_table(sys.argv[1] + "/early_summary.parquet").to_pydict()
+for v, c in zip(e["variance"], e["variance_closed_form"]):
+    assert abs(v - c) < 1e-8 * c, (v, c)
+print("ok")
+"#;
+    let output = Command::new("python3")
+        .arg("-c")
+        .arg(script)
+        .arg(artifact)
+        .output()
+        .unwrap();
+    assert!(output.status.success(), "{}", stderr(&output));
+}

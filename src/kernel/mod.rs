@@ -102,6 +102,18 @@ impl Contribution {
     pub fn self_kick(&self) -> f64 {
         self.outgoing[self.self_rank]
     }
+
+    /// Incoming velocities in ascending order (matched rank by rank with `outgoing`).
+    pub fn sorted_incoming(&self) -> [f64; 3] {
+        let mut sorted = self.incoming;
+        sorted.sort_by(f64::total_cmp);
+        sorted
+    }
+
+    /// `w(u2) w(u3)` of the two launches for a special particle at `u_prime`.
+    pub fn launch_weight(&self, u_prime: f64) -> f64 {
+        launch_weight(self.incoming[1], u_prime) * launch_weight(self.incoming[2], u_prime)
+    }
 }
 
 /// Launch weight `w(u) = f0(u + u') |u|` of a thermal particle with relative velocity `u`.
@@ -109,49 +121,63 @@ fn launch_weight(relative: f64, u_prime: f64) -> f64 {
     thermal_density(relative + u_prime) * relative.abs()
 }
 
-/// The contributions of an event as seen from `target`: the event itself and
-/// its mirror image, with half the weight each. For the
+/// The contributions of an event as seen from `target`: its [`images`] with
+/// their launch weights `w(u2) w(u3)` at `target.u_prime` and, at finite
+/// density, the literal algorithm's survival factor `exp(-r |delay|)`.
+/// Empty for failed scenes.
+pub fn contributions(event: &Event, target: &Target) -> Vec<Contribution> {
+    let delay =
+        event.offset - 0.5 * target.launch_length * (1.0 / event.u3.abs() - 1.0 / event.u2.abs());
+    let survival = (-target.density * launch_rate(target.u_prime) * delay.abs()).exp();
+    let images = images(event, target.kick_floor);
+    let count = images.len() as f64;
+    images
+        .into_iter()
+        .map(|image| Contribution {
+            weight: image.launch_weight(target.u_prime) * survival
+                / (event.proposal_density * count),
+            ..image
+        })
+        .collect()
+}
+
+/// The `u'`-independent geometry of an event: the event itself and its mirror
+/// image, each with weight `1 / (proposal density * images)`. For the
 /// same-side stratum the mirror image stands for the both-negative sign
 /// pattern; for the opposite-side stratum it is another point of the same
 /// stratum (an antithetic pair: the drift, odd under mirroring, loses the noise
 /// of its even part). Either way the image keeps the drawn point's proposal
 /// density: `E_p[f(M x) / p(x)] = int f(M x) dx = int_{M S} f`, unbiased for any
-/// proposal (the two densities coincide only when `launch_shift = 0`). The literal algorithm's
-/// scenes count once. Empty for failed scenes.
-pub fn contributions(event: &Event, target: &Target) -> Vec<Contribution> {
+/// proposal (the two densities coincide only when `launch_shift = 0`). The
+/// literal algorithm's scenes count once. Velocity changes within `kick_floor`
+/// count as zero. Empty for failed scenes.
+pub fn images(event: &Event, kick_floor: f64) -> Vec<Contribution> {
     let Some(outgoing) = event.outgoing else {
         return Vec::new();
     };
-    let images: &[f64] = match event.stratum {
+    let signs: &[f64] = match event.stratum {
         Stratum::Literal => &[1.0],
         Stratum::Opposite | Stratum::SameSide => &[1.0, -1.0],
     };
-    let delay =
-        event.offset - 0.5 * target.launch_length * (1.0 / event.u3.abs() - 1.0 / event.u2.abs());
-    let survival = (-target.density * launch_rate(target.u_prime) * delay.abs()).exp();
-    images
+    signs
         .iter()
         .map(|&sign| {
             let (u2, u3) = (sign * event.u2, sign * event.u3);
-            let weight =
-                launch_weight(u2, target.u_prime) * launch_weight(u3, target.u_prime) * survival
-                    / (event.proposal_density * images.len() as f64);
             let mut out = outgoing.map(|v| sign * v);
             out.sort_by(f64::total_cmp);
             let incoming = [0.0, u2, u3];
             let mut sorted_in = incoming;
             sorted_in.sort_by(f64::total_cmp);
             for (velocity, matched) in out.iter_mut().zip(sorted_in) {
-                if (*velocity - matched).abs() <= target.kick_floor {
+                if (*velocity - matched).abs() <= kick_floor {
                     *velocity = matched;
                 }
             }
-            let self_rank = incoming.iter().filter(|&&u| u < 0.0).count();
             Contribution {
-                weight,
+                weight: 1.0 / (event.proposal_density * signs.len() as f64),
                 incoming,
                 outgoing: out,
-                self_rank,
+                self_rank: incoming.iter().filter(|&&u| u < 0.0).count(),
             }
         })
         .collect()
@@ -214,12 +240,20 @@ impl Histogram {
         }
     }
 
+    /// Self plus bath, per bin: the whole kernel.
+    pub fn total(&self) -> Vec<f64> {
+        self.self_part
+            .iter()
+            .zip(&self.bath_part)
+            .map(|(s, b)| s + b)
+            .collect()
+    }
+
     /// Adds a contribution: -1 at every incoming, +1 at every outgoing velocity,
     /// the special particle's pair into `self_part`, the others into `bath_part`.
     pub fn add(&mut self, bins: &Bins, contribution: &Contribution, scale: f64) {
         let weight = contribution.weight * scale;
-        let mut sorted_in = contribution.incoming;
-        sorted_in.sort_by(f64::total_cmp);
+        let sorted_in = contribution.sorted_incoming();
         for (rank, (incoming, outgoing)) in sorted_in.iter().zip(contribution.outgoing).enumerate()
         {
             let part = if rank == contribution.self_rank {
@@ -281,7 +315,7 @@ impl Draws {
     }
 
     /// `1 / N` for the stratum of `event` in its replicate.
-    fn scale(&self, event: &Event) -> f64 {
+    pub fn scale(&self, event: &Event) -> f64 {
         1.0 / self.counts[event.randomization as usize][event.stratum.index() as usize] as f64
     }
 
@@ -308,7 +342,7 @@ pub fn histograms(events: &[Event], target: &Target, bins: &Bins, draws: &Draws)
 /// Folds the events of every replicate, replicates in parallel. Each replicate
 /// adds its events in their stored order, so the sums are bit-identical for any
 /// thread count.
-fn per_replicate<T: Send>(
+pub fn per_replicate<T: Send>(
     events: &[Event],
     draws: &Draws,
     start: impl Fn() -> T + Sync,

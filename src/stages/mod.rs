@@ -3,6 +3,7 @@
 
 pub mod collisions;
 pub mod convergence;
+pub mod evolve;
 pub mod fit;
 pub mod gases;
 pub mod kernel;
@@ -29,14 +30,21 @@ pub fn plan(study: &Study) -> Vec<Box<dyn Stage>> {
             stages.push(Box::new(moments::MomentsStage::new(params)));
             stages.push(Box::new(fit::FitStage::new(study.fit_params(params))));
         }
-        if let Some((params, own)) = study.sweep_params(potential) {
-            if let Some(collisions) = own {
-                let name = params.collisions.clone();
-                stages.push(Box::new(collisions::CollisionsStage::variant(
-                    collisions, name,
-                )));
-            }
+        let sweep = study.sweep_params(potential);
+        let evolve = study
+            .evolve_params()
+            .filter(|e| e.kernel.potential == potential);
+        if let (true, (name, Some(wide))) = (
+            sweep.is_some() || evolve.is_some(),
+            study.wide_collisions(potential),
+        ) {
+            stages.push(Box::new(collisions::CollisionsStage::variant(wide, name)));
+        }
+        if let Some(params) = sweep {
             stages.push(Box::new(sweep::SweepStage::new(params)));
+        }
+        if let Some(params) = evolve {
+            stages.push(Box::new(evolve::EvolveStage::new(params)));
         }
     }
     let gases = study.gases();

@@ -1,0 +1,264 @@
+//! The evolution of `h(u, t)` (physics.md §4) against invariants: the
+//! linearized operator conserves number, momentum and energy event by event;
+//! the grid keeps the special particle's drift and variance rates exactly;
+//! the evolved `h` keeps the invariants and relaxes to the equilibrium they
+//! fix; and two independent methods (the exact convolution of the
+//! translation-invariant kernel, the master equation on a grid) agree at
+//! early times within their uncertainties.
+
+use ternary::evolve::convolution::{self, kernel_moments};
+use ternary::evolve::grid::VelocityGrid;
+use ternary::evolve::jackknife;
+use ternary::evolve::operator::{Generators, column_rates, kernel_generators};
+use ternary::evolve::propagate::Generator;
+use ternary::evolve::spectral::Dissipative;
+use ternary::kernel::{Bins, Draws, Estimate, Event, Target, contributions, histograms, moments};
+use ternary::physics::potential::Potential;
+use ternary::physics::sampling::{LaunchProposal, OffsetProposal, SamplingPlan};
+use ternary::physics::scene::{EngineSettings, Method};
+
+const KICK_FLOOR: f64 = 1e-10;
+
+/// `randomizations` x 4096 scenes of the `n = 6` gas with a launch mixture of
+/// spread `spread` (0: thermal launches only).
+fn events(seed: u64, randomizations: u32, spread: f64) -> Vec<Event> {
+    let plan = SamplingPlan {
+        seed,
+        randomizations,
+        opposite_points: 3584,
+        same_side_points: 512,
+        proposal: OffsetProposal::default(),
+        quasi_random: true,
+        launch: LaunchProposal { shift: 0.0, spread },
+    };
+    let engine = EngineSettings::new(Method::Dprkn12, 1e-12, 100_000);
+    plan.integrate_all(&Potential::InversePower { n: 6.0 }, &engine, |_| ())
+        .iter()
+        .map(Event::from_record)
+        .collect()
+}
+
+fn generators(events: &[Event], grid: &VelocityGrid) -> Vec<Generators> {
+    generators_with_floor(events, grid, KICK_FLOOR)
+}
+
+fn generators_with_floor(events: &[Event], grid: &VelocityGrid, floor: f64) -> Vec<Generators> {
+    kernel_generators(events, &Draws::count(events), grid, floor, |_| ())
+}
+
+/// `a_6`: the self variance rate at u' = 0 within 0.1 (`Gamma` in `rho^2 l v_th`).
+fn gamma(events: &[Event]) -> f64 {
+    let sums = moments(events, &Target::dilute(0.0), &[0.1], &Draws::count(events));
+    let values: Vec<f64> = sums.iter().map(|r| r[0].self_variance).collect();
+    Estimate::from_replicates(&values).mean
+}
+
+fn mean(replicates: &[Generators], part: fn(&Generators) -> &Generator) -> Generator {
+    let picked: Vec<Generator> = replicates.iter().map(|g| part(g).clone()).collect();
+    Generator::sum(&picked).scaled(1.0 / picked.len() as f64)
+}
+
+/// Number, momentum and energy: every column of the full generator has zero
+/// moments `sum_i M_ij u_i^p` for p = 0, 1, 2 up to the engine's errors: each
+/// scene conserves them to ~1e-13 v_th per velocity (docs/benchmarks.md), so
+/// a column's moment p is bounded by `1e-12 W (1 + |u'|)^p` with `W` the
+/// column's total scene weight. The grid reaches 8 v_th, where no launch ever
+/// arrives, so the ends' reflection plays no part. No kick floor here:
+/// snapping one particle's tiny change to zero would break the conservation
+/// it is meant to test.
+#[test]
+fn full_generator_conserves_number_momentum_and_energy() {
+    let events = events(11, 4, 2.0);
+    let draws = Draws::count(&events);
+    let grid = VelocityGrid::covering(8.0, 0.1);
+    let replicates = generators_with_floor(&events, &grid, 0.0);
+    for j in grid.node_of(-4.0).unwrap()..=grid.node_of(4.0).unwrap() {
+        let u_prime = grid.velocity(j);
+        let mut weights = vec![0.0; draws.replicates()];
+        for event in &events {
+            for c in contributions(event, &Target::dilute(u_prime)) {
+                weights[event.randomization as usize] += c.weight * draws.scale(event);
+            }
+        }
+        for (g, weight) in replicates.iter().zip(weights) {
+            let moments = grid.moments(&g.full.column(j), 0.0, f64::INFINITY);
+            for (p, moment) in moments.iter().enumerate() {
+                let bound = 1e-12 * weight * (1.0 + u_prime.abs()).powi(p as i32);
+                assert!(
+                    moment.abs() <= bound,
+                    "u' = {u_prime}: moment {p} = {moment:e} > {bound:e}"
+                );
+            }
+            let number: f64 = g.tagged.column(j).iter().sum();
+            assert!(number.abs() <= 1e-12 * weight);
+        }
+    }
+}
+
+/// Quadratic deposition keeps the first two moments of every kick: the
+/// tagged generator's column rates are the special particle's drift and
+/// variance rates computed from the unbinned kicks, to rounding.
+#[test]
+fn tagged_columns_carry_the_exact_drift_and_variance_rates() {
+    let events = events(12, 2, 2.0);
+    let grid = VelocityGrid::covering(3.0, 0.05);
+    let replicates = generators(&events, &grid);
+    let draws = Draws::count(&events);
+    for u_prime in [0.0, 1.0, -1.5] {
+        let sums = moments(&events, &Target::dilute(u_prime), &[f64::INFINITY], &draws);
+        let node = grid.node_of(u_prime).unwrap();
+        for (g, sum) in replicates.iter().zip(&sums) {
+            let (drift, variance) = column_rates(&g.tagged, &grid);
+            let expected = [sum[0].self_drift, sum[0].self_variance];
+            for (got, want) in [drift[node], variance[node]].iter().zip(expected) {
+                assert!(
+                    (got - want).abs() <= 1e-10 * want.abs().max(1e-6),
+                    "u' = {u_prime}: {got:e} vs {want:e}"
+                );
+            }
+        }
+    }
+}
+
+/// The full generator, projected onto detailed balance and dissipation
+/// ([`Dissipative`]), evolves `h_full` with number 1, momentum u' = 0 and
+/// energy 0 at all times (exactly, though the ends reflect), and `h_full`
+/// approaches `f0 (3 - u^2) / 2`, the equilibrium those fix. The raw tagged
+/// generator (a Markov generator: stable as it is) takes the special
+/// particle's velocity to `f0`. The raw full estimate at this sample size has
+/// growing modes: the projection removes them.
+#[test]
+fn evolution_keeps_the_invariants_and_relaxes_to_equilibrium() {
+    let events = events(13, 16, 2.0);
+    let grid = VelocityGrid::covering(3.0, 0.1);
+    let replicates = generators(&events, &grid);
+    let a = gamma(&events);
+    let mut h0 = vec![0.0; grid.len()];
+    h0[grid.node_of(0.0).unwrap()] = 1.0;
+    let times: Vec<f64> = [0.1, 1.0, 10.0].iter().map(|t| t / a).collect();
+    let distance =
+        |h: &[f64], eq: &[f64]| -> f64 { h.iter().zip(eq).map(|(x, y)| (x - y).abs()).sum() };
+    let raw = mean(&replicates, |g| &g.full);
+    assert!(
+        raw.exponential(times[2]).norm_1() > 1e3,
+        "no growing mode to remove"
+    );
+    let u = grid.velocities();
+    let invariants = [
+        vec![1.0; grid.len()],
+        u.clone(),
+        u.iter().map(|x| x * x).collect(),
+    ];
+    let projected = Dissipative::project(&raw, &grid.maxwellian(), &invariants);
+    let full = projected.propagate(&h0, &times);
+    for h in &full {
+        let [number, momentum, energy] = grid.moments(h, 0.0, f64::INFINITY);
+        assert!((number - 1.0).abs() < 1e-12, "{number}");
+        assert!(
+            momentum.abs() < 1e-12 && energy.abs() < 1e-12,
+            "{momentum} {energy}"
+        );
+    }
+    let equilibrium = grid.conserving_equilibrium(0.0);
+    let full_distances: Vec<f64> = full.iter().map(|h| distance(h, &equilibrium)).collect();
+    let tagged = mean(&replicates, |g| &g.tagged).propagate(&h0, &times);
+    let tagged_distances: Vec<f64> = tagged
+        .iter()
+        .map(|h| distance(h, &grid.maxwellian()))
+        .collect();
+    // The tagged velocity goes from a delta (distance ~2) to within a few
+    // percent of f0 by t = 1/Gamma. Later, at this sample size (6.5e4 scenes),
+    // its stationary state comes out ~30% too broad (the rare heavy weights of
+    // the launch mixture at |u'| >= 1 are undersampled), and the full
+    // estimate violates detailed balance by ~30%, its noise modes (clipped to
+    // rate 0) keeping h_full ~0.3 from equilibrium. At the default study's
+    // 1.2e6 scenes neither happens (distances 0.05 and 0.0035 at 8/Gamma,
+    // docs/benchmarks.md). Here only the approach is asserted.
+    assert!(
+        tagged_distances[0] > 1.0 && tagged_distances[1] < 0.1,
+        "{tagged_distances:?}"
+    );
+    assert!(
+        full_distances[1] < 0.5 * full_distances[0],
+        "{full_distances:?}"
+    );
+    assert!(projected.largest_clipped > 0.0 && projected.asymmetry > 0.1);
+}
+
+/// Two independent methods: the variance of `h` at `t = 0.01 / Gamma` from the
+/// exact convolution of the translation-invariant kernel (thermal launches,
+/// fine bins) and from the tagged master equation on a grid (the launch
+/// mixture, grid step 0.05) agree within their jackknife errors.
+#[test]
+fn convolution_and_master_equation_agree_at_early_times() {
+    let thermal = events(14, 8, 0.0);
+    let wide = events(15, 8, 2.0);
+    let target = Target::dilute(0.0);
+    let draws = Draws::count(&thermal);
+    let a = gamma(&thermal);
+    let t = 0.01 / a;
+    let bins = Bins::for_window(0.2, 5e-5);
+    let kernels: Vec<Vec<f64>> = histograms(&thermal, &target, &bins, &draws)
+        .iter()
+        .map(|h| h.total())
+        .collect();
+    let total: Vec<f64> = (0..bins.len())
+        .map(|k| kernels.iter().map(|g| g[k]).sum())
+        .collect();
+    let count = kernels.len() as f64;
+    let variance_of = |g: &[f64]| {
+        let size = convolution::periodic_size(g, bins.width, t);
+        let h = &convolution::evolve(g, size, &[t])[0];
+        let half = (size / 2) as f64;
+        let m = |p: i32| -> f64 {
+            h.iter()
+                .enumerate()
+                .map(|(i, v)| v * ((i as f64 - half) * bins.width).powi(p))
+                .sum()
+        };
+        m(2) / m(0) - (m(1) / m(0)).powi(2)
+    };
+    let full: Vec<f64> = total.iter().map(|s| s / count).collect();
+    let loo: Vec<Vec<f64>> = kernels
+        .iter()
+        .map(|own| {
+            vec![variance_of(
+                &total
+                    .iter()
+                    .zip(own)
+                    .map(|(s, o)| (s - o) / (count - 1.0))
+                    .collect::<Vec<_>>(),
+            )]
+        })
+        .collect();
+    let fourier = jackknife(&[variance_of(&full)], &loo)[0];
+    let closed = t * kernel_moments(&full, bins.width)[2];
+    assert!(
+        (fourier.mean - closed).abs() < 1e-9 * closed,
+        "{} vs {closed}",
+        fourier.mean
+    );
+
+    let grid = VelocityGrid::covering(4.0, 0.05);
+    let replicates = generators(&wide, &grid);
+    let tagged: Vec<Generator> = replicates.iter().map(|g| g.tagged.clone()).collect();
+    let sum = Generator::sum(&tagged);
+    let mut h0 = vec![0.0; grid.len()];
+    h0[grid.node_of(0.0).unwrap()] = 1.0;
+    let spread = |m: &Generator| grid.moments(&m.propagate(&h0, &[t])[0], 0.0, f64::INFINITY)[2];
+    let grid_loo: Vec<Vec<f64>> = tagged
+        .iter()
+        .map(|own| vec![spread(&own.leave_out(&sum, tagged.len()))])
+        .collect();
+    let master = jackknife(
+        &[spread(&sum.clone().scaled(1.0 / tagged.len() as f64))],
+        &grid_loo,
+    )[0];
+    let sigma = fourier.stderr.hypot(master.stderr);
+    assert!(
+        (fourier.mean - master.mean).abs() < 3.0 * sigma,
+        "convolution {fourier:?} vs master equation {master:?}"
+    );
+    // The comparison has teeth: each error is a few percent at most.
+    assert!(sigma < 0.05 * master.mean, "{sigma} vs {}", master.mean);
+}
