@@ -16,6 +16,7 @@ pub mod config;
 pub mod evolve;
 pub mod integrate;
 pub mod kernel;
+pub mod linalg;
 pub mod physics;
 pub mod pipeline;
 pub mod report;

@@ -23,8 +23,8 @@
 //! which behaves as `h^8` once the 3rd-order term dominates the denominator.
 
 use super::{
-    Acceleration, FirstOrderStages, Integrator, Step, first_order_stages, scaled_square_sum,
-    weighted_sum,
+    Acceleration, FirstOrderStages, Integrator, Step, Vector, first_order_stages,
+    scaled_square_sum, weighted_sum,
 };
 
 /// Hairer's DOP853 8(5,3) pair on the first-order form of `y'' = a(y)`, FSAL.
@@ -185,15 +185,15 @@ impl Integrator for Dop853 {
     const ERROR_ORDER: u32 = 7;
     const EVALUATIONS_PER_STEP: u32 = STAGES as u32 - 1;
 
-    fn step<A: Acceleration<D>, const D: usize>(
+    fn step<V: Vector, A: Acceleration<V>>(
         acceleration: &A,
-        y: &[f64; D],
-        v: &[f64; D],
-        a0: &[f64; D],
+        y: &V,
+        v: &V,
+        a0: &V,
         h: f64,
-        position_scale: &[f64; D],
-        velocity_scale: &[f64; D],
-    ) -> Step<D> {
+        position_scale: &V,
+        velocity_scale: &V,
+    ) -> Step<V> {
         let FirstOrderStages {
             velocity,
             acceleration: stage_acceleration,
@@ -208,9 +208,10 @@ impl Integrator for Dop853 {
         };
         Step {
             y: last_position,
-            v: velocity[STAGES - 1],
-            a: stage_acceleration[STAGES - 1],
-            error: combined_error::<D>(
+            v: velocity[STAGES - 1].clone(),
+            a: stage_acceleration[STAGES - 1].clone(),
+            error: combined_error(
+                y.components().len(),
                 scaled_squares(&ERROR5_WEIGHTS),
                 scaled_squares(&ERROR3_WEIGHTS),
             ),
@@ -220,10 +221,10 @@ impl Integrator for Dop853 {
 
 /// Hairer's combined estimate `S5 / sqrt(2 D (S5 + 0.01 S3))` from the scaled square sums of
 /// the 5th- and 3rd-order error vectors (zero when both vanish).
-fn combined_error<const D: usize>(error5_squares: f64, error3_squares: f64) -> f64 {
+fn combined_error(len: usize, error5_squares: f64, error3_squares: f64) -> f64 {
     let denominator = error5_squares + ERROR3_SHARE * error3_squares;
     if denominator > 0.0 {
-        error5_squares / ((2 * D) as f64 * denominator).sqrt()
+        error5_squares / ((2 * len) as f64 * denominator).sqrt()
     } else {
         0.0
     }

@@ -14,7 +14,7 @@
 //! `e = b - b_hat` (4th-order `b_hat`), measured in the RMS norm of Hairer's code.
 
 use super::{
-    Acceleration, FirstOrderStages, Integrator, Step, first_order_stages, rms_norm,
+    Acceleration, FirstOrderStages, Integrator, Step, Vector, first_order_stages, rms_norm,
     scaled_square_sum, weighted_sum,
 };
 
@@ -69,15 +69,15 @@ impl Integrator for Dopri5 {
     const ERROR_ORDER: u32 = 4;
     const EVALUATIONS_PER_STEP: u32 = STAGES as u32 - 1;
 
-    fn step<A: Acceleration<D>, const D: usize>(
+    fn step<V: Vector, A: Acceleration<V>>(
         acceleration: &A,
-        y: &[f64; D],
-        v: &[f64; D],
-        a0: &[f64; D],
+        y: &V,
+        v: &V,
+        a0: &V,
         h: f64,
-        position_scale: &[f64; D],
-        velocity_scale: &[f64; D],
-    ) -> Step<D> {
+        position_scale: &V,
+        velocity_scale: &V,
+    ) -> Step<V> {
         let FirstOrderStages {
             velocity,
             acceleration: stage_acceleration,
@@ -87,9 +87,10 @@ impl Integrator for Dopri5 {
         let velocity_error = weighted_sum(h, &ERROR_WEIGHTS, &stage_acceleration);
         Step {
             y: last_position,
-            v: velocity[STAGES - 1],
-            a: stage_acceleration[STAGES - 1],
-            error: rms_norm::<D>(
+            v: velocity[STAGES - 1].clone(),
+            a: stage_acceleration[STAGES - 1].clone(),
+            error: rms_norm(
+                y.components().len(),
                 scaled_square_sum(&position_error, position_scale),
                 scaled_square_sum(&velocity_error, velocity_scale),
             ),

@@ -23,7 +23,7 @@
 //! step costs sixteen stage accelerations plus one at `y_new` (returned as [`Step::a`] for the
 //! next step's `a0`): seventeen in all.
 
-use super::{Acceleration, Integrator, Step, rms_norm, scaled_square_sum, weighted_sum};
+use super::{Acceleration, Integrator, Step, Vector, rms_norm, scaled_square_sum, weighted_sum};
 
 /// Dormand-El-Mikkawy-Prince RKN 12(10) pair for `y'' = a(y)`.
 pub struct Dprkn12;
@@ -316,52 +316,71 @@ impl Integrator for Dprkn12 {
     const ERROR_ORDER: u32 = 10;
     const EVALUATIONS_PER_STEP: u32 = STAGES as u32;
 
-    fn step<A: Acceleration<D>, const D: usize>(
+    fn step<V: Vector, A: Acceleration<V>>(
         acceleration: &A,
-        y: &[f64; D],
-        v: &[f64; D],
-        a0: &[f64; D],
+        y: &V,
+        v: &V,
+        a0: &V,
         h: f64,
-        position_scale: &[f64; D],
-        velocity_scale: &[f64; D],
-    ) -> Step<D> {
+        position_scale: &V,
+        velocity_scale: &V,
+    ) -> Step<V> {
         let forces = stage_accelerations(acceleration, y, v, a0, h);
         let position_increment = weighted_sum(h, &POSITION_WEIGHTS, &forces);
         let velocity_increment = weighted_sum(h, &VELOCITY_WEIGHTS, &forces);
-        let new_y: [f64; D] = std::array::from_fn(|k| y[k] + h * (v[k] + position_increment[k]));
-        let new_v: [f64; D] = std::array::from_fn(|k| v[k] + velocity_increment[k]);
+        let mut new_y = y.clone();
+        let mut new_v = v.clone();
+        {
+            let positions = new_y.components_mut().iter_mut();
+            let increments = v.components().iter().zip(position_increment.components());
+            for (y, (vk, increment)) in positions.zip(increments) {
+                *y += h * (vk + increment);
+            }
+            let velocities = new_v.components_mut().iter_mut();
+            for (v, increment) in velocities.zip(velocity_increment.components()) {
+                *v += increment;
+            }
+        }
         let position_error = weighted_sum(h * h, &POSITION_ERROR_WEIGHTS, &forces);
         let velocity_error = weighted_sum(h, &VELOCITY_ERROR_WEIGHTS, &forces);
         Step {
-            y: new_y,
-            v: new_v,
             a: acceleration.acceleration(&new_y),
-            error: rms_norm::<D>(
+            error: rms_norm(
+                y.components().len(),
                 scaled_square_sum(&position_error, position_scale),
                 scaled_square_sum(&velocity_error, velocity_scale),
             ),
+            y: new_y,
+            v: new_v,
         }
     }
 }
 
 /// Stage accelerations `F_i = a(y + c_i h v + h^2 sum_j a_ij F_j)`, with `F_1 = a0` given.
 #[inline(always)]
-fn stage_accelerations<A: Acceleration<D>, const D: usize>(
+fn stage_accelerations<V: Vector, A: Acceleration<V>>(
     acceleration: &A,
-    y: &[f64; D],
-    v: &[f64; D],
-    a0: &[f64; D],
+    y: &V,
+    v: &V,
+    a0: &V,
     h: f64,
-) -> [[f64; D]; STAGES] {
-    let mut forces = [*a0; STAGES];
+) -> [V; STAGES] {
+    let mut forces: [V; STAGES] = std::array::from_fn(|_| a0.clone());
     for (i, (row, c)) in COUPLING.iter().zip(NODES).enumerate().skip(1) {
-        let mut coupling_sum = [0.0; D];
-        for (&a_ij, force) in row.iter().zip(&forces) {
-            for k in 0..D {
-                coupling_sum[k] += a_ij * force[k];
+        let mut position = y.clone();
+        {
+            let mut coupling_sum = y.zeros_like();
+            let sums = coupling_sum.components_mut();
+            for (&a_ij, force) in row.iter().zip(&forces) {
+                for (s, f) in sums.iter_mut().zip(force.components()) {
+                    *s += a_ij * f;
+                }
+            }
+            let position_components = position.components_mut().iter_mut();
+            for ((p, vk), sum) in position_components.zip(v.components()).zip(sums.iter()) {
+                *p += h * (c * vk + h * sum);
             }
         }
-        let position = std::array::from_fn(|k| y[k] + h * (c * v[k] + h * coupling_sum[k]));
         forces[i] = acceleration.acceleration(&position);
     }
     forces

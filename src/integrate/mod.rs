@@ -3,7 +3,8 @@
 //! Each kernel takes one attempted step of size `h` from `(y, v = y')` with an embedded
 //! explicit Runge-Kutta(-Nystrom) pair and returns the propagated solution together with the
 //! pair's error estimate, already reduced to one RMS number in units of the caller's scales.
-//! Everything is fixed-size arrays on the stack: no allocation, no trait objects.
+//! The state is any [`Vector`]: fixed-size arrays on the stack for three-body scenes (no
+//! allocation, fully unrolled), `Vec<f64>` for systems sized at run time (the ring).
 //!
 //! Owned here: the tableaus (published coefficients as `const` tables, one method per file)
 //! and the arithmetic of one step. Not owned here: the step-size controller, step rejection,
@@ -24,20 +25,61 @@ pub use dop853::Dop853;
 pub use dopri5::Dopri5;
 pub use dprkn12::Dprkn12;
 
+/// A state vector of `len` components: `[f64; D]` or `Vec<f64>`.
+pub trait Vector: Clone {
+    /// A vector of zeros of the same length.
+    fn zeros_like(&self) -> Self;
+    /// The components.
+    fn components(&self) -> &[f64];
+    /// The components, mutable.
+    fn components_mut(&mut self) -> &mut [f64];
+}
+
+impl<const D: usize> Vector for [f64; D] {
+    #[inline(always)]
+    fn zeros_like(&self) -> Self {
+        [0.0; D]
+    }
+
+    #[inline(always)]
+    fn components(&self) -> &[f64] {
+        self
+    }
+
+    #[inline(always)]
+    fn components_mut(&mut self) -> &mut [f64] {
+        self
+    }
+}
+
+impl Vector for Vec<f64> {
+    fn zeros_like(&self) -> Self {
+        vec![0.0; self.len()]
+    }
+
+    fn components(&self) -> &[f64] {
+        self
+    }
+
+    fn components_mut(&mut self) -> &mut [f64] {
+        self
+    }
+}
+
 /// Acceleration field of an autonomous second-order system y'' = a(y).
-pub trait Acceleration<const D: usize> {
-    fn acceleration(&self, y: &[f64; D]) -> [f64; D];
+pub trait Acceleration<V: Vector> {
+    fn acceleration(&self, y: &V) -> V;
 }
 
 /// Result of one attempted step of size h.
 #[derive(Clone, Copy, Debug)]
-pub struct Step<const D: usize> {
+pub struct Step<V> {
     /// Positions at `t + h` (the higher-order solution, which is the one propagated).
-    pub y: [f64; D],
+    pub y: V,
     /// Velocities `y'` at `t + h`.
-    pub v: [f64; D],
+    pub v: V,
     /// `a(y)` at the new positions; pass it back as `a0` of the next step.
-    pub a: [f64; D],
+    pub a: V,
     /// The method's embedded error estimate as an RMS norm over all `2 D` components, each
     /// divided by its scale: `error <= 1` means "within tolerance".
     pub error: f64,
@@ -58,26 +100,88 @@ pub trait Integrator {
     ///
     /// The scales are absolute and must be positive (typically tolerance times a
     /// characteristic size per component).
-    fn step<A: Acceleration<D>, const D: usize>(
+    fn step<V: Vector, A: Acceleration<V>>(
         acceleration: &A,
-        y: &[f64; D],
-        v: &[f64; D],
-        a0: &[f64; D],
+        y: &V,
+        v: &V,
+        a0: &V,
         h: f64,
-        position_scale: &[f64; D],
-        velocity_scale: &[f64; D],
-    ) -> Step<D>;
+        position_scale: &V,
+        velocity_scale: &V,
+    ) -> Step<V>;
+}
+
+/// Step-size control in units of a caller's time scale (the ratio `h / tau`):
+/// the classical controller `ratio *= safety * error^(-1/(q+1))`, bounded per
+/// step, with no growth right after a rejection (Hairer, Norsett & Wanner, II.4).
+#[derive(Clone, Copy, Debug)]
+pub struct StepControl {
+    /// Current step in units of the caller's time scale.
+    pub ratio: f64,
+    exponent: f64,
+    just_rejected: bool,
+}
+
+/// Controller safety factor and bounds on the change per step.
+const SAFETY: f64 = 0.9;
+const MIN_STEP_FACTOR: f64 = 0.2;
+const MAX_STEP_FACTOR: f64 = 5.0;
+
+/// The step collapsed to rounding: the problem is singular at this point.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct StepCollapse;
+
+impl StepControl {
+    /// A controller for integrator `I` starting at `ratio`.
+    pub fn new<I: Integrator>(ratio: f64) -> StepControl {
+        StepControl {
+            ratio,
+            exponent: -1.0 / f64::from(I::ERROR_ORDER + 1),
+            just_rejected: false,
+        }
+    }
+
+    /// Shrinks the step after a rejected trial with estimate `error` (a trial
+    /// rejected for another reason with `error <= 1`, such as two particles
+    /// crossing, is halved).
+    pub fn reject(&mut self, error: f64) -> Result<(), StepCollapse> {
+        self.just_rejected = true;
+        let factor = if error > 1.0 && error.is_finite() {
+            (SAFETY * error.powf(self.exponent)).clamp(MIN_STEP_FACTOR, SAFETY)
+        } else if error <= 1.0 {
+            0.5
+        } else {
+            MIN_STEP_FACTOR
+        };
+        self.ratio *= factor;
+        if self.ratio.is_nan() || self.ratio <= f64::EPSILON {
+            Err(StepCollapse)
+        } else {
+            Ok(())
+        }
+    }
+
+    /// Adapts the step after an accepted trial with estimate `error`.
+    pub fn accept(&mut self, error: f64) {
+        let growth_cap = if self.just_rejected {
+            1.0
+        } else {
+            MAX_STEP_FACTOR
+        };
+        self.just_rejected = false;
+        self.ratio *= (SAFETY * error.powf(self.exponent)).clamp(MIN_STEP_FACTOR, growth_cap);
+    }
 }
 
 /// Stages of an explicit Runge-Kutta method applied to the first-order system
 /// `z = (y, v)`, `z' = (v, a(y))`: stage `i` has slope `k_i = (V_i, A_i)`.
-struct FirstOrderStages<const D: usize, const S: usize> {
+struct FirstOrderStages<V, const S: usize> {
     /// Stage velocities `V_i`, the position part of `k_i`.
-    velocity: [[f64; D]; S],
+    velocity: [V; S],
     /// Stage accelerations `A_i = a(Y_i)`, the velocity part of `k_i`.
-    acceleration: [[f64; D]; S],
+    acceleration: [V; S],
     /// Position `Y_S` of the last stage.
-    last_position: [f64; D],
+    last_position: V,
 }
 
 /// Evaluates the stages `Y_i = y + h sum_j a_ij V_j`, `V_i = v + h sum_j a_ij A_j`,
@@ -85,38 +189,53 @@ struct FirstOrderStages<const D: usize, const S: usize> {
 ///
 /// The first stage is `(V_1, A_1) = (v, a0)`, so it costs no evaluation; `S - 1` calls in all.
 #[inline(always)]
-fn first_order_stages<A: Acceleration<D>, const D: usize, const S: usize>(
+fn first_order_stages<V: Vector, A: Acceleration<V>, const S: usize>(
     acceleration: &A,
-    y: &[f64; D],
-    v: &[f64; D],
-    a0: &[f64; D],
+    y: &V,
+    v: &V,
+    a0: &V,
     h: f64,
     coupling: &[&[f64]; S],
-) -> FirstOrderStages<D, S> {
+) -> FirstOrderStages<V, S> {
     let mut stages = FirstOrderStages {
-        velocity: [*v; S],
-        acceleration: [*a0; S],
-        last_position: *y,
+        velocity: std::array::from_fn(|_| v.clone()),
+        acceleration: std::array::from_fn(|_| a0.clone()),
+        last_position: y.clone(),
     };
+    let len = y.components().len();
     for (i, row) in coupling.iter().enumerate().skip(1) {
-        let mut velocity_sum = [0.0; D];
-        let mut acceleration_sum = [0.0; D];
+        let mut velocity_sum = y.zeros_like();
+        let mut acceleration_sum = y.zeros_like();
         for (j, &a_ij) in row.iter().enumerate() {
-            for k in 0..D {
-                velocity_sum[k] += a_ij * stages.velocity[j][k];
-                acceleration_sum[k] += a_ij * stages.acceleration[j][k];
+            let (vs, acs) = (
+                velocity_sum.components_mut(),
+                stages.velocity[j].components(),
+            );
+            for k in 0..len {
+                vs[k] += a_ij * acs[k];
+            }
+            let (sums, stage) = (
+                acceleration_sum.components_mut(),
+                stages.acceleration[j].components(),
+            );
+            for k in 0..len {
+                sums[k] += a_ij * stage[k];
             }
         }
         // Increments are summed first and added to the state once, so the propagated
         // solution takes one rounding at the size of `y` and `v` per step, not one per stage.
-        let mut position = *y;
-        let mut velocity = *v;
-        for k in 0..D {
-            position[k] += h * velocity_sum[k];
-            velocity[k] += h * acceleration_sum[k];
+        let mut position = y.clone();
+        let mut velocity = v.clone();
+        {
+            let (p, vel) = (position.components_mut(), velocity.components_mut());
+            let (vs, acs) = (velocity_sum.components(), acceleration_sum.components());
+            for k in 0..len {
+                p[k] += h * vs[k];
+                vel[k] += h * acs[k];
+            }
         }
-        stages.velocity[i] = velocity;
         stages.acceleration[i] = acceleration.acceleration(&position);
+        stages.velocity[i] = velocity;
         stages.last_position = position;
     }
     stages
@@ -124,34 +243,35 @@ fn first_order_stages<A: Acceleration<D>, const D: usize, const S: usize>(
 
 /// `factor * sum_i weights_i slopes_i`: an increment or an error vector built from stage slopes.
 #[inline(always)]
-fn weighted_sum<const D: usize, const S: usize>(
-    factor: f64,
-    weights: &[f64; S],
-    slopes: &[[f64; D]; S],
-) -> [f64; D] {
-    let mut sum = [0.0; D];
-    for (&weight, slope) in weights.iter().zip(slopes) {
-        for k in 0..D {
-            sum[k] += weight * slope[k];
+fn weighted_sum<V: Vector, const S: usize>(factor: f64, weights: &[f64; S], slopes: &[V; S]) -> V {
+    let mut sum = slopes[0].zeros_like();
+    {
+        let out = sum.components_mut();
+        for (&weight, slope) in weights.iter().zip(slopes) {
+            for (o, s) in out.iter_mut().zip(slope.components()) {
+                *o += weight * s;
+            }
         }
+        out.iter_mut().for_each(|component| *component *= factor);
     }
-    sum.map(|component| factor * component)
+    sum
 }
 
 /// `sum_k (error_k / scale_k)^2`.
 #[inline(always)]
-fn scaled_square_sum<const D: usize>(error: &[f64; D], scale: &[f64; D]) -> f64 {
+fn scaled_square_sum<V: Vector>(error: &V, scale: &V) -> f64 {
     error
+        .components()
         .iter()
-        .zip(scale)
+        .zip(scale.components())
         .map(|(e, s)| (e / s) * (e / s))
         .sum()
 }
 
-/// RMS over the `2 D` position and velocity components given their scaled square sums.
+/// RMS over the `2 len` position and velocity components given their scaled square sums.
 #[inline(always)]
-fn rms_norm<const D: usize>(position_squares: f64, velocity_squares: f64) -> f64 {
-    ((position_squares + velocity_squares) / (2 * D) as f64).sqrt()
+fn rms_norm(len: usize, position_squares: f64, velocity_squares: f64) -> f64 {
+    ((position_squares + velocity_squares) / (2 * len) as f64).sqrt()
 }
 
 /// Problems, tableau checks and convergence measurements shared by the kernels' unit tests.
@@ -172,7 +292,7 @@ mod test_support {
     /// Kepler problem `y'' = -y / |y|^3` in the plane (`GM = 1`, semi-major axis 1, period `2 pi`).
     pub struct Kepler;
 
-    impl Acceleration<2> for Kepler {
+    impl Acceleration<[f64; 2]> for Kepler {
         fn acceleration(&self, y: &[f64; 2]) -> [f64; 2] {
             let r2 = y[0] * y[0] + y[1] * y[1];
             let inverse_r3 = 1.0 / (r2 * r2.sqrt());
@@ -249,7 +369,7 @@ mod test_support {
         calls: Cell<u32>,
     }
 
-    impl Acceleration<2> for CountingKepler {
+    impl Acceleration<[f64; 2]> for CountingKepler {
         fn acceleration(&self, y: &[f64; 2]) -> [f64; 2] {
             self.calls.set(self.calls.get() + 1);
             Kepler.acceleration(y)
@@ -272,7 +392,7 @@ mod test_support {
     /// Uniform field `y'' = g`.
     struct UniformField;
 
-    impl Acceleration<2> for UniformField {
+    impl Acceleration<[f64; 2]> for UniformField {
         fn acceleration(&self, _y: &[f64; 2]) -> [f64; 2] {
             [0.5, -2.0]
         }

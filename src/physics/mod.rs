@@ -4,6 +4,7 @@
 pub mod launch;
 pub mod potential;
 pub mod quasi_random;
+pub mod ring;
 pub mod sampling;
 pub mod scan;
 pub mod scene;

@@ -15,7 +15,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::potential::{PairPotential, Potential, PotentialVisitor};
-use crate::integrate::{Acceleration, Dop853, Dopri5, Dprkn12, Integrator};
+use crate::integrate::{Acceleration, Dop853, Dopri5, Dprkn12, Integrator, StepControl};
 
 /// A free asymptotic trajectory `x(t) = position + velocity * t` (scaled units:
 /// lengths in `l`, velocities in `v_th`, times in `l / v_th`).
@@ -188,10 +188,6 @@ impl PotentialVisitor for SceneRun<'_> {
 /// Fraction of the free-flight time to contact that one step may cover: a step
 /// never carries two approaching neighbours past each other.
 const APPROACH_FRACTION: f64 = 0.5;
-/// Step-size controller: safety factor and bounds on the change per step.
-const SAFETY: f64 = 0.9;
-const MIN_STEP_FACTOR: f64 = 0.2;
-const MAX_STEP_FACTOR: f64 = 5.0;
 /// First step in units of the local time scale; the controller corrects it.
 const INITIAL_STEP_RATIO: f64 = 0.1;
 
@@ -200,7 +196,7 @@ const INITIAL_STEP_RATIO: f64 = 0.1;
 /// `g1'' = 2 f(g1) - f(g2) + f(g1 + g2)`, `g2'' = 2 f(g2) - f(g1) + f(g1 + g2)`.
 struct GapAcceleration<P>(P);
 
-impl<P: PairPotential> Acceleration<2> for GapAcceleration<P> {
+impl<P: PairPotential> Acceleration<[f64; 2]> for GapAcceleration<P> {
     fn acceleration(&self, gaps: &[f64; 2]) -> [f64; 2] {
         let inner = self.0.force(gaps[0]);
         let outer = self.0.force(gaps[1]);
@@ -517,14 +513,12 @@ fn run_scene<P: PairPotential, I: Integrator>(
     };
     // The controller adapts the step in units of the local time scale, the
     // quantity the error actually depends on (see `local_time_scale`).
-    let mut step_ratio = INITIAL_STEP_RATIO;
-    let mut just_rejected = false;
-    let exponent = -1.0 / f64::from(I::ERROR_ORDER + 1);
+    let mut control = StepControl::new::<I>(INITIAL_STEP_RATIO);
     loop {
         if counters.steps + counters.rejected_steps >= settings.max_steps {
             return failed(incoming, Outcome::StepBudgetExhausted, counters);
         }
-        let step = (step_ratio * local_time_scale(&gaps, &rates, &accel))
+        let step = (control.ratio * local_time_scale(&gaps, &rates, &accel))
             .min(approach_limit(&gaps, &rates));
         let smallest_gap = gaps[0].min(gaps[1]);
         let position_scale = [settings.tolerance * smallest_gap; 2];
@@ -542,27 +536,15 @@ fn run_scene<P: PairPotential, I: Integrator>(
         let admissible = trial.error <= 1.0 && trial.y.iter().all(|&g| g > 0.0);
         if !admissible {
             counters.rejected_steps += 1;
-            just_rejected = true;
             // A step that crossed two particles is halved even if its error looked fine.
-            let factor = if trial.error > 1.0 && trial.error.is_finite() {
-                (SAFETY * trial.error.powf(exponent)).clamp(MIN_STEP_FACTOR, SAFETY)
-            } else if trial.error <= 1.0 {
-                0.5
-            } else {
-                MIN_STEP_FACTOR
-            };
-            step_ratio *= factor;
-            if step_ratio.is_nan() || step_ratio <= f64::EPSILON {
+            if control.reject(trial.error).is_err() {
                 return failed(incoming, Outcome::Breakdown, counters);
             }
             continue;
         }
         counters.steps += 1;
         (gaps, rates, accel) = (trial.y, trial.v, trial.a);
-        // No growth right after a rejection (Hairer, Norsett & Wanner, II.4).
-        let growth_cap = if just_rejected { 1.0 } else { MAX_STEP_FACTOR };
-        just_rejected = false;
-        step_ratio *= (SAFETY * trial.error.powf(exponent)).clamp(MIN_STEP_FACTOR, growth_cap);
+        control.accept(trial.error);
         match classify(
             potential,
             &gaps,

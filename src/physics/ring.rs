@@ -1,0 +1,399 @@
+//! Molecular dynamics of `N` particles on a ring (physics.md §7) in scaled
+//! units: arc positions in `l`, velocities in `v_th`, time in `l / v_th`,
+//! energies in `kT`, circumference `C = 2 pi R / l`.
+//!
+//! Pairs interact through the chord distance `d = (C/pi) sin(pi s / C)` of
+//! their arc separation `s`, so the force on the trailing particle of a pair
+//! is `-f(d) cos(pi s / C)` and on the leading one its opposite
+//! (`f = -dU/dd`, physics.md §7): momentum is conserved pair by pair.
+//! Particles keep their order, so the state is the `N` gaps `g_k = s_(k+1) - s_k`
+//! (the last one wraps around) and their rates `w_k = u_(k+1) - u_k`, with the
+//! total momentum kept aside: relative coordinates stay accurate however
+//! large the ring (numerics.md), and momentum is conserved exactly.
+//! This module integrates the whole ring on one adaptive step (DPRKN12, the
+//! step set by the fastest pair anywhere).
+
+use std::f64::consts::PI;
+
+use super::potential::PairPotential;
+use crate::integrate::{Acceleration, Dprkn12, Integrator, StepControl};
+use crate::linalg::symmetric_eigen;
+
+/// Which pairs interact.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Reach {
+    /// Every pair (the long-ranged `n = 2` Sutherland ring).
+    All,
+    /// Each particle with its `k` nearest neighbours on each side (`2k < N`);
+    /// physics.md §7 found `k = 3` converged.
+    Neighbours(usize),
+}
+
+/// The forces of a ring: potential, circumference and reach.
+#[derive(Clone, Copy, Debug)]
+pub struct RingForces<P> {
+    /// Pair potential of the chord distance.
+    pub potential: P,
+    /// Circumference `C`, in `l`.
+    pub circumference: f64,
+    /// Which pairs interact.
+    pub reach: Reach,
+}
+
+impl<P: PairPotential> RingForces<P> {
+    /// Chord distance of arc separation `arc` (`0 < arc < C`).
+    pub fn chord(&self, arc: f64) -> f64 {
+        self.circumference / PI * (PI * arc / self.circumference).sin()
+    }
+
+    /// Calls `visit(i, j, arc)` for every interacting pair, `j` ahead of `i`
+    /// by `arc` along the ring.
+    fn for_each_pair(&self, gaps: &[f64], mut visit: impl FnMut(usize, usize, f64)) {
+        let n = gaps.len();
+        match self.reach {
+            Reach::All => {
+                for i in 0..n {
+                    let mut arc = 0.0;
+                    for j in i + 1..n {
+                        arc += gaps[j - 1];
+                        visit(i, j, arc);
+                    }
+                }
+            }
+            Reach::Neighbours(k) => {
+                for i in 0..n {
+                    let mut arc = 0.0;
+                    for m in 1..=k {
+                        arc += gaps[(i + m - 1) % n];
+                        visit(i, (i + m) % n, arc);
+                    }
+                }
+            }
+        }
+    }
+
+    /// Particle accelerations (unit masses) at the given gaps.
+    pub fn particle_accelerations(&self, gaps: &[f64]) -> Vec<f64> {
+        let mut accelerations = vec![0.0; gaps.len()];
+        self.for_each_pair(gaps, |i, j, arc| {
+            let push =
+                self.potential.force(self.chord(arc)) * (PI * arc / self.circumference).cos();
+            accelerations[i] -= push;
+            accelerations[j] += push;
+        });
+        accelerations
+    }
+
+    /// Potential energy `sum U(d)` over the interacting pairs, `kT`.
+    pub fn potential_energy(&self, gaps: &[f64]) -> f64 {
+        let mut energy = 0.0;
+        self.for_each_pair(gaps, |_, _, arc| {
+            energy += self.potential.energy(self.chord(arc));
+        });
+        energy
+    }
+}
+
+impl<P: PairPotential> Acceleration<Vec<f64>> for RingForces<P> {
+    /// Gap accelerations `a_(k+1) - a_k`.
+    fn acceleration(&self, gaps: &Vec<f64>) -> Vec<f64> {
+        let a = self.particle_accelerations(gaps);
+        let n = a.len();
+        (0..n).map(|k| a[(k + 1) % n] - a[k]).collect()
+    }
+}
+
+/// The state of a ring: gaps, their rates and the total momentum.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RingState {
+    /// `g_k = s_(k+1) - s_k`, the last wrapping around; all positive, summing to `C`.
+    pub gaps: Vec<f64>,
+    /// `w_k = u_(k+1) - u_k`.
+    pub rates: Vec<f64>,
+    /// Total momentum `sum u_k` (unit masses), `v_th`.
+    pub momentum: f64,
+}
+
+impl RingState {
+    /// The state of particles at arc positions `positions` (ascending, within
+    /// one circumference `circumference`) with velocities `velocities`.
+    pub fn new(positions: &[f64], velocities: &[f64], circumference: f64) -> RingState {
+        let n = positions.len();
+        let gaps = (0..n)
+            .map(|k| {
+                if k + 1 < n {
+                    positions[k + 1] - positions[k]
+                } else {
+                    positions[0] + circumference - positions[k]
+                }
+            })
+            .collect();
+        let rates = (0..n)
+            .map(|k| velocities[(k + 1) % n] - velocities[k])
+            .collect();
+        RingState {
+            gaps,
+            rates,
+            momentum: velocities.iter().sum(),
+        }
+    }
+
+    /// Particle velocities: `u_k = u_0 + sum_(j<k) w_j`, with `u_0` fixed by the momentum.
+    pub fn velocities(&self) -> Vec<f64> {
+        let n = self.gaps.len();
+        let mut offsets = Vec::with_capacity(n);
+        let mut sum = 0.0;
+        for k in 0..n {
+            offsets.push(sum);
+            sum += self.rates[k];
+        }
+        let first = (self.momentum - offsets.iter().sum::<f64>()) / n as f64;
+        offsets.iter().map(|o| first + o).collect()
+    }
+
+    /// Arc positions with particle 0 at 0.
+    pub fn positions(&self) -> Vec<f64> {
+        let mut positions = Vec::with_capacity(self.gaps.len());
+        let mut sum = 0.0;
+        for gap in &self.gaps {
+            positions.push(sum);
+            sum += gap;
+        }
+        positions
+    }
+
+    /// Total energy `sum u^2/2 + sum U`, `kT`.
+    pub fn energy<P: PairPotential>(&self, forces: &RingForces<P>) -> f64 {
+        let kinetic: f64 = self.velocities().iter().map(|u| 0.5 * u * u).sum();
+        kinetic + forces.potential_energy(&self.gaps)
+    }
+
+    /// The same positions with every velocity reversed.
+    pub fn reversed(&self) -> RingState {
+        RingState {
+            gaps: self.gaps.clone(),
+            rates: self.rates.iter().map(|w| -w).collect(),
+            momentum: -self.momentum,
+        }
+    }
+
+    /// Eigenvalues (ascending) of the Sutherland Lax matrix
+    /// `L = diag(u) + i (pi/C) cot(pi (s_j - s_k)/C)`: conserved when the pair
+    /// potential is the chord `d^-2` acting between all pairs (numerics.md).
+    /// Computed from the real symmetric form `[[A, -B], [B, A]]` of `A + iB`,
+    /// whose spectrum is `L`'s twice over.
+    pub fn sutherland_invariants(&self, circumference: f64) -> Vec<f64> {
+        let (u, s) = (self.velocities(), self.positions());
+        let n = u.len();
+        let m = 2 * n;
+        let mut real = vec![0.0; m * m];
+        for j in 0..n {
+            real[j * m + j] = u[j];
+            real[(j + n) * m + j + n] = u[j];
+            for k in 0..n {
+                if j != k {
+                    let b = PI / circumference / (PI * (s[j] - s[k]) / circumference).tan();
+                    real[j * m + k + n] = -b;
+                    real[(j + n) * m + k] = b;
+                }
+            }
+        }
+        let mut values = symmetric_eigen(&real, m).values;
+        values.sort_by(f64::total_cmp);
+        values.into_iter().step_by(2).collect()
+    }
+}
+
+/// Work done by [`evolve`].
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct RingWork {
+    /// Accepted steps.
+    pub steps: u64,
+    /// Rejected steps.
+    pub rejected: u64,
+    /// Force evaluations (each a sweep over all interacting pairs).
+    pub evaluations: u64,
+}
+
+/// Why an evolution stopped early.
+#[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
+pub enum RingError {
+    /// The step budget ran out.
+    #[error("step budget of {0} exhausted")]
+    StepBudget(u64),
+    /// The step size collapsed (a singular approach).
+    #[error("step size collapsed")]
+    Breakdown,
+}
+
+/// A step never lets an approaching gap close by more than this fraction.
+const APPROACH_FRACTION: f64 = 0.5;
+/// First step in units of the local time scale; the controller corrects it.
+const INITIAL_STEP_RATIO: f64 = 0.1;
+
+/// Local time scale of the fastest gap: `g / sqrt(w^2 + g |g''|)` (the time to
+/// close a gap, or to turn around in it), minimized over all gaps.
+fn local_time_scale(gaps: &[f64], rates: &[f64], accelerations: &[f64]) -> f64 {
+    gaps.iter()
+        .zip(rates)
+        .zip(accelerations)
+        .map(|((g, w), a)| g / (w * w + g * a.abs()).sqrt())
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// Largest step by the free-flight time to contact of approaching neighbours.
+fn approach_limit(gaps: &[f64], rates: &[f64]) -> f64 {
+    gaps.iter()
+        .zip(rates)
+        .filter(|(_, w)| **w < 0.0)
+        .map(|(g, w)| APPROACH_FRACTION * g / -w)
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// Advances `state` by `duration` with DPRKN12 on one adaptive step for the
+/// whole ring: the local error per step at most `tolerance` relative to each
+/// gap and to `v_th` for the rates.
+pub fn evolve<P: PairPotential>(
+    forces: &RingForces<P>,
+    state: &mut RingState,
+    duration: f64,
+    tolerance: f64,
+    max_steps: u64,
+) -> Result<RingWork, RingError> {
+    let mut work = RingWork {
+        evaluations: 1,
+        ..RingWork::default()
+    };
+    let mut accelerations = forces.acceleration(&state.gaps);
+    let mut control = StepControl::new::<Dprkn12>(INITIAL_STEP_RATIO);
+    let velocity_scale = vec![tolerance; state.gaps.len()];
+    let mut elapsed = 0.0;
+    while elapsed < duration {
+        if work.steps + work.rejected >= max_steps {
+            return Err(RingError::StepBudget(max_steps));
+        }
+        let remaining = duration - elapsed;
+        let step = (control.ratio * local_time_scale(&state.gaps, &state.rates, &accelerations))
+            .min(approach_limit(&state.gaps, &state.rates))
+            .min(remaining);
+        let position_scale: Vec<f64> = state.gaps.iter().map(|g| tolerance * g).collect();
+        let trial = Dprkn12::step(
+            forces,
+            &state.gaps,
+            &state.rates,
+            &accelerations,
+            step,
+            &position_scale,
+            &velocity_scale,
+        );
+        work.evaluations += u64::from(Dprkn12::EVALUATIONS_PER_STEP);
+        if trial.error > 1.0 || trial.y.iter().any(|&g| g <= 0.0) {
+            work.rejected += 1;
+            control
+                .reject(trial.error)
+                .map_err(|_| RingError::Breakdown)?;
+            continue;
+        }
+        work.steps += 1;
+        elapsed = if step == remaining {
+            duration
+        } else {
+            elapsed + step
+        };
+        (state.gaps, state.rates, accelerations) = (trial.y, trial.v, trial.a);
+        control.accept(trial.error);
+    }
+    Ok(work)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::physics::potential::InverseIntegerPower;
+
+    /// Six particles on a ring of 30 l (dense: many collisions), fixed
+    /// velocities of thermal size with a net momentum.
+    fn dense_ring() -> (Vec<f64>, Vec<f64>, f64) {
+        let positions = vec![0.0, 4.1, 9.3, 15.2, 19.8, 25.5];
+        let velocities = vec![1.3, -0.7, 0.4, -1.9, 0.8, 0.35];
+        (positions, velocities, 30.0)
+    }
+
+    /// Energy is conserved to the integrator's tolerance over many collisions,
+    /// momentum exactly, and the order of the particles is kept.
+    #[test]
+    fn energy_and_momentum_are_conserved() {
+        let (positions, velocities, circumference) = dense_ring();
+        let forces = RingForces {
+            potential: InverseIntegerPower::<6>,
+            circumference,
+            reach: Reach::Neighbours(2),
+        };
+        let mut state = RingState::new(&positions, &velocities, circumference);
+        let (energy, momentum) = (state.energy(&forces), state.momentum);
+        let work = evolve(&forces, &mut state, 200.0, 1e-12, 1_000_000).unwrap();
+        let drift = (state.energy(&forces) - energy).abs() / energy;
+        assert!(drift < 1e-10, "relative energy drift {drift:e} ({work:?})");
+        let total: f64 = state.velocities().iter().sum();
+        assert!((total - momentum).abs() < 1e-12, "{total} vs {momentum}");
+        let circumference_now: f64 = state.gaps.iter().sum();
+        assert!((circumference_now - circumference).abs() < 1e-9);
+        assert!(
+            work.steps > 1000,
+            "too few collisions to test anything: {work:?}"
+        );
+    }
+
+    /// Reversing the velocities and evolving as long again returns to the start.
+    #[test]
+    fn evolution_is_time_reversible() {
+        let (positions, velocities, circumference) = dense_ring();
+        let forces = RingForces {
+            potential: InverseIntegerPower::<6>,
+            circumference,
+            reach: Reach::Neighbours(2),
+        };
+        let start = RingState::new(&positions, &velocities, circumference);
+        let mut state = start.clone();
+        evolve(&forces, &mut state, 50.0, 1e-13, 1_000_000).unwrap();
+        let mut back = state.reversed();
+        evolve(&forces, &mut back, 50.0, 1e-13, 1_000_000).unwrap();
+        let back = back.reversed();
+        for (a, b) in back.gaps.iter().zip(&start.gaps) {
+            assert!((a - b).abs() < 1e-8, "{a} vs {b}");
+        }
+        for (a, b) in back.velocities().iter().zip(start.velocities()) {
+            assert!((a - b).abs() < 1e-8, "{a} vs {b}");
+        }
+    }
+
+    /// The n = 2 chord ring is Sutherland's integrable model: the Lax
+    /// eigenvalues stay put through many collisions.
+    #[test]
+    fn sutherland_invariants_are_conserved() {
+        let (positions, velocities, circumference) = dense_ring();
+        let forces = RingForces {
+            potential: InverseIntegerPower::<2>,
+            circumference,
+            reach: Reach::All,
+        };
+        let mut state = RingState::new(&positions, &velocities, circumference);
+        let before = state.sutherland_invariants(circumference);
+        let energy = state.energy(&forces);
+        evolve(&forces, &mut state, 100.0, 1e-12, 1_000_000).unwrap();
+        let after = state.sutherland_invariants(circumference);
+        for (a, b) in before.iter().zip(&after) {
+            assert!((a - b).abs() < 1e-9, "{before:?} vs {after:?}");
+        }
+        // Sum of eigenvalues = trace L = momentum; sum of squares = trace L^2
+        // = sum u^2 + sum_(j != k) (pi/C)^2 cot^2 = 2 E - (pi/C)^2 N (N - 1).
+        let n = positions.len() as f64;
+        let trace_square = 2.0 * energy - (PI / circumference).powi(2) * n * (n - 1.0);
+        let sum_squares: f64 = before.iter().map(|l| l * l).sum();
+        assert!(
+            (sum_squares - trace_square).abs() < 1e-10 * energy,
+            "{sum_squares} vs {trace_square}"
+        );
+        assert!((before.iter().sum::<f64>() - state.momentum).abs() < 1e-12);
+    }
+}
