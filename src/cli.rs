@@ -7,7 +7,7 @@ use std::process::ExitCode;
 use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand};
 
-use ternary::bench::{self, KernelBenchOptions, WorkPrecisionOptions};
+use ternary::bench::{self, KernelBenchOptions, MdBenchOptions, WorkPrecisionOptions};
 use ternary::config::Study;
 use ternary::pipeline::executor::{self, Action, Freshness, RunOptions, Verbosity};
 use ternary::pipeline::store::Store;
@@ -91,6 +91,27 @@ enum BenchCommand {
         #[arg(long, default_value_t = 4096)]
         points: u32,
         /// Seed.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+    },
+    /// Ring MD: cluster stepping against whole-ring stepping on one run of the published ring.
+    Md {
+        /// Particles N.
+        #[arg(long, default_value_t = 161)]
+        particles: usize,
+        /// Ring radius, um.
+        #[arg(long, default_value_t = 51200.0)]
+        radius_um: f64,
+        /// Temperature, eV.
+        #[arg(long, default_value_t = 0.1)]
+        kt_ev: f64,
+        /// Final time, ns.
+        #[arg(long, default_value_t = 12800.0)]
+        final_time_ns: f64,
+        /// Interacting neighbours on each side.
+        #[arg(long, default_value_t = 3)]
+        neighbours: usize,
+        /// Seed of the initial state.
         #[arg(long, default_value_t = 1)]
         seed: u64,
     },
@@ -239,6 +260,28 @@ fn dispatch(cli: Cli) -> Result<ExitCode> {
                 seed,
             };
             emit(&bench::kernel(&options));
+            Ok(ExitCode::SUCCESS)
+        }
+        Command::Bench {
+            which:
+                BenchCommand::Md {
+                    particles,
+                    radius_um,
+                    kt_ev,
+                    final_time_ns,
+                    neighbours,
+                    seed,
+                },
+        } => {
+            let options = MdBenchOptions {
+                particles,
+                radius_um,
+                kt_ev,
+                final_time_ns,
+                neighbours,
+                seed,
+            };
+            emit(&bench::md(&options));
             Ok(ExitCode::SUCCESS)
         }
     }

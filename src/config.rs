@@ -70,6 +70,9 @@ pub struct Config {
     /// Evolution of `h(u, t)` by the master and Fokker-Planck equations.
     #[serde(default)]
     pub evolve: EvolveConfig,
+    /// Molecular dynamics of rings.
+    #[serde(default)]
+    pub md: MdConfig,
     /// Gases in physical units whose thermalization rates are tabulated.
     #[serde(default)]
     pub gas: Vec<GasConfig>,
@@ -245,6 +248,106 @@ pub struct PhysicalTimes {
     pub times_ns: Vec<f64>,
     /// The same times in units of `1/(rho^2 l v_th)`.
     pub times_scaled: Vec<f64>,
+}
+
+/// `[md]`: molecular dynamics of rings (physics.md §7).
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct MdConfig {
+    /// Run the md stage.
+    pub enabled: bool,
+    /// Independent runs per system.
+    pub runs: u32,
+    /// Seed of the runs' streams.
+    pub seed: u64,
+    /// Interacting neighbours on each side.
+    pub neighbours: u32,
+    /// Integrator tolerance.
+    pub tolerance: f64,
+    /// Estimator window around `u'`.
+    pub window: f64,
+    /// Estimator bin width.
+    pub bin_width: f64,
+    /// Sample times per run, spread evenly over `t_f (1 +- sample_spread)`.
+    pub samples: u32,
+    /// Half-width of the sampling window as a fraction of `t_f`.
+    pub sample_spread: f64,
+    /// Lineages starting within this distance of `u'` enter the tagged estimator.
+    pub start_band: f64,
+    /// The rings.
+    pub system: Vec<MdSystemConfig>,
+}
+
+impl Default for MdConfig {
+    fn default() -> Self {
+        MdConfig {
+            enabled: false,
+            runs: 16,
+            seed: 1,
+            neighbours: 3,
+            tolerance: 1e-10,
+            window: 0.2,
+            bin_width: 0.01,
+            samples: 5,
+            sample_spread: 0.02,
+            start_band: 0.1,
+            system: Vec::new(),
+        }
+    }
+}
+
+/// `[[md.system]]`: one ring.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MdSystemConfig {
+    /// Label.
+    pub name: String,
+    /// A `[[gas]]` given as a ring (`ring_particles`, `ring_radius_um`).
+    pub gas: String,
+    /// Velocity `u'` of the special particle.
+    #[serde(default)]
+    pub u_prime: f64,
+    /// Final time `t_f`, ns.
+    pub final_time_ns: f64,
+}
+
+/// Resolved parameters of one `md` instance.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct MdParams {
+    /// Label.
+    pub name: String,
+    /// The potential (an inverse power law).
+    pub potential: Potential,
+    /// The gas.
+    pub gas: PhysicalGas,
+    /// Particles `N`.
+    pub particles: u32,
+    /// Ring radius, um.
+    pub radius_um: f64,
+    /// Circumference in `l`.
+    pub circumference: f64,
+    /// `u'`.
+    pub u_prime: f64,
+    /// `t_f`, ns.
+    pub final_time_ns: f64,
+    /// Sample times, ns.
+    pub sample_times_ns: Vec<f64>,
+    /// Sample times, `l / v_th`.
+    pub sample_times: Vec<f64>,
+    /// Runs.
+    pub runs: u32,
+    /// Seed.
+    pub seed: u64,
+    /// Neighbours per side.
+    pub neighbours: u32,
+    /// Tolerance.
+    pub tolerance: f64,
+    /// Window.
+    pub window: f64,
+    /// Bin width.
+    pub bin_width: f64,
+    /// Tagged-estimator start band.
+    pub start_band: f64,
 }
 
 /// `[sweep]`.
@@ -756,6 +859,55 @@ impl Study {
         Some(params)
     }
 
+    /// Resolved parameters of every md system, if enabled.
+    pub fn md_params(&self) -> Vec<MdParams> {
+        let md = &self.config.md;
+        if !md.enabled {
+            return Vec::new();
+        }
+        md.system
+            .iter()
+            .filter_map(|system| {
+                let gas = self.config.gas.iter().find(|g| g.name == system.gas)?;
+                let resolved = self.gases().into_iter().find(|g| g.name == system.gas)?;
+                let (particles, radius_um) = (gas.ring_particles?, gas.ring_radius_um?);
+                let exponent = resolved.potential.length_exponent();
+                let length = resolved.gas.length_unit_um(exponent);
+                let time_unit = resolved.gas.time_unit_ns(exponent);
+                let samples = md.samples.max(1);
+                let sample_times_ns: Vec<f64> = (0..samples)
+                    .map(|k| {
+                        let offset = if samples == 1 {
+                            0.0
+                        } else {
+                            2.0 * f64::from(k) / f64::from(samples - 1) - 1.0
+                        };
+                        system.final_time_ns * (1.0 + md.sample_spread * offset)
+                    })
+                    .collect();
+                Some(MdParams {
+                    name: system.name.clone(),
+                    potential: resolved.potential,
+                    gas: resolved.gas,
+                    particles,
+                    radius_um,
+                    circumference: 2.0 * std::f64::consts::PI * radius_um / length,
+                    u_prime: system.u_prime,
+                    final_time_ns: system.final_time_ns,
+                    sample_times: sample_times_ns.iter().map(|t| t / time_unit).collect(),
+                    sample_times_ns,
+                    runs: md.runs,
+                    seed: md.seed,
+                    neighbours: md.neighbours,
+                    tolerance: md.tolerance,
+                    window: md.window,
+                    bin_width: md.bin_width,
+                    start_band: md.start_band,
+                })
+            })
+            .collect()
+    }
+
     /// Resolved parameters of the evolve stage, if enabled.
     pub fn evolve_params(&self) -> Option<EvolveParams> {
         let evolve = &self.config.evolve;
@@ -917,7 +1069,72 @@ fn validate(config: &Config) -> Result<(), Invalid> {
     validate_sweep(&config.sweep, &sweep_launch)?;
     validate_convergence(config)?;
     validate_gases(config)?;
-    validate_evolve(config, &launch, &sweep_launch)
+    validate_evolve(config, &launch, &sweep_launch)?;
+    validate_md(config)
+}
+
+fn validate_md(config: &Config) -> Result<(), Invalid> {
+    let md = &config.md;
+    if !md.enabled {
+        return Ok(());
+    }
+    check(
+        md.runs >= 2,
+        "md.runs",
+        "needs at least 2 runs (errors come from their spread)",
+    )?;
+    check(md.neighbours >= 1, "md.neighbours", "must be at least 1")?;
+    check(
+        md.tolerance > 0.0 && md.tolerance <= 1e-6,
+        "md.tolerance",
+        format!("{} is outside (0, 1e-6]", md.tolerance),
+    )?;
+    check(
+        md.window > 0.0 && md.bin_width > 0.0 && md.bin_width <= md.window,
+        "md.bin_width",
+        format!("{} must be in (0, md.window = {}]", md.bin_width, md.window),
+    )?;
+    check(md.samples >= 1, "md.samples", "must be at least 1")?;
+    check(
+        (0.0..0.5).contains(&md.sample_spread),
+        "md.sample_spread",
+        format!("{} is outside [0, 0.5)", md.sample_spread),
+    )?;
+    check(md.start_band > 0.0, "md.start_band", "must be > 0")?;
+    check(!md.system.is_empty(), "md.system", "lists no ring")?;
+    for (k, system) in md.system.iter().enumerate() {
+        let key = |name: &str| format!("md.system[{k}].{name}");
+        check(
+            md.system.iter().filter(|s| s.name == system.name).count() == 1,
+            key("name"),
+            format!("`{}` is used twice", system.name),
+        )?;
+        let gas = config.gas.iter().find(|g| g.name == system.gas);
+        check(
+            gas.is_some_and(|g| g.ring_particles.is_some()),
+            key("gas"),
+            format!(
+                "`{}` names no [[gas]] given as a ring (ring_particles, ring_radius_um)",
+                system.gas
+            ),
+        )?;
+        let potential = gas.map(|g| g.potential.as_str()).unwrap_or_default();
+        let exponent: Option<f64> = potential.strip_prefix("ipp-").and_then(|n| n.parse().ok());
+        check(
+            exponent.is_some_and(|n| n > 2.0),
+            key("gas"),
+            format!(
+                "the md stage runs inverse power laws with n > 2 by cluster stepping; `{potential}` is not one"
+            ),
+        )?;
+        check(
+            system.final_time_ns.is_finite() && system.final_time_ns > 0.0,
+            key("final_time_ns"),
+            format!("{} must be > 0", system.final_time_ns),
+        )?;
+        check(system.u_prime.is_finite(), key("u_prime"), "must be finite")?;
+    }
+    Ok(())
 }
 
 fn validate_evolve(

@@ -62,6 +62,7 @@ pub fn summary(store: &Store, reports: &[InstanceReport]) -> Result<String> {
     out.push_str(&gases_table(store, reports)?);
     out.push_str(&convergence_table(store, reports)?);
     out.push_str(&evolve_table(store, reports)?);
+    out.push_str(&md_table(store, reports)?);
     let scans = reports.iter().filter(|r| r.id.stage == "scan");
     for (k, report) in scans.enumerate() {
         let Some(key) = &report.key else { continue };
@@ -325,6 +326,43 @@ fn evolve_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
                 with_error(
                     number(&frame, row, "distance_to_equilibrium")?,
                     number(&frame, row, "distance_to_equilibrium_stderr")?
+                ),
+            )?;
+        }
+    }
+    Ok(out)
+}
+
+/// The `md` stage's summaries: moments of `h(u, t_f)` by both estimators.
+fn md_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
+    let mut out = String::new();
+    let frames = table_frames(store, reports, "md", "summary")?;
+    if frames.is_empty() {
+        return Ok(out);
+    }
+    writeln!(
+        out,
+        "\nring molecular dynamics: h(u, t_f) within the window (+- standard errors over runs)"
+    )?;
+    writeln!(
+        out,
+        "{:<22} {:<10} {:<24} {:<28}",
+        "ring", "estimator", "sum h du", "<(u-u')^2>_window [v_th^2]"
+    )?;
+    for (instance, frame) in frames {
+        for row in 0..frame.height() {
+            writeln!(
+                out,
+                "{:<22} {:<10} {:<24} {:<28}",
+                instance,
+                text(&frame, row, "estimator")?,
+                with_error(
+                    number(&frame, row, "number")?,
+                    number(&frame, row, "number_stderr")?
+                ),
+                with_error(
+                    number(&frame, row, "window_variance")?,
+                    number(&frame, row, "window_variance_stderr")?
                 ),
             )?;
         }

@@ -553,3 +553,74 @@ print("ok")
         .unwrap();
     assert!(output.status.success(), "{}", stderr(&output));
 }
+
+/// The md stage: same bytes for any thread count; every run conserves energy
+/// to its tolerance's order and momentum to rounding; the published and the
+/// tagged-velocity estimators agree within their errors (chi-square), and the
+/// tagged one is the less noisy.
+#[test]
+fn md_stage_is_deterministic_and_its_estimators_agree() {
+    let extra = r#"
+[sweep]
+enabled = false
+
+[[gas]]
+name = "ring"
+potential = "ipp-6"
+l0_um = 1.0
+eps_ev = 1.0
+kt_ev = 0.1
+mass_electron = 1.0
+ring_particles = 41
+ring_radius_um = 6400.0
+
+[md]
+enabled = true
+runs = 6
+bin_width = 0.02
+
+[[md.system]]
+name = "N41"
+gas = "ring"
+final_time_ns = 400.0
+"#;
+    let text = config(7, extra);
+    let one = workspace("md-1");
+    let two = workspace("md-2");
+    run_counts(&write_config(&one, &text), &["--threads", "1"]);
+    run_counts(&write_config(&two, &text), &["--threads", "2"]);
+    let read = |dir: &Path, name: &str| {
+        let artifact = &stage_dirs(&dir.join("data"), "md")[0];
+        fs::read(artifact.join(name)).unwrap()
+    };
+    for name in ["h.parquet", "runs.parquet"] {
+        assert!(
+            read(&one, name) == read(&two, name),
+            "{name} differs between 1 and 2 threads"
+        );
+    }
+    let artifact = &stage_dirs(&one.join("data"), "md")[0];
+    let script = r#"
+import sys, pyarrow.parquet as pq
+runs = pq.read_table(sys.argv[1] + "/runs.parquet").to_pydict()
+assert max(runs["energy_error"]) < 1e-8, runs["energy_error"]
+assert max(runs["momentum_error"]) < 1e-11, runs["momentum_error"]
+h = pq.read_table(sys.argv[1] + "/h.parquet").to_pydict()
+chi2, dof = 0.0, 0
+for p, pe, t, te in zip(h["h_published"], h["h_published_stderr"], h["h_tagged"], h["h_tagged_stderr"]):
+    if pe > 0:
+        chi2 += (p - t) ** 2 / (pe ** 2 + te ** 2)
+        dof += 1
+assert dof > 5 and chi2 / dof < 2.5, (chi2, dof)
+noisier = sum(pe > te for pe, te in zip(h["h_published_stderr"], h["h_tagged_stderr"]))
+assert noisier > 0.8 * len(h["h_tagged"]), noisier
+print("ok")
+"#;
+    let output = Command::new("python3")
+        .arg("-c")
+        .arg(script)
+        .arg(artifact)
+        .output()
+        .unwrap();
+    assert!(output.status.success(), "{}", stderr(&output));
+}

@@ -76,6 +76,34 @@ pub fn rebin(h: &[f64], centre: usize, factor: usize, half_out: usize) -> Vec<f6
         .collect()
 }
 
+/// Masses of periodic fine bins (`width`, index `centre` at `x = 0`) summed
+/// into output bins of `out_width` centred on `out_centres`, each fine bin
+/// shared by overlap length (output bins need not align with fine ones).
+pub fn overlap_rebin(
+    h: &[f64],
+    width: f64,
+    centre: usize,
+    out_centres: &[f64],
+    out_width: f64,
+) -> Vec<f64> {
+    out_centres
+        .iter()
+        .map(|&x| {
+            let (low, high) = (x - 0.5 * out_width, x + 0.5 * out_width);
+            let first = (low / width - 0.5).floor() as isize;
+            let last = (high / width + 0.5).ceil() as isize;
+            (first..=last)
+                .filter_map(|k| {
+                    let index = usize::try_from(centre as isize + k).ok()?;
+                    let (a, b) = ((k as f64 - 0.5) * width, (k as f64 + 0.5) * width);
+                    let overlap = (b.min(high) - a.max(low)).max(0.0);
+                    Some(h.get(index)? * overlap / width)
+                })
+                .sum()
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -119,6 +147,15 @@ mod tests {
                 t * k2
             );
         }
+    }
+
+    #[test]
+    fn overlap_rebinning_shares_split_bins() {
+        // Fine bins of width 1 at x = -2..=2 with masses 1..=5; an output bin
+        // [-1, 1] takes half of the bins at -1 and 1 and all of the bin at 0.
+        let h = [1.0, 2.0, 3.0, 4.0, 5.0];
+        let out = overlap_rebin(&h, 1.0, 2, &[0.0, 2.0], 2.0);
+        assert_eq!(out, vec![0.5 * 2.0 + 3.0 + 0.5 * 4.0, 0.5 * 4.0 + 5.0]);
     }
 
     #[test]

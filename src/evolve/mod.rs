@@ -12,6 +12,8 @@ pub mod operator;
 pub mod propagate;
 pub mod spectral;
 
+use rayon::prelude::*;
+
 use crate::kernel::Estimate;
 
 /// Jackknife estimates of a vector-valued function of `R` replicates, given
@@ -36,6 +38,60 @@ pub fn jackknife(full: &[f64], leave_one_out: &[Vec<f64>]) -> Vec<Estimate> {
             }
         })
         .collect()
+}
+
+/// A quantity evaluated on the estimate and on every leave-one-out replicate set.
+pub struct Replicated<T> {
+    /// On all replicates.
+    pub full: T,
+    /// With each replicate left out.
+    pub leave_one_out: Vec<T>,
+}
+
+impl<T: Sync> Replicated<T> {
+    /// Applies `f` to every member, in parallel.
+    pub fn map<U: Send>(&self, f: impl Fn(&T) -> U + Sync) -> Replicated<U> {
+        Replicated {
+            full: f(&self.full),
+            leave_one_out: self.leave_one_out.par_iter().map(&f).collect(),
+        }
+    }
+}
+
+impl Replicated<Vec<Vec<f64>>> {
+    /// Jackknife estimate of `f` of the state at time index `k`.
+    pub fn estimate(&self, k: usize, f: impl Fn(&[f64]) -> f64) -> Estimate {
+        let loo: Vec<Vec<f64>> = self.leave_one_out.iter().map(|s| vec![f(&s[k])]).collect();
+        jackknife(&[f(&self.full[k])], &loo)[0]
+    }
+
+    /// Jackknife estimates of the state at time index `k`, node by node.
+    pub fn states(&self, k: usize) -> Vec<Estimate> {
+        let loo: Vec<Vec<f64>> = self.leave_one_out.iter().map(|s| s[k].clone()).collect();
+        jackknife(&self.full[k], &loo)
+    }
+}
+
+/// The mean of replicate vectors and the means with each one left out.
+pub fn replicate_means(replicates: &[Vec<f64>]) -> Replicated<Vec<f64>> {
+    let count = replicates.len() as f64;
+    let mut total = vec![0.0; replicates[0].len()];
+    for replicate in replicates {
+        total.iter_mut().zip(replicate).for_each(|(t, v)| *t += v);
+    }
+    Replicated {
+        full: total.iter().map(|t| t / count).collect(),
+        leave_one_out: replicates
+            .iter()
+            .map(|own| {
+                total
+                    .iter()
+                    .zip(own)
+                    .map(|(t, v)| (t - v) / (count - 1.0))
+                    .collect()
+            })
+            .collect(),
+    }
 }
 
 #[cfg(test)]

@@ -15,8 +15,11 @@
 
 use std::f64::consts::PI;
 
+use rand::RngExt;
+use rand_distr::StandardNormal;
+
 use super::potential::PairPotential;
-use crate::integrate::{Acceleration, Dprkn12, Integrator, StepControl};
+use crate::integrate::{Acceleration, Dprkn12, Integrator, StepControl, Vector};
 use crate::linalg::symmetric_eigen;
 
 /// Which pairs interact.
@@ -61,6 +64,8 @@ impl<P: PairPotential> RingForces<P> {
                 }
             }
             Reach::Neighbours(k) => {
+                // Each pair once: at most (N - 1) / 2 neighbours on a side.
+                let k = k.min((n - 1) / 2);
                 for i in 0..n {
                     let mut arc = 0.0;
                     for m in 1..=k {
@@ -204,6 +209,46 @@ impl RingState {
     }
 }
 
+/// Why no initial state could be drawn.
+#[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
+#[error(
+    "no configuration accepted in {0} draws: the ring is too crowded for exp(-PE/kT) rejection"
+)]
+pub struct CrowdedRing(pub u32);
+
+/// Initial state of physics.md §7: velocities from `f0` except particle 0 at
+/// `u_prime` (or all thermal when `u_prime` is `None`), positions uniform on
+/// the ring accepted with probability `exp(-PE/kT)` (purely repulsive
+/// potentials: `PE >= 0`). Positions ascending from 0.
+pub fn thermal_start<P: PairPotential, R: RngExt>(
+    forces: &RingForces<P>,
+    particles: usize,
+    u_prime: Option<f64>,
+    rng: &mut R,
+    max_draws: u32,
+) -> Result<(Vec<f64>, Vec<f64>), CrowdedRing> {
+    let circumference = forces.circumference;
+    let velocities: Vec<f64> = (0..particles)
+        .map(|k| match (k, u_prime) {
+            (0, Some(u)) => u,
+            _ => rng.sample(StandardNormal),
+        })
+        .collect();
+    for _ in 0..max_draws {
+        let mut positions: Vec<f64> = (0..particles)
+            .map(|_| circumference * rng.random::<f64>())
+            .collect();
+        positions.sort_by(f64::total_cmp);
+        let origin = positions[0];
+        positions.iter_mut().for_each(|s| *s -= origin);
+        let state = RingState::new(&positions, &velocities, circumference);
+        if rng.random::<f64>() < (-forces.potential_energy(&state.gaps)).exp() {
+            return Ok((positions, velocities));
+        }
+    }
+    Err(CrowdedRing(max_draws))
+}
+
 /// Work done by [`evolve`].
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct RingWork {
@@ -260,34 +305,69 @@ pub fn evolve<P: PairPotential>(
     tolerance: f64,
     max_steps: u64,
 ) -> Result<RingWork, RingError> {
+    advance(
+        forces,
+        &mut state.gaps,
+        &mut state.rates,
+        duration,
+        tolerance,
+        max_steps,
+        |_, _, _, _| (),
+    )
+}
+
+/// Advances gaps and gap rates under `forces` by `duration` on adaptive
+/// DPRKN12 steps (the whole ring, or one cluster of it): the step is a
+/// controlled fraction of the fastest gap's time scale, never lets an
+/// approaching gap close by more than half, and ends exactly at `duration`.
+/// `on_step(gaps, accelerations, before, after)` sees the gaps and gap
+/// accelerations after every accepted step and the gap rates before and after it.
+pub fn advance<V: Vector, A: Acceleration<V>>(
+    forces: &A,
+    gaps: &mut V,
+    rates: &mut V,
+    duration: f64,
+    tolerance: f64,
+    max_steps: u64,
+    mut on_step: impl FnMut(&[f64], &[f64], &[f64], &[f64]),
+) -> Result<RingWork, RingError> {
     let mut work = RingWork {
         evaluations: 1,
         ..RingWork::default()
     };
-    let mut accelerations = forces.acceleration(&state.gaps);
+    let mut accelerations = forces.acceleration(gaps);
     let mut control = StepControl::new::<Dprkn12>(INITIAL_STEP_RATIO);
-    let velocity_scale = vec![tolerance; state.gaps.len()];
+    let mut velocity_scale = gaps.zeros_like();
+    velocity_scale
+        .components_mut()
+        .iter_mut()
+        .for_each(|s| *s = tolerance);
     let mut elapsed = 0.0;
     while elapsed < duration {
         if work.steps + work.rejected >= max_steps {
             return Err(RingError::StepBudget(max_steps));
         }
         let remaining = duration - elapsed;
-        let step = (control.ratio * local_time_scale(&state.gaps, &state.rates, &accelerations))
-            .min(approach_limit(&state.gaps, &state.rates))
+        let (g, w) = (gaps.components(), rates.components());
+        let step = (control.ratio * local_time_scale(g, w, accelerations.components()))
+            .min(approach_limit(g, w))
             .min(remaining);
-        let position_scale: Vec<f64> = state.gaps.iter().map(|g| tolerance * g).collect();
+        let mut position_scale = gaps.clone();
+        position_scale
+            .components_mut()
+            .iter_mut()
+            .for_each(|s| *s *= tolerance);
         let trial = Dprkn12::step(
             forces,
-            &state.gaps,
-            &state.rates,
+            gaps,
+            rates,
             &accelerations,
             step,
             &position_scale,
             &velocity_scale,
         );
         work.evaluations += u64::from(Dprkn12::EVALUATIONS_PER_STEP);
-        if trial.error > 1.0 || trial.y.iter().any(|&g| g <= 0.0) {
+        if trial.error > 1.0 || trial.y.components().iter().any(|&g| g <= 0.0) {
             work.rejected += 1;
             control
                 .reject(trial.error)
@@ -300,7 +380,13 @@ pub fn evolve<P: PairPotential>(
         } else {
             elapsed + step
         };
-        (state.gaps, state.rates, accelerations) = (trial.y, trial.v, trial.a);
+        on_step(
+            trial.y.components(),
+            trial.a.components(),
+            rates.components(),
+            trial.v.components(),
+        );
+        (*gaps, *rates, accelerations) = (trial.y, trial.v, trial.a);
         control.accept(trial.error);
     }
     Ok(work)

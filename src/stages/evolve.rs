@@ -17,7 +17,6 @@
 //! rate at `u'`, from the same events: `a_n` at `u' = 0`) or in ns for a gas;
 //! every table carries both and the scaled time `t rho^2 l v_th`.
 
-use rayon::prelude::*;
 use serde_json::Value;
 
 use super::collisions::CollisionsStage;
@@ -25,10 +24,10 @@ use super::kernel::{collision_events, target_of};
 use crate::config::EvolveParams;
 use crate::evolve::convolution::{self, kernel_moments};
 use crate::evolve::grid::VelocityGrid;
-use crate::evolve::jackknife;
 use crate::evolve::operator::{Generators, column_rates, fokker_planck, kernel_generators};
 use crate::evolve::propagate::Generator;
 use crate::evolve::spectral::Dissipative;
+use crate::evolve::{Replicated, jackknife, replicate_means};
 use crate::kernel::{Bins, Draws, Estimate, Event, histograms, moments};
 use crate::pipeline::{Column, Input, InstanceId, Progress, Stage, StageError, Table};
 
@@ -46,58 +45,6 @@ struct Moment {
     scaled: f64,
     /// ns, NaN when given in `1/Gamma`.
     ns: f64,
-}
-
-/// A quantity evaluated on the estimate and on every leave-one-out replicate set.
-struct Replicated<T> {
-    full: T,
-    leave_one_out: Vec<T>,
-}
-
-impl<T: Sync> Replicated<T> {
-    /// Applies `f` to every member, in parallel.
-    fn map<U: Send>(&self, f: impl Fn(&T) -> U + Sync) -> Replicated<U> {
-        Replicated {
-            full: f(&self.full),
-            leave_one_out: self.leave_one_out.par_iter().map(&f).collect(),
-        }
-    }
-}
-
-impl Replicated<Vec<Vec<f64>>> {
-    /// Jackknife estimate of `f` of the state at time index `k`.
-    fn estimate(&self, k: usize, f: impl Fn(&[f64]) -> f64) -> Estimate {
-        let loo: Vec<Vec<f64>> = self.leave_one_out.iter().map(|s| vec![f(&s[k])]).collect();
-        jackknife(&[f(&self.full[k])], &loo)[0]
-    }
-
-    /// Jackknife estimates of the state at time index `k`, node by node.
-    fn states(&self, k: usize) -> Vec<Estimate> {
-        let loo: Vec<Vec<f64>> = self.leave_one_out.iter().map(|s| s[k].clone()).collect();
-        jackknife(&self.full[k], &loo)
-    }
-}
-
-/// The mean of replicate vectors and the means with each one left out.
-fn replicate_means(replicates: &[Vec<f64>]) -> Replicated<Vec<f64>> {
-    let count = replicates.len() as f64;
-    let mut total = vec![0.0; replicates[0].len()];
-    for replicate in replicates {
-        total.iter_mut().zip(replicate).for_each(|(t, v)| *t += v);
-    }
-    Replicated {
-        full: total.iter().map(|t| t / count).collect(),
-        leave_one_out: replicates
-            .iter()
-            .map(|own| {
-                total
-                    .iter()
-                    .zip(own)
-                    .map(|(t, v)| (t - v) / (count - 1.0))
-                    .collect()
-            })
-            .collect(),
-    }
 }
 
 /// The mean generator and the means with each replicate left out.

@@ -2,11 +2,13 @@
 //! physics. [`plan`] is the one place where stages are registered.
 
 pub mod collisions;
+pub mod compare;
 pub mod convergence;
 pub mod evolve;
 pub mod fit;
 pub mod gases;
 pub mod kernel;
+pub mod md;
 pub mod moments;
 pub mod scan;
 pub mod sweep;
@@ -77,6 +79,21 @@ pub fn plan(study: &Study) -> Vec<Box<dyn Stage>> {
             )));
         }
         stages.push(Box::new(convergence::ConvergenceStage::new(params)));
+    }
+    let rings = study.md_params();
+    for params in &rings {
+        stages.push(Box::new(md::MdStage::new(params.clone())));
+    }
+    if let Some(first) = rings.first() {
+        let kernel = study.kernel_params(first.potential, 0.0, 0.0);
+        let systems = rings
+            .iter()
+            .filter(|r| r.potential == first.potential && r.u_prime == 0.0)
+            .cloned()
+            .collect();
+        stages.push(Box::new(compare::CompareStage::new(
+            compare::CompareParams { kernel, systems },
+        )));
     }
     let rows = potentials
         .iter()

@@ -1,0 +1,145 @@
+//! One molecular-dynamics run of a ring (physics.md §7) and its two
+//! estimators of `h(u, t)`, in scaled units (velocities in `v_th`, times in
+//! `l / v_th`):
+//!
+//! * published: histogram every velocity in the window around `u'`, subtract
+//!   the expected thermal background `(N - 1) f0`, divide by the bin width;
+//! * tagged velocity: every velocity lineage (followed through binary swaps,
+//!   [`ClusterRing`]) that starts within `start_band` of `u'` contributes its
+//!   change `u(t) - u(0)`, histogrammed around `u'` and normalized per lineage.
+//!   No background to subtract, and every near-`u'` particle counts, not one.
+//!
+//! Both are averaged over the sample times (a short window around `t_f`).
+
+use rand::SeedableRng;
+use rand::rngs::StdRng;
+
+use super::clusters::ClusterRing;
+use super::potential::PairPotential;
+use super::quasi_random::standard_normal_cdf;
+use super::ring::{RingError, RingForces, thermal_start};
+use crate::kernel::Bins;
+
+/// What one run does.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RunSettings {
+    /// Particles `N`.
+    pub particles: usize,
+    /// Velocity of the special particle.
+    pub u_prime: f64,
+    /// Integrator tolerance.
+    pub tolerance: f64,
+    /// Times at which both estimators are sampled, ascending, `l / v_th`.
+    pub sample_times: Vec<f64>,
+    /// Estimator bins around `u'`.
+    pub bins: Bins,
+    /// Lineages starting within this distance of `u'` enter the tagged estimator.
+    pub start_band: f64,
+    /// Step budget per macro step of a cluster.
+    pub max_steps: u64,
+}
+
+/// The estimators and diagnostics of one run.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RunResult {
+    /// Published estimator per bin, averaged over the sample times, `1/v_th`.
+    pub published: Vec<f64>,
+    /// Tagged-velocity estimator per bin, averaged over the sample times, `1/v_th`.
+    pub tagged: Vec<f64>,
+    /// Lineages in the tagged estimator (per sample time).
+    pub lineages: usize,
+    /// `|E(t_end) - E(0)| / E(0)`.
+    pub energy_error: f64,
+    /// `|P(t_end) - P(0)|`, `v_th`.
+    pub momentum_error: f64,
+    /// Macro steps of the cluster stepping.
+    pub macro_steps: u64,
+    /// Pair-force evaluations.
+    pub pair_forces: u64,
+}
+
+/// Why a run failed.
+#[derive(Debug, thiserror::Error)]
+pub enum RunError {
+    /// No initial configuration was accepted.
+    #[error(transparent)]
+    Crowded(#[from] super::ring::CrowdedRing),
+    /// The integration failed.
+    #[error(transparent)]
+    Integration(#[from] RingError),
+}
+
+/// Initial draws tried before a ring counts as too crowded.
+const MAX_DRAWS: u32 = 10_000;
+
+/// Runs one ring from the initial state drawn with `seed` (physics.md §7).
+pub fn run<P: PairPotential>(
+    forces: &RingForces<P>,
+    settings: &RunSettings,
+    seed: u64,
+) -> Result<RunResult, RunError> {
+    let mut rng = StdRng::seed_from_u64(seed);
+    let (positions, velocities) = thermal_start(
+        forces,
+        settings.particles,
+        Some(settings.u_prime),
+        &mut rng,
+        MAX_DRAWS,
+    )?;
+    let mut ring = ClusterRing::new(*forces, &positions, &velocities, settings.tolerance);
+    let (energy, momentum) = (ring.energy(), velocities.iter().sum::<f64>());
+    let bins = settings.bins;
+    let background = background(&bins, settings.u_prime, settings.particles - 1);
+    let mut published = vec![0.0; bins.len()];
+    let mut tagged = vec![0.0; bins.len()];
+    let starters: Vec<usize> = (0..velocities.len())
+        .filter(|&k| (velocities[k] - settings.u_prime).abs() <= settings.start_band)
+        .collect();
+    let mut now = 0.0;
+    for &time in &settings.sample_times {
+        ring.advance(time - now, settings.max_steps)?;
+        now = time;
+        for &u in &ring.velocities {
+            if let Some(k) = bins.index(u - settings.u_prime) {
+                published[k] += 1.0;
+            }
+        }
+        let carried = ring.label_velocities();
+        for &label in &starters {
+            if let Some(k) = bins.index(carried[label] - velocities[label]) {
+                tagged[k] += 1.0;
+            }
+        }
+    }
+    let samples = settings.sample_times.len() as f64;
+    let width = bins.width;
+    let lineages = starters.len().max(1) as f64;
+    Ok(RunResult {
+        published: published
+            .iter()
+            .zip(&background)
+            .map(|(count, expected)| (count / samples - expected) / width)
+            .collect(),
+        tagged: tagged
+            .iter()
+            .map(|count| count / (samples * lineages * width))
+            .collect(),
+        lineages: starters.len(),
+        energy_error: (ring.energy() - energy).abs() / energy,
+        momentum_error: (ring.velocities.iter().sum::<f64>() - momentum).abs(),
+        macro_steps: ring.macro_steps,
+        pair_forces: ring.pair_forces,
+    })
+}
+
+/// Expected thermal counts per bin of `thermal` particles: `N_th int_bin f0`.
+fn background(bins: &Bins, u_prime: f64, thermal: usize) -> Vec<f64> {
+    (0..bins.len())
+        .map(|k| {
+            let centre = u_prime + bins.centre(k);
+            let half = 0.5 * bins.width;
+            thermal as f64
+                * (standard_normal_cdf(centre + half) - standard_normal_cdf(centre - half))
+        })
+        .collect()
+}

@@ -1,0 +1,285 @@
+//! `compare`: molecular dynamics against the Boltzmann evolution (physics.md
+//! §7, §8). For every `md` ring, `h(u, t_f)` of the master equation with the
+//! translation-invariant kernel (exact in Fourier space at the ring's `t_f`
+//! in units of its own `rho^2 l v_th`; at `Gamma t_f ~ 2e-4` the kernel's `u'`
+//! dependence is negligible) on the ring's bins, with jackknife errors, and the
+//! chi-square of both MD estimators against it. The scaling collapse: the
+//! tagged `h` of every ring against the first one's.
+
+use serde::Serialize;
+use serde_json::Value;
+
+use super::collisions::CollisionsStage;
+use super::kernel::{collision_events, target_of};
+use crate::config::{KernelParams, MdParams};
+use crate::evolve::convolution::{self, overlap_rebin};
+use crate::evolve::{jackknife, replicate_means};
+use crate::kernel::{Bins, Estimate, histograms};
+use crate::pipeline::table::f64_values;
+use crate::pipeline::{Column, Input, InstanceId, Progress, Stage, StageError, Table};
+
+/// Resolved parameters of the `compare` stage.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct CompareParams {
+    /// The kernel (potential, `u' = 0`, dilute, bins).
+    pub kernel: KernelParams,
+    /// The rings compared.
+    pub systems: Vec<MdParams>,
+}
+
+/// The `compare` stage.
+pub struct CompareStage {
+    params: CompareParams,
+}
+
+/// One ring's MD estimators, read from its `h` table.
+struct MdEstimates {
+    du: Vec<f64>,
+    published: Vec<Estimate>,
+    tagged: Vec<Estimate>,
+}
+
+fn read_md(input: &Input) -> Result<MdEstimates, StageError> {
+    let batch = input
+        .tables
+        .get("h")
+        .ok_or_else(|| StageError::Input(format!("{} has no h table", input.id)))?;
+    let pair = |mean: &str, error: &str| -> Result<Vec<Estimate>, StageError> {
+        Ok(f64_values(batch, mean)?
+            .into_iter()
+            .zip(f64_values(batch, error)?)
+            .map(|(mean, stderr)| Estimate { mean, stderr })
+            .collect())
+    };
+    Ok(MdEstimates {
+        du: f64_values(batch, "du")?,
+        published: pair("h_published", "h_published_stderr")?,
+        tagged: pair("h_tagged", "h_tagged_stderr")?,
+    })
+}
+
+/// One goodness-of-fit row.
+struct Fit {
+    ring: String,
+    reference: String,
+    estimator: String,
+    chi2: f64,
+    dof: u32,
+}
+
+/// `sum (a - b)^2 / (sa^2 + sb^2)` over the bins where the MD estimate `a`
+/// has a nonzero error (bins no run reached carry no error estimate; their
+/// Gaussian error would be zero), and their number.
+fn chi_square(a: &[Estimate], b: &[Estimate]) -> (f64, usize) {
+    a.iter()
+        .zip(b)
+        .filter(|(x, _)| x.stderr > 0.0)
+        .fold((0.0, 0), |(sum, count), (x, y)| {
+            let variance = x.stderr.powi(2) + y.stderr.powi(2);
+            (sum + (x.mean - y.mean).powi(2) / variance, count + 1)
+        })
+}
+
+impl CompareStage {
+    /// A compare stage with resolved parameters.
+    pub fn new(params: CompareParams) -> CompareStage {
+        CompareStage { params }
+    }
+
+    /// Boltzmann `h` of every ring on its MD bins, with jackknife errors.
+    fn boltzmann(
+        &self,
+        collisions: &Input,
+        rings: &[MdEstimates],
+    ) -> Result<Vec<Vec<Estimate>>, StageError> {
+        let (events, draws, _) = collision_events(collisions)?;
+        let kernel = &self.params.kernel;
+        let bins = Bins::for_window(kernel.window, kernel.bin_width);
+        let per_replicate: Vec<Vec<f64>> = histograms(&events, &target_of(kernel), &bins, &draws)
+            .iter()
+            .map(|h| h.total())
+            .collect();
+        let rates = replicate_means(&per_replicate);
+        let exponent = kernel.potential.length_exponent();
+        self.params
+            .systems
+            .iter()
+            .zip(rings)
+            .map(|(system, ring)| {
+                let time = system.final_time_ns * system.gas.rate_per_ns(1.0, exponent);
+                let size = convolution::periodic_size(&rates.full, bins.width, time)
+                    .max((4.0 * system.window / bins.width) as usize)
+                    .next_power_of_two();
+                let out_width = system.bin_width;
+                let binned = rates.map(|g| {
+                    let h = &convolution::evolve(g, size, &[time])[0];
+                    overlap_rebin(h, bins.width, size / 2, &ring.du, out_width)
+                        .iter()
+                        .map(|m| m / out_width)
+                        .collect::<Vec<f64>>()
+                });
+                Ok(jackknife(&binned.full, &binned.leave_one_out))
+            })
+            .collect()
+    }
+}
+
+impl Stage for CompareStage {
+    fn id(&self) -> InstanceId {
+        InstanceId::new("compare", "study")
+    }
+
+    fn version(&self) -> u32 {
+        1
+    }
+
+    fn params(&self) -> Value {
+        serde_json::to_value(&self.params).unwrap_or(Value::Null)
+    }
+
+    fn inputs(&self) -> Vec<InstanceId> {
+        let mut ids = vec![CollisionsStage::instance(
+            &self.params.kernel.potential.id(),
+        )];
+        ids.extend(
+            self.params
+                .systems
+                .iter()
+                .map(|s| InstanceId::new("md", &s.name)),
+        );
+        ids
+    }
+
+    fn work_units(&self) -> u64 {
+        1
+    }
+
+    fn run(&self, inputs: &[Input], progress: &Progress) -> Result<Vec<Table>, StageError> {
+        let rings: Vec<MdEstimates> = inputs[1..].iter().map(read_md).collect::<Result<_, _>>()?;
+        let boltzmann = self.boltzmann(&inputs[0], &rings)?;
+        let mut columns: [Vec<f64>; 7] = Default::default();
+        let mut names = Vec::new();
+        let mut fits: Vec<Fit> = Vec::new();
+        let mut record =
+            |ring: &str, reference: &str, estimator: &str, (chi2, dof): (f64, usize)| {
+                fits.push(Fit {
+                    ring: ring.to_string(),
+                    reference: reference.to_string(),
+                    estimator: estimator.to_string(),
+                    chi2,
+                    dof: dof as u32,
+                });
+            };
+        for ((system, ring), predicted) in self.params.systems.iter().zip(&rings).zip(&boltzmann) {
+            for (k, boltzmann) in predicted.iter().enumerate() {
+                names.push(system.name.clone());
+                let row = [
+                    ring.du[k],
+                    boltzmann.mean,
+                    boltzmann.stderr,
+                    ring.published[k].mean,
+                    ring.published[k].stderr,
+                    ring.tagged[k].mean,
+                    ring.tagged[k].stderr,
+                ];
+                columns.iter_mut().zip(row).for_each(|(c, v)| c.push(v));
+            }
+            record(
+                &system.name,
+                "boltzmann",
+                "published",
+                chi_square(&ring.published, predicted),
+            );
+            record(
+                &system.name,
+                "boltzmann",
+                "tagged",
+                chi_square(&ring.tagged, predicted),
+            );
+            if let (Some(first), Some(reference)) = (rings.first(), self.params.systems.first())
+                && reference.name != system.name
+                && first.du == ring.du
+            {
+                record(
+                    &system.name,
+                    &reference.name,
+                    "tagged",
+                    chi_square(&ring.tagged, &first.tagged),
+                );
+            }
+        }
+        progress.advance(1);
+        let [
+            du,
+            h_b,
+            h_b_err,
+            published,
+            published_err,
+            tagged,
+            tagged_err,
+        ] = columns;
+        let density = "1/v_th";
+        let comparison = Table::new(
+            "comparison",
+            vec![
+                Column::text("ring", "md system", names),
+                Column::f64("du", "v_th", "bin centre relative to u'", du),
+                Column::f64("h_boltzmann", density, "master equation with the translation-invariant kernel at t_f, exact in Fourier space, on the ring's bins", h_b),
+                Column::f64("h_boltzmann_stderr", density, "jackknife standard error over the kernel's randomizations", h_b_err),
+                Column::f64("h_published", density, "MD, published estimator", published),
+                Column::f64("h_published_stderr", density, "standard error over runs", published_err),
+                Column::f64("h_tagged", density, "MD, tagged-velocity estimator", tagged),
+                Column::f64("h_tagged_stderr", density, "standard error over runs", tagged_err),
+            ],
+        )?
+        .with_metadata("ternary.description", "h(u, t_f) of every ring: MD against Boltzmann".into());
+        let text = |f: fn(&Fit) -> &String| fits.iter().map(|x| f(x).clone()).collect::<Vec<_>>();
+        let (system, reference, estimator) = (
+            text(|f| &f.ring),
+            text(|f| &f.reference),
+            text(|f| &f.estimator),
+        );
+        let chi2: Vec<f64> = fits.iter().map(|f| f.chi2).collect();
+        let dof: Vec<u32> = fits.iter().map(|f| f.dof).collect();
+        let reduced: Vec<f64> = chi2
+            .iter()
+            .zip(&dof)
+            .map(|(c, d)| c / f64::from(*d))
+            .collect();
+        let goodness = Table::new(
+            "goodness",
+            vec![
+                Column::text("ring", "md system", system),
+                Column::text(
+                    "reference",
+                    "boltzmann, or the ring it is compared with (scaling collapse)",
+                    reference,
+                ),
+                Column::text("estimator", "MD estimator", estimator),
+                Column::f64(
+                    "chi2",
+                    "1",
+                    "sum over bins of (difference / combined standard error)^2",
+                    chi2,
+                ),
+                Column::u32(
+                    "dof",
+                    "1",
+                    "bins where the MD estimate has a nonzero error",
+                    dof,
+                ),
+                Column::f64(
+                    "chi2_per_dof",
+                    "1",
+                    "chi2 / dof: ~1 when the two agree within errors",
+                    reduced,
+                ),
+            ],
+        )?
+        .with_metadata(
+            "ternary.description",
+            "goodness of fit of MD against Boltzmann, and of the scaling collapse".into(),
+        );
+        Ok(vec![comparison, goodness])
+    }
+}
