@@ -1121,10 +1121,10 @@ fn validate_md(config: &Config) -> Result<(), Invalid> {
         let potential = gas.map(|g| g.potential.as_str()).unwrap_or_default();
         let exponent: Option<f64> = potential.strip_prefix("ipp-").and_then(|n| n.parse().ok());
         check(
-            exponent.is_some_and(|n| n > 2.0),
+            exponent.is_some_and(|n| n >= 2.0),
             key("gas"),
             format!(
-                "the md stage runs inverse power laws with n > 2 by cluster stepping; `{potential}` is not one"
+                "the md stage runs inverse power laws with n >= 2 (n = 2 as a whole ring, larger n by cluster stepping); `{potential}` is not one"
             ),
         )?;
         check(

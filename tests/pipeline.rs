@@ -72,6 +72,17 @@ fn stderr(output: &Output) -> String {
     String::from_utf8_lossy(&output.stderr).into_owned()
 }
 
+/// Runs a pyarrow check script on an artifact directory; it must exit 0.
+fn python_check(script: &str, artifact: &Path) {
+    let output = Command::new("python3")
+        .arg("-c")
+        .arg(script)
+        .arg(artifact)
+        .output()
+        .unwrap();
+    assert!(output.status.success(), "{}", stderr(&output));
+}
+
 /// Runs `ternary run` and returns (computed, fresh) from its closing line.
 fn run_counts(config: &Path, args: &[&str]) -> (usize, usize) {
     let output = ternary(config, &[&["run"], args].concat());
@@ -545,13 +556,7 @@ for v, c in zip(e["variance"], e["variance_closed_form"]):
     assert abs(v - c) < 1e-8 * c, (v, c)
 print("ok")
 "#;
-    let output = Command::new("python3")
-        .arg("-c")
-        .arg(script)
-        .arg(artifact)
-        .output()
-        .unwrap();
-    assert!(output.status.success(), "{}", stderr(&output));
+    python_check(script, artifact);
 }
 
 /// The md stage: same bytes for any thread count; every run conserves energy
@@ -616,11 +621,53 @@ noisier = sum(pe > te for pe, te in zip(h["h_published_stderr"], h["h_tagged_std
 assert noisier > 0.8 * len(h["h_tagged"]), noisier
 print("ok")
 "#;
-    let output = Command::new("python3")
-        .arg("-c")
-        .arg(script)
-        .arg(artifact)
-        .output()
-        .unwrap();
-    assert!(output.status.success(), "{}", stderr(&output));
+    python_check(script, artifact);
+}
+
+/// The n = 2 chord ring is Sutherland's integrable model: every run keeps its
+/// rapidities (Lax eigenvalues) to the integration error, so the tagged h (in
+/// rapidities) stays a delta: all its mass in the centre bin.
+#[test]
+fn sutherland_ring_does_not_thermalize() {
+    let extra = r#"
+[sweep]
+enabled = false
+
+[[gas]]
+name = "sutherland"
+potential = "ipp-2"
+l0_um = 1.0
+eps_ev = 1.0
+kt_ev = 0.1
+mass_electron = 1.0
+ring_particles = 11
+ring_radius_um = 200.0
+
+[md]
+enabled = true
+runs = 3
+tolerance = 1e-12
+start_band = 0.5
+
+[[md.system]]
+name = "sutherland"
+gas = "sutherland"
+final_time_ns = 10.0
+"#;
+    let dir = workspace("sutherland");
+    run_counts(&write_config(&dir, &config(7, extra)), &[]);
+    let artifact = &stage_dirs(&dir.join("data"), "md")[0];
+    let script = r#"
+import sys, pyarrow.parquet as pq
+runs = pq.read_table(sys.argv[1] + "/runs.parquet").to_pydict()
+assert max(runs["invariant_drift"]) < 1e-8, runs["invariant_drift"]
+assert max(runs["energy_error"]) < 1e-9, runs["energy_error"]
+h = pq.read_table(sys.argv[1] + "/h.parquet").to_pydict()
+centre = h["du"].index(0.0)
+width = h["du"][centre + 1] - h["du"][centre]
+assert abs(h["h_tagged"][centre] * width - 1.0) < 1e-12, h["h_tagged"]
+assert sum(abs(v) for k, v in enumerate(h["h_tagged"]) if k != centre) == 0.0
+print("ok")
+"#;
+    python_check(script, artifact);
 }

@@ -10,6 +10,11 @@
 //!   No background to subtract, and every near-`u'` particle counts, not one.
 //!
 //! Both are averaged over the sample times (a short window around `t_f`).
+//!
+//! The integrable `n = 2` (Sutherland) ring interacts at all distances: it is
+//! advanced as a whole (all pairs), and its lineages are its rapidities, the
+//! Lax eigenvalues, which no collision changes: its tagged `h` stays a delta
+//! to the integration error (`invariant_drift`).
 
 use rand::SeedableRng;
 use rand::rngs::StdRng;
@@ -17,7 +22,7 @@ use rand::rngs::StdRng;
 use super::clusters::ClusterRing;
 use super::potential::PairPotential;
 use super::quasi_random::standard_normal_cdf;
-use super::ring::{RingError, RingForces, thermal_start};
+use super::ring::{Reach, RingError, RingForces, RingState, RingWork, evolve, thermal_start};
 use crate::kernel::Bins;
 
 /// What one run does.
@@ -56,6 +61,74 @@ pub struct RunResult {
     pub macro_steps: u64,
     /// Pair-force evaluations.
     pub pair_forces: u64,
+    /// Largest change of a Lax eigenvalue over the run (integrable ring
+    /// only; NaN otherwise), `v_th`.
+    pub invariant_drift: f64,
+}
+
+/// A ring being advanced: by cluster stepping, or as a whole (Sutherland).
+trait Advancing {
+    fn advance(&mut self, duration: f64, max_steps: u64) -> Result<(), RingError>;
+    fn velocities(&self) -> Vec<f64>;
+    /// What each lineage carries now: label velocities, or sorted rapidities.
+    fn lineages(&self) -> Vec<f64>;
+    fn energy(&self) -> f64;
+    /// Macro steps and pair-force evaluations so far.
+    fn work(&self) -> (u64, u64);
+}
+
+impl<P: PairPotential> Advancing for ClusterRing<P> {
+    fn advance(&mut self, duration: f64, max_steps: u64) -> Result<(), RingError> {
+        ClusterRing::advance(self, duration, max_steps)
+    }
+    fn velocities(&self) -> Vec<f64> {
+        self.velocities.clone()
+    }
+    fn lineages(&self) -> Vec<f64> {
+        self.label_velocities()
+    }
+    fn energy(&self) -> f64 {
+        ClusterRing::energy(self)
+    }
+    fn work(&self) -> (u64, u64) {
+        (self.macro_steps, self.pair_forces)
+    }
+}
+
+/// The whole ring on one adaptive step, all pairs interacting.
+struct WholeRing<P> {
+    forces: RingForces<P>,
+    state: RingState,
+    tolerance: f64,
+    work: RingWork,
+}
+
+impl<P: PairPotential> Advancing for WholeRing<P> {
+    fn advance(&mut self, duration: f64, max_steps: u64) -> Result<(), RingError> {
+        let work = evolve(
+            &self.forces,
+            &mut self.state,
+            duration,
+            self.tolerance,
+            max_steps,
+        )?;
+        self.work.steps += work.steps;
+        self.work.evaluations += work.evaluations;
+        Ok(())
+    }
+    fn velocities(&self) -> Vec<f64> {
+        self.state.velocities()
+    }
+    fn lineages(&self) -> Vec<f64> {
+        self.state.sutherland_invariants(self.forces.circumference)
+    }
+    fn energy(&self) -> f64 {
+        self.state.energy(&self.forces)
+    }
+    fn work(&self) -> (u64, u64) {
+        let n = self.state.gaps.len() as u64;
+        (self.work.steps, self.work.evaluations * n * (n - 1) / 2)
+    }
 }
 
 /// Why a run failed.
@@ -86,27 +159,52 @@ pub fn run<P: PairPotential>(
         &mut rng,
         MAX_DRAWS,
     )?;
-    let mut ring = ClusterRing::new(*forces, &positions, &velocities, settings.tolerance);
+    match forces.reach {
+        Reach::All => {
+            let state = RingState::new(&positions, &velocities, forces.circumference);
+            let ring = WholeRing {
+                forces: *forces,
+                state,
+                tolerance: settings.tolerance,
+                work: RingWork::default(),
+            };
+            sample(ring, &velocities, settings, true)
+        }
+        Reach::Neighbours(_) => {
+            let ring = ClusterRing::new(*forces, &positions, &velocities, settings.tolerance);
+            sample(ring, &velocities, settings, false)
+        }
+    }
+}
+
+/// Advances `ring` through the sample times and evaluates both estimators.
+fn sample(
+    mut ring: impl Advancing,
+    velocities: &[f64],
+    settings: &RunSettings,
+    integrable: bool,
+) -> Result<RunResult, RunError> {
     let (energy, momentum) = (ring.energy(), velocities.iter().sum::<f64>());
     let bins = settings.bins;
     let background = background(&bins, settings.u_prime, settings.particles - 1);
     let mut published = vec![0.0; bins.len()];
     let mut tagged = vec![0.0; bins.len()];
-    let starters: Vec<usize> = (0..velocities.len())
-        .filter(|&k| (velocities[k] - settings.u_prime).abs() <= settings.start_band)
+    let start = ring.lineages();
+    let starters: Vec<usize> = (0..start.len())
+        .filter(|&k| (start[k] - settings.u_prime).abs() <= settings.start_band)
         .collect();
     let mut now = 0.0;
     for &time in &settings.sample_times {
         ring.advance(time - now, settings.max_steps)?;
         now = time;
-        for &u in &ring.velocities {
+        for u in ring.velocities() {
             if let Some(k) = bins.index(u - settings.u_prime) {
                 published[k] += 1.0;
             }
         }
-        let carried = ring.label_velocities();
+        let carried = ring.lineages();
         for &label in &starters {
-            if let Some(k) = bins.index(carried[label] - velocities[label]) {
+            if let Some(k) = bins.index(carried[label] - start[label]) {
                 tagged[k] += 1.0;
             }
         }
@@ -114,6 +212,8 @@ pub fn run<P: PairPotential>(
     let samples = settings.sample_times.len() as f64;
     let width = bins.width;
     let lineages = starters.len().max(1) as f64;
+    let last = ring.lineages();
+    let (macro_steps, pair_forces) = ring.work();
     Ok(RunResult {
         published: published
             .iter()
@@ -126,9 +226,17 @@ pub fn run<P: PairPotential>(
             .collect(),
         lineages: starters.len(),
         energy_error: (ring.energy() - energy).abs() / energy,
-        momentum_error: (ring.velocities.iter().sum::<f64>() - momentum).abs(),
-        macro_steps: ring.macro_steps,
-        pair_forces: ring.pair_forces,
+        momentum_error: (ring.velocities().iter().sum::<f64>() - momentum).abs(),
+        macro_steps,
+        pair_forces,
+        invariant_drift: if integrable {
+            last.iter()
+                .zip(&start)
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0, f64::max)
+        } else {
+            f64::NAN
+        },
     })
 }
 

@@ -2,7 +2,9 @@
 //! parallel, each from its own seeded initial state, advanced by cluster
 //! stepping; `h(u, t_f)` by the published estimator and by the tagged-velocity
 //! estimator, averaged over a short window around `t_f`, with standard errors
-//! from the spread of runs; conservation diagnostics per run.
+//! from the spread of runs; conservation diagnostics per run. The `n = 2`
+//! (Sutherland) ring runs as a whole with all pairs, its lineages being its
+//! conserved rapidities.
 
 use rayon::prelude::*;
 use serde_json::Value;
@@ -58,10 +60,15 @@ impl PotentialVisitor for Runs<'_> {
 
     fn visit<P: PairPotential>(self, potential: P) -> Self::Output {
         let p = &self.stage.params;
+        let reach = if p.potential.is_integrable() {
+            Reach::All
+        } else {
+            Reach::Neighbours(p.neighbours as usize)
+        };
         let forces = RingForces {
             potential,
             circumference: p.circumference,
-            reach: Reach::Neighbours(p.neighbours as usize),
+            reach,
         };
         let settings = self.stage.settings();
         (0..p.runs)
@@ -208,7 +215,7 @@ impl MdStage {
                 Column::f64(
                     "macro_steps",
                     "1",
-                    "macro steps of the cluster stepping",
+                    "macro steps of the cluster stepping (accepted steps of a whole ring)",
                     pick(|r| r.macro_steps as f64),
                 ),
                 Column::f64(
@@ -216,6 +223,12 @@ impl MdStage {
                     "1",
                     "pair-force evaluations",
                     pick(|r| r.pair_forces as f64),
+                ),
+                Column::f64(
+                    "invariant_drift",
+                    "v_th",
+                    "largest change of a Lax eigenvalue (rapidity) over the run: the n = 2 Sutherland ring's conservation check (NaN otherwise)",
+                    pick(|r| r.invariant_drift),
                 ),
             ],
         )?
@@ -232,7 +245,7 @@ impl Stage for MdStage {
     }
 
     fn version(&self) -> u32 {
-        1
+        2
     }
 
     fn params(&self) -> Value {
