@@ -159,6 +159,14 @@ fn evolution_keeps_the_invariants_and_relaxes_to_equilibrium() {
             "{momentum} {energy}"
         );
     }
+    // From a delta at u' = 0.5 the momentum u' and the energy u'^2 stay as well.
+    let mut shifted = vec![0.0; grid.len()];
+    shifted[grid.node_of(0.5).unwrap()] = 1.0;
+    for h in projected.propagate(&shifted, &times) {
+        let [number, momentum, energy] = grid.moments(&h, 0.0, f64::INFINITY);
+        let errors = [number - 1.0, momentum - 0.5, energy - 0.25];
+        assert!(errors.iter().all(|e| e.abs() < 1e-12), "{errors:?}");
+    }
     let equilibrium = grid.conserving_equilibrium(0.0);
     let full_distances: Vec<f64> = full.iter().map(|h| distance(h, &equilibrium)).collect();
     let tagged = mean(&replicates, |g| &g.tagged).propagate(&h0, &times);
