@@ -13,6 +13,25 @@
 use rustfft::FftPlanner;
 use rustfft::num_complex::Complex;
 
+use super::{Replicated, replicate_means};
+use crate::kernel::{Bins, Draws, Event, Target, histograms};
+
+/// The binned kernel `g_k = G_k dx` (self plus bath) at `target` on `bins`,
+/// per replicate: its mean and its means with each replicate left out, for
+/// jackknife errors of anything computed from it.
+pub fn replicated_kernel(
+    events: &[Event],
+    draws: &Draws,
+    target: &Target,
+    bins: &Bins,
+) -> Replicated<Vec<f64>> {
+    let per_replicate: Vec<Vec<f64>> = histograms(events, target, bins, draws)
+        .iter()
+        .map(|h| h.total())
+        .collect();
+    replicate_means(&per_replicate)
+}
+
 /// Moments `kappa_p = sum_k g_k x_k^p`, `p = 0..=4`, of a kernel on bins of
 /// `width` centred on `x_k = (k - half) width`.
 pub fn kernel_moments(rates: &[f64], width: f64) -> [f64; 5] {

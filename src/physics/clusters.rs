@@ -31,7 +31,7 @@
 use std::f64::consts::PI;
 
 use super::potential::PairPotential;
-use super::ring::{Reach, RingError, RingForces, RingState, RingWork, advance};
+use super::ring::{Reach, RingError, RingForces, RingState, RingWork, advance, ring_velocities};
 use crate::integrate::{Acceleration, Vector};
 
 /// Unbonded gaps are kept above this fraction of the cutoff.
@@ -71,38 +71,37 @@ impl<P> ClusterForces<'_, P> {
 }
 
 impl<P: PairPotential> ClusterForces<'_, P> {
-    /// Particle accelerations of the run with internal gaps `gaps` into `out`.
-    fn particle_accelerations(&self, gaps: &[f64], out: &mut [f64]) {
-        let m = out.len();
+    /// Calls `visit(i, j, arc)` for every interacting pair of a run with
+    /// internal gaps `gaps`, member `j` ahead of member `i` by `arc`.
+    fn for_each_pair(&self, gaps: &[f64], mut visit: impl FnMut(usize, usize, f64)) {
+        let m = gaps.len() + 1;
         for i in 0..m {
             let mut arc = 0.0;
             for j in i + 1..self.last_partner(i, m) {
                 arc += gaps[j - 1];
-                if !self.interacts(j - i) {
-                    continue;
+                if self.interacts(j - i) {
+                    visit(i, j, arc);
                 }
-                let push = self.forces.potential.force(self.forces.chord(arc))
-                    * (PI * arc / self.forces.circumference).cos();
-                out[i] -= push;
-                out[j] += push;
             }
         }
     }
 
+    /// Particle accelerations of the run with internal gaps `gaps` into `out`.
+    fn particle_accelerations(&self, gaps: &[f64], out: &mut [f64]) {
+        self.for_each_pair(gaps, |i, j, arc| {
+            let push = self.forces.potential.force(self.forces.chord(arc))
+                * (PI * arc / self.forces.circumference).cos();
+            out[i] -= push;
+            out[j] += push;
+        });
+    }
+
     /// Potential energy of the pairs inside the run.
     fn potential_energy(&self, gaps: &[f64]) -> f64 {
-        let m = gaps.len() + 1;
         let mut energy = 0.0;
-        for i in 0..m {
-            let mut arc = 0.0;
-            for j in i + 1..self.last_partner(i, m) {
-                arc += gaps[j - 1];
-                if !self.interacts(j - i) {
-                    continue;
-                }
-                energy += self.forces.potential.energy(self.forces.chord(arc));
-            }
-        }
+        self.for_each_pair(gaps, |_, _, arc| {
+            energy += self.forces.potential.energy(self.forces.chord(arc));
+        });
         energy
     }
 }
@@ -478,13 +477,6 @@ fn run_velocities(rates: &[f64], centre: f64) -> Vec<f64> {
         .iter()
         .map(|offset| centre + offset)
         .collect()
-}
-
-/// Velocities of the whole ring from its gap rates (the last one wrapping)
-/// and its momentum.
-fn ring_velocities(rates: &[f64], momentum: f64) -> Vec<f64> {
-    let n = rates.len();
-    run_velocities(&rates[..n - 1], momentum / n as f64)
 }
 
 /// Velocity labels and the collision groups that pass them on.

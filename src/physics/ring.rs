@@ -145,15 +145,7 @@ impl RingState {
 
     /// Particle velocities: `u_k = u_0 + sum_(j<k) w_j`, with `u_0` fixed by the momentum.
     pub fn velocities(&self) -> Vec<f64> {
-        let n = self.gaps.len();
-        let mut offsets = Vec::with_capacity(n);
-        let mut sum = 0.0;
-        for k in 0..n {
-            offsets.push(sum);
-            sum += self.rates[k];
-        }
-        let first = (self.momentum - offsets.iter().sum::<f64>()) / n as f64;
-        offsets.iter().map(|o| first + o).collect()
+        ring_velocities(&self.rates, self.momentum)
     }
 
     /// Arc positions with particle 0 at 0.
@@ -247,6 +239,21 @@ pub fn thermal_start<P: PairPotential, R: RngExt>(
         }
     }
     Err(CrowdedRing(max_draws))
+}
+
+/// Particle velocities of a whole ring from its gap rates `w_k = u_(k+1) - u_k`
+/// (the last one wrapping) and total momentum: `u_k = u_0 + sum_(j<k) w_j`,
+/// with `u_0` fixed by the momentum.
+pub fn ring_velocities(rates: &[f64], momentum: f64) -> Vec<f64> {
+    let n = rates.len();
+    let mut offsets = Vec::with_capacity(n);
+    let mut sum = 0.0;
+    for rate in rates {
+        offsets.push(sum);
+        sum += rate;
+    }
+    let first = (momentum - offsets.iter().sum::<f64>()) / n as f64;
+    offsets.iter().map(|o| first + o).collect()
 }
 
 /// Work done by [`evolve`].

@@ -13,8 +13,8 @@ use super::collisions::CollisionsStage;
 use super::kernel::{collision_events, target_of};
 use crate::config::{KernelParams, MdParams};
 use crate::evolve::convolution::{self, overlap_rebin};
-use crate::evolve::{jackknife, replicate_means};
-use crate::kernel::{Bins, Estimate, histograms};
+use crate::evolve::jackknife;
+use crate::kernel::{Bins, Estimate};
 use crate::pipeline::table::f64_values;
 use crate::pipeline::{Column, Input, InstanceId, Progress, Stage, StageError, Table};
 
@@ -95,11 +95,7 @@ impl CompareStage {
         let (events, draws, _) = collision_events(collisions)?;
         let kernel = &self.params.kernel;
         let bins = Bins::for_window(kernel.window, kernel.bin_width);
-        let per_replicate: Vec<Vec<f64>> = histograms(&events, &target_of(kernel), &bins, &draws)
-            .iter()
-            .map(|h| h.total())
-            .collect();
-        let rates = replicate_means(&per_replicate);
+        let rates = convolution::replicated_kernel(&events, &draws, &target_of(kernel), &bins);
         let exponent = kernel.potential.length_exponent();
         self.params
             .systems

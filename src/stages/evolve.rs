@@ -27,8 +27,8 @@ use crate::evolve::grid::VelocityGrid;
 use crate::evolve::operator::{Generators, column_rates, fokker_planck, kernel_generators};
 use crate::evolve::propagate::Generator;
 use crate::evolve::spectral::Dissipative;
-use crate::evolve::{Replicated, jackknife, replicate_means};
-use crate::kernel::{Bins, Draws, Estimate, Event, histograms, moments};
+use crate::evolve::{Replicated, jackknife};
+use crate::kernel::{Bins, Draws, Estimate, Event, moments};
 use crate::pipeline::{Column, Input, InstanceId, Progress, Stage, StageError, Table};
 
 /// The `evolve` stage.
@@ -119,11 +119,7 @@ impl EvolveStage {
     ) -> Result<Vec<Table>, StageError> {
         let kernel = &self.params.kernel;
         let bins = Bins::for_window(kernel.window, kernel.bin_width);
-        let per_replicate: Vec<Vec<f64>> = histograms(events, &target_of(kernel), &bins, draws)
-            .iter()
-            .map(|h| h.total())
-            .collect();
-        let rates = replicate_means(&per_replicate);
+        let rates = convolution::replicated_kernel(events, draws, &target_of(kernel), &bins);
         let times: Vec<f64> = schedule.iter().map(|m| m.scaled).collect();
         let t_max = times.last().copied().unwrap_or(0.0);
         let rebin = self.params.early_rebin as usize;
