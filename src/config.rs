@@ -1118,13 +1118,16 @@ fn validate_md(config: &Config) -> Result<(), Invalid> {
                 system.gas
             ),
         )?;
-        let potential = gas.map(|g| g.potential.as_str()).unwrap_or_default();
-        let exponent: Option<f64> = potential.strip_prefix("ipp-").and_then(|n| n.parse().ok());
+        let id = gas.map(|g| g.potential.as_str()).unwrap_or_default();
+        let potential = config.potentials.list().into_iter().find(|p| p.id() == id);
         check(
-            exponent.is_some_and(|n| n >= 2.0),
+            matches!(
+                potential,
+                Some(Potential::InversePower { n }) if n >= 2.0
+            ) || matches!(potential, Some(Potential::LennardJones { .. })),
             key("gas"),
             format!(
-                "the md stage runs inverse power laws with n >= 2 (n = 2 as a whole ring, larger n by cluster stepping); `{potential}` is not one"
+                "the md stage runs inverse power laws with n >= 2 (n = 2 as a whole ring, larger n by cluster stepping) and Lennard-Jones; `{id}` is neither"
             ),
         )?;
         check(
@@ -1264,6 +1267,22 @@ fn validate_gases(config: &Config) -> Result<(), Invalid> {
                 value.is_finite() && value > 0.0,
                 key(name),
                 format!("{value} must be > 0"),
+            )?;
+        }
+        let potential = config
+            .potentials
+            .list()
+            .into_iter()
+            .find(|p| p.id() == gas.potential);
+        if let Some(Potential::LennardJones { theta }) = potential {
+            let ratio = gas.kt_ev / gas.eps_ev;
+            check(
+                (ratio / theta - 1.0).abs() <= 1e-9,
+                key("kt_ev"),
+                format!(
+                    "kt_ev / eps_ev = {ratio} differs from theta = kT/eps = {theta} of `{}`",
+                    gas.potential
+                ),
             )?;
         }
         let masses = [gas.mass_electron, gas.mass_amu];
@@ -1751,5 +1770,24 @@ points = 21
             let error = parse(&VALID.replace(from, to)).unwrap_err();
             assert_eq!(error.key, key, "{error}");
         }
+    }
+
+    /// A Lennard-Jones gas fixes `theta = kT/eps`: a temperature that
+    /// disagrees with its potential is named; a matching one runs as a ring.
+    #[test]
+    fn lennard_jones_gas_must_match_its_theta() {
+        let ring = |kt: f64| {
+            format!(
+                "{VALID}\n[[gas]]\nname = \"lj\"\npotential = \"lj-0.1\"\nl0_um = 1.0\neps_ev = 1.0\nkt_ev = {kt}\nmass_amu = 4.0\nring_particles = 41\nring_radius_um = 6400.0\n\n[md]\nenabled = true\n\n[[md.system]]\nname = \"lj\"\ngas = \"lj\"\nfinal_time_ns = 10.0\n"
+            )
+            .replace("inverse_power = [2, 6]", "inverse_power = [2, 6]\nlennard_jones = [0.1]")
+        };
+        let error = parse(&ring(0.2)).unwrap_err();
+        assert_eq!(error.key, "gas[0].kt_ev", "{error}");
+        let study = parse(&ring(0.1)).unwrap();
+        assert_eq!(
+            study.md_params()[0].potential,
+            Potential::LennardJones { theta: 0.1 }
+        );
     }
 }

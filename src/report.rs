@@ -367,6 +367,32 @@ fn md_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
             )?;
         }
     }
+    out.push_str(&bound_pairs_table(store, reports)?);
+    Ok(out)
+}
+
+/// Bound neighbour pairs of the rings with a well: sampled, after the
+/// dynamics, and the dilute limit.
+fn bound_pairs_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
+    let mut out = String::new();
+    let frames = table_frames(store, reports, "md", "pairs")?;
+    let bound = |frame: &DataFrame, row: usize| -> Result<String> {
+        Ok(with_error(
+            number(frame, row, "bound_fraction")?,
+            number(frame, row, "bound_fraction_stderr")?,
+        ))
+    };
+    for (instance, frame) in frames {
+        let dilute = number(&frame, 2, "bound_fraction")?;
+        if dilute > 0.0 {
+            writeln!(
+                out,
+                "{instance}: bound neighbour pairs per gap {} initial, {} final, {dilute:.5} dilute limit rho K_b",
+                bound(&frame, 0)?,
+                bound(&frame, 1)?,
+            )?;
+        }
+    }
     Ok(out)
 }
 

@@ -22,7 +22,9 @@ use rand::rngs::StdRng;
 use super::clusters::ClusterRing;
 use super::potential::PairPotential;
 use super::quasi_random::standard_normal_cdf;
-use super::ring::{Reach, RingError, RingForces, RingState, RingWork, evolve, thermal_start};
+use super::ring::{
+    Reach, RingError, RingForces, RingState, RingWork, bound_pairs, evolve, thermal_start,
+};
 use crate::kernel::Bins;
 
 /// What one run does.
@@ -61,6 +63,9 @@ pub struct RunResult {
     pub macro_steps: u64,
     /// Pair-force evaluations.
     pub pair_forces: u64,
+    /// Bound neighbour pairs (`w^2/4 + U < 0`) at the start and at the last
+    /// sample time (potentials with a well; 0 otherwise).
+    pub bound_pairs: [usize; 2],
     /// Largest change of a Lax eigenvalue over the run (integrable ring
     /// only; NaN otherwise), `v_th`.
     pub invariant_drift: f64,
@@ -75,6 +80,8 @@ trait Advancing {
     fn energy(&self) -> f64;
     /// Macro steps and pair-force evaluations so far.
     fn work(&self) -> (u64, u64);
+    /// Bound neighbour pairs now.
+    fn bound_pairs(&self) -> usize;
 }
 
 impl<P: PairPotential> Advancing for ClusterRing<P> {
@@ -92,6 +99,9 @@ impl<P: PairPotential> Advancing for ClusterRing<P> {
     }
     fn work(&self) -> (u64, u64) {
         (self.macro_steps, self.pair_forces)
+    }
+    fn bound_pairs(&self) -> usize {
+        ClusterRing::bound_pairs(self)
     }
 }
 
@@ -129,6 +139,9 @@ impl<P: PairPotential> Advancing for WholeRing<P> {
         let n = self.state.gaps.len() as u64;
         (self.work.steps, self.work.evaluations * n * (n - 1) / 2)
     }
+    fn bound_pairs(&self) -> usize {
+        bound_pairs(&self.forces, &self.state.gaps, &self.state.velocities())
+    }
 }
 
 /// Why a run failed.
@@ -140,6 +153,9 @@ pub enum RunError {
     /// The integration failed.
     #[error(transparent)]
     Integration(#[from] RingError),
+    /// The state stopped being finite (a defect: never written as a result).
+    #[error("the ring's state became non-finite")]
+    NonFinite,
 }
 
 /// Initial draws tried before a ring counts as too crowded.
@@ -190,6 +206,7 @@ fn sample(
     let mut published = vec![0.0; bins.len()];
     let mut tagged = vec![0.0; bins.len()];
     let start = ring.lineages();
+    let bound_at_start = ring.bound_pairs();
     let starters: Vec<usize> = (0..start.len())
         .filter(|&k| (start[k] - settings.u_prime).abs() <= settings.start_band)
         .collect();
@@ -208,6 +225,9 @@ fn sample(
                 tagged[k] += 1.0;
             }
         }
+    }
+    if !ring.energy().is_finite() {
+        return Err(RunError::NonFinite);
     }
     let samples = settings.sample_times.len() as f64;
     let width = bins.width;
@@ -229,6 +249,7 @@ fn sample(
         momentum_error: (ring.velocities().iter().sum::<f64>() - momentum).abs(),
         macro_steps,
         pair_forces,
+        bound_pairs: [bound_at_start, ring.bound_pairs()],
         invariant_drift: if integrable {
             last.iter()
                 .zip(&start)

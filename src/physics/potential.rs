@@ -7,6 +7,8 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::quasi_random::standard_normal_cdf;
+
 /// A repulsive-core pair interaction `U(x)` between two particles at scaled
 /// separation `x > 0`.
 pub trait PairPotential: Copy + Send + Sync {
@@ -108,6 +110,42 @@ impl PairPotential for LennardJones {
     }
 }
 
+impl LennardJones {
+    /// Length `K_b = int_(U<0) exp(-U(x)) erf(sqrt(-U(x))) dx`, in `l`: the
+    /// phase-space weight of a bound pair. In a dilute thermal gas a neighbour
+    /// gap lies at `x` with density `rho exp(-U(x))` and its relative velocity
+    /// `w ~ N(0, 2)` binds it (`w^2/4 + U < 0`) with probability
+    /// `erf(sqrt(-U))`, so a fraction `rho K_b (1 + O(rho l))` of the gaps is
+    /// bound. Composite Simpson over `s` with `x = x0 / (1 - s^2)` (`U(x0) = 0`),
+    /// which makes the integrand smooth at both ends.
+    pub fn bound_pair_length(&self) -> f64 {
+        const INTERVALS: usize = 4000;
+        let zero = self.theta.powf(1.0 / 6.0);
+        let integrand = |s: f64| {
+            let y = (1.0 - s * s) / zero;
+            if y <= 0.0 {
+                return 0.0;
+            }
+            let binding = -self.energy(y.recip()).min(0.0);
+            let erf = 1.0 - 2.0 * standard_normal_cdf(-(2.0 * binding).sqrt());
+            binding.exp() * erf * 2.0 * s / (zero * y * y)
+        };
+        let h = 1.0 / INTERVALS as f64;
+        let sum: f64 = (0..=INTERVALS)
+            .map(|k| {
+                let weight = match k {
+                    0 => 1.0,
+                    k if k == INTERVALS => 1.0,
+                    k if k % 2 == 1 => 4.0,
+                    _ => 2.0,
+                };
+                weight * integrand(k as f64 * h)
+            })
+            .sum();
+        sum * h / 3.0
+    }
+}
+
 /// A pair potential as configured by a study.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
@@ -138,6 +176,16 @@ impl Potential {
         match self {
             Potential::InversePower { n } => *n,
             Potential::LennardJones { .. } => 6.0,
+        }
+    }
+
+    /// Phase-space length `K_b` of a bound pair, `l` (0 without a well):
+    /// a fraction `rho K_b` of a dilute gas's neighbour gaps is bound
+    /// ([`LennardJones::bound_pair_length`]).
+    pub fn bound_pair_length(&self) -> f64 {
+        match *self {
+            Potential::InversePower { .. } => 0.0,
+            Potential::LennardJones { theta } => LennardJones { theta }.bound_pair_length(),
         }
     }
 
