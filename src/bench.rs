@@ -8,7 +8,9 @@ use std::time::Instant;
 use rand::rngs::StdRng;
 use rand::{RngExt, SeedableRng};
 
-use crate::kernel::{Bins, Draws, Estimate, Event, Target, histograms, moments};
+use crate::config::KernelConfig;
+use crate::kernel::fit::{FIT_GROUPS, Shape, fit_kernel};
+use crate::kernel::{Bins, Draws, Estimate, Event, Histogram, Target, histograms, moments};
 use crate::physics::launch::thermal_launch_speed;
 use crate::physics::potential::Potential;
 use crate::physics::sampling::{LaunchProposal, OffsetProposal, SamplingPlan, SceneRecord};
@@ -253,6 +255,10 @@ struct KernelRun {
     /// Median relative standard error of `G` over bins with `|du|` in a band.
     near_bins: f64,
     far_bins: f64,
+    /// Relative standard errors of `alpha`, `beta`, `sigma`.
+    shape: [f64; 3],
+    /// Chi-square per degree of freedom of the mean shape fit.
+    chi2_per_dof: f64,
 }
 
 /// The baseline of numerics.md: offsets uniform within +-30 collision times.
@@ -281,10 +287,7 @@ fn plan_for(variant: &Variant, seed: u64, randomizations: u32, points: u32) -> S
 }
 
 /// Median relative standard error of the kernel over bins with `low <= |du| <= high`.
-fn median_relative_error(events: &[Event], draws: &Draws, low: f64, high: f64) -> f64 {
-    let bins = Bins::for_window(0.2, 5e-5);
-    let target = Target::dilute(0.0);
-    let replicates = histograms(events, &target, &bins, draws);
+fn median_relative_error(replicates: &[Histogram], bins: &Bins, low: f64, high: f64) -> f64 {
     let mut errors: Vec<f64> = (0..bins.len())
         .filter(|&k| (low..=high).contains(&bins.centre(k).abs()))
         .map(|k| {
@@ -301,6 +304,27 @@ fn median_relative_error(events: &[Event], draws: &Draws, low: f64, high: f64) -
     errors.get(errors.len() / 2).copied().unwrap_or(f64::NAN)
 }
 
+/// Relative standard errors of the shape parameters `alpha`, `beta`,
+/// `sigma` (the `fit` stage's fit over the default range) and the mean fit's
+/// chi-square per degree of freedom.
+fn shape_errors(replicates: &[Histogram], bins: &Bins) -> ([f64; 3], f64) {
+    let fine: Vec<Vec<f64>> = replicates
+        .iter()
+        .map(|h| h.total().iter().map(|v| v / bins.width).collect())
+        .collect();
+    let offsets: Vec<f64> = (0..bins.len()).map(|k| bins.centre(k)).collect();
+    let [low, high] = KernelConfig::default().fit_range;
+    let fit = fit_kernel(&fine, &offsets, (low, high), FIT_GROUPS);
+    let Some(mean) = fit.mean else {
+        return ([f64::NAN; 3], f64::NAN);
+    };
+    let parameters: [fn(&Shape) -> f64; 3] = [|s| s.alpha, |s| s.beta, |s| s.sigma];
+    (
+        parameters.map(|p| fit.stderr(p) / p(&mean.shape).abs()),
+        mean.chi2_per_dof,
+    )
+}
+
 fn run_sampler(potential: &Potential, plan: &SamplingPlan) -> KernelRun {
     let engine = EngineSettings::new(Method::Dprkn12, 1e-12, MAX_STEPS);
     let started = Instant::now();
@@ -312,12 +336,17 @@ fn run_sampler(potential: &Potential, plan: &SamplingPlan) -> KernelRun {
     let a_n =
         Estimate::from_replicates(&sums.iter().map(|r| r[0].self_variance).collect::<Vec<_>>());
     let seconds = started.elapsed().as_secs_f64();
+    let bins = Bins::for_window(0.2, 5e-5);
+    let replicates = histograms(&events, &target, &bins, &draws);
+    let (shape, chi2_per_dof) = shape_errors(&replicates, &bins);
     KernelRun {
         seconds,
         scenes: plan.total(),
         a_n,
-        near_bins: median_relative_error(&events, &draws, 1e-4, 2e-3),
-        far_bins: median_relative_error(&events, &draws, 1e-2, 5e-2),
+        near_bins: median_relative_error(&replicates, &bins, 1e-4, 2e-3),
+        far_bins: median_relative_error(&replicates, &bins, 1e-2, 5e-2),
+        shape,
+        chi2_per_dof,
     }
 }
 
@@ -446,9 +475,9 @@ pub fn kernel(options: &KernelBenchOptions) -> String {
     );
     let _ = writeln!(
         out,
-        "| scenes per randomization | scenes | seconds | a_n | relative standard error |"
+        "| scenes per randomization | scenes | seconds | a_n | relative standard error | near-bin rel. error | alpha rel. error | beta rel. error | sigma rel. error | fit chi2/dof |"
     );
-    let _ = writeln!(out, "|---|---|---|---|---|");
+    let _ = writeln!(out, "|---|---|---|---|---|---|---|---|---|---|");
     let default = &piloted;
     for power in [10, 12, 14, 16] {
         let run = run_sampler(
@@ -460,15 +489,21 @@ pub fn kernel(options: &KernelBenchOptions) -> String {
                 1 << power,
             ),
         );
+        let [alpha, beta, sigma] = run.shape;
         let _ = writeln!(
             out,
-            "| {} | {} | {:.2} | {:.8e} +- {:.1e} | {:.2e} |",
+            "| {} | {} | {:.2} | {:.8e} +- {:.1e} | {:.2e} | {:.2e} | {:.2e} | {:.2e} | {:.2e} | {:.1} |",
             1u32 << power,
             run.scenes,
             run.seconds,
             run.a_n.mean,
             run.a_n.stderr,
-            run.a_n.stderr / run.a_n.mean
+            run.a_n.stderr / run.a_n.mean,
+            run.near_bins,
+            alpha,
+            beta,
+            sigma,
+            run.chi2_per_dof,
         );
     }
     out.push_str(&skipping(&potential, &piloted_plan));

@@ -309,6 +309,9 @@ pub struct MdSystemConfig {
     pub u_prime: f64,
     /// Final time `t_f`, ns.
     pub final_time_ns: f64,
+    /// Runs of this ring (default `md.runs`): cheap small rings can buy the
+    /// precision a finite-size study needs.
+    pub runs: Option<u32>,
 }
 
 /// Resolved parameters of one `md` instance.
@@ -316,7 +319,7 @@ pub struct MdSystemConfig {
 pub struct MdParams {
     /// Label.
     pub name: String,
-    /// The potential (an inverse power law).
+    /// The potential (an inverse power law or Lennard-Jones).
     pub potential: Potential,
     /// The gas.
     pub gas: PhysicalGas,
@@ -404,7 +407,7 @@ pub struct SweepParams {
 }
 
 /// `[collisions]`: how kernel scenes are sampled (numerics.md "Sampling scenes").
-#[derive(Clone, Copy, Debug, Deserialize)]
+#[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct CollisionsConfig {
     /// Seed of every randomization.
@@ -426,6 +429,9 @@ pub struct CollisionsConfig {
     pub launch_spread: f64,
     /// Mixture proposal of the arrival offset (`[collisions.proposal]`).
     pub proposal: OffsetProposal,
+    /// Per-potential replacements of `points`, keyed by potential id
+    /// (`[collisions.points_per_potential]`, e.g. `"lj-0.1" = 8192`).
+    pub points_per_potential: BTreeMap<String, u32>,
 }
 
 impl Default for CollisionsConfig {
@@ -440,6 +446,7 @@ impl Default for CollisionsConfig {
             launch_shift: 0.0,
             launch_spread: 0.0,
             proposal: OffsetProposal::default(),
+            points_per_potential: BTreeMap::new(),
         }
     }
 }
@@ -776,12 +783,17 @@ impl Study {
                 spread: sampling.launch_spread,
             },
         };
-        plan.allocate(sampling.points, sampling.same_side_fraction);
+        let points = sampling
+            .points_per_potential
+            .get(&potential.id())
+            .copied()
+            .unwrap_or(sampling.points);
+        plan.allocate(points, sampling.same_side_fraction);
         CollisionsParams {
             potential,
             engine: self.engine(),
             sampling: plan,
-            points: sampling.points,
+            points,
             pilot_points: sampling.pilot_points,
             pilot_engine: self.engine(),
         }
@@ -896,7 +908,7 @@ impl Study {
                     final_time_ns: system.final_time_ns,
                     sample_times: sample_times_ns.iter().map(|t| t / time_unit).collect(),
                     sample_times_ns,
-                    runs: md.runs,
+                    runs: system.runs.unwrap_or(md.runs),
                     seed: md.seed,
                     neighbours: md.neighbours,
                     tolerance: md.tolerance,
@@ -1057,6 +1069,19 @@ fn validate(config: &Config) -> Result<(), Invalid> {
     )?;
     validate_scan(config)?;
     validate_collisions(&config.collisions)?;
+    let ids: Vec<String> = config.potentials.list().iter().map(Potential::id).collect();
+    for (id, &points) in &config.collisions.points_per_potential {
+        let key = format!("collisions.points_per_potential.{id}");
+        check(
+            ids.contains(id),
+            key.clone(),
+            format!(
+                "`{id}` names no configured potential; known ids: {}",
+                ids.join(", ")
+            ),
+        )?;
+        check(points >= 2, key, "must be at least 2")?;
+    }
     let launch = LaunchProposal {
         shift: config.collisions.launch_shift,
         spread: config.collisions.launch_spread,
@@ -1136,6 +1161,11 @@ fn validate_md(config: &Config) -> Result<(), Invalid> {
             format!("{} must be > 0", system.final_time_ns),
         )?;
         check(system.u_prime.is_finite(), key("u_prime"), "must be finite")?;
+        check(
+            system.runs.is_none_or(|runs| runs >= 2),
+            key("runs"),
+            "needs at least 2 runs (errors come from their spread)",
+        )?;
     }
     Ok(())
 }

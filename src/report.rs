@@ -63,6 +63,7 @@ pub fn summary(store: &Store, reports: &[InstanceReport]) -> Result<String> {
     out.push_str(&convergence_table(store, reports)?);
     out.push_str(&evolve_table(store, reports)?);
     out.push_str(&md_table(store, reports)?);
+    out.push_str(&compare_table(store, reports)?);
     let scans = reports.iter().filter(|r| r.id.stage == "scan");
     for (k, report) in scans.enumerate() {
         let Some(key) = &report.key else { continue };
@@ -368,6 +369,60 @@ fn md_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
         }
     }
     out.push_str(&bound_pairs_table(store, reports)?);
+    Ok(out)
+}
+
+/// The `compare` stage: goodness of fit of MD against Boltzmann and of the
+/// scaling collapse, and the finite-size and density study.
+fn compare_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
+    let mut out = String::new();
+    for (_, frame) in table_frames(store, reports, "compare", "goodness")? {
+        writeln!(
+            out,
+            "\nMD against Boltzmann and the scaling collapse (chi2 per degree of freedom)"
+        )?;
+        writeln!(
+            out,
+            "{:<22} {:<22} {:<10} {:>8} {:>5}",
+            "ring", "reference", "estimator", "chi2/dof", "dof"
+        )?;
+        for row in 0..frame.height() {
+            writeln!(
+                out,
+                "{:<22} {:<22} {:<10} {:>8.2} {:>5}",
+                text(&frame, row, "ring")?,
+                text(&frame, row, "reference")?,
+                text(&frame, row, "estimator")?,
+                number(&frame, row, "chi2_per_dof")?,
+                count(&frame, row, "dof")?,
+            )?;
+        }
+    }
+    for (_, frame) in table_frames(store, reports, "compare", "finite_size")? {
+        writeln!(
+            out,
+            "\nfinite size and density: tagged window variance at t_f, MD / Boltzmann (+- standard errors)"
+        )?;
+        writeln!(
+            out,
+            "{:<22} {:>5} {:>10} {:>12} {:<24}",
+            "ring", "N", "rho l", "rho^2 l v_th t_f", "MD / Boltzmann"
+        )?;
+        for row in 0..frame.height() {
+            writeln!(
+                out,
+                "{:<22} {:>5} {:>10.3e} {:>12.4e} {:<24}",
+                text(&frame, row, "ring")?,
+                count(&frame, row, "particles")?,
+                number(&frame, row, "density")?,
+                number(&frame, row, "scaled_time")?,
+                with_error(
+                    number(&frame, row, "ratio")?,
+                    number(&frame, row, "ratio_stderr")?
+                ),
+            )?;
+        }
+    }
     Ok(out)
 }
 

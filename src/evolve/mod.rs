@@ -72,6 +72,19 @@ impl Replicated<Vec<Vec<f64>>> {
     }
 }
 
+impl Replicated<Vec<f64>> {
+    /// Jackknife estimates, component by component.
+    pub fn values(&self) -> Vec<Estimate> {
+        jackknife(&self.full, &self.leave_one_out)
+    }
+
+    /// Jackknife estimate of the scalar `f` of the vector.
+    pub fn scalar(&self, f: impl Fn(&[f64]) -> f64) -> Estimate {
+        let loo: Vec<Vec<f64>> = self.leave_one_out.iter().map(|v| vec![f(v)]).collect();
+        jackknife(&[f(&self.full)], &loo)[0]
+    }
+}
+
 /// The mean of replicate vectors and the means with each one left out.
 pub fn replicate_means(replicates: &[Vec<f64>]) -> Replicated<Vec<f64>> {
     let count = replicates.len() as f64;

@@ -17,6 +17,8 @@
 //! does not describe the kernel exactly (chi2/dof of 20 at 1.2e6 scenes for
 //! n = 6): the `fit` stage then scales the errors by sqrt(chi2/dof).
 
+use super::Estimate;
+
 /// Fitted shape parameters.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Shape {
@@ -221,6 +223,114 @@ pub fn fit_shape(data: &FitData) -> Option<ShapeFit> {
         chi2_per_dof: chi2(data, &bins, &p) / (bins.len() - 3) as f64,
         bins: bins.len(),
     })
+}
+
+/// Log-spaced groups of bins in the fit range (about 14 per decade over the
+/// default range 2e-4..0.05).
+pub const FIT_GROUPS: usize = 36;
+
+/// A kernel's shape fit: to the mean over the replicates, and to each one.
+#[derive(Clone, Debug, PartialEq)]
+pub struct KernelFit {
+    /// Fit to the replicate mean (`None` when nothing could be fitted).
+    pub mean: Option<ShapeFit>,
+    /// Fits of the replicates that converged.
+    pub replicates: Vec<Shape>,
+    /// Groups of bins with a nonzero standard error.
+    pub measured: usize,
+}
+
+impl KernelFit {
+    /// `max(1, chi2/dof)` of the mean fit: when the shape misfits the kernel
+    /// (as the Particle Data Group does) the replicate spread alone would
+    /// ignore that the parameters then depend on how the bins are weighted.
+    pub fn scale(&self) -> f64 {
+        self.mean.map_or(1.0, |f| f.chi2_per_dof.max(1.0))
+    }
+
+    /// Covariance of the means of two parameters over the replicate fits,
+    /// times [`KernelFit::scale`]; NaN with fewer than two replicate fits.
+    pub fn covariance(&self, a: fn(&Shape) -> f64, b: fn(&Shape) -> f64) -> f64 {
+        let count = self.replicates.len() as f64;
+        if self.replicates.len() < 2 {
+            return f64::NAN;
+        }
+        let mean = |f: fn(&Shape) -> f64| self.replicates.iter().map(f).sum::<f64>() / count;
+        let (mean_a, mean_b) = (mean(a), mean(b));
+        let sum: f64 = self
+            .replicates
+            .iter()
+            .map(|s| (a(s) - mean_a) * (b(s) - mean_b))
+            .sum();
+        self.scale() * (sum / ((count - 1.0) * count))
+    }
+
+    /// Standard error of one parameter.
+    pub fn stderr(&self, parameter: fn(&Shape) -> f64) -> f64 {
+        self.covariance(parameter, parameter).sqrt()
+    }
+}
+
+/// Fits the shape to the per-replicate kernels `fine` (`G` per bin at bin
+/// centres `offsets`) over `low <= |x| <= high`, in `groups` log-spaced
+/// groups of bins: the mean fit weighted by the group means' replicate
+/// errors, and each replicate alone weighted by `sqrt(R)` times them.
+pub fn fit_kernel(
+    fine: &[Vec<f64>],
+    offsets: &[f64],
+    (low, high): (f64, f64),
+    groups: usize,
+) -> KernelFit {
+    let groups = log_groups(offsets, low, high, groups);
+    let members: Vec<Vec<f64>> = groups
+        .iter()
+        .map(|g| g.iter().map(|&k| offsets[k]).collect())
+        .collect();
+    // Mean kernel over each group's bins, per replicate.
+    let replicates: Vec<Vec<f64>> = fine
+        .iter()
+        .map(|kernel| {
+            groups
+                .iter()
+                .map(|g| g.iter().map(|&k| kernel[k]).sum::<f64>() / g.len() as f64)
+                .collect()
+        })
+        .collect();
+    let estimates: Vec<Estimate> = (0..groups.len())
+        .map(|j| Estimate::from_replicates(&replicates.iter().map(|r| r[j]).collect::<Vec<_>>()))
+        .collect();
+    let values: Vec<f64> = estimates.iter().map(|e| e.mean).collect();
+    let errors: Vec<f64> = estimates.iter().map(|e| e.stderr).collect();
+    let measured = errors.iter().filter(|&&e| e > 0.0).count();
+    let Some(mean) = fit_shape(&FitData {
+        members: &members,
+        values: &values,
+        errors: &errors,
+    }) else {
+        return KernelFit {
+            mean: None,
+            replicates: Vec::new(),
+            measured,
+        };
+    };
+    let scale = (replicates.len() as f64).sqrt();
+    let replicate_errors: Vec<f64> = errors.iter().map(|e| e * scale).collect();
+    let shapes = replicates
+        .iter()
+        .filter_map(|values| {
+            fit_shape(&FitData {
+                members: &members,
+                values,
+                errors: &replicate_errors,
+            })
+            .map(|f| f.shape)
+        })
+        .collect();
+    KernelFit {
+        mean: Some(mean),
+        replicates: shapes,
+        measured,
+    }
 }
 
 #[cfg(test)]

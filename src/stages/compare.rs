@@ -4,7 +4,9 @@
 //! in units of its own `rho^2 l v_th`; at `Gamma t_f ~ 2e-4` the kernel's `u'`
 //! dependence is negligible) on the ring's bins, with jackknife errors, and the
 //! chi-square of both MD estimators against it. The scaling collapse: the
-//! tagged `h` of every ring against the first one's.
+//! tagged `h` of every ring against the first one's. The finite-size and
+//! density study: the tagged window variance of every ring against
+//! Boltzmann's, with the ring's `N` and `rho l`.
 
 use serde::Serialize;
 use serde_json::Value;
@@ -12,10 +14,10 @@ use serde_json::Value;
 use super::collisions::CollisionsStage;
 use super::kernel::{collision_events, target_of};
 use crate::config::{KernelParams, MdParams};
+use crate::evolve::Replicated;
 use crate::evolve::convolution::{self, overlap_rebin};
-use crate::evolve::jackknife;
 use crate::kernel::{Bins, Estimate};
-use crate::pipeline::table::f64_values;
+use crate::pipeline::table::{f64_values, text_values};
 use crate::pipeline::{Column, Input, InstanceId, Progress, Stage, StageError, Table};
 
 /// Resolved parameters of the `compare` stage.
@@ -32,11 +34,13 @@ pub struct CompareStage {
     params: CompareParams,
 }
 
-/// One ring's MD estimators, read from its `h` table.
+/// One ring's MD estimators, read from its `h` and `summary` tables.
 struct MdEstimates {
     du: Vec<f64>,
     published: Vec<Estimate>,
     tagged: Vec<Estimate>,
+    /// Window variance `sum (u - u')^2 h du` of the tagged estimator.
+    tagged_variance: Estimate,
 }
 
 fn read_md(input: &Input) -> Result<MdEstimates, StageError> {
@@ -51,10 +55,22 @@ fn read_md(input: &Input) -> Result<MdEstimates, StageError> {
             .map(|(mean, stderr)| Estimate { mean, stderr })
             .collect())
     };
+    let summary = input
+        .tables
+        .get("summary")
+        .ok_or_else(|| StageError::Input(format!("{} has no summary table", input.id)))?;
+    let tagged_row = text_values(summary, "estimator")?
+        .iter()
+        .position(|e| e == "tagged")
+        .ok_or_else(|| StageError::Input(format!("{} summary has no tagged row", input.id)))?;
     Ok(MdEstimates {
         du: f64_values(batch, "du")?,
         published: pair("h_published", "h_published_stderr")?,
         tagged: pair("h_tagged", "h_tagged_stderr")?,
+        tagged_variance: Estimate {
+            mean: f64_values(summary, "window_variance")?[tagged_row],
+            stderr: f64_values(summary, "window_variance_stderr")?[tagged_row],
+        },
     })
 }
 
@@ -86,12 +102,13 @@ impl CompareStage {
         CompareStage { params }
     }
 
-    /// Boltzmann `h` of every ring on its MD bins, with jackknife errors.
+    /// Boltzmann `h` of every ring on its MD bins, on all kernel replicates
+    /// and with each left out (jackknife).
     fn boltzmann(
         &self,
         collisions: &Input,
         rings: &[MdEstimates],
-    ) -> Result<Vec<Vec<Estimate>>, StageError> {
+    ) -> Result<Vec<Replicated<Vec<f64>>>, StageError> {
         let (events, draws, _) = collision_events(collisions)?;
         let kernel = &self.params.kernel;
         let bins = Bins::for_window(kernel.window, kernel.bin_width);
@@ -107,16 +124,109 @@ impl CompareStage {
                     .max((4.0 * system.window / bins.width) as usize)
                     .next_power_of_two();
                 let out_width = system.bin_width;
-                let binned = rates.map(|g| {
+                Ok(rates.map(|g| {
                     let h = &convolution::evolve(g, size, &[time])[0];
                     overlap_rebin(h, bins.width, size / 2, &ring.du, out_width)
                         .iter()
                         .map(|m| m / out_width)
                         .collect::<Vec<f64>>()
-                });
-                Ok(jackknife(&binned.full, &binned.leave_one_out))
+                }))
             })
             .collect()
+    }
+
+    /// The finite-size and density study: per ring, its size, density and
+    /// scaled time, and the tagged window variance of MD against Boltzmann's.
+    fn finite_size(
+        &self,
+        rings: &[MdEstimates],
+        boltzmann: &[Replicated<Vec<f64>>],
+    ) -> Result<Table, StageError> {
+        let exponent = self.params.kernel.potential.length_exponent();
+        let mut columns: [Vec<f64>; 8] = Default::default();
+        for ((system, ring), predicted) in self.params.systems.iter().zip(rings).zip(boltzmann) {
+            let width = system.bin_width;
+            let variance = predicted.scalar(|h| {
+                h.iter()
+                    .zip(&ring.du)
+                    .map(|(h, du)| h * du * du * width)
+                    .sum()
+            });
+            let md = ring.tagged_variance;
+            let ratio = md.mean / variance.mean;
+            let ratio_error = ratio
+                * ((md.stderr / md.mean).powi(2) + (variance.stderr / variance.mean).powi(2))
+                    .sqrt();
+            let row = [
+                f64::from(system.particles - 1) / system.circumference,
+                system.final_time_ns * system.gas.rate_per_ns(1.0, exponent),
+                md.mean,
+                md.stderr,
+                variance.mean,
+                variance.stderr,
+                ratio,
+                ratio_error,
+            ];
+            columns.iter_mut().zip(row).for_each(|(c, v)| c.push(v));
+        }
+        let [density, time, md, md_err, b, b_err, ratio, ratio_err] = columns;
+        let names = self.params.systems.iter().map(|s| s.name.clone()).collect();
+        let particles = self.params.systems.iter().map(|s| s.particles).collect();
+        let variance = "v_th^2";
+        Ok(Table::new(
+            "finite_size",
+            vec![
+                Column::text("ring", "md system", names),
+                Column::u32("particles", "1", "N", particles),
+                Column::f64("density", "1", "rho l = (N - 1) l / (2 pi R)", density),
+                Column::f64(
+                    "scaled_time",
+                    "1",
+                    "rho^2 l v_th t_f (Gamma t_f = a_n times this)",
+                    time,
+                ),
+                Column::f64(
+                    "md_variance",
+                    variance,
+                    "tagged estimator: window variance sum (u - u')^2 h du at t_f",
+                    md,
+                ),
+                Column::f64(
+                    "md_variance_stderr",
+                    variance,
+                    "standard error over runs",
+                    md_err,
+                ),
+                Column::f64(
+                    "boltzmann_variance",
+                    variance,
+                    "the same of the Boltzmann h (dilute kernel) on the ring's bins",
+                    b,
+                ),
+                Column::f64(
+                    "boltzmann_variance_stderr",
+                    variance,
+                    "jackknife over the kernel's randomizations",
+                    b_err,
+                ),
+                Column::f64(
+                    "ratio",
+                    "1",
+                    "md_variance / boltzmann_variance: 1 at large N and small rho l",
+                    ratio,
+                ),
+                Column::f64(
+                    "ratio_stderr",
+                    "1",
+                    "propagated from both standard errors",
+                    ratio_err,
+                ),
+            ],
+        )?
+        .with_metadata(
+            "ternary.description",
+            "finite-size and density study: MD window variance against Boltzmann per ring".into(),
+        ))
     }
 }
 
@@ -126,7 +236,7 @@ impl Stage for CompareStage {
     }
 
     fn version(&self) -> u32 {
-        1
+        2
     }
 
     fn params(&self) -> Value {
@@ -152,7 +262,8 @@ impl Stage for CompareStage {
 
     fn run(&self, inputs: &[Input], progress: &Progress) -> Result<Vec<Table>, StageError> {
         let rings: Vec<MdEstimates> = inputs[1..].iter().map(read_md).collect::<Result<_, _>>()?;
-        let boltzmann = self.boltzmann(&inputs[0], &rings)?;
+        let replicated = self.boltzmann(&inputs[0], &rings)?;
+        let boltzmann: Vec<Vec<Estimate>> = replicated.iter().map(Replicated::values).collect();
         let mut columns: [Vec<f64>; 7] = Default::default();
         let mut names = Vec::new();
         let mut fits: Vec<Fit> = Vec::new();
@@ -276,6 +387,7 @@ impl Stage for CompareStage {
             "ternary.description",
             "goodness of fit of MD against Boltzmann, and of the scaling collapse".into(),
         );
-        Ok(vec![comparison, goodness])
+        let finite_size = self.finite_size(&rings, &replicated)?;
+        Ok(vec![comparison, goodness, finite_size])
     }
 }

@@ -8,12 +8,9 @@ use serde_json::Value;
 use super::collisions::CollisionsStage;
 use super::kernel::{input_events, target_instance, target_of};
 use crate::config::{FitParams, KernelParams};
-use crate::kernel::fit::{FitData, Shape, ShapeFit, fit_shape, log_groups};
-use crate::kernel::{Bins, Estimate, Histogram, histograms};
+use crate::kernel::fit::{FIT_GROUPS, KernelFit, Shape, fit_kernel};
+use crate::kernel::{Bins, Histogram, histograms};
 use crate::pipeline::{Column, Input, InstanceId, Progress, Stage, StageError, Table};
-
-/// Log-spaced groups of bins in the fit range (about 14 per decade by default).
-const FIT_GROUPS: usize = 36;
 
 /// The `fit` stage for one potential, `u'` and density.
 pub struct FitStage {
@@ -32,21 +29,9 @@ impl FitStage {
     }
 }
 
+/// `G` per bin: self plus bath over the bin width.
 fn kernel_of(histogram: &Histogram, bins: &Bins) -> Vec<f64> {
-    (0..bins.len())
-        .map(|k| (histogram.self_part[k] + histogram.bath_part[k]) / bins.width)
-        .collect()
-}
-
-/// Sample covariance of two parameter lists over replicates, of the mean.
-fn covariance_of_mean(a: &[f64], b: &[f64]) -> f64 {
-    let count = a.len() as f64;
-    let (mean_a, mean_b) = (a.iter().sum::<f64>() / count, b.iter().sum::<f64>() / count);
-    a.iter()
-        .zip(b)
-        .map(|(x, y)| (x - mean_a) * (y - mean_b))
-        .sum::<f64>()
-        / ((count - 1.0) * count)
+    histogram.total().iter().map(|v| v / bins.width).collect()
 }
 
 impl Stage for FitStage {
@@ -82,101 +67,25 @@ impl Stage for FitStage {
             .collect();
         let offsets: Vec<f64> = (0..bins.len()).map(|k| bins.centre(k)).collect();
         let (low, high) = (self.params.range_min, self.params.range_max);
-        let groups = log_groups(&offsets, low, high, FIT_GROUPS);
-        let members: Vec<Vec<f64>> = groups
-            .iter()
-            .map(|g| g.iter().map(|&k| offsets[k]).collect())
-            .collect();
-        // Mean kernel over each group's bins, per replicate.
-        let replicates: Vec<Vec<f64>> = fine
-            .iter()
-            .map(|kernel| {
-                groups
-                    .iter()
-                    .map(|g| g.iter().map(|&k| kernel[k]).sum::<f64>() / g.len() as f64)
-                    .collect()
-            })
-            .collect();
-        let estimates: Vec<Estimate> = (0..groups.len())
-            .map(|j| {
-                Estimate::from_replicates(&replicates.iter().map(|r| r[j]).collect::<Vec<_>>())
-            })
-            .collect();
-        let values: Vec<f64> = estimates.iter().map(|e| e.mean).collect();
-        let errors: Vec<f64> = estimates.iter().map(|e| e.stderr).collect();
-        let mean_data = FitData {
-            members: &members,
-            values: &values,
-            errors: &errors,
-        };
+        let fit = fit_kernel(&fine, &offsets, (low, high), FIT_GROUPS);
         progress.advance(1);
-        let Some(fit) = fit_shape(&mean_data) else {
+        let status = match (&fit.mean, fit.replicates.len()) {
             // Nothing to fit (e.g. the integrable n = 2 kernel vanishes): say so.
-            let measured = errors.iter().filter(|&&e| e > 0.0).count();
-            let status = if measured == 0 {
-                "kernel vanishes in the fit range"
-            } else {
-                "too few measured groups"
-            };
-            return Ok(vec![fit_table(None, status, measured, &[], (low, high))?]);
+            (None, _) if fit.measured == 0 => "kernel vanishes in the fit range",
+            (None, _) => "too few measured groups",
+            (Some(_), fitted) if fitted < 2 => "replicates could not be fitted: no standard errors",
+            (Some(_), _) => "fitted",
         };
-        // Each replicate alone, weighted by the replicate-level errors (sqrt(R) x the mean's).
-        let scale = (replicates.len() as f64).sqrt();
-        let replicate_errors: Vec<f64> = errors.iter().map(|e| e * scale).collect();
-        let shapes: Vec<Shape> = replicates
-            .iter()
-            .filter_map(|values| {
-                fit_shape(&FitData {
-                    members: &members,
-                    values,
-                    errors: &replicate_errors,
-                })
-                .map(|f| f.shape)
-            })
-            .collect();
-        let status = if shapes.len() < 2 {
-            "replicates could not be fitted: no standard errors"
-        } else {
-            "fitted"
-        };
-        Ok(vec![fit_table(
-            Some(fit),
-            status,
-            fit.bins,
-            &shapes,
-            (low, high),
-        )?])
+        Ok(vec![fit_table(&fit, status, (low, high))?])
     }
 }
 
 /// The one-row fit table; NaN where nothing could be fitted.
-fn fit_table(
-    fit: Option<ShapeFit>,
-    status: &str,
-    bins: usize,
-    shapes: &[Shape],
-    (low, high): (f64, f64),
-) -> Result<Table, StageError> {
-    let parameter = |f: fn(&Shape) -> f64| shapes.iter().map(f).collect::<Vec<f64>>();
-    let (alpha, beta, sigma) = (
-        parameter(|s| s.alpha),
-        parameter(|s| s.beta),
-        parameter(|s| s.sigma),
-    );
-    // Scale factor sqrt(chi2/dof) when the shape misfits the kernel (as the
-    // Particle Data Group does): the replicate spread alone would ignore that the
-    // three parameters then depend on how the bins are weighted.
-    let scale = fit.map_or(1.0, |f| f.chi2_per_dof.max(1.0));
-    let covariance = |a: &[f64], b: &[f64]| {
-        if a.len() < 2 {
-            f64::NAN
-        } else {
-            scale * covariance_of_mean(a, b)
-        }
-    };
-    let spread = |values: &[f64]| covariance(values, values).sqrt();
-    let mean = |f: fn(&Shape) -> f64| vec![fit.map_or(f64::NAN, |fit| f(&fit.shape))];
+fn fit_table(fit: &KernelFit, status: &str, (low, high): (f64, f64)) -> Result<Table, StageError> {
+    let [alpha, beta, sigma]: [fn(&Shape) -> f64; 3] = [|s| s.alpha, |s| s.beta, |s| s.sigma];
+    let mean = |f: fn(&Shape) -> f64| vec![fit.mean.map_or(f64::NAN, |m| f(&m.shape))];
     let one = |value: f64| vec![value];
+    let bins = fit.mean.map_or(fit.measured, |m| m.bins);
     let columns = vec![
         Column::f64(
             "alpha",
@@ -188,14 +97,14 @@ fn fit_table(
             "alpha_stderr",
             "as alpha",
             "standard error: spread of per-randomization refits times the scale factor",
-            one(spread(&alpha)),
+            one(fit.stderr(alpha)),
         ),
         Column::f64("beta", "1", "power-law exponent near u'", mean(|s| s.beta)),
         Column::f64(
             "beta_stderr",
             "1",
             "standard error: spread of per-randomization refits times the scale factor",
-            one(spread(&beta)),
+            one(fit.stderr(beta)),
         ),
         Column::f64(
             "sigma",
@@ -207,37 +116,37 @@ fn fit_table(
             "sigma_stderr",
             "v_th",
             "standard error: spread of per-randomization refits times the scale factor",
-            one(spread(&sigma)),
+            one(fit.stderr(sigma)),
         ),
         Column::f64(
             "cov_alpha_beta",
             "mixed",
             "covariance of the means of alpha and beta over replicates",
-            one(covariance(&alpha, &beta)),
+            one(fit.covariance(alpha, beta)),
         ),
         Column::f64(
             "cov_alpha_sigma",
             "mixed",
             "covariance of the means of alpha and sigma",
-            one(covariance(&alpha, &sigma)),
+            one(fit.covariance(alpha, sigma)),
         ),
         Column::f64(
             "cov_beta_sigma",
             "mixed",
             "covariance of the means of beta and sigma",
-            one(covariance(&beta, &sigma)),
+            one(fit.covariance(beta, sigma)),
         ),
         Column::f64(
             "scale_factor",
             "1",
             "sqrt(max(1, chi2/dof)) applied to the errors and covariances",
-            one(scale.sqrt()),
+            one(fit.scale().sqrt()),
         ),
         Column::f64(
             "chi2_per_dof",
             "1",
             "chi-square per degree of freedom of the mean fit (bins treated as independent)",
-            one(fit.map_or(f64::NAN, |f| f.chi2_per_dof)),
+            one(fit.mean.map_or(f64::NAN, |f| f.chi2_per_dof)),
         ),
         Column::u32(
             "bins",
@@ -249,7 +158,7 @@ fn fit_table(
             "replicates_fitted",
             "1",
             "randomizations whose own fit converged",
-            vec![shapes.len() as u32],
+            vec![fit.replicates.len() as u32],
         ),
         Column::f64("range_min", "v_th", "smallest |u - u'| fitted", one(low)),
         Column::f64("range_max", "v_th", "largest |u - u'| fitted", one(high)),
