@@ -111,9 +111,7 @@ pub fn kernel_generators(
             .par_iter()
             .flat_map_iter(|event| {
                 let (replicate, scale) = (event.randomization as usize, draws.scale(event));
-                images(event, kick_floor)
-                    .into_iter()
-                    .map(move |image| Placed::new(&image, replicate, scale))
+                images(event, kick_floor).map(move |image| Placed::new(&image, replicate, scale))
             })
             .collect();
         columns

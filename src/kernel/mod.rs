@@ -125,20 +125,78 @@ fn launch_weight(relative: f64, u_prime: f64) -> f64 {
 /// their launch weights `w(u2) w(u3)` at `target.u_prime` and, at finite
 /// density, the literal algorithm's survival factor `exp(-r |delay|)`.
 /// Empty for failed scenes.
-pub fn contributions(event: &Event, target: &Target) -> Vec<Contribution> {
-    let delay =
-        event.offset - 0.5 * target.launch_length * (1.0 / event.u3.abs() - 1.0 / event.u2.abs());
-    let survival = (-target.density * launch_rate(target.u_prime) * delay.abs()).exp();
-    let images = images(event, target.kick_floor);
-    let count = images.len() as f64;
-    images
-        .into_iter()
-        .map(|image| Contribution {
-            weight: image.launch_weight(target.u_prime) * survival
-                / (event.proposal_density * count),
-            ..image
-        })
-        .collect()
+pub fn contributions<'a>(
+    event: &'a Event,
+    target: &Target,
+) -> impl Iterator<Item = Contribution> + 'a {
+    let weigh = Weighing::new(event, target);
+    images(event, target.kick_floor).map(move |image| Contribution {
+        weight: weigh.weight(&image),
+        ..image
+    })
+}
+
+/// What turns an event's images into contributions at a target: the launch
+/// weights at `u'`, the survival factor and the proposal density.
+#[derive(Clone, Copy)]
+struct Weighing {
+    u_prime: f64,
+    survival: f64,
+    per_image: f64,
+}
+
+impl Weighing {
+    fn new(event: &Event, target: &Target) -> Weighing {
+        // Dilute targets skip the factor: exp(-0) = 1 exactly.
+        let survival = if target.density == 0.0 {
+            1.0
+        } else {
+            let delay = event.offset
+                - 0.5 * target.launch_length * (1.0 / event.u3.abs() - 1.0 / event.u2.abs());
+            (-target.density * launch_rate(target.u_prime) * delay.abs()).exp()
+        };
+        let count = images(event, target.kick_floor).len() as f64;
+        Weighing {
+            u_prime: target.u_prime,
+            survival,
+            per_image: event.proposal_density * count,
+        }
+    }
+
+    /// Weight of one image, `rho^2 l v_th` per drawn point.
+    fn weight(&self, image: &Contribution) -> f64 {
+        image.launch_weight(self.u_prime) * self.survival / self.per_image
+    }
+}
+
+/// Per replicate, the self part of bin `k` of [`histograms`] for `k` off the
+/// centre bin (where the special particle's incoming velocity lies): the
+/// weights of the contributions whose special particle lands in bin `k`,
+/// summed in the same order, so the same bits. Only those are weighed.
+pub fn self_bin(
+    events: &[Event],
+    target: &Target,
+    bins: &Bins,
+    k: usize,
+    draws: &Draws,
+) -> Vec<f64> {
+    debug_assert_ne!(
+        k, bins.half_bins,
+        "the centre bin also holds the incoming velocity"
+    );
+    per_replicate(
+        events,
+        draws,
+        || 0.0,
+        |sum, event, scale| {
+            let weigh = Weighing::new(event, target);
+            for image in images(event, target.kick_floor) {
+                if bins.index(image.self_kick()) == Some(k) {
+                    *sum += weigh.weight(&image) * scale;
+                }
+            }
+        },
+    )
 }
 
 /// The `u'`-independent geometry of an event: the event itself and its mirror
@@ -151,36 +209,33 @@ pub fn contributions(event: &Event, target: &Target) -> Vec<Contribution> {
 /// proposal (the two densities coincide only when `launch_shift = 0`). The
 /// literal algorithm's scenes count once. Velocity changes within `kick_floor`
 /// count as zero. Empty for failed scenes.
-pub fn images(event: &Event, kick_floor: f64) -> Vec<Contribution> {
-    let Some(outgoing) = event.outgoing else {
-        return Vec::new();
+/// A lazy iterator: nothing is allocated per event.
+pub fn images(event: &Event, kick_floor: f64) -> impl ExactSizeIterator<Item = Contribution> + '_ {
+    let signs: &'static [f64] = match (event.outgoing, event.stratum) {
+        (None, _) => &[],
+        (Some(_), Stratum::Literal) => &[1.0],
+        (Some(_), Stratum::Opposite | Stratum::SameSide) => &[1.0, -1.0],
     };
-    let signs: &[f64] = match event.stratum {
-        Stratum::Literal => &[1.0],
-        Stratum::Opposite | Stratum::SameSide => &[1.0, -1.0],
-    };
-    signs
-        .iter()
-        .map(|&sign| {
-            let (u2, u3) = (sign * event.u2, sign * event.u3);
-            let mut out = outgoing.map(|v| sign * v);
-            out.sort_by(f64::total_cmp);
-            let incoming = [0.0, u2, u3];
-            let mut sorted_in = incoming;
-            sorted_in.sort_by(f64::total_cmp);
-            for (velocity, matched) in out.iter_mut().zip(sorted_in) {
-                if (*velocity - matched).abs() <= kick_floor {
-                    *velocity = matched;
-                }
+    let outgoing = event.outgoing.unwrap_or_default();
+    signs.iter().map(move |&sign| {
+        let (u2, u3) = (sign * event.u2, sign * event.u3);
+        let mut out = outgoing.map(|v| sign * v);
+        out.sort_by(f64::total_cmp);
+        let incoming = [0.0, u2, u3];
+        let mut sorted_in = incoming;
+        sorted_in.sort_by(f64::total_cmp);
+        for (velocity, matched) in out.iter_mut().zip(sorted_in) {
+            if (*velocity - matched).abs() <= kick_floor {
+                *velocity = matched;
             }
-            Contribution {
-                weight: 1.0 / (event.proposal_density * signs.len() as f64),
-                incoming,
-                outgoing: out,
-                self_rank: incoming.iter().filter(|&&u| u < 0.0).count(),
-            }
-        })
-        .collect()
+        }
+        Contribution {
+            weight: 1.0 / (event.proposal_density * signs.len() as f64),
+            incoming,
+            outgoing: out,
+            self_rank: incoming.iter().filter(|&&u| u < 0.0).count(),
+        }
+    })
 }
 
 /// Velocity bins centred on `u' + k * width`, `|k| <= half_bins`.
@@ -341,21 +396,25 @@ pub fn histograms(events: &[Event], target: &Target, bins: &Bins, draws: &Draws)
 
 /// Folds the events of every replicate, replicates in parallel. Each replicate
 /// adds its events in their stored order, so the sums are bit-identical for any
-/// thread count.
+/// thread count. The events are split by replicate in one pass (not one scan
+/// of all events per replicate).
 pub fn per_replicate<T: Send>(
     events: &[Event],
     draws: &Draws,
     start: impl Fn() -> T + Sync,
     add: impl Fn(&mut T, &Event, f64) + Sync,
 ) -> Vec<T> {
-    (0..draws.replicates())
+    let mut members: Vec<Vec<&Event>> = vec![Vec::new(); draws.replicates()];
+    for event in events {
+        if let Some(own) = members.get_mut(event.randomization as usize) {
+            own.push(event);
+        }
+    }
+    members
         .into_par_iter()
-        .map(|replicate| {
+        .map(|own| {
             let mut sum = start();
-            for event in events
-                .iter()
-                .filter(|e| e.randomization as usize == replicate)
-            {
+            for event in own {
                 add(&mut sum, event, draws.scale(event));
             }
             sum
@@ -440,7 +499,6 @@ pub fn pilot_same_side_fraction(
             .iter()
             .map(|r| {
                 contributions(&Event::from_record(r), target)
-                    .iter()
                     .map(|c| c.weight * c.self_kick().powi(2))
                     .sum()
             })

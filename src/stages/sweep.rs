@@ -17,7 +17,7 @@ use serde_json::Value;
 use super::collisions::CollisionsStage;
 use super::kernel::input_events;
 use crate::config::SweepParams;
-use crate::kernel::{Bins, Draws, Estimate, Event, Target, histograms, moments};
+use crate::kernel::{Bins, Draws, Estimate, Event, Target, moments, self_bin};
 use crate::physics::launch::thermal_density;
 use crate::pipeline::{Column, Input, InstanceId, Progress, Stage, StageError, Table};
 
@@ -173,22 +173,20 @@ impl SweepStage {
         let rows: Vec<[f64; 9]> = grid
             .par_iter()
             .flat_map_iter(|&a| {
-                let forward = histograms(events, &self.target(a), &bins, draws);
                 self.params
                     .balance_separations
                     .iter()
                     .map(move |&separation| {
                         let steps = (separation / width).round() as usize;
                         let b = a + steps as f64 * width;
-                        let backward = histograms(events, &self.target(b), &bins, draws);
-                        let there: Vec<f64> = forward
-                            .iter()
-                            .map(|h| h.self_part[bins.half_bins + steps] / width)
-                            .collect();
-                        let back: Vec<f64> = backward
-                            .iter()
-                            .map(|h| h.self_part[bins.half_bins - steps] / width)
-                            .collect();
+                        let self_kernel = |from: f64, k: usize| -> Vec<f64> {
+                            self_bin(events, &self.target(from), &bins, k, draws)
+                                .iter()
+                                .map(|v| v / width)
+                                .collect()
+                        };
+                        let there = self_kernel(a, bins.half_bins + steps);
+                        let back = self_kernel(b, bins.half_bins - steps);
                         let imbalance: Vec<f64> = there
                             .iter()
                             .zip(&back)
