@@ -559,6 +559,36 @@ print("ok")
     python_check(script, artifact);
 }
 
+/// The evolve stage for a special particle launched at u' = 0.5: h_full keeps
+/// number 1, momentum u' and energy u'^2 at every time (the linearized
+/// operator conserves all three); the tagged velocity's mean follows the
+/// Fokker-Planck evolution of the same rates (within four standard errors)
+/// and both start falling towards 0.
+#[test]
+fn evolve_stage_from_a_moving_special_particle_conserves_and_relaxes() {
+    let extra = "[collisions.points_per_potential]\nipp-6 = 16384\n\n[evolve]\nenabled = true\npotential = \"ipp-6\"\nu_prime = 0.5\ntimes = [0.1, 1.0]\nearly_times = [1e-3]\nvelocity_range = 2.5\ngrid_step = 0.1\n";
+    let text = config(7, extra).replace("randomizations = 2", "randomizations = 8");
+    let dir = workspace("evolve-moving");
+    run_counts(&write_config(&dir, &text), &[]);
+    let artifact = &stage_dirs(&dir.join("data"), "evolve")[0];
+    let script = r#"
+import sys, pyarrow.parquet as pq
+s = pq.read_table(sys.argv[1] + "/evolution_summary.parquet").to_pydict()
+rows = list(zip(s["process"], s["number"], s["momentum"], s["momentum_stderr"], s["second_moment"]))
+for process, number, momentum, error, second in rows:
+    assert abs(number - 1) < 1e-9, (process, number)
+    if process == "full":
+        assert abs(momentum - 0.5) < 1e-9 and abs(second - 0.25) < 1e-9, (momentum, second)
+tagged = [r for r in rows if r[0] == "tagged"]
+planck = [r for r in rows if r[0] == "fokker_planck"]
+for t, p in zip(tagged, planck):
+    assert abs(t[2] - p[2]) < 4 * (t[3] ** 2 + p[3] ** 2) ** 0.5, (t, p)
+assert tagged[0][2] < 0.5 and planck[0][2] < 0.5, (tagged, planck)
+print("ok")
+"#;
+    python_check(script, artifact);
+}
+
 /// The md stage: same bytes for any thread count; every run conserves energy
 /// to its tolerance's order and momentum to rounding; the published and the
 /// tagged-velocity estimators agree within their errors (chi-square), and the
