@@ -401,25 +401,29 @@ fn compare_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
     for (_, frame) in table_frames(store, reports, "compare", "finite_size")? {
         writeln!(
             out,
-            "\nfinite size and density: tagged window variance at t_f, MD / Boltzmann (+- standard errors)"
+            "\nfinite size and density: window variance at t_f, MD / Boltzmann (+- standard errors); tagged: starts near u', thermal: every start"
         )?;
         writeln!(
             out,
-            "{:<22} {:>5} {:>10} {:>12} {:<24}",
-            "ring", "N", "rho l", "rho^2 l v_th t_f", "MD / Boltzmann"
+            "{:<22} {:>5} {:>10} {:>16} {:<24} {:<24}",
+            "ring", "N", "rho l", "rho^2 l v_th t_f", "tagged", "thermal"
         )?;
         for row in 0..frame.height() {
+            let ratio = |name: &str| -> Result<String> {
+                Ok(with_error(
+                    number(&frame, row, name)?,
+                    number(&frame, row, &format!("{name}_stderr"))?,
+                ))
+            };
             writeln!(
                 out,
-                "{:<22} {:>5} {:>10.3e} {:>12.4e} {:<24}",
+                "{:<22} {:>5} {:>10.3e} {:>16.4e} {:<24} {:<24}",
                 text(&frame, row, "ring")?,
                 count(&frame, row, "particles")?,
                 number(&frame, row, "density")?,
                 number(&frame, row, "scaled_time")?,
-                with_error(
-                    number(&frame, row, "ratio")?,
-                    number(&frame, row, "ratio_stderr")?
-                ),
+                ratio("ratio")?,
+                ratio("thermal_ratio")?,
             )?;
         }
     }

@@ -657,8 +657,9 @@ print("ok")
 /// MD meets Boltzmann at low density: on a ring at rho l = 2.9e-3 (N = 41,
 /// 128 runs), the tagged h(u, t_f) agrees bin by bin with the master
 /// equation of an independent Monte Carlo kernel (chi-square per degree of
-/// freedom), and so does its window variance (the finite-size table's ratio,
-/// within four standard errors).
+/// freedom), and so do its window variance and the thermal estimator's (every
+/// lineage, against the self kernel averaged over thermal starts): the
+/// finite-size table's ratios, within four standard errors.
 #[test]
 fn md_meets_boltzmann_at_low_density() {
     let extra = r#"
@@ -700,6 +701,8 @@ assert dof >= 8 and chi2 / dof < 2.5, (chi2, dof)
 study = pq.read_table(sys.argv[1] + "/finite_size.parquet").to_pydict()
 ratio, error = study["ratio"][0], study["ratio_stderr"][0]
 assert 0 < error < 0.3 and abs(ratio - 1) < 4 * error, (ratio, error)
+ratio, error = study["thermal_ratio"][0], study["thermal_ratio_stderr"][0]
+assert 0 < error < 0.1 and abs(ratio - 1) < 4 * error, (ratio, error)
 print("ok")
 "#;
     python_check(script, compare);

@@ -46,6 +46,26 @@ pub struct RunSettings {
     pub max_steps: u64,
 }
 
+/// Lineages starting with `|u| <= THERMAL_BAND` (`v_th`) enter the thermal
+/// estimator: the reach of the kernel's reweighting (`|u'| <= 3`), so the
+/// Boltzmann side can average its rates over the same starts.
+pub const THERMAL_BAND: f64 = 3.0;
+
+/// The thermal estimator of one run: every lineage starting within
+/// [`THERMAL_BAND`], its change `x = u(t) - u(0)` counted within the
+/// window, averaged over lineages and sample times. Its Boltzmann
+/// counterpart is the self kernel's window variance rate averaged over the
+/// thermal starts, times `t`.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ThermalLineages {
+    /// Lineages counted (per sample time).
+    pub lineages: usize,
+    /// Fraction of lineages whose change lies within the window.
+    pub number: f64,
+    /// Mean of `x^2` over lineages, `x` within the window, `v_th^2`.
+    pub window_variance: f64,
+}
+
 /// The estimators and diagnostics of one run.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RunResult {
@@ -55,6 +75,8 @@ pub struct RunResult {
     pub tagged: Vec<f64>,
     /// Lineages in the tagged estimator (per sample time).
     pub lineages: usize,
+    /// Every thermal lineage's change within the window.
+    pub thermal: ThermalLineages,
     /// `|E(t_end) - E(0)| / E(0)`.
     pub energy_error: f64,
     /// `|P(t_end) - P(0)|`, `v_th`.
@@ -210,6 +232,11 @@ fn sample(
     let starters: Vec<usize> = (0..start.len())
         .filter(|&k| (start[k] - settings.u_prime).abs() <= settings.start_band)
         .collect();
+    let thermal_starters: Vec<usize> = (0..start.len())
+        .filter(|&k| start[k].abs() <= THERMAL_BAND)
+        .collect();
+    let half_window = bins.width * (bins.half_bins as f64 + 0.5);
+    let mut thermal = [0.0; 2];
     let mut now = 0.0;
     for &time in &settings.sample_times {
         ring.advance(time - now, settings.max_steps)?;
@@ -225,6 +252,13 @@ fn sample(
                 tagged[k] += 1.0;
             }
         }
+        for &label in &thermal_starters {
+            let change = carried[label] - start[label];
+            if change.abs() <= half_window {
+                thermal[0] += 1.0;
+                thermal[1] += change * change;
+            }
+        }
     }
     if !ring.energy().is_finite() {
         return Err(RunError::NonFinite);
@@ -232,6 +266,7 @@ fn sample(
     let samples = settings.sample_times.len() as f64;
     let width = bins.width;
     let lineages = starters.len().max(1) as f64;
+    let thermal_count = samples * thermal_starters.len().max(1) as f64;
     let last = ring.lineages();
     let (macro_steps, pair_forces) = ring.work();
     Ok(RunResult {
@@ -245,6 +280,11 @@ fn sample(
             .map(|count| count / (samples * lineages * width))
             .collect(),
         lineages: starters.len(),
+        thermal: ThermalLineages {
+            lineages: thermal_starters.len(),
+            number: thermal[0] / thermal_count,
+            window_variance: thermal[1] / thermal_count,
+        },
         energy_error: (ring.energy() - energy).abs() / energy,
         momentum_error: (ring.velocities().iter().sum::<f64>() - momentum).abs(),
         macro_steps,

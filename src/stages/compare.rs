@@ -16,7 +16,9 @@ use super::kernel::{collision_events, target_of};
 use crate::config::{KernelParams, MdParams};
 use crate::evolve::Replicated;
 use crate::evolve::convolution::{self, overlap_rebin};
-use crate::kernel::{Bins, Estimate};
+use crate::kernel::{Bins, Estimate, Target, moments};
+use crate::physics::launch::thermal_density;
+use crate::physics::md::THERMAL_BAND;
 use crate::pipeline::table::{f64_values, text_values};
 use crate::pipeline::{Column, Input, InstanceId, Progress, Stage, StageError, Table};
 
@@ -25,9 +27,15 @@ use crate::pipeline::{Column, Input, InstanceId, Progress, Stage, StageError, Ta
 pub struct CompareParams {
     /// The kernel (potential, `u' = 0`, dilute, bins).
     pub kernel: KernelParams,
+    /// The collisions instance that reweights to every thermal start
+    /// (`|u'| <= 3`): the thermal estimator's reference.
+    pub thermal_collisions: String,
     /// The rings compared.
     pub systems: Vec<MdParams>,
 }
+
+/// Simpson intervals of the average over thermal starts in [-3, 3] (step 0.25).
+const THERMAL_INTERVALS: usize = 24;
 
 /// The `compare` stage.
 pub struct CompareStage {
@@ -41,6 +49,8 @@ struct MdEstimates {
     tagged: Vec<Estimate>,
     /// Window variance `sum (u - u')^2 h du` of the tagged estimator.
     tagged_variance: Estimate,
+    /// Window variance of the thermal estimator (every lineage).
+    thermal_variance: Estimate,
 }
 
 fn read_md(input: &Input) -> Result<MdEstimates, StageError> {
@@ -59,19 +69,43 @@ fn read_md(input: &Input) -> Result<MdEstimates, StageError> {
         .tables
         .get("summary")
         .ok_or_else(|| StageError::Input(format!("{} has no summary table", input.id)))?;
-    let tagged_row = text_values(summary, "estimator")?
-        .iter()
-        .position(|e| e == "tagged")
-        .ok_or_else(|| StageError::Input(format!("{} summary has no tagged row", input.id)))?;
+    let estimators = text_values(summary, "estimator")?;
+    let (means, errors) = (
+        f64_values(summary, "window_variance")?,
+        f64_values(summary, "window_variance_stderr")?,
+    );
+    let variance = |name: &str| -> Result<Estimate, StageError> {
+        let row = estimators
+            .iter()
+            .position(|e| e == name)
+            .ok_or_else(|| StageError::Input(format!("{} summary has no {name} row", input.id)))?;
+        Ok(Estimate {
+            mean: means[row],
+            stderr: errors[row],
+        })
+    };
     Ok(MdEstimates {
         du: f64_values(batch, "du")?,
         published: pair("h_published", "h_published_stderr")?,
         tagged: pair("h_tagged", "h_tagged_stderr")?,
-        tagged_variance: Estimate {
-            mean: f64_values(summary, "window_variance")?[tagged_row],
-            stderr: f64_values(summary, "window_variance_stderr")?[tagged_row],
-        },
+        tagged_variance: variance("tagged")?,
+        thermal_variance: variance("thermal")?,
     })
+}
+
+/// Half-width of a ring's estimator window (the outer edges of its bins), `v_th`.
+fn half_window(system: &MdParams) -> f64 {
+    let bins = Bins::for_window(system.window, system.bin_width);
+    bins.width * (bins.half_bins as f64 + 0.5)
+}
+
+/// `a / b` with the two relative standard errors combined.
+fn ratio(a: Estimate, b: Estimate) -> Estimate {
+    let mean = a.mean / b.mean;
+    Estimate {
+        mean,
+        stderr: mean.abs() * (a.stderr / a.mean).hypot(b.stderr / b.mean),
+    }
 }
 
 /// One goodness-of-fit row.
@@ -97,6 +131,18 @@ fn chi_square(a: &[Estimate], b: &[Estimate]) -> (f64, usize) {
 }
 
 impl CompareStage {
+    /// The kernel's collisions, then the thermal reference's when they differ.
+    fn collision_inputs(&self) -> Vec<InstanceId> {
+        let mut ids = vec![CollisionsStage::instance(
+            &self.params.kernel.potential.id(),
+        )];
+        let thermal = CollisionsStage::instance(&self.params.thermal_collisions);
+        if !ids.contains(&thermal) {
+            ids.push(thermal);
+        }
+        ids
+    }
+
     /// A compare stage with resolved parameters.
     pub fn new(params: CompareParams) -> CompareStage {
         CompareStage { params }
@@ -135,16 +181,61 @@ impl CompareStage {
             .collect()
     }
 
+    /// Per ring, per kernel replicate: the self kernel's window variance rate
+    /// (truncated at the ring's half window) averaged over thermal starts
+    /// `u0` in [-3, 3] with weight `f0(u0)` (Simpson, step 0.25, normalized on
+    /// the band), `rho^2 l v_th`.
+    fn thermal_rates(&self, collisions: &Input) -> Result<Vec<Vec<f64>>, StageError> {
+        let (events, draws, _) = collision_events(collisions)?;
+        let edges: Vec<f64> = self.params.systems.iter().map(half_window).collect();
+        let step = 2.0 * THERMAL_BAND / THERMAL_INTERVALS as f64;
+        let mut rates = vec![vec![0.0; draws.replicates()]; edges.len()];
+        let mut norm = 0.0;
+        for j in 0..=THERMAL_INTERVALS {
+            let u = -THERMAL_BAND + step * j as f64;
+            let simpson = match j {
+                0 | THERMAL_INTERVALS => 1.0,
+                j if j % 2 == 1 => 4.0,
+                _ => 2.0,
+            };
+            let weight = simpson * thermal_density(u);
+            norm += weight;
+            let target = Target {
+                u_prime: u,
+                ..target_of(&self.params.kernel)
+            };
+            let sums = moments(&events, &target, &edges, &draws);
+            for (replicate, sums) in sums.iter().enumerate() {
+                for (ring, sum) in sums.iter().enumerate() {
+                    rates[ring][replicate] += weight * sum.self_variance;
+                }
+            }
+        }
+        rates.iter_mut().flatten().for_each(|r| *r /= norm);
+        Ok(rates)
+    }
+
     /// The finite-size and density study: per ring, its size, density and
-    /// scaled time, and the tagged window variance of MD against Boltzmann's.
+    /// scaled time, and the window variances of MD against Boltzmann's: of
+    /// the tagged estimator (starts near `u'`, against the Boltzmann `h`) and
+    /// of the thermal one (every start, against `t` times the thermal rate;
+    /// first order in `Gamma t`).
     fn finite_size(
         &self,
         rings: &[MdEstimates],
         boltzmann: &[Replicated<Vec<f64>>],
+        thermal_rates: &[Vec<f64>],
     ) -> Result<Table, StageError> {
         let exponent = self.params.kernel.potential.length_exponent();
-        let mut columns: [Vec<f64>; 8] = Default::default();
-        for ((system, ring), predicted) in self.params.systems.iter().zip(rings).zip(boltzmann) {
+        let mut columns: [Vec<f64>; 14] = Default::default();
+        for (((system, ring), predicted), rates) in self
+            .params
+            .systems
+            .iter()
+            .zip(rings)
+            .zip(boltzmann)
+            .zip(thermal_rates)
+        {
             let width = system.bin_width;
             let variance = predicted.scalar(|h| {
                 h.iter()
@@ -152,24 +243,47 @@ impl CompareStage {
                     .map(|(h, du)| h * du * du * width)
                     .sum()
             });
-            let md = ring.tagged_variance;
-            let ratio = md.mean / variance.mean;
-            let ratio_error = ratio
-                * ((md.stderr / md.mean).powi(2) + (variance.stderr / variance.mean).powi(2))
-                    .sqrt();
+            let time = system.final_time_ns * system.gas.rate_per_ns(1.0, exponent);
+            let thermal =
+                Estimate::from_replicates(&rates.iter().map(|r| r * time).collect::<Vec<f64>>());
+            let [tagged_ratio, thermal_ratio] = [
+                ratio(ring.tagged_variance, variance),
+                ratio(ring.thermal_variance, thermal),
+            ];
             let row = [
                 f64::from(system.particles - 1) / system.circumference,
-                system.final_time_ns * system.gas.rate_per_ns(1.0, exponent),
-                md.mean,
-                md.stderr,
+                time,
+                ring.tagged_variance.mean,
+                ring.tagged_variance.stderr,
                 variance.mean,
                 variance.stderr,
-                ratio,
-                ratio_error,
+                tagged_ratio.mean,
+                tagged_ratio.stderr,
+                ring.thermal_variance.mean,
+                ring.thermal_variance.stderr,
+                thermal.mean,
+                thermal.stderr,
+                thermal_ratio.mean,
+                thermal_ratio.stderr,
             ];
             columns.iter_mut().zip(row).for_each(|(c, v)| c.push(v));
         }
-        let [density, time, md, md_err, b, b_err, ratio, ratio_err] = columns;
+        let [
+            density,
+            time,
+            md,
+            md_err,
+            b,
+            b_err,
+            ratio,
+            ratio_err,
+            thermal_md,
+            thermal_md_err,
+            thermal_b,
+            thermal_b_err,
+            thermal_ratio,
+            thermal_ratio_err,
+        ] = columns;
         let names = self.params.systems.iter().map(|s| s.name.clone()).collect();
         let particles = self.params.systems.iter().map(|s| s.particles).collect();
         let variance = "v_th^2";
@@ -221,6 +335,12 @@ impl CompareStage {
                     "propagated from both standard errors",
                     ratio_err,
                 ),
+                Column::f64("thermal_md_variance", variance, "thermal estimator: mean over every lineage starting with |u| <= 3 of its squared change within the window", thermal_md),
+                Column::f64("thermal_md_variance_stderr", variance, "standard error over runs", thermal_md_err),
+                Column::f64("thermal_boltzmann_variance", variance, "t_f times the self kernel's window variance rate averaged over thermal starts (f0 on [-3, 3]); first order in Gamma t_f", thermal_b),
+                Column::f64("thermal_boltzmann_variance_stderr", variance, "standard error over the kernel's randomizations", thermal_b_err),
+                Column::f64("thermal_ratio", "1", "thermal_md_variance / thermal_boltzmann_variance", thermal_ratio),
+                Column::f64("thermal_ratio_stderr", "1", "propagated from both standard errors", thermal_ratio_err),
             ],
         )?
         .with_metadata(
@@ -236,7 +356,7 @@ impl Stage for CompareStage {
     }
 
     fn version(&self) -> u32 {
-        2
+        3
     }
 
     fn params(&self) -> Value {
@@ -244,9 +364,7 @@ impl Stage for CompareStage {
     }
 
     fn inputs(&self) -> Vec<InstanceId> {
-        let mut ids = vec![CollisionsStage::instance(
-            &self.params.kernel.potential.id(),
-        )];
+        let mut ids = self.collision_inputs();
         ids.extend(
             self.params
                 .systems
@@ -261,7 +379,11 @@ impl Stage for CompareStage {
     }
 
     fn run(&self, inputs: &[Input], progress: &Progress) -> Result<Vec<Table>, StageError> {
-        let rings: Vec<MdEstimates> = inputs[1..].iter().map(read_md).collect::<Result<_, _>>()?;
+        let collisions = self.collision_inputs().len();
+        let rings: Vec<MdEstimates> = inputs[collisions..]
+            .iter()
+            .map(read_md)
+            .collect::<Result<_, _>>()?;
         let replicated = self.boltzmann(&inputs[0], &rings)?;
         let boltzmann: Vec<Vec<Estimate>> = replicated.iter().map(Replicated::values).collect();
         let mut columns: [Vec<f64>; 7] = Default::default();
@@ -387,7 +509,8 @@ impl Stage for CompareStage {
             "ternary.description",
             "goodness of fit of MD against Boltzmann, and of the scaling collapse".into(),
         );
-        let finite_size = self.finite_size(&rings, &replicated)?;
+        let thermal_rates = self.thermal_rates(&inputs[collisions - 1])?;
+        let finite_size = self.finite_size(&rings, &replicated, &thermal_rates)?;
         Ok(vec![comparison, goodness, finite_size])
     }
 }

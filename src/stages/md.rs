@@ -143,16 +143,27 @@ impl MdStage {
                 .sum()
         };
         let mut columns: [Vec<f64>; 4] = Default::default();
-        let names = vec!["published".to_string(), "tagged".to_string()];
+        let names = ["published", "tagged", "thermal"]
+            .map(String::from)
+            .to_vec();
         let parts: [fn(&RunResult) -> &Vec<f64>; 2] = [|r| &r.published, |r| &r.tagged];
+        let per_run = |value: &dyn Fn(&RunResult) -> f64| {
+            Estimate::from_replicates(&results.iter().map(value).collect::<Vec<f64>>())
+        };
         for part in parts {
             for p in [0, 2] {
-                let values: Vec<f64> = results.iter().map(|r| moment(part(r), p)).collect();
-                let estimate = Estimate::from_replicates(&values);
+                let estimate = per_run(&|r| moment(part(r), p));
                 let slot = if p == 0 { 0 } else { 2 };
                 columns[slot].push(estimate.mean);
                 columns[slot + 1].push(estimate.stderr);
             }
+        }
+        for (slot, estimate) in [
+            (0, per_run(&|r| r.thermal.number)),
+            (2, per_run(&|r| r.thermal.window_variance)),
+        ] {
+            columns[slot].push(estimate.mean);
+            columns[slot + 1].push(estimate.stderr);
         }
         let [mass, mass_err, variance, variance_err] = columns;
         Ok(Table::new(
@@ -160,7 +171,7 @@ impl MdStage {
             vec![
                 Column::text(
                     "estimator",
-                    "published (background subtracted) or tagged (velocity lineages)",
+                    "published (background subtracted), tagged (velocity lineages starting within start_band of u'), or thermal (every lineage starting with |u| <= 3: number = fraction whose change stays within the window, window_variance = mean of its square there)",
                     names,
                 ),
                 Column::f64("number", "1", "sum h dx over the window", mass),
@@ -247,6 +258,12 @@ impl MdStage {
                     pick(|r| r.lineages as f64),
                 ),
                 Column::f64(
+                    "thermal_lineages",
+                    "1",
+                    "lineages in the thermal estimator (|u| <= 3 at the start)",
+                    pick(|r| r.thermal.lineages as f64),
+                ),
+                Column::f64(
                     "energy_error",
                     "1",
                     "|E(t_end) - E(0)| / E(0)",
@@ -303,7 +320,7 @@ impl Stage for MdStage {
     }
 
     fn version(&self) -> u32 {
-        3
+        4
     }
 
     fn params(&self) -> Value {

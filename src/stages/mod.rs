@@ -36,8 +36,12 @@ pub fn plan(study: &Study) -> Vec<Box<dyn Stage>> {
         let evolve = study
             .evolve_params()
             .filter(|e| e.kernel.potential == potential);
+        let compared = study
+            .md_params()
+            .first()
+            .is_some_and(|ring| ring.potential == potential);
         if let (true, (name, Some(wide))) = (
-            sweep.is_some() || evolve.is_some(),
+            sweep.is_some() || evolve.is_some() || compared,
             study.wide_collisions(potential),
         ) {
             stages.push(Box::new(collisions::CollisionsStage::variant(wide, name)));
@@ -91,8 +95,13 @@ pub fn plan(study: &Study) -> Vec<Box<dyn Stage>> {
             .filter(|r| r.potential == first.potential && r.u_prime == 0.0)
             .cloned()
             .collect();
+        let (thermal_collisions, _) = study.wide_collisions(first.potential);
         stages.push(Box::new(compare::CompareStage::new(
-            compare::CompareParams { kernel, systems },
+            compare::CompareParams {
+                kernel,
+                thermal_collisions,
+                systems,
+            },
         )));
     }
     let rows = potentials
