@@ -1,7 +1,8 @@
 //! Dense linear algebra the physics needs and no crate of ours provides: the
 //! symmetric eigenproblem (cyclic Jacobi), used for the dissipative projection
-//! of collision generators and for the Lax matrix of the Sutherland ring.
-//! Pure math: no IO.
+//! of collision generators and for the Lax matrix of the Sutherland ring;
+//! and the composite Simpson weights of the quadratures (bound-pair length,
+//! averages over thermal starts). Pure math: no IO.
 
 /// Eigenvalues and orthonormal eigenvectors of a symmetric matrix.
 #[derive(Clone, Debug, PartialEq)]
@@ -60,6 +61,17 @@ pub fn symmetric_eigen(a: &[f64], n: usize) -> SymmetricEigen {
         vectors: (0..n)
             .map(|k| (0..n).map(|i| v[i * n + k]).collect())
             .collect(),
+    }
+}
+
+/// Weight of node `k` of the composite Simpson rule over `intervals` (even)
+/// equal intervals, in units of `step / 3`: 1, 4, 2, 4, ..., 4, 1.
+pub fn simpson_weight(k: usize, intervals: usize) -> f64 {
+    match k {
+        0 => 1.0,
+        k if k == intervals => 1.0,
+        k if k % 2 == 1 => 4.0,
+        _ => 2.0,
     }
 }
 

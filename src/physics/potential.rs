@@ -8,6 +8,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::quasi_random::standard_normal_cdf;
+use crate::linalg::simpson_weight;
 
 /// A repulsive-core pair interaction `U(x)` between two particles at scaled
 /// separation `x > 0`.
@@ -132,15 +133,7 @@ impl LennardJones {
         };
         let h = 1.0 / INTERVALS as f64;
         let sum: f64 = (0..=INTERVALS)
-            .map(|k| {
-                let weight = match k {
-                    0 => 1.0,
-                    k if k == INTERVALS => 1.0,
-                    k if k % 2 == 1 => 4.0,
-                    _ => 2.0,
-                };
-                weight * integrand(k as f64 * h)
-            })
+            .map(|k| simpson_weight(k, INTERVALS) * integrand(k as f64 * h))
             .sum();
         sum * h / 3.0
     }

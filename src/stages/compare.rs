@@ -17,6 +17,7 @@ use crate::config::{KernelParams, MdParams};
 use crate::evolve::Replicated;
 use crate::evolve::convolution::{self, overlap_rebin};
 use crate::kernel::{Bins, Estimate, Target, moments};
+use crate::linalg::simpson_weight;
 use crate::physics::launch::thermal_density;
 use crate::physics::md::THERMAL_BAND;
 use crate::pipeline::table::{f64_values, text_values};
@@ -193,12 +194,7 @@ impl CompareStage {
         let mut norm = 0.0;
         for j in 0..=THERMAL_INTERVALS {
             let u = -THERMAL_BAND + step * j as f64;
-            let simpson = match j {
-                0 | THERMAL_INTERVALS => 1.0,
-                j if j % 2 == 1 => 4.0,
-                _ => 2.0,
-            };
-            let weight = simpson * thermal_density(u);
+            let weight = simpson_weight(j, THERMAL_INTERVALS) * thermal_density(u);
             norm += weight;
             let target = Target {
                 u_prime: u,
