@@ -67,6 +67,10 @@ pub fn symmetric_eigen(a: &[f64], n: usize) -> SymmetricEigen {
 /// Weight of node `k` of the composite Simpson rule over `intervals` (even)
 /// equal intervals, in units of `step / 3`: 1, 4, 2, 4, ..., 4, 1.
 pub fn simpson_weight(k: usize, intervals: usize) -> f64 {
+    debug_assert!(
+        intervals.is_multiple_of(2),
+        "Simpson needs an even number of intervals"
+    );
     match k {
         0 => 1.0,
         k if k == intervals => 1.0,

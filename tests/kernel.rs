@@ -391,6 +391,14 @@ fn single_bin_self_kernel_equals_the_histogram() {
                 assert_eq!(h.self_part[k].to_bits(), value.to_bits(), "bin {k}");
             }
         }
-        assert!(full.iter().any(|h| h.self_part.iter().any(|&v| v != 0.0)));
+        let off_centre = (0..bins.len()).filter(|&k| k != bins.half_bins);
+        let landed = off_centre
+            .filter(|&k| {
+                self_bin(&events, &target, &bins, k, &draws)
+                    .iter()
+                    .any(|&v| v != 0.0)
+            })
+            .count();
+        assert!(landed > 3, "only {landed} off-centre bins received a kick");
     }
 }

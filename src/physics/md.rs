@@ -51,8 +51,8 @@ pub struct RunSettings {
 /// Boltzmann side can average its rates over the same starts.
 pub const THERMAL_BAND: f64 = 3.0;
 
-/// The thermal estimator of one run: every lineage starting within
-/// [`THERMAL_BAND`], its change `x = u(t) - u(0)` counted within the
+/// The thermal estimator of one run: every thermal lineage (not the special
+/// particle's) starting within [`THERMAL_BAND`], its change `x = u(t) - u(0)` counted within the
 /// window, averaged over lineages and sample times. Its Boltzmann
 /// counterpart is the self kernel's window variance rate averaged over the
 /// thermal starts, times `t`.
@@ -232,7 +232,8 @@ fn sample(
     let starters: Vec<usize> = (0..start.len())
         .filter(|&k| (start[k] - settings.u_prime).abs() <= settings.start_band)
         .collect();
-    let thermal_starters: Vec<usize> = (0..start.len())
+    // Lineage 0 starts at u' by construction, not from f0: left out.
+    let thermal_starters: Vec<usize> = (1..start.len())
         .filter(|&k| start[k].abs() <= THERMAL_BAND)
         .collect();
     let half_window = bins.width * (bins.half_bins as f64 + 0.5);

@@ -9,6 +9,7 @@
 
 use rayon::prelude::*;
 use serde_json::Value;
+use sha2::{Digest, Sha256};
 
 use crate::config::MdParams;
 use crate::kernel::{Bins, Estimate};
@@ -44,9 +45,13 @@ impl MdStage {
         }
     }
 
-    /// Seed of run `k`: the study's seed mixed with the run index.
+    /// Seed of run `k`: the study's seed mixed with the ring's name and the
+    /// run index, so that rings of a study draw independent initial states
+    /// (correlated rings would correlate the errors of a finite-size trend).
     fn seed(&self, run: u32) -> u64 {
-        self.params.seed ^ u64::from(run + 1).wrapping_mul(0x9E37_79B9_7F4A_7C15)
+        let digest = Sha256::digest(self.params.name.as_bytes());
+        let name = u64::from_le_bytes(digest[..8].try_into().unwrap_or([0; 8]));
+        self.params.seed ^ name ^ u64::from(run + 1).wrapping_mul(0x9E37_79B9_7F4A_7C15)
     }
 }
 
@@ -84,10 +89,21 @@ impl PotentialVisitor for Runs<'_> {
     }
 }
 
-/// Mean and standard error over runs of bin `k` of `part`.
+/// Mean and standard error over runs of bin `k` of `part`. A bin where every
+/// run has the same value (no run counted anything there, say) has no spread
+/// to estimate an error from: exactly 0, not the rounding residue of the
+/// mean, so that chi-square tests can leave it out.
 fn per_bin(results: &[RunResult], k: usize, part: fn(&RunResult) -> &Vec<f64>) -> Estimate {
     let values: Vec<f64> = results.iter().map(|r| part(r)[k]).collect();
-    Estimate::from_replicates(&values)
+    let estimate = Estimate::from_replicates(&values);
+    if values.iter().all(|v| *v == values[0]) {
+        Estimate {
+            stderr: 0.0,
+            ..estimate
+        }
+    } else {
+        estimate
+    }
 }
 
 impl MdStage {
@@ -320,7 +336,7 @@ impl Stage for MdStage {
     }
 
     fn version(&self) -> u32 {
-        4
+        6
     }
 
     fn params(&self) -> Value {
