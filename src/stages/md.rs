@@ -336,7 +336,7 @@ impl Stage for MdStage {
     }
 
     fn version(&self) -> u32 {
-        6
+        7
     }
 
     fn params(&self) -> Value {
