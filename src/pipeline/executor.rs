@@ -296,10 +296,7 @@ fn compute(
         ("ternary.stage_version", stage.version().to_string()),
         ("ternary.key", key.to_string()),
         ("ternary.params", super::key::canonical_json(&params)),
-        (
-            "ternary.inputs",
-            serde_json::to_string(&inputs).unwrap_or_default(),
-        ),
+        ("ternary.inputs", super::key::embedded_inputs(&inputs)),
         ("ternary.tool", tool_version()),
     ]
     .into_iter()

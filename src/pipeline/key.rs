@@ -73,15 +73,36 @@ pub struct InputRecord {
     pub files: Vec<(String, String)>,
 }
 
-/// The key of a stage instance. The upstream keys themselves are left out so
-/// that only file contents matter.
-pub fn stage_key(stage: &str, version: u32, params: &Value, inputs: &[InputRecord]) -> String {
-    let inputs: Vec<Value> = inputs
+/// What of the inputs a key hashes: upstream stage names and file contents.
+/// Upstream keys and instance names are left out so that only file contents
+/// matter (early cutoff).
+fn keyed_inputs(inputs: &[InputRecord]) -> Value {
+    inputs
         .iter()
         .map(|input| serde_json::json!({ "stage": input.stage, "files": input.files }))
-        .collect();
+        .collect()
+}
+
+/// The inputs as every output file embeds them (`ternary.inputs`): exactly
+/// what the key hashes, so that one key always means the same bytes (the
+/// manifest keeps the upstream keys and instances).
+pub fn embedded_inputs(inputs: &[InputRecord]) -> String {
+    canonical_json(&keyed_inputs(inputs))
+}
+
+/// The key of a stage instance: stage, version, parameters and
+/// [`keyed_inputs`]. Encoding 2 marks stages with inputs, whose files embed
+/// [`embedded_inputs`] (encoding 1 embedded upstream keys, which the key does
+/// not hash); files of stages without inputs kept their bytes and keys.
+pub fn stage_key(stage: &str, version: u32, params: &Value, inputs: &[InputRecord]) -> String {
+    let encoding = if inputs.is_empty() {
+        "ternary-stage-key/1"
+    } else {
+        "ternary-stage-key/2"
+    };
+    let inputs = keyed_inputs(inputs);
     let document = serde_json::json!({
-        "encoding": "ternary-stage-key/1",
+        "encoding": encoding,
         "stage": stage,
         "version": version,
         "params": params,
@@ -152,6 +173,26 @@ mod tests {
             stage_key("table", 1, &json!({"n": 8.0}), &[input("k1", "aa")])
         );
         assert_ne!(base, stage_key("table", 1, &params, &[input("k1", "ab")]));
+    }
+
+    /// Records that differ only in upstream key and instance embed the same
+    /// text and give the same key.
+    #[test]
+    fn embedded_inputs_are_what_the_key_hashes() {
+        let record = |key: &str, instance: &str| InputRecord {
+            stage: "md".into(),
+            instance: instance.into(),
+            key: key.into(),
+            files: vec![("h.parquet".into(), "abc".into())],
+        };
+        let (a, b) = ([record("k1", "ring")], [record("k2", "other")]);
+        assert_eq!(embedded_inputs(&a), embedded_inputs(&b));
+        let params = serde_json::json!({});
+        assert_eq!(
+            stage_key("compare", 1, &params, &a),
+            stage_key("compare", 1, &params, &b)
+        );
+        assert!(!embedded_inputs(&a).contains("k1"));
     }
 
     #[test]
