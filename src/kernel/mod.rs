@@ -346,6 +346,16 @@ impl Estimate {
             stderr: (variance / count).sqrt(),
         }
     }
+
+    /// `self / other`, with the two relative standard errors combined to
+    /// first order (the two estimates treated as independent).
+    pub fn ratio(self, other: Estimate) -> Estimate {
+        let mean = self.mean / other.mean;
+        Estimate {
+            mean,
+            stderr: mean.abs() * (self.stderr / self.mean).hypot(other.stderr / other.mean),
+        }
+    }
 }
 
 /// Points drawn per replicate and stratum (failed scenes included).

@@ -149,15 +149,7 @@ impl RingState {
     /// one circumference `circumference`) with velocities `velocities`.
     pub fn new(positions: &[f64], velocities: &[f64], circumference: f64) -> RingState {
         let n = positions.len();
-        let gaps = (0..n)
-            .map(|k| {
-                if k + 1 < n {
-                    positions[k + 1] - positions[k]
-                } else {
-                    positions[0] + circumference - positions[k]
-                }
-            })
-            .collect();
+        let gaps = gaps_of(positions, circumference);
         let rates = (0..n)
             .map(|k| velocities[(k + 1) % n] - velocities[k])
             .collect();
@@ -260,9 +252,8 @@ pub fn thermal_start<P: PairPotential, R: RngExt>(
         positions.iter_mut().for_each(|s| *s -= origin);
         positions
     };
-    let gaps_of = |positions: &[f64]| RingState::new(positions, &velocities, circumference).gaps;
     if forces.potential.well_depth() > 0.0 {
-        let mut gaps = gaps_of(&uniform_positions(rng));
+        let mut gaps = gaps_of(&uniform_positions(rng), circumference);
         for _ in 0..WELL_SWEEPS {
             metropolis_sweep(forces, &mut gaps, rng);
         }
@@ -270,7 +261,8 @@ pub fn thermal_start<P: PairPotential, R: RngExt>(
     }
     for _ in 0..max_draws {
         let positions = uniform_positions(rng);
-        if rng.random::<f64>() < (-forces.potential_energy(&gaps_of(&positions))).exp() {
+        let gaps = gaps_of(&positions, circumference);
+        if rng.random::<f64>() < (-forces.potential_energy(&gaps)).exp() {
             return Ok((positions, velocities));
         }
     }
@@ -324,6 +316,21 @@ pub fn bound_pairs<P: PairPotential>(
             0.25 * w * w + forces.potential.energy(forces.chord(gaps[k])) < 0.0
         })
         .count()
+}
+
+/// Gaps `g_k = s_(k+1) - s_k` of ascending arc positions, the last wrapping
+/// around the circumference.
+pub fn gaps_of(positions: &[f64], circumference: f64) -> Vec<f64> {
+    let n = positions.len();
+    (0..n)
+        .map(|k| {
+            if k + 1 < n {
+                positions[k + 1] - positions[k]
+            } else {
+                positions[0] + circumference - positions[k]
+            }
+        })
+        .collect()
 }
 
 /// Arc positions of a ring's particles from its gaps, particle 0 at 0.
@@ -501,17 +508,10 @@ pub fn advance<V: Vector, A: Acceleration<V>>(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::kernel::Estimate;
     use crate::physics::potential::{InverseIntegerPower, LennardJones};
     use rand::SeedableRng;
     use rand::rngs::StdRng;
-
-    /// Mean and standard error of `values`.
-    fn mean_and_error(values: &[f64]) -> (f64, f64) {
-        let n = values.len() as f64;
-        let mean = values.iter().sum::<f64>() / n;
-        let variance = values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0);
-        (mean, (variance / n).sqrt())
-    }
 
     /// Thermal starts of a Lennard-Jones ring (kT = eps/10: a well of 2.5 kT)
     /// bind the fraction `rho K_b` of their gaps that the dilute limit
@@ -537,7 +537,10 @@ mod tests {
                 bound_pairs(&forces, &state.gaps, &velocities) as f64
             })
             .collect();
-        let (mean, error) = mean_and_error(&counts);
+        let Estimate {
+            mean,
+            stderr: error,
+        } = Estimate::from_replicates(&counts);
         let expected = particles as f64 * density * potential.bound_pair_length();
         assert!(
             (mean - expected).abs() < 4.0 * error,

@@ -39,6 +39,16 @@ impl CollisionsStage {
     pub fn instance(name: &str) -> InstanceId {
         InstanceId::new("collisions", name)
     }
+
+    /// The instances of scene sets `main` and `other`, `other` left out when
+    /// it is the same set (a stage then reads it once).
+    pub fn instances(main: &str, other: &str) -> Vec<InstanceId> {
+        let mut ids = vec![CollisionsStage::instance(main)];
+        if other != main {
+            ids.push(CollisionsStage::instance(other));
+        }
+        ids
+    }
 }
 
 impl Stage for CollisionsStage {

@@ -100,15 +100,6 @@ fn half_window(system: &MdParams) -> f64 {
     bins.width * (bins.half_bins as f64 + 0.5)
 }
 
-/// `a / b` with the two relative standard errors combined.
-fn ratio(a: Estimate, b: Estimate) -> Estimate {
-    let mean = a.mean / b.mean;
-    Estimate {
-        mean,
-        stderr: mean.abs() * (a.stderr / a.mean).hypot(b.stderr / b.mean),
-    }
-}
-
 /// One goodness-of-fit row.
 struct Fit {
     ring: String,
@@ -134,14 +125,10 @@ fn chi_square(a: &[Estimate], b: &[Estimate]) -> (f64, usize) {
 impl CompareStage {
     /// The kernel's collisions, then the thermal reference's when they differ.
     fn collision_inputs(&self) -> Vec<InstanceId> {
-        let mut ids = vec![CollisionsStage::instance(
+        CollisionsStage::instances(
             &self.params.kernel.potential.id(),
-        )];
-        let thermal = CollisionsStage::instance(&self.params.thermal_collisions);
-        if !ids.contains(&thermal) {
-            ids.push(thermal);
-        }
-        ids
+            &self.params.thermal_collisions,
+        )
     }
 
     /// A compare stage with resolved parameters.
@@ -243,8 +230,8 @@ impl CompareStage {
             let thermal =
                 Estimate::from_replicates(&rates.iter().map(|r| r * time).collect::<Vec<f64>>());
             let [tagged_ratio, thermal_ratio] = [
-                ratio(ring.tagged_variance, variance),
-                ratio(ring.thermal_variance, thermal),
+                ring.tagged_variance.ratio(variance),
+                ring.thermal_variance.ratio(thermal),
             ];
             let row = [
                 f64::from(system.particles - 1) / system.circumference,

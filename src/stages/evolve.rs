@@ -66,14 +66,6 @@ impl EvolveStage {
         EvolveStage { params }
     }
 
-    fn input_ids(&self) -> Vec<InstanceId> {
-        let mut ids = vec![CollisionsStage::instance(&self.params.collisions)];
-        if self.params.wide_collisions != self.params.collisions {
-            ids.push(CollisionsStage::instance(&self.params.wide_collisions));
-        }
-        ids
-    }
-
     /// The special particle's variance rate at `u'` (within half the window),
     /// `rho^2 l v_th`: `Gamma` in scaled units.
     fn gamma(&self, events: &[Event], draws: &Draws) -> f64 {
@@ -550,7 +542,7 @@ impl Stage for EvolveStage {
     }
 
     fn inputs(&self) -> Vec<InstanceId> {
-        self.input_ids()
+        CollisionsStage::instances(&self.params.collisions, &self.params.wide_collisions)
     }
 
     fn work_units(&self) -> u64 {

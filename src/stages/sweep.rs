@@ -194,9 +194,7 @@ impl SweepStage {
                             .collect();
                         let [there, back, imbalance] =
                             [&there, &back, &imbalance].map(|v| Estimate::from_replicates(v));
-                        let ratio = there.mean / back.mean;
-                        let ratio_error = ratio.abs()
-                            * (there.stderr / there.mean).hypot(back.stderr / back.mean);
+                        let ratio = there.ratio(back);
                         [
                             a,
                             b,
@@ -204,8 +202,8 @@ impl SweepStage {
                             there.stderr,
                             back.mean,
                             back.stderr,
-                            ratio,
-                            ratio_error,
+                            ratio.mean,
+                            ratio.stderr,
                             imbalance.mean / imbalance.stderr,
                         ]
                     })
