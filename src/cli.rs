@@ -143,10 +143,26 @@ fn emit(text: &str) {
     }
 }
 
-fn load(config: &Path) -> Result<(Study, Store)> {
+/// How a command opens the study's store.
+#[derive(Clone, Copy)]
+enum Opening {
+    /// Create it when missing or empty (`run`).
+    Write,
+    /// It must exist (`verify`, `gc`, `show`).
+    Existing,
+    /// A missing store reads as empty (`status`).
+    View,
+}
+
+fn load(config: &Path, opening: Opening) -> Result<(Study, Store)> {
     let study = Study::load(config)?;
-    let store = Store::open(&study.store_path())
-        .with_context(|| format!("opening the store {}", study.store_path().display()))?;
+    let root = study.store_path();
+    let store = match opening {
+        Opening::Write => Store::open(&root),
+        Opening::Existing => Store::open_existing(&root),
+        Opening::View => Store::view(&root),
+    }
+    .with_context(|| format!("opening the store {}", root.display()))?;
     Ok((study, store))
 }
 
@@ -166,7 +182,7 @@ fn dispatch(cli: Cli) -> Result<ExitCode> {
                     .num_threads(threads)
                     .build_global()?;
             }
-            let (study, store) = load(&cli.config)?;
+            let (study, store) = load(&cli.config, Opening::Write)?;
             let plan = stages::plan(&study);
             let verbosity = if quiet {
                 Verbosity::Quiet
@@ -181,7 +197,7 @@ fn dispatch(cli: Cli) -> Result<ExitCode> {
             let reports = executor::run(&store, &plan, &options)?;
             let computed = reports
                 .iter()
-                .filter(|r| matches!(r.action, Action::Computed(_)))
+                .filter(|r| matches!(r.action, Action::Computed { .. }))
                 .count();
             let fresh = reports.iter().filter(|r| r.action == Action::Fresh).count();
             let skipped = reports
@@ -198,12 +214,16 @@ fn dispatch(cli: Cli) -> Result<ExitCode> {
             Ok(ExitCode::SUCCESS)
         }
         Command::Status => {
-            let (study, store) = load(&cli.config)?;
+            let (study, store) = load(&cli.config, Opening::View)?;
             for line in executor::status(&store, &stages::plan(&study))? {
                 let id = line.id;
                 let line = match line.freshness {
                     Freshness::Fresh => "fresh".to_string(),
                     Freshness::Stale(reasons) => format!("stale: {}", reasons.join("; ")),
+                    Freshness::Damaged(problems) => format!(
+                        "damaged: {} (the next run recomputes it)",
+                        problems.join("; ")
+                    ),
                     Freshness::Missing(reason) => format!("missing: {reason}"),
                 };
                 emit(&format!("{:<24} {line}\n", id.to_string()));
@@ -216,8 +236,8 @@ fn dispatch(cli: Cli) -> Result<ExitCode> {
             Ok(ExitCode::SUCCESS)
         }
         Command::Verify => {
-            let (_, store) = load(&cli.config)?;
-            let (text, damaged) = report::verify(&store)?;
+            let (study, store) = load(&cli.config, Opening::Existing)?;
+            let (text, damaged) = report::verify(&store, &stages::plan(&study))?;
             emit(&text);
             Ok(if damaged == 0 {
                 ExitCode::SUCCESS
@@ -226,14 +246,16 @@ fn dispatch(cli: Cli) -> Result<ExitCode> {
             })
         }
         Command::Gc => {
-            let (study, store) = load(&cli.config)?;
+            let (study, store) = load(&cli.config, Opening::Existing)?;
             emit(&report::gc(&store, &stages::plan(&study))?);
             Ok(ExitCode::SUCCESS)
         }
         Command::Show { target, rows } => {
-            let store = Study::load(&cli.config)
-                .ok()
-                .and_then(|study| Store::open(&study.store_path()).ok());
+            let store = if Path::new(&target).exists() {
+                None
+            } else {
+                Some(load(&cli.config, Opening::Existing)?.1)
+            };
             emit(&report::show(store.as_ref(), &target, rows)?);
             Ok(ExitCode::SUCCESS)
         }

@@ -35,7 +35,11 @@ impl fmt::Display for ConfigError {
         if let Some(line) = self.line {
             write!(f, ":{line}")?;
         }
-        write!(f, ": `{}`: {}", self.key, self.message)
+        if self.key.is_empty() {
+            write!(f, ": {}", self.message)
+        } else {
+            write!(f, ": `{}`: {}", self.key, self.message)
+        }
     }
 }
 
@@ -707,11 +711,25 @@ pub struct Study {
 impl Study {
     /// Reads, parses and validates a configuration file.
     pub fn load(file: &Path) -> Result<Study, ConfigError> {
-        let text = std::fs::read_to_string(file).map_err(|error| ConfigError {
+        let error = |line: Option<usize>, message: String| ConfigError {
             file: file.to_path_buf(),
             key: String::new(),
-            line: None,
-            message: format!("cannot read the file: {error}"),
+            line,
+            message,
+        };
+        let bytes =
+            std::fs::read(file).map_err(|e| error(None, format!("cannot read the file: {e}")))?;
+        let text = String::from_utf8(bytes).map_err(|e| {
+            let valid = e.utf8_error().valid_up_to();
+            let bytes = e.as_bytes();
+            let line = bytes[..valid].iter().filter(|&&b| b == b'\n').count() + 1;
+            error(
+                Some(line),
+                format!(
+                    "the file is not UTF-8 text (byte 0x{:02x}): TOML files are UTF-8",
+                    bytes[valid]
+                ),
+            )
         })?;
         Study::parse(file, &text)
     }
@@ -728,7 +746,7 @@ impl Study {
             error(
                 String::new(),
                 line_of_span(text, e.span()),
-                e.message().to_string(),
+                format!("TOML syntax: {}", e.message().trim_end()),
             )
         })?;
         let config: Config = serde_path_to_error::deserialize(deserializer).map_err(|e| {
@@ -998,30 +1016,10 @@ impl Study {
             .iter()
             .filter_map(|gas| {
                 let potential = *potentials.iter().find(|p| p.id() == gas.potential)?;
-                let mass = match (gas.mass_electron, gas.mass_amu) {
-                    (Some(m), _) => Mass::ElectronMasses(m),
-                    (None, Some(m)) => Mass::AtomicMassUnits(m),
-                    (None, None) => return None,
-                };
-                let density_per_um =
-                    match (gas.density_per_um, gas.ring_particles, gas.ring_radius_um) {
-                        (Some(density), _, _) => density,
-                        (None, Some(particles), Some(radius)) => {
-                            ring_density_per_um(particles, radius)
-                        }
-                        _ => return None,
-                    };
-                let physical = PhysicalGas {
-                    l0_um: gas.l0_um,
-                    eps_ev: gas.eps_ev,
-                    kt_ev: gas.kt_ev,
-                    mass,
-                    density_per_um,
-                };
                 Some(GasParams {
                     name: gas.name.clone(),
                     potential,
-                    gas: physical,
+                    gas: physical_gas(gas)?,
                 })
             })
             .collect()
@@ -1038,6 +1036,28 @@ impl Study {
             launches: scan.launch.clone(),
         }
     }
+}
+
+/// The physical gas of a `[[gas]]` entry (`None` when its mass or density is
+/// incompletely given, which validation rejects).
+fn physical_gas(gas: &GasConfig) -> Option<PhysicalGas> {
+    let mass = match (gas.mass_electron, gas.mass_amu) {
+        (Some(m), _) => Mass::ElectronMasses(m),
+        (None, Some(m)) => Mass::AtomicMassUnits(m),
+        (None, None) => return None,
+    };
+    let density_per_um = match (gas.density_per_um, gas.ring_particles, gas.ring_radius_um) {
+        (Some(density), _, _) => density,
+        (None, Some(particles), Some(radius)) => ring_density_per_um(particles, radius),
+        _ => return None,
+    };
+    Some(PhysicalGas {
+        l0_um: gas.l0_um,
+        eps_ev: gas.eps_ev,
+        kt_ev: gas.kt_ev,
+        mass,
+        density_per_um,
+    })
 }
 
 /// A validation failure: key path and message.
@@ -1080,7 +1100,7 @@ fn validate(config: &Config) -> Result<(), Invalid> {
                 ids.join(", ")
             ),
         )?;
-        check(points >= 2, key, "must be at least 2")?;
+        check_scenes(&config.collisions, points, &key)?;
     }
     let launch = LaunchProposal {
         shift: config.collisions.launch_shift,
@@ -1104,11 +1124,18 @@ fn validate_md(config: &Config) -> Result<(), Invalid> {
         return Ok(());
     }
     check(
-        md.runs >= 2,
+        (2..=MAX_MD_RUNS).contains(&md.runs),
         "md.runs",
-        "needs at least 2 runs (errors come from their spread)",
+        format!(
+            "{} is outside [2, {MAX_MD_RUNS}] (errors come from the runs' spread)",
+            md.runs
+        ),
     )?;
-    check(md.neighbours >= 1, "md.neighbours", "must be at least 1")?;
+    check(
+        (1..=MAX_NEIGHBOURS).contains(&md.neighbours),
+        "md.neighbours",
+        format!("{} is outside [1, {MAX_NEIGHBOURS}]", md.neighbours),
+    )?;
     check(
         md.tolerance > 0.0 && md.tolerance <= 1e-6,
         "md.tolerance",
@@ -1119,7 +1146,11 @@ fn validate_md(config: &Config) -> Result<(), Invalid> {
         "md.bin_width",
         format!("{} must be in (0, md.window = {}]", md.bin_width, md.window),
     )?;
-    check(md.samples >= 1, "md.samples", "must be at least 1")?;
+    check(
+        (1..=MAX_MD_SAMPLES).contains(&md.samples),
+        "md.samples",
+        format!("{} is outside [1, {MAX_MD_SAMPLES}]", md.samples),
+    )?;
     check(
         (0.0..0.5).contains(&md.sample_spread),
         "md.sample_spread",
@@ -1160,15 +1191,45 @@ fn validate_md(config: &Config) -> Result<(), Invalid> {
             key("final_time_ns"),
             format!("{} must be > 0", system.final_time_ns),
         )?;
+        if let Some(physical) = gas.and_then(physical_gas) {
+            let particles = f64::from(gas.and_then(|g| g.ring_particles).unwrap_or(0));
+            let encounters = particles
+                * physical.density_per_um
+                * physical.thermal_speed_um_per_ns()
+                * system.final_time_ns;
+            check(
+                encounters <= MAX_RING_ENCOUNTERS,
+                key("final_time_ns"),
+                format!(
+                    "{} ns gives ~{encounters:.1e} neighbour encounters per run (N rho v_th t_f), more than {MAX_RING_ENCOUNTERS:.0e}",
+                    system.final_time_ns
+                ),
+            )?;
+        }
         check(system.u_prime.is_finite(), key("u_prime"), "must be finite")?;
         check(
-            system.runs.is_none_or(|runs| runs >= 2),
+            system
+                .runs
+                .is_none_or(|runs| (2..=MAX_MD_RUNS).contains(&runs)),
             key("runs"),
-            "needs at least 2 runs (errors come from their spread)",
+            format!("must lie in [2, {MAX_MD_RUNS}] (errors come from the runs' spread)"),
         )?;
     }
     Ok(())
 }
+
+/// Largest MD runs per ring.
+pub const MAX_MD_RUNS: u32 = 1 << 16;
+
+/// Largest interacting neighbours per side.
+pub const MAX_NEIGHBOURS: u32 = 64;
+
+/// Largest sample times per ring.
+pub const MAX_MD_SAMPLES: u32 = 1000;
+
+/// Largest neighbour encounters per MD run, `N rho v_th t_f` (the published
+/// ring N = 161, R = 51200 um, 12800 ns has 1.4e5).
+pub const MAX_RING_ENCOUNTERS: f64 = 1e9;
 
 fn validate_evolve(
     config: &Config,
@@ -1208,6 +1269,19 @@ fn validate_evolve(
         "must span at least two grid steps",
     )?;
     check(
+        evolve.velocity_range / evolve.grid_step <= MAX_EVOLVE_HALF_NODES,
+        "evolve.grid_step",
+        format!(
+            "more than {} grid nodes (dense generators of n^2 entries, exponentials in n^3): widen the step",
+            2.0 * MAX_EVOLVE_HALF_NODES + 1.0
+        ),
+    )?;
+    check(
+        evolve.early_range / evolve.early_bin_width <= MAX_BINS,
+        "evolve.early_bin_width",
+        "more than a million early bins: widen the bins or narrow evolve.early_range",
+    )?;
+    check(
         within_reach(wide, evolve.velocity_range) && within_reach(wide, -evolve.velocity_range),
         "evolve.velocity_range",
         format!(
@@ -1241,6 +1315,11 @@ fn validate_evolve(
         ("early_times", &evolve.early_times),
         ("times_ns", &evolve.times_ns),
     ] {
+        check(
+            times.len() <= MAX_LIST,
+            format!("evolve.{name}"),
+            format!("lists {} times, more than {MAX_LIST}", times.len()),
+        )?;
         for (k, &t) in times.iter().enumerate() {
             check(
                 positive(t),
@@ -1273,6 +1352,15 @@ fn validate_evolve(
         ),
     }
 }
+
+/// Largest `evolve.velocity_range / evolve.grid_step` (801 nodes).
+pub const MAX_EVOLVE_HALF_NODES: f64 = 400.0;
+
+/// Largest histogram bins of a kernel or an early evolution.
+pub const MAX_BINS: f64 = 1e6;
+
+/// Longest list of values (velocities, densities, times, settings).
+pub const MAX_LIST: usize = 256;
 
 fn validate_gases(config: &Config) -> Result<(), Invalid> {
     let ids: Vec<String> = config.potentials.list().iter().map(Potential::id).collect();
@@ -1336,14 +1424,37 @@ fn validate_gases(config: &Config) -> Result<(), Invalid> {
             )?;
         } else {
             check(
-                gas.ring_particles.is_some_and(|n| n >= 3),
+                gas.ring_particles
+                    .is_some_and(|n| (3..=MAX_RING_PARTICLES).contains(&n)),
                 key("ring_particles"),
-                "needs at least 3 particles",
+                format!("needs 3 to {MAX_RING_PARTICLES} particles"),
             )?;
             check(
                 gas.ring_radius_um.is_some_and(|r| r.is_finite() && r > 0.0),
                 key("ring_radius_um"),
                 "needs a ring radius > 0",
+            )?;
+        }
+    }
+    for (k, gas) in config.gas.iter().enumerate() {
+        let potential = config
+            .potentials
+            .list()
+            .into_iter()
+            .find(|p| p.id() == gas.potential);
+        if let (Some(potential), Some(physical)) = (potential, physical_gas(gas)) {
+            let density = physical.scaled_density(potential.length_exponent());
+            let key = if gas.density_per_um.is_some() {
+                "density_per_um"
+            } else {
+                "ring_radius_um"
+            };
+            check(
+                density <= MAX_GAS_DENSITY,
+                format!("gas[{k}].{key}"),
+                format!(
+                    "gives rho*l = {density:.4e}, above {MAX_GAS_DENSITY}: the three-body kernel describes dilute gases (rho*l << 1)"
+                ),
             )?;
         }
     }
@@ -1356,6 +1467,12 @@ fn validate_gases(config: &Config) -> Result<(), Invalid> {
         "gas",
     )
 }
+
+/// Largest particles of a ring.
+pub const MAX_RING_PARTICLES: u32 = 100_000;
+
+/// Largest `rho * l` of a gas, as for `kernel.density`.
+pub const MAX_GAS_DENSITY: f64 = 0.1;
 
 fn validate_convergence(config: &Config) -> Result<(), Invalid> {
     let study = &config.convergence;
@@ -1385,6 +1502,11 @@ fn validate_convergence(config: &Config) -> Result<(), Invalid> {
         ),
     ];
     for (name, values, low, high) in lists {
+        check(
+            values.len() <= MAX_LIST,
+            format!("convergence.{name}"),
+            format!("lists {} values, more than {MAX_LIST}", values.len()),
+        )?;
         for (k, &value) in values.iter().enumerate() {
             check(
                 value.is_finite() && value > low && value <= high,
@@ -1413,9 +1535,12 @@ fn validate_sweep(sweep: &SweepConfig, launch: &LaunchProposal) -> Result<(), In
         "the grid must lie within reach of the launch proposal (collisions.launch_shift +- (launch_spread + 3))",
     )?;
     check(
-        sweep.points >= 3,
+        (3..=MAX_SWEEP_POINTS).contains(&sweep.points),
         "sweep.points",
-        "at least 3 points are needed for derivatives",
+        format!(
+            "{} is outside [3, {MAX_SWEEP_POINTS}]: at least 3 points are needed for derivatives",
+            sweep.points
+        ),
     )?;
     check(
         sweep.launch_spread.is_finite() && (0.0..=3.0).contains(&sweep.launch_spread),
@@ -1428,9 +1553,12 @@ fn validate_sweep(sweep: &SweepConfig, launch: &LaunchProposal) -> Result<(), In
         format!("{} must be > 0", sweep.balance_bin_width),
     )?;
     check(
-        !sweep.balance_separations.is_empty(),
+        !sweep.balance_separations.is_empty() && sweep.balance_separations.len() <= MAX_LIST,
         "sweep.balance_separations",
-        "lists no separation",
+        format!(
+            "lists {} separations: give 1 to {MAX_LIST}",
+            sweep.balance_separations.len()
+        ),
     )?;
     for (k, &separation) in sweep.balance_separations.iter().enumerate() {
         check(
@@ -1442,16 +1570,26 @@ fn validate_sweep(sweep: &SweepConfig, launch: &LaunchProposal) -> Result<(), In
     Ok(())
 }
 
+/// Largest `u'` points of the sweep.
+pub const MAX_SWEEP_POINTS: u32 = 1001;
+
 fn validate_collisions(sampling: &CollisionsConfig) -> Result<(), Invalid> {
     check(
-        sampling.randomizations >= 2,
+        (2..=MAX_RANDOMIZATIONS).contains(&sampling.randomizations),
         "collisions.randomizations",
-        "at least 2 randomizations are needed for a standard error",
+        format!(
+            "{} is outside [2, {MAX_RANDOMIZATIONS}]: at least 2 are needed for a standard error",
+            sampling.randomizations
+        ),
     )?;
+    check_scenes(sampling, sampling.points, "collisions.points")?;
     check(
-        sampling.points >= 2,
-        "collisions.points",
-        "must be at least 2",
+        sampling.pilot_points == 0 || (16..=MAX_PILOT_POINTS).contains(&sampling.pilot_points),
+        "collisions.pilot_points",
+        format!(
+            "{} must be 0 (no pilot) or in [16, {MAX_PILOT_POINTS}]: fewer pilot scenes cannot estimate a stratum's spread",
+            sampling.pilot_points
+        ),
     )?;
     check(
         sampling.same_side_fraction > 0.0 && sampling.same_side_fraction < 1.0,
@@ -1502,6 +1640,32 @@ fn validate_collisions(sampling: &CollisionsConfig) -> Result<(), Invalid> {
     Ok(())
 }
 
+/// Largest number of randomizations (replicates) of a collisions instance.
+pub const MAX_RANDOMIZATIONS: u32 = 1024;
+
+/// Largest pilot scenes per stratum.
+pub const MAX_PILOT_POINTS: u32 = 1 << 20;
+
+/// Largest scenes of one collisions instance (randomizations x points): each
+/// event takes ~120 bytes in memory before it is encoded, so 2^25 events take
+/// ~4 GB (the publication study draws 2^19).
+pub const MAX_SCENES: u64 = 1 << 25;
+
+/// Checks the scenes per randomization `points` (under `key`) and the
+/// instance's total against [`MAX_SCENES`].
+fn check_scenes(sampling: &CollisionsConfig, points: u32, key: &str) -> Result<(), Invalid> {
+    check(points >= 2, key, "must be at least 2")?;
+    let total = u64::from(sampling.randomizations) * u64::from(points);
+    check(
+        total <= MAX_SCENES,
+        key,
+        format!(
+            "{points} scenes x {} randomizations = {total} exceeds {MAX_SCENES} (~4 GB of events in memory): use fewer points",
+            sampling.randomizations
+        ),
+    )
+}
+
 /// Largest `|u' - launch_shift|` that reweighting covers: beyond it the launch
 /// speeds that matter lie past the largest speed the point set can draw (6.8
 /// v_th), biasing the kernel by > 0.5%, and the weights' variance explodes.
@@ -1514,9 +1678,12 @@ fn within_reach(launch: &LaunchProposal, u_prime: f64) -> bool {
 
 fn validate_kernel(kernel: &KernelConfig, launch: &LaunchProposal) -> Result<(), Invalid> {
     check(
-        !kernel.u_prime.is_empty(),
+        !kernel.u_prime.is_empty() && kernel.u_prime.len() <= MAX_LIST,
         "kernel.u_prime",
-        "lists no velocity",
+        format!(
+            "lists {} velocities: give 1 to {MAX_LIST}",
+            kernel.u_prime.len()
+        ),
     )?;
     for (k, &u) in kernel.u_prime.iter().enumerate() {
         check(
@@ -1529,9 +1696,12 @@ fn validate_kernel(kernel: &KernelConfig, launch: &LaunchProposal) -> Result<(),
         )?;
     }
     check(
-        !kernel.density.is_empty(),
+        !kernel.density.is_empty() && kernel.density.len() <= MAX_LIST,
         "kernel.density",
-        "lists no density",
+        format!(
+            "lists {} densities: give 1 to {MAX_LIST}",
+            kernel.density.len()
+        ),
     )?;
     for (k, &density) in kernel.density.iter().enumerate() {
         check(
@@ -1554,7 +1724,7 @@ fn validate_kernel(kernel: &KernelConfig, launch: &LaunchProposal) -> Result<(),
         ),
     )?;
     check(
-        kernel.window / kernel.bin_width <= 1e6,
+        kernel.window / kernel.bin_width <= MAX_BINS,
         "kernel.bin_width",
         "more than a million bins: widen the bins or narrow the window",
     )?;
@@ -1583,21 +1753,65 @@ fn validate_potentials(potentials: &PotentialsConfig) -> Result<(), Invalid> {
         "lists no potential: give `inverse_power = [6]` or `lennard_jones = [1.0]`",
     )?;
     for (k, &n) in potentials.inverse_power.iter().enumerate() {
+        let key = format!("potentials.inverse_power[{k}]");
         check(
-            n.is_finite() && n > 1.0,
-            format!("potentials.inverse_power[{k}]"),
-            format!("n = {n} must be a finite number > 1 (the potential tail must be integrable)"),
+            n > 1.0 && n <= MAX_EXPONENT,
+            key.clone(),
+            format!(
+                "n = {} is outside (1, {MAX_EXPONENT}] (the potential tail must be integrable; steeper walls are hard spheres)",
+                compact(n)
+            ),
         )?;
+        check_id(Potential::InversePower { n }, key)?;
     }
     for (k, &theta) in potentials.lennard_jones.iter().enumerate() {
+        let key = format!("potentials.lennard_jones[{k}]");
         check(
-            theta.is_finite() && theta > 0.0,
-            format!("potentials.lennard_jones[{k}]"),
-            format!("theta = kT/eps = {theta} must be a finite number > 0"),
+            (THETA_RANGE[0]..=THETA_RANGE[1]).contains(&theta),
+            key.clone(),
+            format!(
+                "theta = kT/eps = {} is outside [{}, {}]",
+                compact(theta),
+                THETA_RANGE[0],
+                THETA_RANGE[1]
+            ),
         )?;
+        check_id(Potential::LennardJones { theta }, key)?;
     }
     check_unique(&potentials.inverse_power, "potentials.inverse_power")?;
     check_unique(&potentials.lennard_jones, "potentials.lennard_jones")
+}
+
+/// A number for a message: plain when of moderate size, else in exponent form
+/// (`1e300`, not three hundred digits).
+fn compact(x: f64) -> String {
+    if x == 0.0 || (1e-4..1e6).contains(&x.abs()) || !x.is_finite() {
+        x.to_string()
+    } else {
+        format!("{x:e}")
+    }
+}
+
+/// Largest inverse-power exponent `n`.
+pub const MAX_EXPONENT: f64 = 100.0;
+
+/// Range of Lennard-Jones `theta = kT/eps`: below it nearly every pair is
+/// bound, above it the well does not matter.
+pub const THETA_RANGE: [f64; 2] = [1e-3, 1e3];
+
+/// Longest potential id: ids name directories and files of the store.
+pub const MAX_ID_LENGTH: usize = 24;
+
+/// Checks that a potential's id is short enough to name files.
+fn check_id(potential: Potential, key: String) -> Result<(), Invalid> {
+    let id = potential.id();
+    check(
+        id.len() <= MAX_ID_LENGTH,
+        key,
+        format!(
+            "its id `{id}` is longer than {MAX_ID_LENGTH} characters: give the value with fewer digits"
+        ),
+    )
 }
 
 fn check_unique<T: PartialEq + fmt::Display>(values: &[T], key: &str) -> Result<(), Invalid> {
@@ -1611,12 +1825,23 @@ fn check_unique<T: PartialEq + fmt::Display>(values: &[T], key: &str) -> Result<
     Ok(())
 }
 
+/// Largest offsets per launch pair of a scan.
+pub const MAX_SCAN_POINTS: u32 = 1 << 20;
+
+/// Largest number of scan launch pairs.
+pub const MAX_SCAN_LAUNCHES: usize = 64;
+
 fn validate_grid(grid: &ScanGrid, prefix: &str) -> Result<(), Invalid> {
-    check(
-        grid.offset_min.is_finite() && grid.offset_max.is_finite(),
-        format!("{prefix}offset_min"),
-        "offsets must be finite",
-    )?;
+    for (name, value) in [
+        ("offset_min", grid.offset_min),
+        ("offset_max", grid.offset_max),
+    ] {
+        check(
+            value.is_finite(),
+            format!("{prefix}{name}"),
+            format!("{value} must be a finite offset"),
+        )?;
+    }
     check(
         grid.offset_min < grid.offset_max,
         format!("{prefix}offset_max"),
@@ -1632,6 +1857,14 @@ fn validate_grid(grid: &ScanGrid, prefix: &str) -> Result<(), Invalid> {
             "{} points cannot bracket a peak: use at least 3",
             grid.points
         ),
+    )?;
+    check(
+        grid.points <= MAX_SCAN_POINTS,
+        format!("{prefix}points"),
+        format!(
+            "{} is more than {MAX_SCAN_POINTS} offsets per launch pair",
+            grid.points
+        ),
     )
 }
 
@@ -1644,9 +1877,12 @@ fn validate_scan(config: &Config) -> Result<(), Invalid> {
     )?;
     validate_grid(&scan.grid(""), "scan.")?;
     check(
-        !scan.launch.is_empty(),
+        !scan.launch.is_empty() && scan.launch.len() <= MAX_SCAN_LAUNCHES,
         "scan.launch",
-        "lists no launch pair",
+        format!(
+            "lists {} launch pairs: give 1 to {MAX_SCAN_LAUNCHES}",
+            scan.launch.len()
+        ),
     )?;
     for (k, launch) in scan.launch.iter().enumerate() {
         for (name, u) in [("u2", launch.u2), ("u3", launch.u3)] {
@@ -1691,30 +1927,38 @@ fn line_of_span(text: &str, span: Option<std::ops::Range<usize>>) -> Option<usiz
 }
 
 /// Line of the value at a dotted key path such as `scan.launch[1].u2`, found in
-/// the spanned document tree.
+/// the spanned document tree. A segment may itself hold dots (a quoted key
+/// such as `points_per_potential."lj-0.1"`): at each level the longest key of
+/// the table that the path continues with is taken.
 fn line_of_key(text: &str, key: &str) -> Option<usize> {
     use toml::de::{DeTable, DeValue};
     let root = DeTable::parse(text).ok()?;
     let mut current: toml::Spanned<DeValue> =
         toml::Spanned::new(root.span(), DeValue::Table(root.into_inner()));
-    for segment in key.split('.').filter(|s| !s.is_empty()) {
-        let (name, index) = match segment.split_once('[') {
-            Some((name, rest)) => (name, rest.trim_end_matches(']').parse::<usize>().ok()),
-            None => (segment, None),
-        };
+    let mut rest = key;
+    while !rest.is_empty() {
         let DeValue::Table(table) = current.into_inner() else {
             return None;
         };
-        current = table
+        let (name, value) = table
             .into_iter()
-            .find(|(k, _)| k.get_ref().as_ref() == name)?
-            .1;
-        if let Some(index) = index {
+            .filter(|(k, _)| {
+                let name: &str = k.get_ref().as_ref();
+                rest.strip_prefix(name)
+                    .is_some_and(|after| after.is_empty() || after.starts_with(['.', '[']))
+            })
+            .max_by_key(|(k, _)| k.get_ref().len())?;
+        current = value;
+        rest = &rest[name.get_ref().len()..];
+        while let Some(indexed) = rest.strip_prefix('[') {
+            let (index, after) = indexed.split_once(']')?;
             let DeValue::Array(array) = current.into_inner() else {
                 return None;
             };
-            current = array.into_iter().nth(index)?;
+            current = array.into_iter().nth(index.parse().ok()?)?;
+            rest = after;
         }
+        rest = rest.strip_prefix('.').unwrap_or(rest);
     }
     line_of_span(text, Some(current.span()))
 }

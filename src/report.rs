@@ -2,7 +2,7 @@
 //! garbage-collection reports, and artifact listings. Reads artifacts with
 //! polars, as any user would.
 
-use std::collections::BTreeSet;
+use std::collections::{BTreeMap, BTreeSet};
 use std::fmt::Write as _;
 use std::fs::File;
 use std::path::Path;
@@ -11,8 +11,8 @@ use anyhow::{Context, Result, bail};
 use polars::prelude::{DataFrame, ParquetReader, SerReader};
 
 use crate::pipeline::Stage;
-use crate::pipeline::executor::{self, InstanceReport};
-use crate::pipeline::store::Store;
+use crate::pipeline::executor::{self, Action, InstanceReport};
+use crate::pipeline::store::{Depth, Store, table_files};
 use crate::pipeline::table::read_parquet;
 
 /// `value ± error` with as many decimals as the error's leading two digits need.
@@ -66,10 +66,13 @@ pub fn summary(store: &Store, reports: &[InstanceReport]) -> Result<String> {
     out.push_str(&compare_table(store, reports)?);
     let scans = reports.iter().filter(|r| r.id.stage == "scan");
     for (k, report) in scans.enumerate() {
-        let Some(key) = &report.key else { continue };
-        if store.intact_manifest("scan", key).is_none() {
+        let Some(key) = report
+            .key
+            .as_ref()
+            .filter(|_| report.action != Action::Skipped)
+        else {
             continue;
-        }
+        };
         if k == 0 {
             writeln!(
                 out,
@@ -129,12 +132,8 @@ fn table_frames(
     reports
         .iter()
         .filter(|r| r.id.stage == stage)
-        .filter_map(|r| {
-            r.key
-                .as_ref()
-                .filter(|key| store.intact_manifest(stage, key).is_some())
-                .map(|key| (r, key))
-        })
+        .filter(|r| r.action != Action::Skipped)
+        .filter_map(|r| r.key.as_ref().map(|key| (r, key)))
         .map(|(report, key)| {
             let frame = read_frame(
                 &store
@@ -470,29 +469,39 @@ pub fn dag(stages: &[Box<dyn Stage>]) -> String {
     out
 }
 
-/// Re-hashes every artifact: the report and the number of damaged artifacts.
-pub fn verify(store: &Store) -> Result<(String, usize)> {
+/// Checks every artifact down to its tables' content hashes (and, for stages
+/// of the study, that it holds exactly the tables the stage writes): the
+/// report and the number of damaged artifacts.
+pub fn verify(store: &Store, stages: &[Box<dyn Stage>]) -> Result<(String, usize)> {
+    let outputs: BTreeMap<String, Vec<String>> = stages
+        .iter()
+        .map(|stage| (stage.id().stage, table_files(stage.tables())))
+        .collect();
     let mut out = String::new();
     let mut damaged = 0;
     let artifacts = store.artifacts()?;
     for (stage, key) in &artifacts {
-        let report = store.verify_artifact(stage, key);
-        if report.problems.is_empty() {
-            writeln!(out, "ok       {stage}/{key}")?;
-        } else {
-            damaged += 1;
-            writeln!(
-                out,
-                "DAMAGED  {stage}/{key}: {}",
-                report.problems.join("; ")
-            )?;
+        let expected = outputs.get(stage).map(Vec::as_slice);
+        match store.inspect(stage, key, expected, Depth::Contents) {
+            Ok(_) => writeln!(out, "ok       {stage}/{key}")?,
+            Err(problems) => {
+                damaged += 1;
+                writeln!(out, "DAMAGED  {stage}/{key}: {}", problems.join("; "))?;
+            }
         }
+    }
+    for path in store.foreign_entries()? {
+        writeln!(
+            out,
+            "foreign  {} (not written by ternary: left alone)",
+            path.display()
+        )?;
     }
     let debris = store.staging_debris()?.len();
     if debris > 0 {
         writeln!(
             out,
-            "{debris} staging directories from interrupted runs are ignored (the next run or gc removes them)"
+            "{debris} staging entries from interrupted runs are ignored (the next run or gc removes them)"
         )?;
     }
     writeln!(
@@ -506,7 +515,8 @@ pub fn verify(store: &Store) -> Result<(String, usize)> {
 }
 
 /// Removes artifacts that neither the current key nor the last computed key of
-/// a current instance names, and staging debris.
+/// a current instance names, and staging debris. Only names ternary gives are
+/// removed; foreign entries are reported and kept.
 pub fn gc(store: &Store, stages: &[Box<dyn Stage>]) -> Result<String> {
     let lock = store.lock()?;
     let mut keep: BTreeSet<(String, String)> = BTreeSet::new();
@@ -527,9 +537,12 @@ pub fn gc(store: &Store, stages: &[Box<dyn Stage>]) -> Result<String> {
         }
     }
     let debris = store.clean_staging(&lock)?;
-    Ok(format!(
-        "gc: removed {removed} artifacts ({bytes} bytes) and {debris} staging directories\n"
-    ))
+    let mut out =
+        format!("gc: removed {removed} artifacts ({bytes} bytes) and {debris} staging entries\n");
+    for path in store.foreign_entries()? {
+        writeln!(out, "gc: kept {} (not written by ternary)", path.display())?;
+    }
+    Ok(out)
 }
 
 /// Metadata, schema with units, and the first rows of a Parquet file.
@@ -566,7 +579,9 @@ pub fn show(store: Option<&Store>, target: &str, rows: usize) -> Result<String> 
         path.to_path_buf()
     } else {
         let Some(store) = store else {
-            bail!("`{target}` is not a file, and no store is configured to look up keys")
+            bail!(
+                "`{target}` is neither a file nor a directory, and no store is open to look up keys"
+            )
         };
         if target.len() < 6 {
             bail!("`{target}`: give at least 6 characters of a key, or a path");

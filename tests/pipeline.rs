@@ -226,7 +226,7 @@ fn killed_run_leaves_nothing_trusted_and_next_run_completes() {
         "{}",
         stdout(&verify)
     );
-    assert!(stdout(&verify).contains("staging directories from interrupted runs are ignored"));
+    assert!(stdout(&verify).contains("staging entries from interrupted runs are ignored"));
     let status = stdout(&ternary(&path, &["status"]));
     assert!(
         status.contains("scan[ipp-2]              missing"),

@@ -3,18 +3,20 @@
 //!
 //! Instances are given in topological order. An instance's key is computed from
 //! its stage name, version, parameters and the file hashes of its inputs; if the
-//! store holds an intact artifact under that key it is fresh, otherwise it is
-//! computed and committed atomically.
+//! store holds an intact artifact under that key (checked down to its file
+//! hashes) it is fresh, otherwise it is computed and committed atomically.
 
 use std::collections::BTreeMap;
-use std::io::{IsTerminal, Write};
+use std::io::{ErrorKind, IsTerminal, Write};
 use std::time::Instant;
 
 use indicatif::{ProgressBar, ProgressStyle};
 
-use super::key::{InputRecord, changed_params, stage_key};
-use super::store::{InstanceRef, Manifest, Store, StoreError};
-use super::table::{TableError, read_parquet};
+use super::key::{InputRecord, changed_params, sha256_hex, stage_key};
+use super::store::{
+    Depth, InstanceRef, Manifest, Store, StoreError, StoreLock, content_hashes, table_files,
+};
+use super::table::{PROVENANCE_KEYS, TableError, read_parquet_bytes};
 use super::{Input, InstanceId, Progress, Stage, StageError};
 
 /// A run could not proceed.
@@ -38,6 +40,26 @@ pub enum ExecError {
         id: InstanceId,
         /// The cause.
         source: TableError,
+    },
+    /// An input file changed after it was checked.
+    #[error(
+        "{id}: input {file} no longer hashes to its manifest ({detail}); run again to repair it"
+    )]
+    DamagedInput {
+        /// The instance.
+        id: InstanceId,
+        /// The input file.
+        file: String,
+        /// What differs.
+        detail: String,
+    },
+    /// The store cannot be written and an instance needs computing.
+    #[error("{id} needs computing, but the store cannot be written ({reason})")]
+    ReadOnly {
+        /// The instance.
+        id: InstanceId,
+        /// Why the store is read-only.
+        reason: String,
     },
     /// The DAG or the options are inconsistent.
     #[error("{0}")]
@@ -69,8 +91,13 @@ pub struct RunOptions {
 pub enum Action {
     /// An intact artifact with the current key existed.
     Fresh,
-    /// Computed and committed, in this many seconds.
-    Computed(f64),
+    /// Computed and committed.
+    Computed {
+        /// Wall time, seconds.
+        seconds: f64,
+        /// The problems of a damaged artifact under the same key that it replaced.
+        repaired: Option<String>,
+    },
     /// Not selected by `--only` and not fresh.
     Skipped,
 }
@@ -93,6 +120,8 @@ pub enum Freshness {
     Fresh,
     /// Computed before, but something it depends on changed.
     Stale(Vec<String>),
+    /// Its artifact exists under the current key but fails its checks.
+    Damaged(Vec<String>),
     /// Never computed, or its artifact is gone.
     Missing(String),
 }
@@ -141,23 +170,67 @@ fn input_records(
         .iter()
         .map(|input| {
             let manifest = resolved.get(input)?;
-            let mut files: Vec<(String, String)> = manifest
-                .files
-                .iter()
-                .map(|f| (f.name.clone(), f.content_sha256.clone()))
-                .collect();
-            files.sort();
             Some(InputRecord {
                 stage: input.stage.clone(),
                 instance: input.instance.clone(),
                 key: manifest.key.clone(),
-                files,
+                files: content_hashes(manifest),
             })
         })
         .collect()
 }
 
-/// Executes the stale instances in order.
+/// The artifact of `stage` under `key`, checked to file hashes: its manifest
+/// when intact, otherwise its problems (`None` when there is no artifact).
+fn checked(store: &Store, stage: &dyn Stage, key: &str) -> Result<Manifest, Option<Vec<String>>> {
+    let id = stage.id();
+    if !store.artifact_dir(&id.stage, key).is_dir() {
+        return Err(None);
+    }
+    store
+        .inspect(
+            &id.stage,
+            key,
+            Some(&table_files(stage.tables())),
+            Depth::Hashes,
+        )
+        .map_err(Some)
+}
+
+/// Write access of a run: the store lock, or why the store cannot be written.
+enum Access {
+    /// The lock, held until the run ends.
+    Locked {
+        _lock: StoreLock,
+    },
+    ReadOnly(String),
+}
+
+impl Access {
+    /// Takes the lock and removes debris of interrupted runs; a store that
+    /// cannot be written is still read (everything may be fresh).
+    fn acquire(store: &Store) -> Result<Access, ExecError> {
+        match store.lock() {
+            Ok(lock) => {
+                store.clean_staging(&lock)?;
+                Ok(Access::Locked { _lock: lock })
+            }
+            Err(StoreError::Io { path, source })
+                if matches!(
+                    source.kind(),
+                    ErrorKind::PermissionDenied | ErrorKind::ReadOnlyFilesystem
+                ) =>
+            {
+                Ok(Access::ReadOnly(format!("{}: {source}", path.display())))
+            }
+            Err(error) => Err(error.into()),
+        }
+    }
+}
+
+/// Executes the stale instances in order. Every artifact is checked down to
+/// its file hashes before it is trusted; a damaged one is recomputed under
+/// the same key.
 pub fn run(
     store: &Store,
     stages: &[Box<dyn Stage>],
@@ -167,8 +240,7 @@ pub fn run(
         stages,
         &[options.only.clone(), options.force.clone()].concat(),
     )?;
-    let lock = store.lock()?;
-    store.clean_staging(&lock)?;
+    let access = Access::acquire(store)?;
     let mut resolved: BTreeMap<InstanceId, Manifest> = BTreeMap::new();
     let mut reports = Vec::new();
     for stage in stages {
@@ -189,18 +261,33 @@ pub fn run(
         };
         let key = stage_key(&id.stage, stage.version(), &stage.params(), &inputs);
         let forced = options.force.contains(&id.stage);
-        let existing = store.intact_manifest(&id.stage, &key);
-        let action = match existing {
-            Some(manifest) if !(forced && selected) => {
+        let entry = InstanceRef {
+            key: key.clone(),
+            version: stage.version(),
+            params: stage.params(),
+            inputs,
+        };
+        let action = match checked(store, stage.as_ref(), &key) {
+            Ok(manifest) if !(forced && selected) => {
+                if let Access::Locked { .. } = access {
+                    heal_ref(store, &id, &entry)?;
+                }
                 resolved.insert(id.clone(), manifest);
                 Action::Fresh
             }
             _ if !selected => Action::Skipped,
-            _ => {
+            existing => {
+                if let Access::ReadOnly(reason) = &access {
+                    return Err(ExecError::ReadOnly {
+                        id,
+                        reason: reason.clone(),
+                    });
+                }
+                let repaired = existing.err().flatten().map(|problems| problems.join("; "));
                 let (manifest, seconds) =
-                    compute(store, stage.as_ref(), &key, inputs, &resolved, options)?;
+                    compute(store, stage.as_ref(), &entry, &resolved, options)?;
                 resolved.insert(id.clone(), manifest);
-                Action::Computed(seconds)
+                Action::Computed { seconds, repaired }
             }
         };
         if options.verbosity == Verbosity::Normal {
@@ -220,10 +307,26 @@ pub fn run(
     Ok(reports)
 }
 
+/// Rewrites a missing or outdated ref of a fresh instance (a run killed
+/// between committing an artifact and writing its ref leaves one).
+fn heal_ref(store: &Store, id: &InstanceId, entry: &InstanceRef) -> Result<(), ExecError> {
+    if store.read_ref(&id.stage, &id.instance).as_ref() != Some(entry) {
+        store.write_ref(&id.stage, &id.instance, entry)?;
+    }
+    Ok(())
+}
+
 fn report_line(id: &InstanceId, key: &str, action: &Action) -> String {
     let what = match action {
         Action::Fresh => "fresh".to_string(),
-        Action::Computed(seconds) => format!("computed in {seconds:.2} s"),
+        Action::Computed {
+            seconds,
+            repaired: None,
+        } => format!("computed in {seconds:.2} s"),
+        Action::Computed {
+            seconds,
+            repaired: Some(problems),
+        } => format!("computed in {seconds:.2} s (replaced a damaged artifact: {problems})"),
         Action::Skipped => "skipped (not selected, not fresh)".to_string(),
     };
     format!("{:<24} {:<28} key {}", id.to_string(), what, &key[..12])
@@ -242,6 +345,8 @@ fn progress_for(stage: &dyn Stage, verbosity: Verbosity) -> Progress {
     Progress { bar: Some(bar) }
 }
 
+/// Reads the input tables of `stage`, hashing each file's bytes against its
+/// manifest before decoding them: nothing damaged since it was checked is used.
 fn load_inputs(
     store: &Store,
     stage: &dyn Stage,
@@ -256,8 +361,19 @@ fn load_inputs(
             let dir = store.artifact_dir(&input.stage, &manifest.key);
             let mut tables = BTreeMap::new();
             for file in &manifest.files {
+                let path = dir.join(&file.name);
+                let damaged = |detail: String| ExecError::DamagedInput {
+                    id: id.clone(),
+                    file: path.display().to_string(),
+                    detail,
+                };
+                let bytes = std::fs::read(&path).map_err(|error| damaged(error.to_string()))?;
+                let sha = sha256_hex(&bytes);
+                if sha != file.sha256 {
+                    return Err(damaged(format!("sha256 {sha}, recorded {}", file.sha256)));
+                }
                 let (batch, _) =
-                    read_parquet(&dir.join(&file.name)).map_err(|source| ExecError::Input {
+                    read_parquet_bytes(&file.name, bytes).map_err(|source| ExecError::Input {
                         id: id.clone(),
                         source,
                     })?;
@@ -268,17 +384,23 @@ fn load_inputs(
         .collect()
 }
 
+fn stage_failure(id: &InstanceId) -> impl Fn(TableError) -> ExecError + '_ {
+    move |source| ExecError::Stage {
+        id: id.clone(),
+        source: source.into(),
+    }
+}
+
 fn compute(
     store: &Store,
     stage: &dyn Stage,
-    key: &str,
-    inputs: Vec<InputRecord>,
+    entry: &InstanceRef,
     resolved: &BTreeMap<InstanceId, Manifest>,
     options: &RunOptions,
 ) -> Result<(Manifest, f64), ExecError> {
     let id = stage.id();
+    let key = &entry.key;
     let started = Instant::now();
-    let mut staging = store.begin(&id.stage, key)?;
     let loaded = load_inputs(store, stage, resolved)?;
     let progress = progress_for(stage, options.verbosity);
     let tables = stage
@@ -290,29 +412,37 @@ fn compute(
     if let Some(bar) = progress.bar {
         bar.finish_and_clear();
     }
-    let params = stage.params();
-    let provenance: BTreeMap<String, String> = [
-        ("ternary.stage", id.stage.clone()),
-        ("ternary.stage_version", stage.version().to_string()),
-        ("ternary.key", key.to_string()),
-        ("ternary.params", super::key::canonical_json(&params)),
-        ("ternary.inputs", super::key::embedded_inputs(&inputs)),
-        ("ternary.tool", tool_version()),
-    ]
-    .into_iter()
-    .map(|(k, v)| (k.to_string(), v))
-    .collect();
+    let mut written: Vec<&str> = tables.iter().map(|t| t.name.as_str()).collect();
+    let mut declared = stage.tables().to_vec();
+    written.sort_unstable();
+    declared.sort_unstable();
+    if written != declared {
+        return Err(ExecError::Stage {
+            id,
+            source: StageError::Input(format!(
+                "wrote tables [{}] but declares [{}]",
+                written.join(", "),
+                declared.join(", ")
+            )),
+        });
+    }
+    let values = [
+        id.stage.clone(),
+        stage.version().to_string(),
+        key.to_string(),
+        super::key::canonical_json(&entry.params),
+        super::key::embedded_inputs(&entry.inputs),
+        tool_version(),
+    ];
+    let provenance: BTreeMap<String, String> = PROVENANCE_KEYS
+        .iter()
+        .map(ToString::to_string)
+        .zip(values)
+        .collect();
+    let mut staging = store.begin(&id.stage, key)?;
     for table in &tables {
-        let bytes = table
-            .to_parquet(&provenance)
-            .map_err(|source| ExecError::Stage {
-                id: id.clone(),
-                source: source.into(),
-            })?;
-        let content = table.content_sha256().map_err(|source| ExecError::Stage {
-            id: id.clone(),
-            source: source.into(),
-        })?;
+        let bytes = table.to_parquet(&provenance).map_err(stage_failure(&id))?;
+        let content = table.content_sha256().map_err(stage_failure(&id))?;
         staging.write_file(
             &format!("{}.parquet", table.name),
             &bytes,
@@ -326,20 +456,15 @@ fn compute(
         stage: id.stage.clone(),
         version: stage.version(),
         instance: id.instance.clone(),
-        params: params.clone(),
-        inputs: inputs.clone(),
+        params: entry.params.clone(),
+        inputs: entry.inputs.clone(),
         files: staging.files().to_vec(),
         tool: tool_version(),
         wall_seconds: seconds,
+        manifest_sha256: None,
     };
-    staging.commit(&manifest)?;
-    let entry = InstanceRef {
-        key: key.to_string(),
-        version: stage.version(),
-        params,
-        inputs,
-    };
-    store.write_ref(&id.stage, &id.instance, &entry)?;
+    let manifest = staging.commit(manifest)?;
+    store.write_ref(&id.stage, &id.instance, entry)?;
     Ok((manifest, seconds))
 }
 
@@ -360,13 +485,18 @@ pub struct StatusLine {
 }
 
 /// Freshness of every instance, with reasons, without computing anything.
+/// Artifacts are checked as `run` checks them (down to file hashes).
 pub fn status(store: &Store, stages: &[Box<dyn Stage>]) -> Result<Vec<StatusLine>, ExecError> {
     check_plan(stages, &[])?;
     let mut resolved: BTreeMap<InstanceId, Manifest> = BTreeMap::new();
     let mut lines = Vec::new();
     for stage in stages {
         let id = stage.id();
-        let previous = store.read_ref(&id.stage, &id.instance);
+        let previous = store.read_ref(&id.stage, &id.instance).or_else(|| {
+            store
+                .latest_manifest_of(&id.stage, &id.instance)
+                .map(|manifest| InstanceRef::from(&manifest))
+        });
         let mut key = None;
         let freshness = match input_records(stage.as_ref(), &resolved) {
             None => {
@@ -384,12 +514,13 @@ pub fn status(store: &Store, stages: &[Box<dyn Stage>]) -> Result<Vec<StatusLine
             }
             Some(inputs) => {
                 let current = stage_key(&id.stage, stage.version(), &stage.params(), &inputs);
-                let freshness = match store.intact_manifest(&id.stage, &current) {
-                    Some(manifest) => {
+                let freshness = match checked(store, stage.as_ref(), &current) {
+                    Ok(manifest) => {
                         resolved.insert(id.clone(), manifest);
                         Freshness::Fresh
                     }
-                    None => explain(stage.as_ref(), &current, &inputs, previous),
+                    Err(Some(problems)) => Freshness::Damaged(problems),
+                    Err(None) => explain(stage.as_ref(), &current, &inputs, previous),
                 };
                 key = Some(current);
                 freshness
@@ -410,7 +541,7 @@ fn explain(
         return Freshness::Missing("never computed".to_string());
     };
     if previous.key == key {
-        return Freshness::Missing("its artifact is missing or damaged".to_string());
+        return Freshness::Missing("its artifact was removed".to_string());
     }
     let mut reasons = Vec::new();
     if previous.version != stage.version() {
@@ -465,6 +596,9 @@ mod tests {
         fn params(&self) -> serde_json::Value {
             json!({ "label": self.label, "value": self.value })
         }
+        fn tables(&self) -> &'static [&'static str] {
+            &["value"]
+        }
         fn inputs(&self) -> Vec<InstanceId> {
             Vec::new()
         }
@@ -488,6 +622,9 @@ mod tests {
         }
         fn params(&self) -> serde_json::Value {
             json!({})
+        }
+        fn tables(&self) -> &'static [&'static str] {
+            &["value"]
         }
         fn inputs(&self) -> Vec<InstanceId> {
             vec![InstanceId::new("source", "a")]
@@ -522,7 +659,7 @@ mod tests {
         run(store, stages, &options)
             .unwrap()
             .into_iter()
-            .filter(|r| matches!(r.action, Action::Computed(_)))
+            .filter(|r| matches!(r.action, Action::Computed { .. }))
             .map(|r| r.id.stage)
             .collect()
     }

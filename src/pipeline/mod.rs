@@ -97,6 +97,8 @@ pub trait Stage: Sync {
     fn version(&self) -> u32;
     /// Resolved parameters: everything besides the inputs that the output depends on.
     fn params(&self) -> Value;
+    /// Names of the tables it writes (`<name>.parquet`), always all of them.
+    fn tables(&self) -> &'static [&'static str];
     /// Upstream instances whose tables this stage reads.
     fn inputs(&self) -> Vec<InstanceId>;
     /// Amount of work, in the units the stage reports through [`Progress`].

@@ -3,8 +3,10 @@
 //! Layout under the store root:
 //!
 //! ```text
-//! store.lock                          exclusive lock held by `run` and `gc`
+//! ternary-store.json                  format marker: written when ternary creates the store
+//! store.lock                          exclusive lock held by writing `run`s and `gc`
 //! tmp/<key>.<pid>/                    staging directories (never trusted)
+//! tmp/<key>.<pid>.old/                an artifact being replaced (`--force`, repair)
 //! artifacts/<stage>/<key>/            one directory per artifact:
 //!     manifest.json                   key, parameters, inputs, file hashes, provenance
 //!     <table>.parquet                 output tables
@@ -15,15 +17,35 @@
 //! the manifest is written last, and the directory is renamed into place: a
 //! run killed at any point leaves only staging debris, which nothing trusts and
 //! the next locked run removes.
+//!
+//! The store never deletes what it did not create: a directory is opened as a
+//! store only when it carries the marker (or is empty, or is missing, and then
+//! gets one), and only names of the shapes above are ever removed. Every
+//! artifact is checked before it is trusted ([`Store::inspect`]): its manifest
+//! must name its key, the key must follow from the manifest's parameters and
+//! inputs, the directory must hold exactly the listed files, and each file
+//! must hash to its recorded SHA-256.
 
 use std::fs::{self, File, OpenOptions};
 use std::io::{self, Write};
 use std::path::{Path, PathBuf};
 
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
-use super::key::{InputRecord, sha256_hex};
+use super::key::{InputRecord, canonical_json, hex, sha256_hex, stage_key};
+use super::table::content_sha256_of_file;
+
+/// Name of the marker file at the store root.
+pub const MARKER: &str = "ternary-store.json";
+
+/// Store layout version written into the marker; a store with a higher one
+/// is refused (it was written by a newer ternary).
+pub const FORMAT_VERSION: u32 = 1;
+
+/// The top-level entries a ternary store consists of.
+const LAYOUT: [&str; 5] = [MARKER, "store.lock", "artifacts", "refs", "tmp"];
 
 /// A store operation failed.
 #[derive(Debug, thiserror::Error)]
@@ -44,12 +66,53 @@ pub enum StoreError {
         /// The cause.
         source: serde_json::Error,
     },
+    /// The directory holds files and is not a ternary store.
+    #[error(
+        "{path} is not a ternary store: it has no {MARKER} and is not empty (it holds {found}); \
+         point `store.path` at a new or empty directory"
+    )]
+    NotAStore {
+        /// The directory.
+        path: PathBuf,
+        /// A few of its entries.
+        found: String,
+    },
+    /// The marker exists but cannot be read, or names another format or version.
+    #[error("{path}: {message}")]
+    Marker {
+        /// The marker file.
+        path: PathBuf,
+        /// What is wrong.
+        message: String,
+    },
+    /// The store directory does not exist (commands that only read).
+    #[error("no store at {0}: `ternary run` creates it")]
+    Missing(PathBuf),
 }
 
 fn io_error(path: &Path) -> impl FnOnce(io::Error) -> StoreError + '_ {
     move |source| StoreError::Io {
         path: path.to_path_buf(),
         source,
+    }
+}
+
+/// The marker's content.
+#[derive(Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Marker {
+    /// Always `ternary-store`.
+    format: String,
+    /// Layout version.
+    version: u32,
+}
+
+impl Marker {
+    fn current() -> Marker {
+        Marker {
+            format: "ternary-store".to_string(),
+            version: FORMAT_VERSION,
+        }
     }
 }
 
@@ -90,6 +153,32 @@ pub struct Manifest {
     pub tool: String,
     /// Wall time of the computation in seconds.
     pub wall_seconds: f64,
+    /// SHA-256 of the manifest's canonical JSON without this field, so that
+    /// any edit shows ([`Manifest::sealed`]). Absent in manifests written
+    /// before it existed, which are checked without it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub manifest_sha256: Option<String>,
+}
+
+impl Manifest {
+    /// SHA-256 of the canonical JSON of everything but `manifest_sha256`.
+    fn seal(&self) -> String {
+        let unsealed = Manifest {
+            manifest_sha256: None,
+            ..self.clone()
+        };
+        let value = serde_json::to_value(&unsealed).unwrap_or(Value::Null);
+        sha256_hex(canonical_json(&value).as_bytes())
+    }
+
+    /// The manifest with its seal set.
+    pub fn sealed(self) -> Manifest {
+        let seal = self.seal();
+        Manifest {
+            manifest_sha256: Some(seal),
+            ..self
+        }
+    }
 }
 
 /// The last computation of a stage instance, for `status` to explain staleness.
@@ -105,15 +194,26 @@ pub struct InstanceRef {
     pub inputs: Vec<InputRecord>,
 }
 
-/// The result of re-hashing one artifact.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub struct VerifyReport {
-    /// Stage name.
-    pub stage: String,
-    /// Key (directory name).
-    pub key: String,
-    /// Problems found; empty when intact.
-    pub problems: Vec<String>,
+impl From<&Manifest> for InstanceRef {
+    fn from(manifest: &Manifest) -> InstanceRef {
+        InstanceRef {
+            key: manifest.key.clone(),
+            version: manifest.version,
+            params: manifest.params.clone(),
+            inputs: manifest.inputs.clone(),
+        }
+    }
+}
+
+/// How deeply [`Store::inspect`] checks an artifact.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub enum Depth {
+    /// Manifest, key, listing and file sizes: no file is read.
+    Sizes,
+    /// Also the SHA-256 of every file's bytes (what `run` and `status` use).
+    Hashes,
+    /// Also every table's content hash, decoded from its Parquet file (`verify`).
+    Contents,
 }
 
 /// An artifact store rooted at a directory.
@@ -127,16 +227,146 @@ pub struct StoreLock {
     _file: File,
 }
 
+/// `true` for a lower-case hex SHA-256 (an artifact key).
+pub fn is_key(name: &str) -> bool {
+    name.len() == 64 && name.bytes().all(|b| matches!(b, b'0'..=b'9' | b'a'..=b'f'))
+}
+
+/// `true` for the staging names [`Store::begin`] creates: `<key>.<pid>` and
+/// `<key>.<pid>.old`.
+fn is_staging_name(name: &str) -> bool {
+    let name = name.strip_suffix(".old").unwrap_or(name);
+    name.split_once('.').is_some_and(|(key, pid)| {
+        is_key(key) && !pid.is_empty() && pid.bytes().all(|b| b.is_ascii_digit())
+    })
+}
+
+/// `true` for the temporary names [`write_atomically`] creates for refs and
+/// the marker: `.<name>.json.<pid>`.
+fn is_json_temporary(name: &str) -> bool {
+    name.strip_prefix('.')
+        .and_then(|rest| rest.rsplit_once(".json."))
+        .is_some_and(|(instance, pid)| {
+            !instance.is_empty() && !pid.is_empty() && pid.bytes().all(|b| b.is_ascii_digit())
+        })
+}
+
 impl Store {
-    /// Opens (creating if needed) the store at `root`.
+    /// Opens the store at `root` for writing: a missing or empty directory
+    /// becomes a new store (with its marker); a directory with files must
+    /// carry the marker or is refused, so nothing of a user's is ever treated
+    /// as debris.
     pub fn open(root: &Path) -> Result<Store, StoreError> {
+        let store = Store {
+            root: root.to_path_buf(),
+        };
+        if !store.check_marker()? {
+            let entries = sorted_entries(root)?;
+            if !entries.is_empty() && !store.is_unmarked_store(&entries)? {
+                return Err(StoreError::NotAStore {
+                    path: root.to_path_buf(),
+                    found: summarize(&entries),
+                });
+            }
+            fs::create_dir_all(root).map_err(io_error(root))?;
+            let marker = serde_json::to_vec_pretty(&Marker::current()).map_err(|source| {
+                StoreError::Json {
+                    path: store.marker_path(),
+                    source,
+                }
+            })?;
+            write_atomically(&store.marker_path(), &marker)?;
+        }
         for dir in ["artifacts", "refs", "tmp"] {
             let path = root.join(dir);
             fs::create_dir_all(&path).map_err(io_error(&path))?;
         }
-        Ok(Store {
+        Ok(store)
+    }
+
+    /// Opens an existing store for reading: nothing is created, a missing
+    /// directory is an error, and a directory without the marker is refused
+    /// as in [`Store::open`].
+    pub fn open_existing(root: &Path) -> Result<Store, StoreError> {
+        if !root.is_dir() {
+            return Err(StoreError::Missing(root.to_path_buf()));
+        }
+        Store::view(root)
+    }
+
+    /// A store to read, where a missing directory reads as an empty store
+    /// (`status` before the first run): nothing is created.
+    pub fn view(root: &Path) -> Result<Store, StoreError> {
+        let store = Store {
             root: root.to_path_buf(),
-        })
+        };
+        if root.exists() && !store.check_marker()? {
+            let entries = sorted_entries(root)?;
+            if !store.is_unmarked_store(&entries)? {
+                return Err(StoreError::NotAStore {
+                    path: root.to_path_buf(),
+                    found: summarize(&entries),
+                });
+            }
+        }
+        Ok(store)
+    }
+
+    fn marker_path(&self) -> PathBuf {
+        self.root.join(MARKER)
+    }
+
+    /// `true` when the marker is present and current; an error when it is
+    /// present but unreadable or of another format or a newer version.
+    fn check_marker(&self) -> Result<bool, StoreError> {
+        let path = self.marker_path();
+        let bytes = match fs::read(&path) {
+            Ok(bytes) => bytes,
+            Err(error) if error.kind() == io::ErrorKind::NotFound => return Ok(false),
+            Err(error) => return Err(io_error(&path)(error)),
+        };
+        let expected =
+            String::from_utf8_lossy(&serde_json::to_vec(&Marker::current()).unwrap_or_default())
+                .into_owned();
+        let marker: Marker =
+            serde_json::from_slice(&bytes).map_err(|error| StoreError::Marker {
+                path: path.clone(),
+                message: format!(
+                    "the store marker is damaged ({error}); if this directory is a ternary store, \
+                 restore the file's content to {expected}"
+                ),
+            })?;
+        if marker.format != "ternary-store" || marker.version > FORMAT_VERSION {
+            return Err(StoreError::Marker {
+                path,
+                message: format!(
+                    "format `{}` version {} is not one this ternary reads (`ternary-store` up to {FORMAT_VERSION})",
+                    marker.format, marker.version
+                ),
+            });
+        }
+        Ok(true)
+    }
+
+    /// A store written before the marker existed: only the store's own
+    /// top-level entries, artifacts only under key names with a manifest,
+    /// and only staging names in `tmp/`. Anything else is a user's folder.
+    fn is_unmarked_store(&self, entries: &[String]) -> Result<bool, StoreError> {
+        let own = |e: &String| LAYOUT.contains(&e.as_str()) || is_json_temporary(e);
+        if entries.is_empty() || !entries.iter().all(own) {
+            return Ok(entries.is_empty());
+        }
+        for stage in sorted_entries(&self.root.join("artifacts"))? {
+            for key in sorted_entries(&self.root.join("artifacts").join(&stage))? {
+                let dir = self.artifact_dir(&stage, &key);
+                if !is_key(&key) || !dir.join("manifest.json").is_file() {
+                    return Ok(false);
+                }
+            }
+        }
+        Ok(sorted_entries(&self.root.join("tmp"))?
+            .iter()
+            .all(|name| is_staging_name(name)))
     }
 
     /// The store root.
@@ -157,10 +387,13 @@ impl Store {
             .map_err(io_error(&path))?;
         if file.try_lock().is_err() {
             let holder = fs::read_to_string(&path).unwrap_or_default();
+            let holder = match holder.trim() {
+                "" => "another process".to_string(),
+                pid => format!("process {pid}"),
+            };
             eprintln!(
-                "waiting for the store lock {} (held by process {}) ...",
-                path.display(),
-                holder.trim()
+                "waiting for the store lock {} (held by {holder}) ...",
+                path.display()
             );
             file.lock().map_err(io_error(&path))?;
         }
@@ -181,15 +414,51 @@ impl Store {
             .join(format!("{instance}.json"))
     }
 
-    /// The manifest of an artifact whose files are all present with their
-    /// recorded sizes (a cheap check; `verify` re-hashes).
-    pub fn intact_manifest(&self, stage: &str, key: &str) -> Option<Manifest> {
+    /// Checks the artifact `key` of `stage` to `depth` and returns its
+    /// manifest, or every problem found. `outputs`, when given, are the file
+    /// names the stage writes: the manifest must list exactly those.
+    pub fn inspect(
+        &self,
+        stage: &str,
+        key: &str,
+        outputs: Option<&[String]>,
+        depth: Depth,
+    ) -> Result<Manifest, Vec<String>> {
         let dir = self.artifact_dir(stage, key);
-        let manifest: Manifest = read_json(&dir.join("manifest.json")).ok()?;
-        let sizes_match = manifest.files.iter().all(|file| {
-            fs::metadata(dir.join(&file.name)).is_ok_and(|meta| meta.len() == file.bytes)
-        });
-        (manifest.key == key && sizes_match).then_some(manifest)
+        if !dir.is_dir() {
+            return Err(vec!["no artifact directory".to_string()]);
+        }
+        let manifest: Manifest = read_json(&dir.join("manifest.json"))
+            .map_err(|error| vec![format!("unreadable manifest: {}", error_chain(&error))])?;
+        let mut problems = manifest_problems(&manifest, stage, key, outputs);
+        let listed: Vec<&str> = manifest.files.iter().map(|f| f.name.as_str()).collect();
+        match sorted_entries(&dir) {
+            Err(error) => problems.push(error_chain(&error)),
+            Ok(present) => {
+                for name in &present {
+                    if name != "manifest.json" && !listed.contains(&name.as_str()) {
+                        problems.push(format!("{name}: not listed in the manifest"));
+                    }
+                }
+                for name in &listed {
+                    if !present.iter().any(|p| p == name) {
+                        problems.push(format!("{name}: missing"));
+                    }
+                }
+            }
+        }
+        if problems.is_empty() {
+            problems = manifest
+                .files
+                .par_iter()
+                .flat_map_iter(|file| file_problems(&dir, file, depth))
+                .collect();
+        }
+        if problems.is_empty() {
+            Ok(manifest)
+        } else {
+            Err(problems)
+        }
     }
 
     /// Starts writing the artifact `key` of `stage` in a fresh staging directory.
@@ -210,6 +479,7 @@ impl Store {
                 .join("tmp")
                 .join(format!("{key}.{}.old", std::process::id())),
             files: Vec::new(),
+            committed: false,
         })
     }
 
@@ -221,11 +491,13 @@ impl Store {
         entry: &InstanceRef,
     ) -> Result<(), StoreError> {
         let path = self.ref_path(stage, instance);
+        let text = serde_json::to_vec_pretty(entry).map_err(|source| StoreError::Json {
+            path: path.clone(),
+            source,
+        })?;
         let dir = path.parent().unwrap_or(&self.root).to_path_buf();
         fs::create_dir_all(&dir).map_err(io_error(&dir))?;
-        let temporary = dir.join(format!(".{instance}.json.{}", std::process::id()));
-        write_json(&temporary, entry)?;
-        fs::rename(&temporary, &path).map_err(io_error(&path))
+        write_atomically(&path, &text)
     }
 
     /// The last computed key of a stage instance, if any.
@@ -233,69 +505,99 @@ impl Store {
         read_json(&self.ref_path(stage, instance)).ok()
     }
 
-    /// Every artifact directory as `(stage, key)`, sorted.
+    /// The most recently written manifest of `stage` that names `instance`:
+    /// what `status` explains staleness against when the ref is lost.
+    pub fn latest_manifest_of(&self, stage: &str, instance: &str) -> Option<Manifest> {
+        let keys = sorted_entries(&self.root.join("artifacts").join(stage)).ok()?;
+        keys.into_iter()
+            .filter(|key| is_key(key))
+            .filter_map(|key| {
+                let path = self.artifact_dir(stage, &key).join("manifest.json");
+                let modified = fs::metadata(&path).and_then(|m| m.modified()).ok()?;
+                let manifest: Manifest = read_json(&path).ok()?;
+                (manifest.instance == instance).then_some((modified, manifest))
+            })
+            .max_by(|a, b| a.0.cmp(&b.0))
+            .map(|(_, manifest)| manifest)
+    }
+
+    /// Every artifact directory as `(stage, key)`, sorted; entries that are
+    /// not named like artifacts are left out (see [`Store::foreign_entries`]).
     pub fn artifacts(&self) -> Result<Vec<(String, String)>, StoreError> {
         let mut found = Vec::new();
         for stage in sorted_entries(&self.root.join("artifacts"))? {
             for key in sorted_entries(&self.root.join("artifacts").join(&stage))? {
-                found.push((stage.clone(), key));
+                if is_key(&key) && self.artifact_dir(&stage, &key).is_dir() {
+                    found.push((stage.clone(), key));
+                }
             }
         }
         Ok(found)
     }
 
-    /// Staging directories left by interrupted runs.
+    /// Entries under `artifacts/` and `tmp/` that ternary did not name: never
+    /// removed, only reported.
+    pub fn foreign_entries(&self) -> Result<Vec<PathBuf>, StoreError> {
+        let mut foreign = Vec::new();
+        let artifacts = self.root.join("artifacts");
+        for stage in sorted_entries(&artifacts)? {
+            if !artifacts.join(&stage).is_dir() {
+                foreign.push(artifacts.join(&stage));
+                continue;
+            }
+            for key in sorted_entries(&artifacts.join(&stage))? {
+                let path = self.artifact_dir(&stage, &key);
+                if !is_key(&key) || !path.is_dir() {
+                    foreign.push(path);
+                }
+            }
+        }
+        let tmp = self.root.join("tmp");
+        for name in sorted_entries(&tmp)? {
+            if !(is_staging_name(&name) && tmp.join(&name).is_dir()) {
+                foreign.push(tmp.join(name));
+            }
+        }
+        Ok(foreign)
+    }
+
+    /// Staging directories left by interrupted runs, and temporary refs.
     pub fn staging_debris(&self) -> Result<Vec<PathBuf>, StoreError> {
         let tmp = self.root.join("tmp");
-        Ok(sorted_entries(&tmp)?
+        let mut debris: Vec<PathBuf> = sorted_entries(&tmp)?
             .into_iter()
+            .filter(|name| is_staging_name(name))
             .map(|name| tmp.join(name))
-            .collect())
+            .filter(|path| path.is_dir())
+            .collect();
+        for name in sorted_entries(&self.root)? {
+            if is_json_temporary(&name) {
+                debris.push(self.root.join(name));
+            }
+        }
+        let refs = self.root.join("refs");
+        for stage in sorted_entries(&refs)? {
+            for name in sorted_entries(&refs.join(&stage))? {
+                if is_json_temporary(&name) {
+                    debris.push(refs.join(&stage).join(name));
+                }
+            }
+        }
+        Ok(debris)
     }
 
     /// Removes staging debris. Call only while holding the lock.
     pub fn clean_staging(&self, _lock: &StoreLock) -> Result<usize, StoreError> {
         let debris = self.staging_debris()?;
         for path in &debris {
-            fs::remove_dir_all(path).map_err(io_error(path))?;
+            let removed = if path.is_dir() {
+                fs::remove_dir_all(path)
+            } else {
+                fs::remove_file(path)
+            };
+            removed.map_err(io_error(path))?;
         }
         Ok(debris.len())
-    }
-
-    /// Re-hashes every file of one artifact against its manifest.
-    pub fn verify_artifact(&self, stage: &str, key: &str) -> VerifyReport {
-        let dir = self.artifact_dir(stage, key);
-        let mut problems = Vec::new();
-        match read_json::<Manifest>(&dir.join("manifest.json")) {
-            Err(error) => problems.push(format!("unreadable manifest: {error}")),
-            Ok(manifest) => {
-                if manifest.key != key || manifest.stage != stage {
-                    problems.push(format!(
-                        "manifest names {}/{}",
-                        manifest.stage, manifest.key
-                    ));
-                }
-                for file in &manifest.files {
-                    match fs::read(dir.join(&file.name)) {
-                        Err(error) => problems.push(format!("{}: {error}", file.name)),
-                        Ok(bytes) => {
-                            let sha = sha256_hex(&bytes);
-                            if sha != file.sha256 {
-                                problems.push(format!(
-                                    "{}: sha256 {} but manifest records {}",
-                                    file.name, sha, file.sha256
-                                ));
-                            }
-                        }
-                    }
-                }
-            }
-        }
-        VerifyReport {
-            stage: stage.to_string(),
-            key: key.to_string(),
-            problems,
-        }
     }
 
     /// Removes an artifact directory. Call only while holding the lock.
@@ -312,12 +614,173 @@ impl Store {
     }
 }
 
-/// An artifact being written. Nothing in it is visible until [`Staging::commit`].
+/// Problems of a manifest as a document: it must name this artifact, its key
+/// must follow from its stage, version, parameters and inputs, and it must
+/// list plain, unique file names (exactly `outputs` when given).
+fn manifest_problems(
+    manifest: &Manifest,
+    stage: &str,
+    key: &str,
+    outputs: Option<&[String]>,
+) -> Vec<String> {
+    let mut problems = Vec::new();
+    if manifest
+        .manifest_sha256
+        .as_ref()
+        .is_some_and(|seal| *seal != manifest.seal())
+    {
+        problems.push("the manifest was edited (its manifest_sha256 no longer matches)".into());
+    }
+    if manifest.key != key || manifest.stage != stage {
+        problems.push(format!(
+            "manifest names {}/{}",
+            manifest.stage, manifest.key
+        ));
+    }
+    let derived = stage_key(
+        &manifest.stage,
+        manifest.version,
+        &manifest.params,
+        &manifest.inputs,
+    );
+    if derived != manifest.key {
+        problems.push(
+            "the manifest's stage version, parameters or inputs do not give its key".to_string(),
+        );
+    }
+    let mut names: Vec<&str> = manifest.files.iter().map(|f| f.name.as_str()).collect();
+    if names.is_empty() {
+        problems.push("the manifest lists no file".to_string());
+    }
+    if let Some(name) = names
+        .iter()
+        .find(|name| name.is_empty() || name.contains(['/', '\\']) || name.starts_with('.'))
+    {
+        problems.push(format!(
+            "the manifest lists `{name}`, not a plain file name"
+        ));
+    }
+    names.sort_unstable();
+    if names.windows(2).any(|pair| pair[0] == pair[1]) {
+        problems.push("the manifest lists a file twice".to_string());
+    }
+    if let Some(outputs) = outputs {
+        let mut expected: Vec<&str> = outputs.iter().map(String::as_str).collect();
+        expected.sort_unstable();
+        if names != expected {
+            problems.push(format!(
+                "the manifest lists [{}] but the stage writes [{}]",
+                names.join(", "),
+                expected.join(", ")
+            ));
+        }
+    }
+    problems
+}
+
+/// Problems of one listed file, checked to `depth`.
+fn file_problems(dir: &Path, file: &FileRecord, depth: Depth) -> Vec<String> {
+    let path = dir.join(&file.name);
+    let name = &file.name;
+    let size = match fs::metadata(&path) {
+        Ok(meta) => meta.len(),
+        Err(error) => return vec![format!("{name}: {error}")],
+    };
+    if size != file.bytes {
+        return vec![format!(
+            "{name}: {size} bytes but the manifest records {}",
+            file.bytes
+        )];
+    }
+    let mismatch = |sha: String| {
+        vec![format!(
+            "{name}: sha256 {sha} but the manifest records {}",
+            file.sha256
+        )]
+    };
+    match depth {
+        Depth::Sizes => {}
+        Depth::Hashes => match sha256_of_file(&path) {
+            Err(error) => return vec![format!("{name}: {error}")],
+            Ok(sha) if sha != file.sha256 => return mismatch(sha),
+            Ok(_) => {}
+        },
+        Depth::Contents => {
+            let bytes = match fs::read(&path) {
+                Ok(bytes) => bytes,
+                Err(error) => return vec![format!("{name}: {error}")],
+            };
+            let sha = sha256_hex(&bytes);
+            if sha != file.sha256 {
+                return mismatch(sha);
+            }
+            return content_problems(file, bytes);
+        }
+    }
+    Vec::new()
+}
+
+/// Lower-case hex SHA-256 of a file, read in 1 MiB pieces.
+fn sha256_of_file(path: &Path) -> io::Result<String> {
+    use sha2::{Digest, Sha256};
+    use std::io::Read;
+    let mut file = File::open(path)?;
+    let mut hasher = Sha256::new();
+    let mut buffer = vec![0u8; 1 << 20];
+    loop {
+        let read = file.read(&mut buffer)?;
+        if read == 0 {
+            break;
+        }
+        hasher.update(&buffer[..read]);
+    }
+    Ok(hex(&hasher.finalize()))
+}
+
+/// Problems of a file's table content against its recorded content hash.
+fn content_problems(file: &FileRecord, bytes: Vec<u8>) -> Vec<String> {
+    let name = &file.name;
+    match content_sha256_of_file(name, bytes) {
+        Err(error) => vec![format!("{name}: {}", error_chain(&error))],
+        Ok(content) if content != file.content_sha256 => vec![format!(
+            "{name}: content sha256 {content} but the manifest records {}",
+            file.content_sha256
+        )],
+        Ok(_) => Vec::new(),
+    }
+}
+
+/// An error and its causes on one line.
+pub fn error_chain(error: &dyn std::error::Error) -> String {
+    let mut text = error.to_string();
+    let mut source = error.source();
+    while let Some(cause) = source {
+        text.push_str(": ");
+        text.push_str(&cause.to_string());
+        source = cause.source();
+    }
+    text
+}
+
+/// A few entry names of a directory, for messages.
+fn summarize(entries: &[String]) -> String {
+    let shown: Vec<&str> = entries.iter().take(4).map(String::as_str).collect();
+    let more = entries.len().saturating_sub(shown.len());
+    if more > 0 {
+        format!("{} and {more} more", shown.join(", "))
+    } else {
+        shown.join(", ")
+    }
+}
+
+/// An artifact being written. Nothing in it is visible until
+/// [`Staging::commit`]; dropped uncommitted, it removes its directory.
 pub struct Staging {
     dir: PathBuf,
     target: PathBuf,
     trash: PathBuf,
     files: Vec<FileRecord>,
+    committed: bool,
 }
 
 impl Staging {
@@ -346,11 +809,13 @@ impl Staging {
         &self.files
     }
 
-    /// Writes the manifest last, then renames the directory into place,
-    /// replacing an older artifact of the same key (`--force`).
-    pub fn commit(self, manifest: &Manifest) -> Result<PathBuf, StoreError> {
+    /// Seals and writes the manifest last, then renames the directory into
+    /// place, replacing an older or damaged artifact of the same key; returns
+    /// the sealed manifest.
+    pub fn commit(mut self, manifest: Manifest) -> Result<Manifest, StoreError> {
+        let manifest = manifest.sealed();
         let manifest_path = self.dir.join("manifest.json");
-        let text = serde_json::to_vec_pretty(manifest).map_err(|source| StoreError::Json {
+        let text = serde_json::to_vec_pretty(&manifest).map_err(|source| StoreError::Json {
             path: manifest_path.clone(),
             source,
         })?;
@@ -362,11 +827,21 @@ impl Staging {
             fs::rename(&self.target, &self.trash).map_err(io_error(&self.target))?;
         }
         fs::rename(&self.dir, &self.target).map_err(io_error(&self.target))?;
+        self.committed = true;
         sync_dir(&parent)?;
         if self.trash.exists() {
             fs::remove_dir_all(&self.trash).map_err(io_error(&self.trash))?;
         }
-        Ok(self.target)
+        Ok(manifest)
+    }
+}
+
+impl Drop for Staging {
+    fn drop(&mut self) {
+        if !self.committed {
+            // Best effort: what remains is debris that the next locked run removes.
+            let _ = fs::remove_dir_all(&self.dir);
+        }
     }
 }
 
@@ -376,18 +851,24 @@ fn write_synced(path: &Path, bytes: &[u8]) -> Result<(), StoreError> {
     file.sync_all().map_err(io_error(path))
 }
 
+/// Writes `path` by a synced temporary file `.<name>.<pid>` renamed over it,
+/// then syncs the directory: readers see the old or the new file, never a part.
+fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), StoreError> {
+    let dir = path.parent().unwrap_or(Path::new(".")).to_path_buf();
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let temporary = dir.join(format!(".{name}.{}", std::process::id()));
+    write_synced(&temporary, bytes)?;
+    fs::rename(&temporary, path).map_err(io_error(path))?;
+    sync_dir(&dir)
+}
+
 fn sync_dir(path: &Path) -> Result<(), StoreError> {
     File::open(path)
         .and_then(|dir| dir.sync_all())
         .map_err(io_error(path))
-}
-
-fn write_json<T: Serialize>(path: &Path, value: &T) -> Result<(), StoreError> {
-    let text = serde_json::to_vec_pretty(value).map_err(|source| StoreError::Json {
-        path: path.to_path_buf(),
-        source,
-    })?;
-    write_synced(path, &text)
 }
 
 fn read_json<T: for<'de> Deserialize<'de>>(path: &Path) -> Result<T, StoreError> {
@@ -423,4 +904,41 @@ fn directory_bytes(dir: &Path) -> u64 {
                 .sum()
         })
         .unwrap_or(0)
+}
+
+/// File names an artifact's tables are written to.
+pub fn table_files(tables: &[&str]) -> Vec<String> {
+    tables
+        .iter()
+        .map(|name| format!("{name}.parquet"))
+        .collect()
+}
+
+/// Sorted `(name, content sha256)` of a manifest's files: what a downstream key hashes.
+pub fn content_hashes(manifest: &Manifest) -> Vec<(String, String)> {
+    let mut files: Vec<(String, String)> = manifest
+        .files
+        .iter()
+        .map(|f| (f.name.clone(), f.content_sha256.clone()))
+        .collect();
+    files.sort();
+    files
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn only_ternary_names_are_staging_or_ref_debris() {
+        let key = "a".repeat(64);
+        assert!(is_staging_name(&format!("{key}.123")));
+        assert!(is_staging_name(&format!("{key}.123.old")));
+        assert!(!is_staging_name("my_project"));
+        assert!(!is_staging_name(&format!("{key}.x1")));
+        assert!(!is_staging_name(&format!("{}.123", "A".repeat(64))));
+        assert!(is_json_temporary(".ipp-6.json.77"));
+        assert!(!is_json_temporary("ipp-6.json"));
+        assert!(!is_json_temporary(".notes.json.bak"));
+    }
 }

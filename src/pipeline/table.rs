@@ -6,7 +6,6 @@
 //! same table gives the same bytes.
 
 use std::collections::{BTreeMap, HashMap};
-use std::fs::File;
 use std::path::Path;
 use std::sync::Arc;
 
@@ -114,8 +113,10 @@ impl Table {
         })
     }
 
-    /// Adds a key-value metadata entry.
+    /// Adds a key-value metadata entry; keys start with `ternary.` (see
+    /// [`content_sha256_of_file`]).
     pub fn with_metadata(mut self, key: &str, value: String) -> Table {
+        debug_assert!(key.starts_with("ternary."), "metadata key `{key}`");
         self.metadata.insert(key.to_string(), value);
         self
     }
@@ -257,13 +258,33 @@ pub fn text_values(batch: &RecordBatch, name: &str) -> Result<Vec<String>, Table
         .collect())
 }
 
+/// Key-value metadata the executor stamps into every file: provenance, not
+/// content (left out of [`Table::content_sha256`]).
+pub const PROVENANCE_KEYS: [&str; 6] = [
+    "ternary.stage",
+    "ternary.stage_version",
+    "ternary.key",
+    "ternary.params",
+    "ternary.inputs",
+    "ternary.tool",
+];
+
 /// Reads a whole Parquet file into one batch, with its key-value metadata.
 pub fn read_parquet(path: &Path) -> Result<(RecordBatch, BTreeMap<String, String>), TableError> {
-    let io = |source| TableError::Io {
+    let bytes = std::fs::read(path).map_err(|source| TableError::Io {
         path: path.display().to_string(),
         source,
-    };
-    let builder = ParquetRecordBatchReaderBuilder::try_new(File::open(path).map_err(io)?)?;
+    })?;
+    read_parquet_bytes(&path.display().to_string(), bytes)
+}
+
+/// Decodes Parquet bytes (already read, and hashed, by the caller) into one
+/// batch with its key-value metadata; `label` names the source in errors.
+pub fn read_parquet_bytes(
+    label: &str,
+    bytes: Vec<u8>,
+) -> Result<(RecordBatch, BTreeMap<String, String>), TableError> {
+    let builder = ParquetRecordBatchReaderBuilder::try_new(bytes::Bytes::from(bytes))?;
     let metadata = builder
         .metadata()
         .file_metadata()
@@ -276,17 +297,32 @@ pub fn read_parquet(path: &Path) -> Result<(RecordBatch, BTreeMap<String, String
         })
         .unwrap_or_default();
     let schema = builder.schema().clone();
+    let arrow_error = |source| TableError::Arrow {
+        name: label.to_string(),
+        source,
+    };
     let batches = builder
         .build()?
         .collect::<Result<Vec<_>, _>>()
-        .map_err(|source| TableError::Arrow {
-            name: path.display().to_string(),
-            source,
-        })?;
-    let batch =
-        arrow::compute::concat_batches(&schema, &batches).map_err(|source| TableError::Arrow {
-            name: path.display().to_string(),
-            source,
-        })?;
+        .map_err(arrow_error)?;
+    let batch = arrow::compute::concat_batches(&schema, &batches).map_err(arrow_error)?;
     Ok((batch, metadata))
+}
+
+/// The content hash ([`Table::content_sha256`]) of the Parquet file `name`
+/// (`<table>.parquet`) with these bytes: its data, column metadata and the
+/// stage's `ternary.*` metadata, without the executor's provenance.
+pub fn content_sha256_of_file(name: &str, bytes: Vec<u8>) -> Result<String, TableError> {
+    let (batch, metadata) = read_parquet_bytes(name, bytes)?;
+    let table = Table {
+        name: name.trim_end_matches(".parquet").to_string(),
+        batch,
+        metadata: metadata
+            .into_iter()
+            .filter(|(key, _)| {
+                key.starts_with("ternary.") && !PROVENANCE_KEYS.contains(&key.as_str())
+            })
+            .collect(),
+    };
+    table.content_sha256()
 }

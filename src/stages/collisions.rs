@@ -64,6 +64,10 @@ impl Stage for CollisionsStage {
         serde_json::to_value(&self.params).unwrap_or(Value::Null)
     }
 
+    fn tables(&self) -> &'static [&'static str] {
+        &["events"]
+    }
+
     fn inputs(&self) -> Vec<InstanceId> {
         Vec::new()
     }

@@ -346,6 +346,10 @@ impl Stage for CompareStage {
         serde_json::to_value(&self.params).unwrap_or(Value::Null)
     }
 
+    fn tables(&self) -> &'static [&'static str] {
+        &["comparison", "goodness", "finite_size"]
+    }
+
     fn inputs(&self) -> Vec<InstanceId> {
         let mut ids = self.collision_inputs();
         ids.extend(

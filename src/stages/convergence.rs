@@ -78,6 +78,10 @@ impl Stage for ConvergenceStage {
         serde_json::to_value(&self.params).unwrap_or(Value::Null)
     }
 
+    fn tables(&self) -> &'static [&'static str] {
+        &["convergence"]
+    }
+
     fn inputs(&self) -> Vec<InstanceId> {
         let id = self.params.kernel.potential.id();
         let mut inputs = vec![CollisionsStage::instance(&id)];

@@ -541,6 +541,15 @@ impl Stage for EvolveStage {
         serde_json::to_value(&self.params).unwrap_or(Value::Null)
     }
 
+    fn tables(&self) -> &'static [&'static str] {
+        &[
+            "early_evolution",
+            "early_summary",
+            "evolution",
+            "evolution_summary",
+        ]
+    }
+
     fn inputs(&self) -> Vec<InstanceId> {
         CollisionsStage::instances(&self.params.collisions, &self.params.wide_collisions)
     }

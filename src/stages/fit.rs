@@ -47,6 +47,10 @@ impl Stage for FitStage {
         serde_json::to_value(self.params).unwrap_or(Value::Null)
     }
 
+    fn tables(&self) -> &'static [&'static str] {
+        &["fit"]
+    }
+
     fn inputs(&self) -> Vec<InstanceId> {
         vec![CollisionsStage::instance(
             &self.params.kernel.potential.id(),

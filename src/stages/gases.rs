@@ -58,6 +58,10 @@ impl Stage for GasesStage {
             .unwrap_or(Value::Null)
     }
 
+    fn tables(&self) -> &'static [&'static str] {
+        &["gases"]
+    }
+
     fn inputs(&self) -> Vec<InstanceId> {
         let mut inputs: Vec<InstanceId> = Vec::new();
         for (_, dilute, dense) in &self.gases {

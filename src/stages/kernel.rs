@@ -78,6 +78,10 @@ impl Stage for KernelStage {
         serde_json::to_value(self.params).unwrap_or(Value::Null)
     }
 
+    fn tables(&self) -> &'static [&'static str] {
+        &["kernel"]
+    }
+
     fn inputs(&self) -> Vec<InstanceId> {
         vec![CollisionsStage::instance(&self.params.potential.id())]
     }

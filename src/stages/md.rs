@@ -343,6 +343,10 @@ impl Stage for MdStage {
         serde_json::to_value(&self.params).unwrap_or(Value::Null)
     }
 
+    fn tables(&self) -> &'static [&'static str] {
+        &["h", "summary", "runs", "pairs"]
+    }
+
     fn inputs(&self) -> Vec<InstanceId> {
         Vec::new()
     }

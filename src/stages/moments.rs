@@ -67,6 +67,10 @@ impl Stage for MomentsStage {
         serde_json::to_value(self.params).unwrap_or(Value::Null)
     }
 
+    fn tables(&self) -> &'static [&'static str] {
+        &["moments"]
+    }
+
     fn inputs(&self) -> Vec<InstanceId> {
         vec![CollisionsStage::instance(&self.params.potential.id())]
     }

@@ -80,6 +80,10 @@ impl Stage for ScanStage {
         serde_json::to_value(&self.params).unwrap_or(Value::Null)
     }
 
+    fn tables(&self) -> &'static [&'static str] {
+        &["curve", "peak"]
+    }
+
     fn inputs(&self) -> Vec<InstanceId> {
         Vec::new()
     }

@@ -264,6 +264,10 @@ impl Stage for SweepStage {
         serde_json::to_value(&self.params).unwrap_or(Value::Null)
     }
 
+    fn tables(&self) -> &'static [&'static str] {
+        &["rates", "detailed_balance"]
+    }
+
     fn inputs(&self) -> Vec<InstanceId> {
         vec![CollisionsStage::instance(&self.params.collisions)]
     }

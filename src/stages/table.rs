@@ -72,6 +72,10 @@ impl Stage for TableStage {
         serde_json::to_value(&self.rows).unwrap_or(Value::Null)
     }
 
+    fn tables(&self) -> &'static [&'static str] {
+        &["table"]
+    }
+
     fn inputs(&self) -> Vec<InstanceId> {
         self.rows
             .iter()
