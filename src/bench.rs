@@ -578,7 +578,7 @@ struct MdRun {
 /// `ternary bench md`: wall time and energy error of one run of `N` electrons
 /// (`n = 6`, `l0 = 1 um`, `eps = 1 eV`) to the final time, cluster stepping
 /// against whole-ring stepping at the same tolerances, in one process.
-pub fn md(options: &MdBenchOptions) -> String {
+pub fn md(options: &MdBenchOptions) -> Result<String, String> {
     use crate::physics::clusters::ClusterRing;
     use crate::physics::potential::InverseIntegerPower;
     use crate::physics::ring::{Reach, RingForces, RingState, evolve, thermal_start};
@@ -602,7 +602,7 @@ pub fn md(options: &MdBenchOptions) -> String {
     let mut rng = StdRng::seed_from_u64(options.seed);
     let (positions, velocities) =
         thermal_start(&forces, options.particles, Some(0.0), &mut rng, 1000)
-            .expect("a dilute ring accepts almost every draw");
+            .map_err(|error| error.to_string())?;
     let start = RingState::new(&positions, &velocities, circumference);
     let energy = start.energy(&forces);
     let mut out = String::new();
@@ -625,7 +625,8 @@ pub fn md(options: &MdBenchOptions) -> String {
     for tolerance in [1e-10, 1e-12] {
         let clock = Instant::now();
         let mut ring = ClusterRing::new(forces, &positions, &velocities, tolerance);
-        ring.advance(duration, u64::MAX).expect("cluster run");
+        ring.advance(duration, u64::MAX)
+            .map_err(|error| format!("cluster stepping: {error}"))?;
         let cluster = MdRun {
             seconds: clock.elapsed().as_secs_f64(),
             energy_error: (ring.energy() - energy).abs() / energy,
@@ -635,8 +636,8 @@ pub fn md(options: &MdBenchOptions) -> String {
         };
         let clock = Instant::now();
         let mut whole = start.clone();
-        let work =
-            evolve(&forces, &mut whole, duration, tolerance, u64::MAX).expect("whole-ring run");
+        let work = evolve(&forces, &mut whole, duration, tolerance, u64::MAX)
+            .map_err(|error| format!("whole-ring stepping: {error}"))?;
         let global = MdRun {
             seconds: clock.elapsed().as_secs_f64(),
             energy_error: (whole.energy(&forces) - energy).abs() / energy,
@@ -667,5 +668,5 @@ pub fn md(options: &MdBenchOptions) -> String {
             global.seconds / cluster.seconds
         );
     }
-    out
+    Ok(out)
 }

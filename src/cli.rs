@@ -8,7 +8,8 @@ use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand};
 
 use ternary::bench::{self, KernelBenchOptions, MdBenchOptions, WorkPrecisionOptions};
-use ternary::config::Study;
+use ternary::config::{MAX_EXPONENT, MAX_GAS_DENSITY, MAX_RING_ENCOUNTERS, Study};
+use ternary::physics::units::{Mass, PhysicalGas, ring_density_per_um};
 use ternary::pipeline::executor::{self, Action, Freshness, RunOptions, Verbosity};
 use ternary::pipeline::store::Store;
 use ternary::{report, stages};
@@ -69,26 +70,27 @@ enum Command {
 enum BenchCommand {
     /// Work-precision of the integrators on thermally sampled scenes.
     Integrators {
-        /// Potential exponent n of U = x^-n.
-        #[arg(long, default_value_t = 6.0)]
+        /// Potential exponent n of U = x^-n, in (1, 100].
+        #[arg(long, default_value_t = 6.0, value_parser = exponent)]
         n: f64,
-        /// Thermal scenes per measurement.
-        #[arg(long, default_value_t = 2000)]
-        scenes: usize,
+        /// Thermal scenes per measurement, 1 to 1000000.
+        #[arg(long, default_value_t = 2000, value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
+        scenes: u32,
         /// Seed of the scene sample.
         #[arg(long, default_value_t = 1)]
         seed: u64,
     },
     /// Precision of a_n and of the kernel per CPU second: what each sampling measure gains.
     Kernel {
-        /// Potential exponent n of U = x^-n.
-        #[arg(long, default_value_t = 6.0)]
+        /// Potential exponent n of U = x^-n, in (1, 100].
+        #[arg(long, default_value_t = 6.0, value_parser = exponent)]
         n: f64,
-        /// Randomizations (replicates).
-        #[arg(long, default_value_t = 16)]
+        /// Randomizations (replicates), 2 to 256.
+        #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(2..=256))]
         randomizations: u32,
-        /// Scenes per randomization in the sampler comparison.
-        #[arg(long, default_value_t = 4096)]
+        /// Scenes per randomization in the sampler comparison, 16 to 65536
+        /// (the work-precision table draws up to 16x as many).
+        #[arg(long, default_value_t = 4096, value_parser = clap::value_parser!(u32).range(16..=65536))]
         points: u32,
         /// Seed.
         #[arg(long, default_value_t = 1)]
@@ -96,25 +98,77 @@ enum BenchCommand {
     },
     /// Ring MD: cluster stepping against whole-ring stepping on one run of the published ring.
     Md {
-        /// Particles N.
-        #[arg(long, default_value_t = 161)]
-        particles: usize,
-        /// Ring radius, um.
-        #[arg(long, default_value_t = 51200.0)]
+        /// Particles N, 3 to 100000.
+        #[arg(long, default_value_t = 161, value_parser = clap::value_parser!(u32).range(3..=100_000))]
+        particles: u32,
+        /// Ring radius, um (> 0).
+        #[arg(long, default_value_t = 51200.0, value_parser = positive)]
         radius_um: f64,
-        /// Temperature, eV.
-        #[arg(long, default_value_t = 0.1)]
+        /// Temperature, eV (> 0).
+        #[arg(long, default_value_t = 0.1, value_parser = positive)]
         kt_ev: f64,
-        /// Final time, ns.
-        #[arg(long, default_value_t = 12800.0)]
+        /// Final time, ns (> 0).
+        #[arg(long, default_value_t = 12800.0, value_parser = positive)]
         final_time_ns: f64,
-        /// Interacting neighbours on each side.
-        #[arg(long, default_value_t = 3)]
-        neighbours: usize,
+        /// Interacting neighbours on each side, 1 to 64.
+        #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..=64))]
+        neighbours: u32,
         /// Seed of the initial state.
         #[arg(long, default_value_t = 1)]
         seed: u64,
     },
+}
+
+/// A finite number > 0.
+fn positive(text: &str) -> Result<f64, String> {
+    let value: f64 = text.parse().map_err(|e| format!("{e}"))?;
+    if value.is_finite() && value > 0.0 {
+        Ok(value)
+    } else {
+        Err(format!("{value} must be a finite number > 0"))
+    }
+}
+
+/// An inverse-power exponent in (1, 100].
+fn exponent(text: &str) -> Result<f64, String> {
+    let value: f64 = text.parse().map_err(|e| format!("{e}"))?;
+    if value > 1.0 && value <= MAX_EXPONENT {
+        Ok(value)
+    } else {
+        Err(format!("n = {value} is outside (1, {MAX_EXPONENT}]"))
+    }
+}
+
+/// Refuses a bench ring that is not dilute or would take absurdly long, by the
+/// bounds the study's `[md]` section has.
+fn check_md_bench(options: &MdBenchOptions) -> Result<()> {
+    let gas = PhysicalGas {
+        l0_um: 1.0,
+        eps_ev: 1.0,
+        kt_ev: options.kt_ev,
+        mass: Mass::ElectronMasses(1.0),
+        density_per_um: ring_density_per_um(options.particles as u32, options.radius_um),
+    };
+    let density = gas.scaled_density(6.0);
+    if density > MAX_GAS_DENSITY {
+        bail!(
+            "--radius-um {} with --particles {} and --kt-ev {} gives rho*l = {density:.3e}, above {MAX_GAS_DENSITY}: the ring is not dilute",
+            options.radius_um,
+            options.particles,
+            options.kt_ev
+        );
+    }
+    let encounters = options.particles as f64
+        * gas.density_per_um
+        * gas.thermal_speed_um_per_ns()
+        * options.final_time_ns;
+    if encounters > MAX_RING_ENCOUNTERS {
+        bail!(
+            "--final-time-ns {:e} gives ~{encounters:.1e} neighbour encounters, more than {MAX_RING_ENCOUNTERS:.0e}",
+            options.final_time_ns
+        );
+    }
+    Ok(())
 }
 
 /// Runs the command line and maps errors to exit code 1 (2 for usage errors, by clap).
@@ -217,11 +271,12 @@ fn dispatch(cli: Cli) -> Result<ExitCode> {
             let (study, store) = load(&cli.config, Opening::View)?;
             for line in executor::status(&store, &stages::plan(&study))? {
                 let id = line.id;
+                let key = line.key.as_deref().map_or("", |key| &key[..12]);
                 let line = match line.freshness {
-                    Freshness::Fresh => "fresh".to_string(),
+                    Freshness::Fresh => format!("fresh (key {key})"),
                     Freshness::Stale(reasons) => format!("stale: {}", reasons.join("; ")),
                     Freshness::Damaged(problems) => format!(
-                        "damaged: {} (the next run recomputes it)",
+                        "damaged (key {key}): {} (the next run recomputes it)",
                         problems.join("; ")
                     ),
                     Freshness::Missing(reason) => format!("missing: {reason}"),
@@ -262,7 +317,11 @@ fn dispatch(cli: Cli) -> Result<ExitCode> {
         Command::Bench {
             which: BenchCommand::Integrators { n, scenes, seed },
         } => {
-            let options = WorkPrecisionOptions { n, scenes, seed };
+            let options = WorkPrecisionOptions {
+                n,
+                scenes: scenes as usize,
+                seed,
+            };
             emit(&bench::integrators(&options));
             Ok(ExitCode::SUCCESS)
         }
@@ -296,14 +355,15 @@ fn dispatch(cli: Cli) -> Result<ExitCode> {
                 },
         } => {
             let options = MdBenchOptions {
-                particles,
+                particles: particles as usize,
                 radius_um,
                 kt_ev,
                 final_time_ns,
-                neighbours,
+                neighbours: neighbours as usize,
                 seed,
             };
-            emit(&bench::md(&options));
+            check_md_bench(&options)?;
+            emit(&bench::md(&options).map_err(anyhow::Error::msg)?);
             Ok(ExitCode::SUCCESS)
         }
     }

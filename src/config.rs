@@ -1753,22 +1753,19 @@ fn validate_potentials(potentials: &PotentialsConfig) -> Result<(), Invalid> {
         "lists no potential: give `inverse_power = [6]` or `lennard_jones = [1.0]`",
     )?;
     for (k, &n) in potentials.inverse_power.iter().enumerate() {
-        let key = format!("potentials.inverse_power[{k}]");
         check(
             n > 1.0 && n <= MAX_EXPONENT,
-            key.clone(),
+            format!("potentials.inverse_power[{k}]"),
             format!(
                 "n = {} is outside (1, {MAX_EXPONENT}] (the potential tail must be integrable; steeper walls are hard spheres)",
                 compact(n)
             ),
         )?;
-        check_id(Potential::InversePower { n }, key)?;
     }
     for (k, &theta) in potentials.lennard_jones.iter().enumerate() {
-        let key = format!("potentials.lennard_jones[{k}]");
         check(
             (THETA_RANGE[0]..=THETA_RANGE[1]).contains(&theta),
-            key.clone(),
+            format!("potentials.lennard_jones[{k}]"),
             format!(
                 "theta = kT/eps = {} is outside [{}, {}]",
                 compact(theta),
@@ -1776,7 +1773,6 @@ fn validate_potentials(potentials: &PotentialsConfig) -> Result<(), Invalid> {
                 THETA_RANGE[1]
             ),
         )?;
-        check_id(Potential::LennardJones { theta }, key)?;
     }
     check_unique(&potentials.inverse_power, "potentials.inverse_power")?;
     check_unique(&potentials.lennard_jones, "potentials.lennard_jones")
@@ -1796,23 +1792,9 @@ fn compact(x: f64) -> String {
 pub const MAX_EXPONENT: f64 = 100.0;
 
 /// Range of Lennard-Jones `theta = kT/eps`: below it nearly every pair is
-/// bound, above it the well does not matter.
+/// bound, above it the well does not matter. With `n` in `(1, MAX_EXPONENT]`
+/// this bounds every potential id (which names files) to 24 characters.
 pub const THETA_RANGE: [f64; 2] = [1e-3, 1e3];
-
-/// Longest potential id: ids name directories and files of the store.
-pub const MAX_ID_LENGTH: usize = 24;
-
-/// Checks that a potential's id is short enough to name files.
-fn check_id(potential: Potential, key: String) -> Result<(), Invalid> {
-    let id = potential.id();
-    check(
-        id.len() <= MAX_ID_LENGTH,
-        key,
-        format!(
-            "its id `{id}` is longer than {MAX_ID_LENGTH} characters: give the value with fewer digits"
-        ),
-    )
-}
 
 fn check_unique<T: PartialEq + fmt::Display>(values: &[T], key: &str) -> Result<(), Invalid> {
     for (k, value) in values.iter().enumerate() {
@@ -1827,6 +1809,9 @@ fn check_unique<T: PartialEq + fmt::Display>(values: &[T], key: &str) -> Result<
 
 /// Largest offsets per launch pair of a scan.
 pub const MAX_SCAN_POINTS: u32 = 1 << 20;
+
+/// Largest scenes of one scan (offsets x launch pairs).
+pub const MAX_SCAN_SCENES: u64 = 1 << 22;
 
 /// Largest number of scan launch pairs.
 pub const MAX_SCAN_LAUNCHES: usize = 64;
@@ -1905,6 +1890,20 @@ fn validate_scan(config: &Config) -> Result<(), Invalid> {
     }
     let names: Vec<&str> = scan.launch.iter().map(|l| l.name.as_str()).collect();
     check_unique(&names, "scan.launch")?;
+    let largest = scan
+        .overrides
+        .keys()
+        .map(|id| scan.grid(id).points)
+        .fold(scan.points, u32::max);
+    let scenes = u64::from(largest) * scan.launch.len() as u64;
+    check(
+        scenes <= MAX_SCAN_SCENES,
+        "scan.points",
+        format!(
+            "{largest} offsets x {} launch pairs = {scenes} scenes exceeds {MAX_SCAN_SCENES} (~1 GB of curve rows in memory)",
+            scan.launch.len()
+        ),
+    )?;
     let ids: Vec<String> = config.potentials.list().iter().map(Potential::id).collect();
     for id in scan.overrides.keys() {
         check(
@@ -1990,6 +1989,29 @@ points = 21
 
     fn parse(text: &str) -> Result<Study, ConfigError> {
         Study::parse(Path::new("pipeline.toml"), text)
+    }
+
+    /// Potential ids name files: the range bounds keep the longest ones
+    /// (17 significant digits, the most a shortest f64 form has) short.
+    #[test]
+    fn potential_ids_within_the_ranges_are_short() {
+        let extremes = [
+            Potential::InversePower {
+                n: 1.0 + f64::EPSILON,
+            },
+            Potential::InversePower {
+                n: 99.999_999_999_999_99,
+            },
+            Potential::LennardJones {
+                theta: 0.001_234_567_890_123_456_7,
+            },
+            Potential::LennardJones {
+                theta: 999.999_999_999_999_9,
+            },
+        ];
+        for potential in extremes {
+            assert!(potential.id().len() <= 24, "{}", potential.id());
+        }
     }
 
     #[test]

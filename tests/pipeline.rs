@@ -4,18 +4,12 @@
 
 use std::fs;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output, Stdio};
+use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
-const BINARY: &str = env!("CARGO_BIN_EXE_ternary");
+mod common;
 
-/// A fresh directory for one test.
-fn workspace(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("ternary-test-{name}-{}", std::process::id()));
-    let _ = fs::remove_dir_all(&dir);
-    fs::create_dir_all(&dir).unwrap();
-    dir
-}
+use common::{BINARY, run_counts, stderr, stdout, ternary, workspace, write_config};
 
 fn config(points: u32, extra: &str) -> String {
     format!(
@@ -49,29 +43,6 @@ points = 64
     )
 }
 
-fn write_config(dir: &Path, text: &str) -> PathBuf {
-    let path = dir.join("pipeline.toml");
-    fs::write(&path, text).unwrap();
-    path
-}
-
-fn ternary(config: &Path, args: &[&str]) -> Output {
-    Command::new(BINARY)
-        .arg("--config")
-        .arg(config)
-        .args(args)
-        .output()
-        .unwrap()
-}
-
-fn stdout(output: &Output) -> String {
-    String::from_utf8_lossy(&output.stdout).into_owned()
-}
-
-fn stderr(output: &Output) -> String {
-    String::from_utf8_lossy(&output.stderr).into_owned()
-}
-
 /// Runs a pyarrow check script on an artifact directory; it must exit 0.
 fn python_check(script: &str, artifact: &Path) {
     let output = Command::new("python3")
@@ -81,28 +52,6 @@ fn python_check(script: &str, artifact: &Path) {
         .output()
         .unwrap();
     assert!(output.status.success(), "{}", stderr(&output));
-}
-
-/// Runs `ternary run` and returns (computed, fresh) from its closing line.
-fn run_counts(config: &Path, args: &[&str]) -> (usize, usize) {
-    let output = ternary(config, &[&["run"], args].concat());
-    assert!(output.status.success(), "run failed: {}", stderr(&output));
-    let text = stdout(&output);
-    let line = text
-        .lines()
-        .find(|l| l.starts_with("run: "))
-        .expect("closing line");
-    let number = |word: &str| -> usize {
-        let before = line.split(word).next().unwrap();
-        before
-            .split_whitespace()
-            .last()
-            .unwrap()
-            .trim_start_matches("run:")
-            .parse()
-            .unwrap()
-    };
-    (number(" computed"), number(" fresh"))
 }
 
 /// Every instance of the default DAG: per potential scan, collisions, the
@@ -157,7 +106,7 @@ fn changing_one_potentials_scan_setting_reruns_only_that_instance() {
     write_config(&dir, &config(7, "[scan.overrides.ipp-6]\npoints = 9\n"));
     let status = stdout(&ternary(&path, &["status"]));
     assert!(
-        status.contains("scan[ipp-2]              fresh"),
+        status.contains("scan[ipp-2]              fresh (key "),
         "{status}"
     );
     assert!(

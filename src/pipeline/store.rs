@@ -316,8 +316,10 @@ impl Store {
         self.root.join(MARKER)
     }
 
-    /// `true` when the marker is present and current; an error when it is
-    /// present but unreadable or of another format or a newer version.
+    /// `true` when the marker is present and current; an error when it names
+    /// a newer layout version. A marker with other content (damaged) counts
+    /// as missing: the directory is then judged by its layout, and
+    /// [`Store::open`] rewrites the marker.
     fn check_marker(&self) -> Result<bool, StoreError> {
         let path = self.marker_path();
         let bytes = match fs::read(&path) {
@@ -325,27 +327,19 @@ impl Store {
             Err(error) if error.kind() == io::ErrorKind::NotFound => return Ok(false),
             Err(error) => return Err(io_error(&path)(error)),
         };
-        let expected =
-            String::from_utf8_lossy(&serde_json::to_vec(&Marker::current()).unwrap_or_default())
-                .into_owned();
-        let marker: Marker =
-            serde_json::from_slice(&bytes).map_err(|error| StoreError::Marker {
-                path: path.clone(),
-                message: format!(
-                    "the store marker is damaged ({error}); if this directory is a ternary store, \
-                 restore the file's content to {expected}"
-                ),
-            })?;
-        if marker.format != "ternary-store" || marker.version > FORMAT_VERSION {
-            return Err(StoreError::Marker {
-                path,
-                message: format!(
-                    "format `{}` version {} is not one this ternary reads (`ternary-store` up to {FORMAT_VERSION})",
-                    marker.format, marker.version
-                ),
-            });
+        match serde_json::from_slice::<Marker>(&bytes) {
+            Ok(marker) if marker.format == "ternary-store" && marker.version > FORMAT_VERSION => {
+                Err(StoreError::Marker {
+                    path,
+                    message: format!(
+                        "the store has layout version {}, newer than this ternary reads ({FORMAT_VERSION}): use a newer ternary",
+                        marker.version
+                    ),
+                })
+            }
+            Ok(marker) => Ok(marker == Marker::current()),
+            Err(_) => Ok(false),
         }
-        Ok(true)
     }
 
     /// A store written before the marker existed: only the store's own

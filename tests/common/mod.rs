@@ -1,0 +1,162 @@
+//! Helpers shared by the integration tests that drive the `ternary` binary.
+#![allow(dead_code)]
+
+use std::fs;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+pub const BINARY: &str = env!("CARGO_BIN_EXE_ternary");
+
+/// A fresh directory for one test.
+pub fn workspace(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("ternary-test-{name}-{}", std::process::id()));
+    let _ = fs::remove_dir_all(&dir);
+    fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+pub fn write_config(dir: &Path, text: &str) -> PathBuf {
+    let path = dir.join("pipeline.toml");
+    fs::write(&path, text).unwrap();
+    path
+}
+
+pub fn ternary(config: &Path, args: &[&str]) -> Output {
+    Command::new(BINARY)
+        .arg("--config")
+        .arg(config)
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+pub fn stdout(output: &Output) -> String {
+    String::from_utf8_lossy(&output.stdout).into_owned()
+}
+
+pub fn stderr(output: &Output) -> String {
+    String::from_utf8_lossy(&output.stderr).into_owned()
+}
+
+/// Runs `ternary run` and returns (computed, fresh) from its closing line.
+pub fn run_counts(config: &Path, args: &[&str]) -> (usize, usize) {
+    let output = ternary(config, &[&["run"], args].concat());
+    assert!(output.status.success(), "run failed: {}", stderr(&output));
+    let text = stdout(&output);
+    let line = text
+        .lines()
+        .find(|l| l.starts_with("run: "))
+        .expect("closing line");
+    let number = |word: &str| -> usize {
+        let before = line.split(word).next().unwrap();
+        before
+            .split_whitespace()
+            .last()
+            .unwrap()
+            .trim_start_matches("run:")
+            .parse()
+            .unwrap()
+    };
+    (number(" computed"), number(" fresh"))
+}
+
+/// A study of one potential (`ipp-6`) small enough to run in a fraction of a
+/// second: scan, collisions, kernel, moments, fit and table.
+pub fn small_study(store: &str) -> String {
+    format!(
+        r#"
+[store]
+path = "{store}"
+
+[potentials]
+inverse_power = [6]
+
+[scan]
+offset_min = -3.0
+offset_max = 3.0
+points = 7
+
+[[scan.launch]]
+name = "symmetric"
+u2 = 1.0
+u3 = -1.0
+
+[collisions]
+randomizations = 2
+points = 64
+pilot_points = 0
+
+[sweep]
+enabled = false
+"#
+    )
+}
+
+/// Stage instances of [`small_study`].
+pub const SMALL_STUDY_INSTANCES: usize = 6;
+
+/// Every file under `dir`, recursively, as paths relative to `dir`.
+pub fn files_under(dir: &Path) -> Vec<PathBuf> {
+    let mut found = Vec::new();
+    let mut pending = vec![dir.to_path_buf()];
+    while let Some(next) = pending.pop() {
+        for entry in fs::read_dir(&next).into_iter().flatten().flatten() {
+            let path = entry.path();
+            if path.is_dir() {
+                pending.push(path);
+            } else {
+                found.push(path.strip_prefix(dir).unwrap().to_path_buf());
+            }
+        }
+    }
+    found.sort();
+    found
+}
+
+/// SHA-256 of every artifact table and ref of a store, by relative path: what
+/// two stores holding the same results share (manifests are left out, as they
+/// record wall times).
+pub fn result_bytes(store: &Path) -> std::collections::BTreeMap<PathBuf, String> {
+    files_under(store)
+        .into_iter()
+        .filter(|path| {
+            let top = path.components().next().unwrap().as_os_str();
+            (top == "artifacts" && path.extension().is_some_and(|e| e == "parquet"))
+                || (top == "refs" && !is_hidden(path))
+        })
+        .map(|path| {
+            let bytes = fs::read(store.join(&path)).unwrap();
+            (path, ternary::pipeline::key::sha256_hex(&bytes))
+        })
+        .collect()
+}
+
+fn is_hidden(path: &Path) -> bool {
+    path.file_name()
+        .is_some_and(|name| name.to_string_lossy().starts_with('.'))
+}
+
+/// What an interrupted run may leave and `gc` must remove: staging entries in
+/// `tmp/` and temporary files of atomic writes.
+pub fn debris(store: &Path) -> Vec<PathBuf> {
+    files_under(store)
+        .into_iter()
+        .filter(|path| path.starts_with("tmp") || is_hidden(path))
+        .collect()
+}
+
+/// `true` when `strace` can trace a child here (installed, and ptrace allowed).
+pub fn strace_works() -> bool {
+    Command::new("strace")
+        .args(["-f", "-qq", "-o", "/dev/null", "true"])
+        .output()
+        .is_ok_and(|output| output.status.success())
+}
+
+/// Flips one bit of a file in its middle.
+pub fn flip_byte(path: &Path) {
+    let mut bytes = fs::read(path).unwrap();
+    let middle = bytes.len() / 2;
+    bytes[middle] ^= 0x01;
+    fs::write(path, bytes).unwrap();
+}

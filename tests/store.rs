@@ -1,0 +1,463 @@
+//! Regression tests of the store's guarantees, one per defect found by fault
+//! testing: a foreign folder is never emptied, a damaged artifact is never
+//! trusted, refs survive interruptions, counts and ids are bounded at load,
+//! and bad command-line input is refused instead of panicking or hanging.
+
+use std::fs;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+mod common;
+
+use common::{
+    BINARY, SMALL_STUDY_INSTANCES, flip_byte, result_bytes, run_counts, small_study, stderr,
+    stdout, strace_works, ternary, workspace, write_config,
+};
+
+/// A workspace with the small study, its store at `data/`, computed once.
+fn computed_study(name: &str) -> (PathBuf, PathBuf) {
+    let dir = workspace(name);
+    let config = write_config(&dir, &small_study("data"));
+    assert_eq!(run_counts(&config, &[]), (SMALL_STUDY_INSTANCES, 0));
+    (config, dir.join("data"))
+}
+
+/// The single artifact directory of `stage`.
+fn artifact_of(store: &Path, stage: &str) -> PathBuf {
+    let dirs: Vec<PathBuf> = fs::read_dir(store.join("artifacts").join(stage))
+        .unwrap()
+        .map(|entry| entry.unwrap().path())
+        .collect();
+    assert_eq!(dirs.len(), 1, "{stage}: {dirs:?}");
+    dirs[0].clone()
+}
+
+/// The line of `status` for one instance.
+fn status_of(config: &Path, instance: &str) -> String {
+    let text = stdout(&ternary(config, &["status"]));
+    text.lines()
+        .find(|line| line.starts_with(instance))
+        .unwrap_or_else(|| panic!("no {instance} in {text}"))
+        .to_string()
+}
+
+/// A change to a manifest document.
+type ManifestEdit = fn(&mut serde_json::Value);
+
+fn edit_manifest(dir: &Path, edit: impl FnOnce(&mut serde_json::Value)) {
+    let path = dir.join("manifest.json");
+    let mut manifest: serde_json::Value =
+        serde_json::from_str(&fs::read_to_string(&path).unwrap()).unwrap();
+    edit(&mut manifest);
+    fs::write(&path, serde_json::to_vec_pretty(&manifest).unwrap()).unwrap();
+}
+
+/// A user's project folder as a store path: `run` and `gc` refuse it and no
+/// file of it is touched (today's code deleted `tmp/my_project/src/main.c`
+/// and `artifacts/release/v1.0/`).
+#[test]
+fn a_foreign_folder_is_refused_and_keeps_every_file() {
+    let dir = workspace("foreign");
+    let project = dir.join("project");
+    let files = [
+        "tmp/my_project/src/main.c",
+        "artifacts/release/v1.0/notes.txt",
+        "src/lib.rs",
+    ];
+    for file in files {
+        let path = project.join(file);
+        fs::create_dir_all(path.parent().unwrap()).unwrap();
+        fs::write(&path, file).unwrap();
+    }
+    let config = write_config(&dir, &small_study("project"));
+    for command in [&["run"][..], &["gc"], &["status"], &["verify"]] {
+        let output = ternary(&config, command);
+        assert!(
+            !output.status.success(),
+            "{command:?} accepted a foreign folder"
+        );
+        assert!(
+            stderr(&output).contains("is not a ternary store"),
+            "{command:?}: {}",
+            stderr(&output)
+        );
+    }
+    for file in files {
+        assert_eq!(fs::read_to_string(project.join(file)).unwrap(), file);
+    }
+    assert!(!project.join("ternary-store.json").exists());
+}
+
+/// An empty or missing folder becomes a store with its marker.
+#[test]
+fn an_empty_or_missing_folder_becomes_a_marked_store() {
+    let dir = workspace("marker");
+    fs::create_dir_all(dir.join("empty")).unwrap();
+    for store in ["empty", "missing/deeper"] {
+        let config = write_config(&dir, &small_study(store));
+        assert_eq!(run_counts(&config, &[]), (SMALL_STUDY_INSTANCES, 0));
+        let marker = fs::read_to_string(dir.join(store).join("ternary-store.json")).unwrap();
+        assert!(marker.contains("\"ternary-store\""), "{marker}");
+    }
+}
+
+/// Entries ternary did not create in `tmp/` and `artifacts/` are reported and
+/// kept by `run`, `verify` and `gc`, and do not make a run fail (today a
+/// foreign file in `tmp/` failed every later run).
+#[test]
+fn foreign_entries_inside_a_store_are_left_alone() {
+    let (config, store) = computed_study("foreign-entries");
+    let foreign = [
+        store.join("tmp/notes.txt"),
+        store.join("tmp/keep/inside.txt"),
+        store.join("artifacts/scan/my-results/table.csv"),
+    ];
+    for path in &foreign {
+        fs::create_dir_all(path.parent().unwrap()).unwrap();
+        fs::write(path, "mine").unwrap();
+    }
+    assert_eq!(run_counts(&config, &[]), (0, SMALL_STUDY_INSTANCES));
+    let verify = ternary(&config, &["verify"]);
+    assert!(verify.status.success(), "{}", stdout(&verify));
+    assert!(stdout(&verify).contains("foreign"), "{}", stdout(&verify));
+    let gc = ternary(&config, &["gc"]);
+    assert!(gc.status.success(), "{}", stderr(&gc));
+    assert!(
+        stdout(&gc).contains("removed 0 artifacts"),
+        "{}",
+        stdout(&gc)
+    );
+    for path in &foreign {
+        assert_eq!(
+            fs::read_to_string(path).unwrap(),
+            "mine",
+            "{}",
+            path.display()
+        );
+    }
+}
+
+/// One flipped byte in an input: `status` calls it damaged, a forced
+/// downstream stage refuses to read it (today it wrote different bytes under
+/// the same key), and the next run recomputes it to the original bytes while
+/// its consumers stay fresh.
+#[test]
+fn a_flipped_byte_in_an_input_is_never_used_and_is_repaired() {
+    let (config, store) = computed_study("flip-input");
+    let clean = result_bytes(&store);
+    flip_byte(&artifact_of(&store, "collisions").join("events.parquet"));
+    let line = status_of(&config, "collisions[ipp-6]");
+    assert!(
+        line.contains("damaged (key ") && line.contains("events.parquet: sha256"),
+        "{line}"
+    );
+    let forced = ternary(&config, &["run", "--only", "moments", "--force", "moments"]);
+    assert!(!forced.status.success(), "a damaged input was read");
+    assert!(
+        stderr(&forced).contains("input is not available"),
+        "{}",
+        stderr(&forced)
+    );
+    let output = ternary(&config, &["run"]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let text = stdout(&output);
+    assert!(
+        text.contains("replaced a damaged artifact: events.parquet: sha256"),
+        "{text}"
+    );
+    assert!(text.contains("run: 1 computed"), "{text}");
+    assert_eq!(result_bytes(&store), clean);
+    assert!(ternary(&config, &["verify"]).status.success());
+}
+
+/// A damaged final table (no consumer reads it) is recomputed by a plain run
+/// (today the store stayed damaged until `--force`).
+#[test]
+fn a_damaged_final_table_is_recomputed_without_force() {
+    let (config, store) = computed_study("flip-table");
+    let clean = result_bytes(&store);
+    flip_byte(&artifact_of(&store, "table").join("table.parquet"));
+    assert!(status_of(&config, "table[study]").contains("damaged"));
+    assert_eq!(run_counts(&config, &[]), (1, SMALL_STUDY_INSTANCES - 1));
+    assert_eq!(result_bytes(&store), clean);
+}
+
+/// Edited manifests are damaged artifacts for `verify`, `status` and `run`
+/// (today `files = []` verified and was called fresh).
+#[test]
+fn an_edited_manifest_is_damaged() {
+    let (config, store) = computed_study("edit-manifest");
+    let clean = result_bytes(&store);
+    let edits: [(&str, ManifestEdit); 4] = [
+        ("files = []", |m| m["files"] = serde_json::json!([])),
+        ("parameters", |m| m["params"]["window"] = 0.3.into()),
+        ("content hash", |m| {
+            m["files"][0]["content_sha256"] = "0".repeat(64).into()
+        }),
+        ("seal", |m| m["manifest_sha256"] = "1".repeat(64).into()),
+    ];
+    for (what, edit) in edits {
+        edit_manifest(&artifact_of(&store, "kernel"), edit);
+        let verify = ternary(&config, &["verify"]);
+        assert!(!verify.status.success(), "{what}: verify passed");
+        assert!(stdout(&verify).contains("DAMAGED  kernel/"), "{what}");
+        assert!(
+            status_of(&config, "kernel[").contains("damaged"),
+            "{what}: not damaged in status"
+        );
+        assert_eq!(
+            run_counts(&config, &[]),
+            (1, SMALL_STUDY_INSTANCES - 1),
+            "{what}"
+        );
+        assert_eq!(result_bytes(&store), clean, "{what}");
+    }
+    // Hand-written manifests without a seal are still checked against their
+    // key, listing and hashes: a params edit shows.
+    edit_manifest(&artifact_of(&store, "fit"), |m| {
+        m.as_object_mut().unwrap().remove("manifest_sha256");
+        m["params"]["range_min"] = 1e-3.into();
+    });
+    let line = status_of(&config, "fit[");
+    assert!(line.contains("do not give its key"), "{line}");
+}
+
+/// A run killed between committing an artifact and writing its ref loses the
+/// ref: the next run rewrites it, `status` still names a changed parameter
+/// (from the latest manifest) and the orphan temporary ref is removed.
+#[test]
+fn a_lost_ref_is_rewritten_and_status_still_explains() {
+    let (config, store) = computed_study("lost-ref");
+    let refs = store.join("refs/scan");
+    let reference = fs::read(refs.join("ipp-6.json")).unwrap();
+    fs::remove_file(refs.join("ipp-6.json")).unwrap();
+    fs::write(refs.join(".ipp-6.json.4242"), "{").unwrap();
+    let dir = config.parent().unwrap();
+    write_config(
+        dir,
+        &small_study("data").replace("points = 7", "points = 9"),
+    );
+    let line = status_of(&config, "scan[ipp-6]");
+    assert!(line.contains("parameter grid.points: 7 -> 9"), "{line}");
+    write_config(dir, &small_study("data"));
+    assert_eq!(run_counts(&config, &[]), (0, SMALL_STUDY_INSTANCES));
+    assert_eq!(fs::read(refs.join("ipp-6.json")).unwrap(), reference);
+    assert!(!refs.join(".ipp-6.json.4242").exists());
+}
+
+/// `verify` on a store that does not exist fails and creates nothing (today
+/// it created the store and passed).
+#[test]
+fn verify_of_a_missing_store_fails_and_creates_nothing() {
+    let dir = workspace("verify-missing");
+    let config = write_config(&dir, &small_study("data"));
+    let verify = ternary(&config, &["verify"]);
+    assert!(!verify.status.success());
+    assert!(
+        stderr(&verify).contains("no store at"),
+        "{}",
+        stderr(&verify)
+    );
+    let status = ternary(&config, &["status"]);
+    assert!(status.status.success(), "{}", stderr(&status));
+    assert!(stdout(&status).contains("missing: never computed"));
+    assert!(!dir.join("data").exists());
+}
+
+/// A store that cannot be written (the lock file cannot be opened) still runs
+/// when everything is fresh, and says what it cannot compute otherwise
+/// (today it failed at `store.lock`). The read-only filesystem is simulated by
+/// strace injecting EROFS into every call on the lock file.
+#[test]
+fn a_read_only_store_runs_when_everything_is_fresh() {
+    if !strace_works() {
+        eprintln!("skipped: strace cannot trace here");
+        return;
+    }
+    let (config, store) = computed_study("read-only");
+    let read_only = |args: &[&str]| {
+        Command::new("strace")
+            .args(["-f", "-qq", "-o", "/dev/null", "-P"])
+            .arg(store.join("store.lock"))
+            .args(["-e", "inject=openat:error=EROFS", BINARY, "--config"])
+            .arg(&config)
+            .args(args)
+            .output()
+            .unwrap()
+    };
+    let output = read_only(&["run"]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    assert!(stdout(&output).contains("run: 0 computed, 6 fresh"));
+    let dir = config.parent().unwrap();
+    write_config(
+        dir,
+        &small_study("data").replace("points = 7", "points = 9"),
+    );
+    let output = read_only(&["run"]);
+    assert!(!output.status.success());
+    assert!(
+        stderr(&output).contains("scan[ipp-6] needs computing, but the store cannot be written"),
+        "{}",
+        stderr(&output)
+    );
+}
+
+/// While another process holds the lock, a run says so (today the message
+/// could read "held by process " with no holder).
+#[test]
+fn a_waiting_run_names_the_lock_holder_plainly() {
+    let (config, store) = computed_study("lock-holder");
+    let lock = fs::OpenOptions::new()
+        .write(true)
+        .truncate(true)
+        .open(store.join("store.lock"))
+        .unwrap();
+    lock.lock().unwrap();
+    let child = Command::new(BINARY)
+        .arg("--config")
+        .arg(&config)
+        .arg("run")
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let started = Instant::now();
+    std::thread::sleep(Duration::from_millis(300));
+    lock.unlock().unwrap();
+    let output = child.wait_with_output().unwrap();
+    assert!(output.status.success());
+    assert!(started.elapsed() < Duration::from_secs(30));
+    let message = stderr(&output);
+    assert!(message.contains("(held by another process)"), "{message}");
+}
+
+/// Every count has an upper bound and every potential a short id, checked at
+/// load with the key and line (today these allocated gigabytes, ran on, or
+/// failed with "File name too long" after committing an artifact).
+#[test]
+fn counts_ranges_and_ids_are_bounded_at_load() {
+    let dir = workspace("bounds");
+    let study = small_study("data");
+    let cases: [(&str, &str, &str); 10] = [
+        ("points = 7", "points = 4000000000", "scan.points"),
+        (
+            "randomizations = 2",
+            "randomizations = 1000000000",
+            "collisions.randomizations",
+        ),
+        ("points = 64", "points = 4294967295", "collisions.points"),
+        (
+            "pilot_points = 0",
+            "pilot_points = 5",
+            "collisions.pilot_points",
+        ),
+        (
+            "inverse_power = [6]",
+            "inverse_power = [1e300]",
+            "potentials.inverse_power[0]",
+        ),
+        (
+            "inverse_power = [6]",
+            "inverse_power = [6.12345678901234567890123]\nlennard_jones = [1e-9]",
+            "potentials.lennard_jones[0]",
+        ),
+        ("offset_max = 3.0", "offset_max = inf", "scan.offset_max"),
+        (
+            "[sweep]",
+            "[[gas]]\nname = \"dense\"\npotential = \"ipp-6\"\nl0_um = 1.0\neps_ev = 1.0\nkt_ev = 0.1\nmass_electron = 1.0\nring_particles = 100000\nring_radius_um = 1.0\n\n[sweep]",
+            "gas[0].ring_radius_um",
+        ),
+        (
+            "pilot_points = 0",
+            "pilot_points = 0\n\n[collisions.points_per_potential]\n\"ipp-6\" = 1",
+            "collisions.points_per_potential.ipp-6",
+        ),
+        (
+            "enabled = false",
+            "enabled = false\npoints = 100000",
+            "sweep.points",
+        ),
+    ];
+    for (from, to, key) in cases {
+        let text = study.replace(from, to);
+        assert_ne!(text, study, "{from}");
+        let config = write_config(&dir, &text);
+        let started = Instant::now();
+        let output = ternary(&config, &["dag"]);
+        assert!(!output.status.success(), "{key}: accepted");
+        assert!(started.elapsed() < Duration::from_secs(5), "{key}: slow");
+        let message = stderr(&output);
+        assert!(message.contains(&format!("`{key}`")), "{key}: {message}");
+        let first = text[..text.find(to).unwrap()].matches('\n').count() + 1;
+        let last = first + to.matches('\n').count();
+        let line: usize = message
+            .split("pipeline.toml:")
+            .nth(1)
+            .and_then(|rest| rest.split(':').next())
+            .and_then(|number| number.parse().ok())
+            .unwrap_or_else(|| panic!("{key}: no line in {message}"));
+        assert!(
+            (first..=last).contains(&line),
+            "{key}: line {line}: {message}"
+        );
+        assert!(message.len() < 400, "{key}: {message}");
+    }
+}
+
+/// TOML syntax errors and non-UTF-8 files are reported with their line
+/// (today: an empty key and no line).
+#[test]
+fn syntax_and_encoding_errors_name_their_line() {
+    let dir = workspace("syntax");
+    let config = dir.join("pipeline.toml");
+    fs::write(&config, "[potentials]\ninverse_power = [6\n[scan]\n").unwrap();
+    let message = stderr(&ternary(&config, &["dag"]));
+    assert!(
+        message.contains("pipeline.toml:3: TOML syntax:"),
+        "{message}"
+    );
+    assert!(!message.contains("``"), "{message}");
+    fs::write(&config, b"[potentials]\n# caf\xe9\ninverse_power = [6]\n").unwrap();
+    let message = stderr(&ternary(&config, &["dag"]));
+    assert!(
+        message.contains("pipeline.toml:2: the file is not UTF-8 text"),
+        "{message}"
+    );
+}
+
+/// Bench arguments are validated: each bad value exits with an error naming
+/// it, quickly, without a panic (today: index out of bounds, CrowdedRing,
+/// Breakdown, hangs, a 48 TB allocation, NaN tables with exit 0).
+#[test]
+fn bench_arguments_are_validated() {
+    let cases: [(&[&str], &str); 11] = [
+        (&["md", "--particles", "0"], "--particles"),
+        (&["md", "--radius-um", "0"], "--radius-um"),
+        (&["md", "--kt-ev", "0"], "--kt-ev"),
+        (&["md", "--kt-ev", "nan"], "--kt-ev"),
+        (&["md", "--radius-um=-100"], "--radius-um"),
+        (&["md", "--final-time-ns", "1e30"], "--final-time-ns"),
+        (
+            &["md", "--particles", "100000", "--radius-um", "1"],
+            "--radius-um",
+        ),
+        (&["integrators", "--scenes", "1", "--n=-1"], "--n"),
+        (&["integrators", "--scenes", "1000000000000"], "--scenes"),
+        (&["integrators", "--scenes", "0"], "--scenes"),
+        (&["integrators", "--n", "nan"], "--n"),
+    ];
+    for (args, option) in cases {
+        let started = Instant::now();
+        let output = Command::new(BINARY)
+            .arg("bench")
+            .args(args)
+            .output()
+            .unwrap();
+        let message = stderr(&output);
+        assert!(!output.status.success(), "{args:?} succeeded");
+        assert!(!message.contains("panicked"), "{args:?}: {message}");
+        assert!(message.contains(option), "{args:?}: {message}");
+        assert!(started.elapsed() < Duration::from_secs(5), "{args:?}: slow");
+    }
+}
