@@ -401,6 +401,7 @@ fn compute(
     let id = stage.id();
     let key = &entry.key;
     let started = Instant::now();
+    let mut staging = store.begin(&id.stage, key)?;
     let loaded = load_inputs(store, stage, resolved)?;
     let progress = progress_for(stage, options.verbosity);
     let tables = stage
@@ -439,7 +440,6 @@ fn compute(
         .map(ToString::to_string)
         .zip(values)
         .collect();
-    let mut staging = store.begin(&id.stage, key)?;
     for table in &tables {
         let bytes = table.to_parquet(&provenance).map_err(stage_failure(&id))?;
         let content = table.content_sha256().map_err(stage_failure(&id))?;

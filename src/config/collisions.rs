@@ -1,0 +1,220 @@
+//! `[collisions]`: how kernel scenes are sampled (numerics.md "Sampling scenes").
+
+use std::collections::BTreeMap;
+
+use serde::{Deserialize, Serialize};
+
+use super::check::{Invalid, check, potential_named};
+use crate::physics::potential::Potential;
+use crate::physics::sampling::{LaunchProposal, OffsetProposal, SamplingPlan};
+use crate::physics::scene::EngineSettings;
+
+/// `[collisions]`: how kernel scenes are sampled (numerics.md "Sampling scenes").
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct CollisionsConfig {
+    /// Seed of every randomization.
+    pub seed: u64,
+    /// Independent randomizations (replicates); standard errors come from their spread.
+    pub randomizations: u32,
+    /// Scenes per randomization (both strata together); each stratum's share is
+    /// rounded to the nearest power of two.
+    pub points: u32,
+    /// Fraction of the scenes drawn in the same-side stratum when no pilot runs.
+    pub same_side_fraction: f64,
+    /// Pilot scenes per stratum that set the strata allocation (Neyman); 0 disables.
+    pub pilot_points: u32,
+    /// Scrambled Sobol' points (default) or plain Monte Carlo points.
+    pub quasi_random: bool,
+    /// `u'` the launch-speed proposal is tuned for.
+    pub launch_shift: f64,
+    /// Side components of the launch proposal at `launch_shift +- launch_spread` (0: none).
+    pub launch_spread: f64,
+    /// Mixture proposal of the arrival offset (`[collisions.proposal]`).
+    pub proposal: OffsetProposal,
+    /// Per-potential replacements of `points`, keyed by potential id
+    /// (`[collisions.points_per_potential]`, e.g. `"lj-0.1" = 8192`).
+    pub points_per_potential: BTreeMap<String, u32>,
+}
+
+impl Default for CollisionsConfig {
+    fn default() -> Self {
+        CollisionsConfig {
+            seed: 1,
+            randomizations: 16,
+            points: 4096,
+            same_side_fraction: 0.15,
+            pilot_points: 1024,
+            quasi_random: true,
+            launch_shift: 0.0,
+            launch_spread: 0.0,
+            proposal: OffsetProposal::default(),
+            points_per_potential: BTreeMap::new(),
+        }
+    }
+}
+
+/// Resolved parameters of a `collisions` instance.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct CollisionsParams {
+    /// The potential.
+    pub potential: Potential,
+    /// Engine settings.
+    pub engine: EngineSettings,
+    /// What to draw (strata split by `same_side_fraction` unless a pilot decides).
+    pub sampling: SamplingPlan,
+    /// Scenes per randomization, both strata.
+    pub points: u32,
+    /// Pilot scenes per stratum for the Neyman allocation (0: keep the fraction).
+    pub pilot_points: u32,
+    /// Engine of the pilot: the study's, also for re-integrations at other
+    /// tolerances, so that they get the same split and the same points.
+    pub pilot_engine: EngineSettings,
+}
+
+/// Largest number of randomizations (replicates) of a collisions instance.
+pub const MAX_RANDOMIZATIONS: u32 = 1024;
+
+/// Largest pilot scenes per stratum.
+pub const MAX_PILOT_POINTS: u32 = 1 << 20;
+
+/// Largest scenes of one collisions instance (randomizations x points): each
+/// event takes ~120 bytes in memory before it is encoded, so 2^25 events take
+/// ~4 GB (the publication study draws 2^19).
+pub const MAX_SCENES: u64 = 1 << 25;
+
+/// Checks the scenes per randomization `points` (under `key`) and the
+/// instance's total against [`MAX_SCENES`].
+fn check_scenes(sampling: &CollisionsConfig, points: u32, key: &str) -> Result<(), Invalid> {
+    check(points >= 2, key, "must be at least 2")?;
+    let total = u64::from(sampling.randomizations) * u64::from(points);
+    check(
+        total <= MAX_SCENES,
+        key,
+        format!(
+            "{points} scenes x {} randomizations = {total} exceeds {MAX_SCENES} (~4 GB of events in memory): use fewer points",
+            sampling.randomizations
+        ),
+    )
+}
+
+/// Largest `|u' - launch_shift|` that reweighting covers: beyond it the launch
+/// speeds that matter lie past the largest speed the point set can draw (6.8
+/// v_th), biasing the kernel by > 0.5%, and the weights' variance explodes.
+pub(super) const REWEIGHTING_REACH: f64 = 3.0;
+
+/// `true` when `u'` lies within reach of a component of the launch proposal.
+pub(super) fn within_reach(launch: &LaunchProposal, u_prime: f64) -> bool {
+    (u_prime - launch.shift).abs() <= REWEIGHTING_REACH + launch.spread
+}
+
+impl CollisionsConfig {
+    /// Checks the sampling settings and the per-potential point counts.
+    pub(super) fn validate(&self, potentials: &[Potential]) -> Result<(), Invalid> {
+        let sampling = self;
+        check(
+            (2..=MAX_RANDOMIZATIONS).contains(&sampling.randomizations),
+            "collisions.randomizations",
+            format!(
+                "{} is outside [2, {MAX_RANDOMIZATIONS}]: at least 2 are needed for a standard error",
+                sampling.randomizations
+            ),
+        )?;
+        check_scenes(sampling, sampling.points, "collisions.points")?;
+        check(
+            sampling.pilot_points == 0 || (16..=MAX_PILOT_POINTS).contains(&sampling.pilot_points),
+            "collisions.pilot_points",
+            format!(
+                "{} must be 0 (no pilot) or in [16, {MAX_PILOT_POINTS}]: fewer pilot scenes cannot estimate a stratum's spread",
+                sampling.pilot_points
+            ),
+        )?;
+        check(
+            sampling.same_side_fraction > 0.0 && sampling.same_side_fraction < 1.0,
+            "collisions.same_side_fraction",
+            format!(
+                "{} must lie in (0, 1): both strata need scenes",
+                sampling.same_side_fraction
+            ),
+        )?;
+        check(
+            sampling.launch_shift.is_finite() && sampling.launch_shift.abs() <= 3.0,
+            "collisions.launch_shift",
+            format!("{} is outside [-3, 3]", sampling.launch_shift),
+        )?;
+        check(
+            sampling.launch_spread.is_finite() && (0.0..=3.0).contains(&sampling.launch_spread),
+            "collisions.launch_spread",
+            format!("{} is outside [0, 3]", sampling.launch_spread),
+        )?;
+        let proposal = &sampling.proposal;
+        for (key, value) in [
+            ("core_weight", proposal.core_weight),
+            ("tail_weight", proposal.tail_weight),
+            ("uniform_weight", proposal.uniform_weight),
+        ] {
+            check(
+                value.is_finite() && value >= 0.0,
+                format!("collisions.proposal.{key}"),
+                format!("{value} must be a finite weight >= 0"),
+            )?;
+        }
+        check(
+            proposal.tail_weight > 0.0,
+            "collisions.proposal.tail_weight",
+            "must be > 0: only the Cauchy tail covers every offset, so no scene is left out",
+        )?;
+        for (key, value) in [
+            ("core_width", proposal.core_width),
+            ("tail_width", proposal.tail_width),
+            ("uniform_range", proposal.uniform_range),
+        ] {
+            check(
+                value.is_finite() && value > 0.0,
+                format!("collisions.proposal.{key}"),
+                format!("{value} must be a finite width > 0 (in collision times)"),
+            )?;
+        }
+        for (id, &points) in &self.points_per_potential {
+            let key = format!("collisions.points_per_potential.{id}");
+            potential_named(id, potentials, key.clone())?;
+            check_scenes(self, points, &key)?;
+        }
+        Ok(())
+    }
+
+    /// The launch-speed proposal of the kernel's scenes.
+    pub fn launch(&self) -> LaunchProposal {
+        LaunchProposal {
+            shift: self.launch_shift,
+            spread: self.launch_spread,
+        }
+    }
+
+    /// Resolved parameters of the collision scenes of `potential`.
+    pub fn params(&self, potential: Potential, engine: EngineSettings) -> CollisionsParams {
+        let mut plan = SamplingPlan {
+            seed: self.seed,
+            randomizations: self.randomizations,
+            opposite_points: 0,
+            same_side_points: 0,
+            proposal: self.proposal,
+            quasi_random: self.quasi_random,
+            launch: self.launch(),
+        };
+        let points = self
+            .points_per_potential
+            .get(&potential.id())
+            .copied()
+            .unwrap_or(self.points);
+        plan.allocate(points, self.same_side_fraction);
+        CollisionsParams {
+            potential,
+            engine,
+            sampling: plan,
+            points,
+            pilot_points: self.pilot_points,
+            pilot_engine: engine,
+        }
+    }
+}

@@ -1,0 +1,188 @@
+//! `[kernel]`: the kernel's targets `(u', density)`, bins and shape fit.
+
+use serde::{Deserialize, Serialize};
+
+use super::check::{Invalid, MAX_LIST, check};
+use super::collisions::{REWEIGHTING_REACH, within_reach};
+use crate::physics::potential::Potential;
+use crate::physics::sampling::LaunchProposal;
+
+pub use crate::kernel::DEFAULT_KICK_FLOOR;
+
+/// `[kernel]`.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct KernelConfig {
+    /// Velocities `u'` of the special particle (units of `v_th`).
+    pub u_prime: Vec<f64>,
+    /// Densities `rho * l`; 0 is the dilute limit.
+    pub density: Vec<f64>,
+    /// Total width of the velocity window around `u'`.
+    pub window: f64,
+    /// Histogram bin width.
+    pub bin_width: f64,
+    /// Observation region length `L` (in `l`), for the finite-density weight.
+    pub launch_length: f64,
+    /// Velocity changes up to this size (`v_th`) count as zero (engine error floor).
+    pub kick_floor: f64,
+    /// Range of `|u - u'|` of the shape fit, `[min, max]`.
+    pub fit_range: [f64; 2],
+}
+
+impl Default for KernelConfig {
+    fn default() -> Self {
+        KernelConfig {
+            u_prime: vec![0.0],
+            density: vec![0.0],
+            window: 0.2,
+            bin_width: 0.1 / 2000.0,
+            launch_length: 90.0,
+            kick_floor: DEFAULT_KICK_FLOOR,
+            fit_range: [2e-4, 0.05],
+        }
+    }
+}
+
+/// Resolved parameters of a `fit` instance.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct FitParams {
+    /// The kernel it fits.
+    pub kernel: KernelParams,
+    /// Smallest `|u - u'|` fitted.
+    pub range_min: f64,
+    /// Largest `|u - u'|` fitted.
+    pub range_max: f64,
+}
+
+/// Resolved parameters of a `kernel` or `moments` instance.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct KernelParams {
+    /// The potential (identifies the input).
+    pub potential: Potential,
+    /// `u'`.
+    pub u_prime: f64,
+    /// `rho * l`.
+    pub density: f64,
+    /// Window width.
+    pub window: f64,
+    /// Bin width.
+    pub bin_width: f64,
+    /// `L`.
+    pub launch_length: f64,
+    /// Velocity changes up to this size count as zero.
+    pub kick_floor: f64,
+}
+
+/// Largest histogram bins of a kernel or an early evolution.
+pub const MAX_BINS: f64 = 1e6;
+
+impl KernelConfig {
+    /// Checks the targets (within reach of the launch proposal), the bins and the fit range.
+    pub(super) fn validate(&self, launch: &LaunchProposal) -> Result<(), Invalid> {
+        let kernel = self;
+        check(
+            !kernel.u_prime.is_empty() && kernel.u_prime.len() <= MAX_LIST,
+            "kernel.u_prime",
+            format!(
+                "lists {} velocities: give 1 to {MAX_LIST}",
+                kernel.u_prime.len()
+            ),
+        )?;
+        for (k, &u) in kernel.u_prime.iter().enumerate() {
+            check(
+                u.is_finite() && within_reach(launch, u),
+                format!("kernel.u_prime[{k}]"),
+                format!(
+                    "{u} is beyond the reach of the launch proposal (launch_shift {} +- (launch_spread {} + {REWEIGHTING_REACH})): widen launch_spread",
+                    launch.shift, launch.spread
+                ),
+            )?;
+        }
+        check(
+            !kernel.density.is_empty() && kernel.density.len() <= MAX_LIST,
+            "kernel.density",
+            format!(
+                "lists {} densities: give 1 to {MAX_LIST}",
+                kernel.density.len()
+            ),
+        )?;
+        for (k, &density) in kernel.density.iter().enumerate() {
+            check(
+                density.is_finite() && (0.0..=0.1).contains(&density),
+                format!("kernel.density[{k}]"),
+                format!("rho*l = {density} is outside [0, 0.1] (the model is for dilute gases)"),
+            )?;
+        }
+        check(
+            kernel.bin_width.is_finite() && kernel.bin_width > 0.0,
+            "kernel.bin_width",
+            format!("{} must be > 0", kernel.bin_width),
+        )?;
+        check(
+            kernel.window.is_finite() && kernel.window >= 3.0 * kernel.bin_width,
+            "kernel.window",
+            format!(
+                "{} must hold at least 3 bins of kernel.bin_width",
+                kernel.window
+            ),
+        )?;
+        check(
+            kernel.window / kernel.bin_width <= MAX_BINS,
+            "kernel.bin_width",
+            "more than a million bins: widen the bins or narrow the window",
+        )?;
+        check(
+            kernel.launch_length.is_finite() && kernel.launch_length > 0.0,
+            "kernel.launch_length",
+            format!("L = {} must be > 0", kernel.launch_length),
+        )?;
+        check(
+            kernel.kick_floor >= 0.0 && kernel.kick_floor < 0.5 * kernel.bin_width,
+            "kernel.kick_floor",
+            format!("{} must lie in [0, bin_width/2)", kernel.kick_floor),
+        )?;
+        let [low, high] = kernel.fit_range;
+        check(
+            low > 0.0 && low < high && high <= 0.5 * kernel.window,
+            "kernel.fit_range",
+            format!("[{low}, {high}] must satisfy 0 < min < max <= window/2"),
+        )
+    }
+
+    /// Every `(u', density)` the kernel is evaluated at, with `(0, 0)` (which
+    /// defines `a_n`) always first.
+    pub fn targets(&self) -> Vec<(f64, f64)> {
+        let mut targets = vec![(0.0, 0.0)];
+        for &u in &self.u_prime {
+            for &density in &self.density {
+                if !targets.contains(&(u, density)) {
+                    targets.push((u, density));
+                }
+            }
+        }
+        targets
+    }
+
+    /// Resolved kernel parameters of `potential` at `(u', density)`.
+    pub fn params(&self, potential: Potential, u_prime: f64, density: f64) -> KernelParams {
+        KernelParams {
+            potential,
+            u_prime,
+            density,
+            window: self.window,
+            bin_width: self.bin_width,
+            launch_length: self.launch_length,
+            kick_floor: self.kick_floor,
+        }
+    }
+
+    /// Resolved parameters of the shape fit of a kernel.
+    pub fn fit(&self, kernel: KernelParams) -> FitParams {
+        let [range_min, range_max] = self.fit_range;
+        FitParams {
+            kernel,
+            range_min,
+            range_max,
+        }
+    }
+}

@@ -1,0 +1,814 @@
+//! The README's `pipeline.toml` key tables against the schema: every key of
+//! the schema has a row, every row names a key of the schema, and every
+//! default the README shows equals the schema's.
+
+use std::collections::{BTreeMap, BTreeSet};
+
+use serde_json::Value;
+use ternary::config::{Config, Study};
+
+/// A study that sets every optional table once (overrides, per-potential
+/// points, launch pairs, rings, gases), so that every key appears.
+const EVERY_KEY: &str = r#"
+[potentials]
+inverse_power = [6]
+
+[scan]
+offset_min = -3.0
+offset_max = 3.0
+points = 5
+
+[[scan.launch]]
+name = "a"
+u2 = 1.0
+u3 = -1.0
+
+[scan.overrides."<id>"]
+offset_min = -1.0
+offset_max = 1.0
+points = 3
+
+[collisions.points_per_potential]
+"<id>" = 64
+
+[evolve]
+gas = "g"
+times_ns = [1.0]
+
+[[md.system]]
+name = "r"
+gas = "g"
+final_time_ns = 1.0
+runs = 2
+
+[[gas]]
+name = "g"
+potential = "ipp-6"
+l0_um = 1.0
+eps_ev = 1.0
+kt_ev = 0.1
+mass_electron = 1.0
+mass_amu = 1.0
+density_per_um = 1.0
+ring_particles = 3
+ring_radius_um = 1.0
+"#;
+
+/// Only the required keys: everything else at its default.
+const DEFAULTS: &str = r#"
+[potentials]
+
+[scan]
+offset_min = -3.0
+offset_max = 3.0
+points = 5
+launch = []
+"#;
+
+/// The schema's leaf keys of a parsed (not validated) configuration, with
+/// their values; array indices are dropped (`scan.launch.name`) and the map
+/// key `<id>` stands for any potential id (removed: `collisions.points_per_potential`).
+fn leaves(text: &str) -> BTreeMap<String, Value> {
+    let config: Config = toml::from_str(text).expect("the sample parses");
+    let mut found = BTreeMap::new();
+    walk(
+        &serde_json::to_value(&config).unwrap(),
+        String::new(),
+        &mut found,
+    );
+    found
+}
+
+fn walk(value: &Value, path: String, found: &mut BTreeMap<String, Value>) {
+    let child = |name: &str| match (path.is_empty(), name) {
+        (_, "<id>") => path.clone(),
+        (true, _) => name.to_string(),
+        (false, _) => format!("{path}.{name}"),
+    };
+    match value {
+        Value::Object(map) if !map.is_empty() => {
+            for (name, item) in map {
+                walk(item, child(name), found);
+            }
+        }
+        Value::Array(items) if items.iter().any(Value::is_object) => {
+            for item in items {
+                walk(item, path.clone(), found);
+            }
+        }
+        _ => {
+            found.insert(path, value.clone());
+        }
+    }
+}
+
+/// One row of a README key table: its keys and the defaults it shows.
+struct Row {
+    keys: Vec<String>,
+    defaults: Vec<Value>,
+}
+
+/// The backticked tokens of a table cell.
+fn ticked(cell: &str) -> Vec<String> {
+    cell.split('`')
+        .skip(1)
+        .step_by(2)
+        .map(ToString::to_string)
+        .collect()
+}
+
+/// A token as a TOML value (`"data"`, `1e-12`, `[0]`, `0.5, 0.7`), if it is one.
+fn toml_value(token: &str) -> Option<Vec<Value>> {
+    let parse = |text: &str| -> Option<Value> {
+        let table: toml::Table = toml::from_str(&format!("v = {text}")).ok()?;
+        serde_json::to_value(&table["v"]).ok()
+    };
+    if token.contains(',') && !token.starts_with('[') {
+        return token.split(',').map(|part| parse(part.trim())).collect();
+    }
+    parse(token).map(|value| vec![value])
+}
+
+/// The key tables of README.md's `pipeline.toml` section.
+fn readme_rows() -> Vec<Row> {
+    let readme = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/README.md"))
+        .expect("README.md");
+    let section = readme
+        .split("\n## `pipeline.toml`")
+        .nth(1)
+        .and_then(|rest| rest.split("\n## ").next())
+        .expect("a `pipeline.toml` section");
+    let mut rows = Vec::new();
+    let mut table_prefix = String::new();
+    for line in section.lines() {
+        let cells: Vec<&str> = line.split(" | ").collect();
+        if !line.starts_with("| ") || cells.len() < 3 || line.starts_with("|---") {
+            continue;
+        }
+        if cells[0] == "| key" {
+            // The `[[gas]]` table names its keys without a prefix.
+            table_prefix = if cells[1] == "type" {
+                "gas".into()
+            } else {
+                String::new()
+            };
+            continue;
+        }
+        rows.push(row(cells[0], cells[1], &table_prefix));
+    }
+    rows
+}
+
+/// The keys of a first cell: absolute (`sweep.points`), relative to a
+/// bracketed table (`[[scan.launch]]` `name`) or to the previous key's table
+/// (`md.system[k].name`, `.gas`), with `[k]` and `<id>` parts removed.
+fn row(key_cell: &str, type_cell: &str, table_prefix: &str) -> Row {
+    let mut prefix = table_prefix.to_string();
+    let mut keys = Vec::new();
+    for token in ticked(key_cell) {
+        let token = token.replace("[k]", "").replace(".<id>", "");
+        if let Some(table) = token.strip_prefix('[') {
+            prefix = table.trim_matches(|c| c == '[' || c == ']').to_string();
+        } else if let Some(relative) = token.strip_prefix('.') {
+            keys.push(format!("{prefix}.{relative}"));
+        } else if token.contains('.') {
+            prefix = token.rsplit_once('.').unwrap().0.to_string();
+            keys.push(token);
+        } else if prefix.is_empty() {
+            keys.push(token);
+        } else {
+            keys.push(format!("{prefix}.{token}"));
+        }
+    }
+    let defaults = ticked(type_cell)
+        .iter()
+        .filter_map(|token| toml_value(token))
+        .flatten()
+        .collect();
+    Row { keys, defaults }
+}
+
+/// Equal as documented values: numbers to 1e-12 relative, lists elementwise.
+fn same(readme: &Value, schema: &Value) -> bool {
+    match (readme, schema) {
+        (Value::Number(a), Value::Number(b)) => {
+            let (a, b) = (a.as_f64().unwrap(), b.as_f64().unwrap());
+            (a - b).abs() <= 1e-12 * a.abs().max(b.abs())
+        }
+        (Value::Array(a), Value::Array(b)) => {
+            a.len() == b.len() && a.iter().zip(b).all(|(x, y)| same(x, y))
+        }
+        (a, b) => a == b,
+    }
+}
+
+#[test]
+fn every_key_has_a_readme_row_and_every_row_a_key() {
+    let schema: BTreeSet<String> = leaves(EVERY_KEY).into_keys().collect();
+    let documented: BTreeSet<String> = readme_rows().into_iter().flat_map(|r| r.keys).collect();
+    let undocumented: Vec<&String> = schema.difference(&documented).collect();
+    let unknown: Vec<&String> = documented.difference(&schema).collect();
+    assert!(
+        undocumented.is_empty() && unknown.is_empty(),
+        "keys without a README row: {undocumented:?}; README rows naming no key: {unknown:?}"
+    );
+}
+
+#[test]
+fn readme_defaults_are_the_schema_defaults() {
+    let defaults = leaves(DEFAULTS);
+    let mut compared = 0;
+    for row in readme_rows() {
+        let pairs: Vec<(&String, &Value)> = if row.defaults.len() == row.keys.len() {
+            row.keys.iter().zip(&row.defaults).collect()
+        } else if row.keys.len() == 1 && !row.defaults.is_empty() {
+            vec![(&row.keys[0], &row.defaults[0])]
+        } else {
+            Vec::new()
+        };
+        for (key, shown) in pairs {
+            let Some(default) = defaults.get(key) else {
+                continue;
+            };
+            assert!(
+                same(shown, default),
+                "README shows `{key}` = {shown} but the default is {default}"
+            );
+            compared += 1;
+        }
+    }
+    assert!(compared >= 60, "only {compared} defaults compared");
+}
+
+/// A valid study with every section enabled: the base of the range tests.
+const STUDY: &str = r#"
+[store]
+path = "data"
+
+[potentials]
+inverse_power = [2, 6]
+lennard_jones = [0.1]
+
+[engine]
+method = "dprkn12"
+tolerance = 1e-12
+max_steps = 100000
+
+[scan]
+launch_length = 90.0
+offset_min = -3.0
+offset_max = 3.0
+points = 9
+
+[[scan.launch]]
+name = "symmetric"
+u2 = 1.0
+u3 = -1.0
+
+[scan.overrides.ipp-6]
+points = 11
+
+[collisions]
+randomizations = 4
+points = 256
+same_side_fraction = 0.15
+pilot_points = 64
+launch_shift = 0.0
+launch_spread = 0.0
+
+[collisions.proposal]
+core_weight = 0.5
+core_width = 0.7
+tail_weight = 0.45
+tail_width = 1.0
+uniform_weight = 0.05
+uniform_range = 40.0
+
+[collisions.points_per_potential]
+"lj-0.1" = 512
+
+[kernel]
+u_prime = [0.0, 0.5]
+density = [0.0, 1e-3]
+window = 0.2
+bin_width = 5e-5
+launch_length = 90.0
+kick_floor = 1e-10
+fit_range = [2e-4, 0.05]
+
+[sweep]
+u_prime_min = -3.0
+u_prime_max = 3.0
+points = 5
+balance_separations = [0.02, 0.05]
+balance_bin_width = 0.005
+launch_spread = 2.0
+
+[convergence]
+enabled = true
+inverse_power = 6
+densities = [1e-3]
+offset_bounds = [3.0, 30.0]
+tolerances = [1e-10]
+bin_widths = [2e-4, 1e-3]
+
+[evolve]
+enabled = true
+potential = "ipp-6"
+u_prime = 0.0
+times = [0.1, 1.0]
+early_times = [1e-3]
+early_bin_width = 1.05e-3
+early_range = 0.3
+velocity_range = 2.0
+grid_step = 0.1
+gas = "ring"
+times_ns = [100.0]
+
+[md]
+enabled = true
+runs = 4
+neighbours = 3
+tolerance = 1e-10
+window = 0.2
+bin_width = 0.01
+samples = 3
+sample_spread = 0.02
+start_band = 0.1
+
+[[md.system]]
+name = "ring"
+gas = "ring"
+u_prime = 0.0
+final_time_ns = 100.0
+runs = 8
+
+[[gas]]
+name = "ring"
+potential = "ipp-6"
+l0_um = 1.0
+eps_ev = 1.0
+kt_ev = 0.1
+mass_electron = 1.0
+ring_particles = 21
+ring_radius_um = 1600.0
+
+[[gas]]
+name = "lj"
+potential = "lj-0.1"
+l0_um = 1.0
+eps_ev = 1.0
+kt_ev = 0.1
+mass_amu = 4.0
+density_per_um = 5e-4
+"#;
+
+/// Each `(from, to, key)`: replacing `from` by `to` in [`STUDY`] is rejected
+/// with an error naming `key` and a line inside `to`.
+fn rejects(cases: &[(&str, &str, &str)]) {
+    let path = std::path::Path::new("pipeline.toml");
+    Study::parse(path, STUDY).expect("the base study is valid");
+    for &(from, to, key) in cases {
+        assert_eq!(STUDY.matches(from).count(), 1, "`{from}` is not unique");
+        let text = STUDY.replace(from, to);
+        let error = Study::parse(path, &text).expect_err(&format!("{to}: accepted"));
+        assert_eq!(error.key, key, "{to}: {error}");
+        let first = STUDY[..STUDY.find(from).unwrap()].matches('\n').count() + 1;
+        let last = first + to.matches('\n').count();
+        let line = error
+            .line
+            .unwrap_or_else(|| panic!("{to}: no line in {error}"));
+        assert!(
+            (first..=last).contains(&line),
+            "{to}: line {line} in {error}"
+        );
+    }
+}
+
+#[test]
+fn store_section_rejects_bad_values() {
+    rejects(&[("path = \"data\"", "path = 5", "store.path")]);
+}
+
+#[test]
+fn potentials_section_rejects_bad_values() {
+    rejects(&[
+        (
+            "inverse_power = [2, 6]",
+            "inverse_power = [2, 1]",
+            "potentials.inverse_power[1]",
+        ),
+        (
+            "inverse_power = [2, 6]",
+            "inverse_power = [2, 101]",
+            "potentials.inverse_power[1]",
+        ),
+        (
+            "inverse_power = [2, 6]",
+            "inverse_power = [2, 2]",
+            "potentials.inverse_power[1]",
+        ),
+        (
+            "lennard_jones = [0.1]",
+            "lennard_jones = [0.0]",
+            "potentials.lennard_jones[0]",
+        ),
+        (
+            "lennard_jones = [0.1]",
+            "lennard_jones = [1e4]",
+            "potentials.lennard_jones[0]",
+        ),
+        (
+            "inverse_power = [2, 6]",
+            "inverse_power = [2, 6]\nbogus = 1",
+            "potentials.bogus",
+        ),
+    ]);
+}
+
+#[test]
+fn engine_section_rejects_bad_values() {
+    rejects(&[
+        ("method = \"dprkn12\"", "method = \"rk4\"", "engine.method"),
+        (
+            "tolerance = 1e-12\nmax",
+            "tolerance = 0.01\nmax",
+            "engine.tolerance",
+        ),
+        (
+            "tolerance = 1e-12\nmax",
+            "tolerance = 0.0\nmax",
+            "engine.tolerance",
+        ),
+        ("max_steps = 100000", "max_steps = 0", "engine.max_steps"),
+    ]);
+}
+
+#[test]
+fn scan_section_rejects_bad_values() {
+    rejects(&[
+        (
+            "launch_length = 90.0\noffset",
+            "launch_length = 0.0\noffset",
+            "scan.launch_length",
+        ),
+        ("offset_min = -3.0", "offset_min = nan", "scan.offset_min"),
+        ("offset_max = 3.0", "offset_max = inf", "scan.offset_max"),
+        ("offset_max = 3.0", "offset_max = -4.0", "scan.offset_max"),
+        ("points = 9", "points = 2", "scan.points"),
+        ("points = 9", "points = 1048577", "scan.points"),
+        ("u2 = 1.0", "u2 = 0.0", "scan.launch[0].u2"),
+        ("u3 = -1.0", "u3 = 1.0", "scan.launch[0].u3"),
+        ("name = \"symmetric\"", "name = \"\"", "scan.launch[0].name"),
+        (
+            "u3 = -1.0\n",
+            "u3 = -1.0\n\n[[scan.launch]]\nname = \"symmetric\"\nu2 = 1.0\nu3 = -2.0\n",
+            "scan.launch[1].name",
+        ),
+        (
+            "[scan.overrides.ipp-6]",
+            "[scan.overrides.ipp-7]",
+            "scan.overrides.ipp-7",
+        ),
+        ("points = 11", "points = 2", "scan.overrides.ipp-6.points"),
+    ]);
+}
+
+#[test]
+fn collisions_section_rejects_bad_values() {
+    rejects(&[
+        (
+            "randomizations = 4",
+            "randomizations = 1",
+            "collisions.randomizations",
+        ),
+        (
+            "randomizations = 4",
+            "randomizations = 1025",
+            "collisions.randomizations",
+        ),
+        ("points = 256", "points = 1", "collisions.points"),
+        ("points = 256", "points = 16777216", "collisions.points"),
+        (
+            "same_side_fraction = 0.15",
+            "same_side_fraction = 1.0",
+            "collisions.same_side_fraction",
+        ),
+        (
+            "pilot_points = 64",
+            "pilot_points = 5",
+            "collisions.pilot_points",
+        ),
+        (
+            "pilot_points = 64",
+            "pilot_points = 1048577",
+            "collisions.pilot_points",
+        ),
+        (
+            "launch_shift = 0.0",
+            "launch_shift = 4.0",
+            "collisions.launch_shift",
+        ),
+        (
+            "launch_spread = 0.0\n",
+            "launch_spread = -1.0\n",
+            "collisions.launch_spread",
+        ),
+        (
+            "core_weight = 0.5",
+            "core_weight = -0.5",
+            "collisions.proposal.core_weight",
+        ),
+        (
+            "tail_weight = 0.45",
+            "tail_weight = 0.0",
+            "collisions.proposal.tail_weight",
+        ),
+        (
+            "core_width = 0.7",
+            "core_width = 0.0",
+            "collisions.proposal.core_width",
+        ),
+        (
+            "uniform_range = 40.0",
+            "uniform_range = inf",
+            "collisions.proposal.uniform_range",
+        ),
+        (
+            "\"lj-0.1\" = 512",
+            "\"lj-0.1\" = 1",
+            "collisions.points_per_potential.lj-0.1",
+        ),
+        (
+            "\"lj-0.1\" = 512",
+            "\"lj-0.2\" = 512",
+            "collisions.points_per_potential.lj-0.2",
+        ),
+    ]);
+}
+
+#[test]
+fn kernel_section_rejects_bad_values() {
+    rejects(&[
+        ("u_prime = [0.0, 0.5]", "u_prime = []", "kernel.u_prime"),
+        (
+            "u_prime = [0.0, 0.5]",
+            "u_prime = [0.0, 3.5]",
+            "kernel.u_prime[1]",
+        ),
+        (
+            "density = [0.0, 1e-3]",
+            "density = [0.0, 0.2]",
+            "kernel.density[1]",
+        ),
+        ("bin_width = 5e-5", "bin_width = 0.0", "kernel.bin_width"),
+        ("bin_width = 5e-5", "bin_width = 1e-8", "kernel.bin_width"),
+        (
+            "window = 0.2\nbin_width = 5e-5",
+            "window = 1e-4\nbin_width = 5e-5",
+            "kernel.window",
+        ),
+        (
+            "launch_length = 90.0\nkick",
+            "launch_length = 0.0\nkick",
+            "kernel.launch_length",
+        ),
+        (
+            "kick_floor = 1e-10",
+            "kick_floor = 1e-4",
+            "kernel.kick_floor",
+        ),
+        (
+            "fit_range = [2e-4, 0.05]",
+            "fit_range = [0.05, 2e-4]",
+            "kernel.fit_range",
+        ),
+    ]);
+}
+
+#[test]
+fn sweep_section_rejects_bad_values() {
+    rejects(&[
+        (
+            "u_prime_max = 3.0",
+            "u_prime_max = -4.0",
+            "sweep.u_prime_max",
+        ),
+        (
+            "u_prime_min = -3.0",
+            "u_prime_min = -6.0",
+            "sweep.u_prime_min",
+        ),
+        ("points = 5\nbalance", "points = 2\nbalance", "sweep.points"),
+        (
+            "points = 5\nbalance",
+            "points = 1002\nbalance",
+            "sweep.points",
+        ),
+        (
+            "launch_spread = 2.0",
+            "launch_spread = 4.0",
+            "sweep.launch_spread",
+        ),
+        (
+            "balance_bin_width = 0.005",
+            "balance_bin_width = 0.0",
+            "sweep.balance_bin_width",
+        ),
+        (
+            "balance_separations = [0.02, 0.05]",
+            "balance_separations = []",
+            "sweep.balance_separations",
+        ),
+        (
+            "balance_separations = [0.02, 0.05]",
+            "balance_separations = [0.02, 0.6]",
+            "sweep.balance_separations[1]",
+        ),
+    ]);
+}
+
+#[test]
+fn convergence_section_rejects_bad_values() {
+    rejects(&[
+        (
+            "inverse_power = 6",
+            "inverse_power = 8",
+            "convergence.inverse_power",
+        ),
+        (
+            "densities = [1e-3]",
+            "densities = [0.2]",
+            "convergence.densities[0]",
+        ),
+        (
+            "offset_bounds = [3.0, 30.0]",
+            "offset_bounds = [0.0, 30.0]",
+            "convergence.offset_bounds[0]",
+        ),
+        (
+            "tolerances = [1e-10]",
+            "tolerances = [1e-2]",
+            "convergence.tolerances[0]",
+        ),
+        (
+            "tolerances = [1e-10]",
+            "tolerances = [1e-10, 1e-10]",
+            "convergence.tolerances[1]",
+        ),
+        (
+            "bin_widths = [2e-4, 1e-3]",
+            "bin_widths = [2e-4, 0.2]",
+            "convergence.bin_widths[1]",
+        ),
+    ]);
+}
+
+#[test]
+fn evolve_section_rejects_bad_values() {
+    rejects(&[
+        (
+            "potential = \"ipp-6\"\nu_prime",
+            "potential = \"ipp-7\"\nu_prime",
+            "evolve.potential",
+        ),
+        ("grid_step = 0.1", "grid_step = 0.0", "evolve.grid_step"),
+        ("grid_step = 0.1", "grid_step = 1e-3", "evolve.grid_step"),
+        (
+            "velocity_range = 2.0",
+            "velocity_range = 0.1",
+            "evolve.velocity_range",
+        ),
+        (
+            "velocity_range = 2.0",
+            "velocity_range = 6.0",
+            "evolve.velocity_range",
+        ),
+        (
+            "u_prime = 0.0\ntimes",
+            "u_prime = 0.05\ntimes",
+            "evolve.u_prime",
+        ),
+        (
+            "early_bin_width = 1.05e-3",
+            "early_bin_width = 1e-3",
+            "evolve.early_bin_width",
+        ),
+        (
+            "early_bin_width = 1.05e-3",
+            "early_bin_width = 1.5e-7",
+            "evolve.early_bin_width",
+        ),
+        (
+            "times = [0.1, 1.0]",
+            "times = [0.1, -1.0]",
+            "evolve.times[1]",
+        ),
+        (
+            "early_times = [1e-3]",
+            "early_times = [0.0]",
+            "evolve.early_times[0]",
+        ),
+        (
+            "gas = \"ring\"\ntimes_ns",
+            "gas = \"lj\"\ntimes_ns",
+            "evolve.gas",
+        ),
+        (
+            "times_ns = [100.0]",
+            "times_ns = [-1.0]",
+            "evolve.times_ns[0]",
+        ),
+    ]);
+}
+
+#[test]
+fn md_section_rejects_bad_values() {
+    rejects(&[
+        ("runs = 4", "runs = 1", "md.runs"),
+        ("runs = 4", "runs = 65537", "md.runs"),
+        ("neighbours = 3", "neighbours = 65", "md.neighbours"),
+        (
+            "tolerance = 1e-10\nwindow",
+            "tolerance = 1e-5\nwindow",
+            "md.tolerance",
+        ),
+        ("bin_width = 0.01", "bin_width = 0.5", "md.bin_width"),
+        ("samples = 3", "samples = 0", "md.samples"),
+        (
+            "sample_spread = 0.02",
+            "sample_spread = 0.5",
+            "md.sample_spread",
+        ),
+        ("start_band = 0.1", "start_band = 0.0", "md.start_band"),
+        (
+            "gas = \"ring\"\nu_prime",
+            "gas = \"lj\"\nu_prime",
+            "md.system[0].gas",
+        ),
+        (
+            "final_time_ns = 100.0",
+            "final_time_ns = 0.0",
+            "md.system[0].final_time_ns",
+        ),
+        (
+            "final_time_ns = 100.0",
+            "final_time_ns = 1e12",
+            "md.system[0].final_time_ns",
+        ),
+        (
+            "u_prime = 0.0\nfinal",
+            "u_prime = nan\nfinal",
+            "md.system[0].u_prime",
+        ),
+        ("runs = 8", "runs = 1", "md.system[0].runs"),
+    ]);
+}
+
+#[test]
+fn gas_section_rejects_bad_values() {
+    rejects(&[
+        ("name = \"lj\"", "name = \"\"", "gas[1].name"),
+        (
+            "potential = \"lj-0.1\"\nl0",
+            "potential = \"lj-1\"\nl0",
+            "gas[1].potential",
+        ),
+        (
+            "kt_ev = 0.1\nmass_amu",
+            "kt_ev = 0.2\nmass_amu",
+            "gas[1].kt_ev",
+        ),
+        (
+            "mass_amu = 4.0",
+            "mass_amu = 4.0\nmass_electron = 1.0",
+            "gas[1].mass_electron",
+        ),
+        (
+            "density_per_um = 5e-4",
+            "density_per_um = 0.0",
+            "gas[1].density_per_um",
+        ),
+        (
+            "density_per_um = 5e-4",
+            "density_per_um = 1e3",
+            "gas[1].density_per_um",
+        ),
+        (
+            "ring_particles = 21",
+            "ring_particles = 2",
+            "gas[0].ring_particles",
+        ),
+        (
+            "ring_radius_um = 1600.0",
+            "ring_radius_um = 0.0",
+            "gas[0].ring_radius_um",
+        ),
+        (
+            "ring_radius_um = 1600.0",
+            "ring_radius_um = 1e-3",
+            "gas[0].ring_radius_um",
+        ),
+        ("name = \"lj\"", "name = \"ring\"", "gas[1].name"),
+    ]);
+}
