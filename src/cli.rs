@@ -9,6 +9,7 @@ use clap::{Parser, Subcommand};
 
 use ternary::bench::{self, KernelBenchOptions, MdBenchOptions, WorkPrecisionOptions};
 use ternary::config::{MAX_EXPONENT, MAX_GAS_DENSITY, MAX_RING_ENCOUNTERS, Study};
+use ternary::export::{self, ExportOptions};
 use ternary::physics::units::{Mass, PhysicalGas, ring_density_per_um};
 use ternary::pipeline::executor::{self, Action, Freshness, RunOptions, Verbosity};
 use ternary::pipeline::store::Store;
@@ -47,8 +48,26 @@ enum Command {
     Status,
     /// Print the DAG of stage instances.
     Dag,
-    /// Re-hash every artifact; exit non-zero on any mismatch.
-    Verify,
+    /// Check every artifact to the bottom (or an exported bundle); exit non-zero on any problem.
+    Verify {
+        /// Check the exported bundle in this directory instead of the store.
+        #[arg(long, value_name = "DIR")]
+        bundle: Option<PathBuf>,
+    },
+    /// Write the study's current artifacts as a citable dataset bundle.
+    Export {
+        /// The bundle directory (new or empty).
+        dir: PathBuf,
+        /// Export only this stage's tables (repeatable).
+        #[arg(long, value_name = "STAGE")]
+        stage: Vec<String>,
+        /// Export only this potential's tables, plus the study-wide ones (repeatable).
+        #[arg(long, value_name = "ID")]
+        potential: Vec<String>,
+        /// Include the scene tables of the collisions stage (large).
+        #[arg(long)]
+        include_events: bool,
+    },
     /// Remove artifacts that no stage instance of the current study references.
     Gc,
     /// Show an artifact (key or key prefix) or a Parquet file: metadata and first rows.
@@ -290,15 +309,41 @@ fn dispatch(cli: Cli) -> Result<ExitCode> {
             emit(&report::dag(&stages::plan(&study)));
             Ok(ExitCode::SUCCESS)
         }
-        Command::Verify => {
-            let (study, store) = load(&cli.config, Opening::Existing)?;
-            let (text, damaged) = report::verify(&store, &stages::plan(&study))?;
+        Command::Verify { bundle } => {
+            let (text, problems) = match bundle {
+                Some(dir) => export::verify_bundle(&dir)?,
+                None => {
+                    let (study, store) = load(&cli.config, Opening::Existing)?;
+                    report::verify(&store, &stages::plan(&study))?
+                }
+            };
             emit(&text);
-            Ok(if damaged == 0 {
+            Ok(if problems == 0 {
                 ExitCode::SUCCESS
             } else {
                 ExitCode::FAILURE
             })
+        }
+        Command::Export {
+            dir,
+            stage,
+            potential,
+            include_events,
+        } => {
+            let (study, store) = load(&cli.config, Opening::Existing)?;
+            let options = ExportOptions {
+                stages: stage,
+                potentials: potential,
+                include_events,
+            };
+            emit(&export::export(
+                &study,
+                &store,
+                &stages::plan(&study),
+                &dir,
+                &options,
+            )?);
+            Ok(ExitCode::SUCCESS)
         }
         Command::Gc => {
             let (study, store) = load(&cli.config, Opening::Existing)?;

@@ -14,6 +14,7 @@
 pub mod bench;
 pub mod config;
 pub mod evolve;
+pub mod export;
 pub mod integrate;
 pub mod kernel;
 pub mod linalg;

@@ -545,6 +545,18 @@ pub fn gc(store: &Store, stages: &[Box<dyn Stage>]) -> Result<String> {
     Ok(out)
 }
 
+/// Sum of a numeric column in row order (nulls skipped), `None` for text.
+fn column_sum(column: &arrow::array::ArrayRef) -> Option<f64> {
+    let as_f64 = arrow::compute::cast(column, &arrow::datatypes::DataType::Float64).ok()?;
+    if !column.data_type().is_numeric() {
+        return None;
+    }
+    let values = as_f64
+        .as_any()
+        .downcast_ref::<arrow::array::Float64Array>()?;
+    Some(values.iter().flatten().sum())
+}
+
 /// Metadata, schema with units, and the first rows of a Parquet file.
 fn show_file(path: &Path, rows: usize) -> Result<String> {
     let mut out = String::new();
@@ -553,14 +565,15 @@ fn show_file(path: &Path, rows: usize) -> Result<String> {
     for (key, value) in metadata.iter().filter(|(k, _)| k.starts_with("ternary.")) {
         writeln!(out, "  {key}: {value}")?;
     }
-    writeln!(out, "  columns:")?;
-    for field in batch.schema().fields() {
+    writeln!(out, "  columns (sum of the numbers, in row order):")?;
+    for (field, column) in batch.schema().fields().iter().zip(batch.columns()) {
         let meta = field.metadata();
         let unit = meta.get("unit").map(String::as_str).unwrap_or("");
         let description = meta.get("description").map(String::as_str).unwrap_or("");
+        let sum = column_sum(column).map_or(String::new(), |sum| format!("{sum:e}"));
         writeln!(
             out,
-            "    {:<28} {:<8} [{unit}] {description}",
+            "    {:<28} {:<8} {sum:<24} [{unit}] {description}",
             field.name(),
             field.data_type().to_string()
         )?;

@@ -52,6 +52,16 @@ mass_amu = 1.0
 density_per_um = 1.0
 ring_particles = 3
 ring_radius_um = 1.0
+
+[publication]
+date = "2026-01-01"
+
+[[publication.authors]]
+given_names = "A"
+family_names = "B"
+name = "C"
+orcid = "0000-0000-0000-0000"
+affiliation = "D"
 "#;
 
 /// Only the required keys: everything else at its default.

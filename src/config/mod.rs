@@ -3,7 +3,7 @@
 //!
 //! One module per section (`[store]`, `[potentials]`, `[engine]`, `[scan]`,
 //! `[collisions]`, `[kernel]`, `[sweep]`, `[convergence]`, `[evolve]`,
-//! `[md]`, `[[gas]]`), each owning its schema with defaults, the check of
+//! `[md]`, `[[gas]]`, `[publication]`), each owning its schema with defaults, the check of
 //! every documented range, and the parameters of the stages it configures.
 //! Unknown keys, wrong types and out-of-range values are rejected with a
 //! [`ConfigError`] naming the key path and, where the document shows it, the
@@ -24,6 +24,7 @@ mod gas;
 mod kernel;
 mod md;
 mod potentials;
+mod publication;
 mod scan;
 mod store;
 mod sweep;
@@ -50,6 +51,7 @@ pub use md::{
     MdSystemConfig,
 };
 pub use potentials::{MAX_EXPONENT, PotentialsConfig, THETA_RANGE};
+pub use publication::{AuthorConfig, PublicationConfig};
 pub use scan::{
     MAX_SCAN_LAUNCHES, MAX_SCAN_POINTS, MAX_SCAN_SCENES, NamedLaunch, ScanConfig, ScanGrid,
     ScanGridOverride, ScanParams,
@@ -123,6 +125,9 @@ pub struct Config {
     /// Gases in physical units whose thermalization rates are tabulated.
     #[serde(default)]
     pub gas: Vec<GasConfig>,
+    /// How an exported dataset describes and credits itself.
+    #[serde(default)]
+    pub publication: PublicationConfig,
 }
 
 /// A loaded and validated study, with the parameters that needed lookups
@@ -224,6 +229,7 @@ impl Study {
             wide: &wide,
         })?;
         let md = config.md.resolve(&config.gas, &gases)?;
+        config.publication.validate()?;
         Ok(Study {
             file: file.to_path_buf(),
             potentials,

@@ -278,16 +278,9 @@ pub fn read_parquet(path: &Path) -> Result<(RecordBatch, BTreeMap<String, String
     read_parquet_bytes(&path.display().to_string(), bytes)
 }
 
-/// Decodes Parquet bytes (already read, and hashed, by the caller) into one
-/// batch with its key-value metadata; `label` names the source in errors.
-pub fn read_parquet_bytes(
-    label: &str,
-    bytes: Vec<u8>,
-) -> Result<(RecordBatch, BTreeMap<String, String>), TableError> {
-    let builder = ParquetRecordBatchReaderBuilder::try_new(bytes::Bytes::from(bytes))?;
-    let metadata = builder
-        .metadata()
-        .file_metadata()
+/// A Parquet file's key-value metadata.
+fn key_values(metadata: &parquet::file::metadata::FileMetaData) -> BTreeMap<String, String> {
+    metadata
         .key_value_metadata()
         .map(|entries| {
             entries
@@ -295,7 +288,32 @@ pub fn read_parquet_bytes(
                 .map(|kv| (kv.key.clone(), kv.value.clone().unwrap_or_default()))
                 .collect()
         })
-        .unwrap_or_default();
+        .unwrap_or_default()
+}
+
+/// The schema (with field metadata), key-value metadata and row count of a
+/// Parquet file, read from its footer without decoding the data.
+pub fn read_parquet_footer(
+    path: &Path,
+) -> Result<(arrow::datatypes::SchemaRef, BTreeMap<String, String>, u64), TableError> {
+    let file = std::fs::File::open(path).map_err(|source| TableError::Io {
+        path: path.display().to_string(),
+        source,
+    })?;
+    let builder = ParquetRecordBatchReaderBuilder::try_new(file)?;
+    let metadata = builder.metadata().file_metadata();
+    let rows = u64::try_from(metadata.num_rows()).unwrap_or(0);
+    Ok((builder.schema().clone(), key_values(metadata), rows))
+}
+
+/// Decodes Parquet bytes (already read, and hashed, by the caller) into one
+/// batch with its key-value metadata; `label` names the source in errors.
+pub fn read_parquet_bytes(
+    label: &str,
+    bytes: Vec<u8>,
+) -> Result<(RecordBatch, BTreeMap<String, String>), TableError> {
+    let builder = ParquetRecordBatchReaderBuilder::try_new(bytes::Bytes::from(bytes))?;
+    let metadata = key_values(builder.metadata().file_metadata());
     let schema = builder.schema().clone();
     let arrow_error = |source| TableError::Arrow {
         name: label.to_string(),

@@ -1,0 +1,826 @@
+//! `ternary export`: the study's current artifacts as a citable,
+//! self-describing dataset bundle, and `ternary verify --bundle`.
+//!
+//! A bundle is a directory a data repository and a reader without our code
+//! both accept:
+//!
+//! ```text
+//! datapackage.json        Frictionless Data Package v2: one resource per file
+//!                         (but itself and SHA256SUMS) with bytes and sha256; for
+//!                         a table its Table Schema (types, units, descriptions)
+//!                         and the artifact it came from
+//! CITATION.cff            Citation File Format 1.2.0 }  both from `[publication]`
+//! .zenodo.json            Zenodo deposit metadata    }  (Zenodo reads only this one)
+//! README.md               what each table holds, how to read it (Python, R, DuckDB)
+//! pipeline.toml           the study configuration, verbatim
+//! SHA256SUMS              every other file, in the format `sha256sum -c` reads
+//! <stage>/<instance>.parquet            a stage's only table
+//! <stage>/<instance>/<table>.parquet    one of several tables
+//! ```
+//!
+//! Exporting the same store twice gives the same bytes: files are written in
+//! sorted order and nothing records the wall-clock time (dates come from
+//! `[publication]`). The bundle is written next to its target and renamed
+//! into place, so it appears complete or not at all.
+
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+use std::fs;
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result, bail};
+use arrow::datatypes::DataType;
+use serde_json::{Value, json};
+
+use crate::config::{AuthorConfig, PublicationConfig, Study};
+use crate::pipeline::Stage;
+use crate::pipeline::executor::{self, Freshness, tool_version};
+use crate::pipeline::key::sha256_hex;
+use crate::pipeline::store::{Depth, Store};
+use crate::pipeline::table::read_parquet_footer;
+
+/// The stage whose tables hold every integrated scene: large, and left out
+/// of a bundle unless asked for.
+const EVENTS_STAGE: &str = "collisions";
+
+/// Data Package v2 profile.
+const DATAPACKAGE_SCHEMA: &str = "https://datapackage.org/profiles/2.0/datapackage.json";
+
+/// IANA media type of Parquet.
+const PARQUET_MEDIATYPE: &str = "application/vnd.apache.parquet";
+
+/// The published study `ternary` reproduces.
+const PAPER_DOI: &str = "10.1103/PhysRevE.110.014114";
+const PAPER_CITATION: &str = "Phys. Rev. E 110, 014114 (2024)";
+const PAPER_ARXIV: &str = "2403.00089";
+
+/// What to export.
+#[derive(Clone, Debug, Default)]
+pub struct ExportOptions {
+    /// Only these stages (all when empty).
+    pub stages: Vec<String>,
+    /// Only instances of these potentials (by id, e.g. `ipp-6`), plus the
+    /// study-wide ones (all when empty).
+    pub potentials: Vec<String>,
+    /// Include the scene tables of the `collisions` stage.
+    pub include_events: bool,
+}
+
+/// One exported table: where it came from and where it goes.
+struct Entry {
+    stage: String,
+    instance: String,
+    key: String,
+    version: u32,
+    params: Value,
+    table: String,
+    source: PathBuf,
+    path: String,
+    sha256: String,
+}
+
+/// Writes the bundle of `study`'s current artifacts into `dir` (missing or
+/// empty); refuses while a selected instance is stale, missing or damaged.
+/// Returns a one-line summary.
+pub fn export(
+    study: &Study,
+    store: &Store,
+    plan: &[Box<dyn Stage>],
+    dir: &Path,
+    options: &ExportOptions,
+) -> Result<String> {
+    if study.config.publication.authors.is_empty() {
+        bail!(
+            "{}: `[publication]` lists no author; add a [[publication.authors]] entry (a citation needs one)",
+            study.file.display()
+        );
+    }
+    let entries = selected_entries(store, plan, options)?;
+    if dir.exists() && fs::read_dir(dir)?.next().is_some() {
+        bail!(
+            "{} is not empty: export into a new or empty directory",
+            dir.display()
+        );
+    }
+    let parent = dir
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    fs::create_dir_all(parent)?;
+    let name = dir
+        .file_name()
+        .context("the bundle directory has no name")?;
+    let staging = parent.join(format!(
+        ".{}.export-{}",
+        name.to_string_lossy(),
+        std::process::id()
+    ));
+    if staging.exists() {
+        fs::remove_dir_all(&staging)?;
+    }
+    let written = write_bundle(study, &entries, &staging);
+    if let Err(error) = written {
+        let _ = fs::remove_dir_all(&staging);
+        return Err(error);
+    }
+    if dir.exists() {
+        fs::remove_dir(dir)?;
+    }
+    fs::rename(&staging, dir)
+        .with_context(|| format!("moving the bundle into {}", dir.display()))?;
+    let bytes: u64 = files_of(dir)?
+        .iter()
+        .map(|path| fs::metadata(dir.join(path)).map(|m| m.len()).unwrap_or(0))
+        .sum();
+    Ok(format!(
+        "export: {} tables, {bytes} bytes in {}\n",
+        entries.len(),
+        dir.display()
+    ))
+}
+
+/// The tables of the selected, fresh instances, in plan order.
+fn selected_entries(
+    store: &Store,
+    plan: &[Box<dyn Stage>],
+    options: &ExportOptions,
+) -> Result<Vec<Entry>> {
+    let known_stages: Vec<String> = plan.iter().map(|s| s.id().stage).collect();
+    if let Some(unknown) = options.stages.iter().find(|s| !known_stages.contains(s)) {
+        let mut known = known_stages.clone();
+        known.dedup();
+        bail!(
+            "unknown stage `{unknown}`; stages are: {}",
+            known.join(", ")
+        );
+    }
+    let potential_of = |instance: &str| -> Option<String> {
+        let id = instance.split('_').next().unwrap_or(instance);
+        (id.starts_with("ipp-") || id.starts_with("lj-")).then(|| id.to_string())
+    };
+    let known_potentials: Vec<String> = plan
+        .iter()
+        .filter_map(|s| potential_of(&s.id().instance))
+        .collect();
+    if let Some(unknown) = options
+        .potentials
+        .iter()
+        .find(|p| !known_potentials.contains(p))
+    {
+        bail!("`{unknown}` names no potential of the study");
+    }
+    let selected = |stage: &str, instance: &str| {
+        (options.stages.is_empty() || options.stages.iter().any(|s| s == stage))
+            && (options.include_events || stage != EVENTS_STAGE)
+            && (options.potentials.is_empty()
+                || potential_of(instance).is_none_or(|p| options.potentials.contains(&p)))
+    };
+    let mut not_fresh = Vec::new();
+    let mut entries = Vec::new();
+    for line in executor::status(store, plan)? {
+        let (stage, instance) = (&line.id.stage, &line.id.instance);
+        if !selected(stage, instance) {
+            continue;
+        }
+        let key = match (&line.freshness, &line.key) {
+            (Freshness::Fresh, Some(key)) => key.clone(),
+            (freshness, _) => {
+                not_fresh.push(format!("{}: {}", line.id, describe(freshness)));
+                continue;
+            }
+        };
+        let manifest = store
+            .inspect(stage, &key, None, Depth::Hashes)
+            .map_err(|problems| anyhow::anyhow!("{}: {}", line.id, problems.join("; ")))?;
+        let single = manifest.files.len() == 1;
+        for file in &manifest.files {
+            let table = file.name.trim_end_matches(".parquet").to_string();
+            let path = if single {
+                format!("{stage}/{instance}.parquet")
+            } else {
+                format!("{stage}/{instance}/{table}.parquet")
+            };
+            entries.push(Entry {
+                stage: stage.clone(),
+                instance: instance.clone(),
+                key: key.clone(),
+                version: manifest.version,
+                params: manifest.params.clone(),
+                table,
+                source: store.artifact_dir(stage, &key).join(&file.name),
+                path,
+                sha256: file.sha256.clone(),
+            });
+        }
+    }
+    if !not_fresh.is_empty() {
+        bail!(
+            "not exported: these instances are not up to date (run `ternary run` first):\n  {}",
+            not_fresh.join("\n  ")
+        );
+    }
+    if entries.is_empty() {
+        bail!("the selection holds no table");
+    }
+    Ok(entries)
+}
+
+fn describe(freshness: &Freshness) -> String {
+    match freshness {
+        Freshness::Fresh => "fresh".into(),
+        Freshness::Stale(reasons) => format!("stale: {}", reasons.join("; ")),
+        Freshness::Damaged(problems) => format!("damaged: {}", problems.join("; ")),
+        Freshness::Missing(reason) => format!("missing: {reason}"),
+    }
+}
+
+/// Copies the tables (checking each copy's hash) and writes the descriptors.
+fn write_bundle(study: &Study, entries: &[Entry], dir: &Path) -> Result<()> {
+    let mut resources = Vec::new();
+    for entry in entries {
+        let target = dir.join(&entry.path);
+        fs::create_dir_all(target.parent().unwrap_or(dir))?;
+        let bytes = fs::read(&entry.source)
+            .with_context(|| format!("reading {}", entry.source.display()))?;
+        if sha256_hex(&bytes) != entry.sha256 {
+            bail!(
+                "{} changed while it was exported; run `ternary run` to repair it",
+                entry.source.display()
+            );
+        }
+        fs::write(&target, &bytes)?;
+        resources.push(resource(entry, &target, bytes.len() as u64)?);
+    }
+    let publication = &study.config.publication;
+    fs::write(dir.join("CITATION.cff"), citation_cff(publication))?;
+    write_json(&dir.join(".zenodo.json"), &zenodo(publication))?;
+    fs::copy(&study.file, dir.join("pipeline.toml"))
+        .with_context(|| format!("copying {}", study.file.display()))?;
+    fs::write(
+        dir.join("README.md"),
+        bundle_readme(publication, &resources),
+    )?;
+    for (path, format, mediatype, description) in DOCUMENTS {
+        resources.push(document_resource(
+            dir,
+            path,
+            format,
+            mediatype,
+            description,
+        )?);
+    }
+    check_unique_names(&resources)?;
+    write_json(
+        &dir.join("datapackage.json"),
+        &datapackage(publication, resources),
+    )?;
+    let sums = sha256sums(dir)?;
+    fs::write(dir.join("SHA256SUMS"), sums)?;
+    Ok(())
+}
+
+fn write_json(path: &Path, value: &Value) -> Result<()> {
+    let mut text = serde_json::to_string_pretty(value)?;
+    text.push('\n');
+    fs::write(path, text)?;
+    Ok(())
+}
+
+/// The bundle's files besides the tables and the two that describe the rest
+/// (`datapackage.json`, `SHA256SUMS`): path, format, media type, description.
+const DOCUMENTS: [(&str, &str, &str, &str); 4] = [
+    (
+        "README.md",
+        "md",
+        "text/markdown",
+        "what each table holds and how to read it",
+    ),
+    (
+        "pipeline.toml",
+        "toml",
+        "application/toml",
+        "the study configuration that produced the tables",
+    ),
+    (
+        "CITATION.cff",
+        "cff",
+        "application/x-yaml",
+        "how to cite the dataset (Citation File Format 1.2.0)",
+    ),
+    (
+        ".zenodo.json",
+        "json",
+        "application/json",
+        "deposit metadata for Zenodo",
+    ),
+];
+
+/// The descriptor of a non-tabular file of the bundle.
+fn document_resource(
+    dir: &Path,
+    path: &str,
+    format: &str,
+    mediatype: &str,
+    description: &str,
+) -> Result<Value> {
+    let bytes = fs::read(dir.join(path))?;
+    let name: String = path
+        .trim_start_matches('.')
+        .to_lowercase()
+        .replace('.', "-");
+    Ok(json!({
+        "name": name,
+        "path": path,
+        "format": format,
+        "mediatype": mediatype,
+        "bytes": bytes.len(),
+        "hash": format!("sha256:{}", sha256_hex(&bytes)),
+        "description": description,
+    }))
+}
+
+/// A Data Package resource name: lower-case, `[a-z0-9._-]`.
+fn resource_name(entry: &Entry) -> String {
+    format!("{}.{}.{}", entry.stage, entry.instance, entry.table)
+        .to_lowercase()
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || matches!(c, '.' | '_' | '-') {
+                c
+            } else {
+                '-'
+            }
+        })
+        .collect()
+}
+
+fn check_unique_names(resources: &[Value]) -> Result<()> {
+    let mut seen = std::collections::BTreeSet::new();
+    for resource in resources {
+        let name = resource["name"].as_str().unwrap_or_default();
+        if !seen.insert(name.to_string()) {
+            bail!("two tables would share the resource name `{name}`");
+        }
+    }
+    Ok(())
+}
+
+/// Table Schema type of an Arrow column type.
+fn field_type(data_type: &DataType) -> &'static str {
+    match data_type {
+        DataType::Float32 | DataType::Float64 => "number",
+        DataType::Boolean => "boolean",
+        DataType::Utf8 | DataType::LargeUtf8 => "string",
+        t if t.is_integer() => "integer",
+        _ => "any",
+    }
+}
+
+/// The descriptor of one table: path, size, hash, Table Schema from the
+/// file's column metadata, and the artifact it came from.
+fn resource(entry: &Entry, file: &Path, bytes: u64) -> Result<Value> {
+    let (schema, metadata, rows) = read_parquet_footer(file)?;
+    let fields: Vec<Value> = schema
+        .fields()
+        .iter()
+        .map(|field| {
+            let meta = field.metadata();
+            let mut value = json!({
+                "name": field.name(),
+                "type": field_type(field.data_type()),
+                "description": meta.get("description").cloned().unwrap_or_default(),
+            });
+            if let Some(unit) = meta.get("unit").filter(|u| !u.is_empty()) {
+                value["unit"] = json!(unit);
+            }
+            value
+        })
+        .collect();
+    let description = metadata
+        .get("ternary.description")
+        .cloned()
+        .unwrap_or_else(|| format!("table `{}` of stage `{}`", entry.table, entry.stage));
+    Ok(json!({
+        "name": resource_name(entry),
+        "path": entry.path,
+        "type": "table",
+        "format": "parquet",
+        "mediatype": PARQUET_MEDIATYPE,
+        "bytes": bytes,
+        "hash": format!("sha256:{}", entry.sha256),
+        "description": description,
+        "schema": { "fields": fields },
+        "ternary": {
+            "stage": entry.stage,
+            "stage_version": entry.version,
+            "instance": entry.instance,
+            "table": entry.table,
+            "key": entry.key,
+            "rows": rows,
+            "params": entry.params,
+        },
+    }))
+}
+
+/// URL of a licence by its SPDX id, where known.
+fn license_path(spdx: &str) -> Option<&'static str> {
+    match spdx {
+        "CC-BY-4.0" => Some("https://creativecommons.org/licenses/by/4.0/"),
+        "CC0-1.0" => Some("https://creativecommons.org/publicdomain/zero/1.0/"),
+        "CC-BY-SA-4.0" => Some("https://creativecommons.org/licenses/by-sa/4.0/"),
+        "ODC-BY-1.0" => Some("https://opendatacommons.org/licenses/by/1-0/"),
+        _ => None,
+    }
+}
+
+/// `https://orcid.org/<id>`.
+fn orcid_url(orcid: &str) -> String {
+    format!("https://orcid.org/{orcid}")
+}
+
+fn datapackage(publication: &PublicationConfig, resources: Vec<Value>) -> Value {
+    let mut license = json!({ "name": publication.license });
+    if let Some(path) = license_path(&publication.license) {
+        license["path"] = json!(path);
+    }
+    let contributors: Vec<Value> = publication
+        .authors
+        .iter()
+        .map(|author| {
+            let mut value = json!({ "title": author.display_name(), "roles": ["creator"] });
+            if let Some(given) = &author.given_names {
+                value["givenName"] = json!(given);
+            }
+            if let Some(family) = &author.family_names {
+                value["familyName"] = json!(family);
+            }
+            if let Some(orcid) = &author.orcid {
+                value["path"] = json!(orcid_url(orcid));
+            }
+            if let Some(affiliation) = &author.affiliation {
+                value["organization"] = json!(affiliation);
+            }
+            value
+        })
+        .collect();
+    let mut descriptor = json!({
+        "$schema": DATAPACKAGE_SCHEMA,
+        "name": publication.name,
+        "title": publication.title,
+        "version": publication.version,
+        "description": publication.description,
+        "licenses": [license],
+        "contributors": contributors,
+        "sources": [
+            { "title": PAPER_CITATION, "path": format!("https://doi.org/{PAPER_DOI}") },
+            { "title": format!("arXiv:{PAPER_ARXIV}"), "path": format!("https://arxiv.org/abs/{PAPER_ARXIV}") },
+        ],
+        "keywords": publication.keywords,
+        "resources": resources,
+        "ternary": { "tool": tool_version(), "configuration": "pipeline.toml" },
+    });
+    if let Some(date) = &publication.date {
+        descriptor["created"] = json!(format!("{date}T00:00:00Z"));
+    }
+    descriptor
+}
+
+/// A YAML string (double-quoted, escaped): safe for any text.
+fn yaml(text: &str) -> String {
+    serde_json::to_string(text).unwrap_or_default()
+}
+
+fn citation_cff(publication: &PublicationConfig) -> String {
+    let mut out = String::new();
+    let _ = writeln!(out, "cff-version: 1.2.0");
+    let _ = writeln!(
+        out,
+        "message: {}",
+        yaml(&format!(
+            "If you use this dataset, please cite it as below. It reproduces and extends \
+             {PAPER_CITATION}, doi:{PAPER_DOI}, arXiv:{PAPER_ARXIV}."
+        ))
+    );
+    let _ = writeln!(out, "type: dataset");
+    let _ = writeln!(out, "title: {}", yaml(&publication.title));
+    let _ = writeln!(out, "version: {}", yaml(&publication.version));
+    if let Some(date) = &publication.date {
+        let _ = writeln!(out, "date-released: {}", yaml(date));
+    }
+    let _ = writeln!(out, "license: {}", yaml(&publication.license));
+    let _ = writeln!(out, "abstract: {}", yaml(&publication.description));
+    let _ = writeln!(out, "authors:");
+    for author in &publication.authors {
+        cff_author(&mut out, author);
+    }
+    if !publication.keywords.is_empty() {
+        let _ = writeln!(out, "keywords:");
+        for keyword in &publication.keywords {
+            let _ = writeln!(out, "  - {}", yaml(keyword));
+        }
+    }
+    out
+}
+
+fn cff_author(out: &mut String, author: &AuthorConfig) {
+    let mut lines = Vec::new();
+    if let Some(family) = &author.family_names {
+        lines.push(format!("family-names: {}", yaml(family)));
+    }
+    if let Some(given) = &author.given_names {
+        lines.push(format!("given-names: {}", yaml(given)));
+    }
+    if let Some(name) = &author.name {
+        lines.push(format!("name: {}", yaml(name)));
+    }
+    if let Some(orcid) = &author.orcid {
+        lines.push(format!("orcid: {}", yaml(&orcid_url(orcid))));
+    }
+    if let Some(affiliation) = &author.affiliation {
+        lines.push(format!("affiliation: {}", yaml(affiliation)));
+    }
+    for (k, line) in lines.iter().enumerate() {
+        let _ = writeln!(out, "  {} {line}", if k == 0 { "-" } else { " " });
+    }
+}
+
+fn zenodo(publication: &PublicationConfig) -> Value {
+    let creators: Vec<Value> = publication
+        .authors
+        .iter()
+        .map(|author| {
+            let mut value = json!({ "name": author.display_name() });
+            if let Some(affiliation) = &author.affiliation {
+                value["affiliation"] = json!(affiliation);
+            }
+            if let Some(orcid) = &author.orcid {
+                value["orcid"] = json!(orcid);
+            }
+            value
+        })
+        .collect();
+    let mut value = json!({
+        "upload_type": "dataset",
+        "title": publication.title,
+        "description": publication.description,
+        "version": publication.version,
+        "license": publication.license.to_lowercase(),
+        "creators": creators,
+        "keywords": publication.keywords,
+        "related_identifiers": [
+            { "identifier": PAPER_DOI, "relation": "references", "scheme": "doi" },
+            { "identifier": format!("arXiv:{PAPER_ARXIV}"), "relation": "references", "scheme": "arxiv" },
+        ],
+    });
+    if let Some(date) = &publication.date {
+        value["publication_date"] = json!(date);
+    }
+    value
+}
+
+fn bundle_readme(publication: &PublicationConfig, tables: &[Value]) -> String {
+    let mut out = String::new();
+    let _ = writeln!(out, "# {}\n", publication.title);
+    let _ = writeln!(out, "{}\n", publication.description);
+    let authors: Vec<String> = publication
+        .authors
+        .iter()
+        .map(AuthorConfig::display_name)
+        .collect();
+    if !authors.is_empty() {
+        let _ = writeln!(out, "Authors: {}.\n", authors.join("; "));
+    }
+    let _ = writeln!(
+        out,
+        "Version {}, licence {}. Written by {} from the study configuration `pipeline.toml` \
+         (included). The model and its units follow {PAPER_CITATION} (doi:{PAPER_DOI}, \
+         arXiv:{PAPER_ARXIV}): velocities in v_th = sqrt(kT/m), lengths in l = l0 (eps/kT)^(1/n) \
+         (n = 6 for Lennard-Jones), times in l/v_th, rates in rho^2 l v_th.\n",
+        publication.version,
+        publication.license,
+        tool_version()
+    );
+    let _ = writeln!(
+        out,
+        "`datapackage.json` (Frictionless Data Package v2) describes every table: its columns \
+         with types, units and descriptions, its size and SHA-256, and the stage, version, key \
+         and parameters that produced it. `SHA256SUMS` lists every file (`sha256sum -c SHA256SUMS`); \
+         `ternary verify --bundle .` checks both.\n"
+    );
+    let _ = writeln!(out, "## Reading the tables\n");
+    let example = tables[0]["path"].as_str().unwrap_or("table.parquet");
+    let _ = writeln!(
+        out,
+        "Python (polars):\n\n    import polars as pl\n    frame = pl.read_parquet(\"{example}\")\n"
+    );
+    let _ = writeln!(
+        out,
+        "Python (pyarrow), with units from the column metadata:\n\n    import pyarrow.parquet as pq\n    table = pq.read_table(\"{example}\")\n    print(table.schema.field(0).metadata)   # {{b'unit': ..., b'description': ...}}\n"
+    );
+    let _ = writeln!(
+        out,
+        "R (arrow):\n\n    library(arrow)\n    frame <- read_parquet(\"{example}\")\n"
+    );
+    let _ = writeln!(
+        out,
+        "DuckDB:\n\n    SELECT * FROM '{example}';\n    SELECT * FROM parquet_kv_metadata('{example}');\n"
+    );
+    let _ = writeln!(out, "## Tables\n");
+    for resource in tables {
+        let meta = &resource["ternary"];
+        let _ = writeln!(
+            out,
+            "### `{}`\n\n{} ({} rows; stage `{}` version {}, instance `{}`, key `{}`)\n",
+            resource["path"].as_str().unwrap_or_default(),
+            resource["description"].as_str().unwrap_or_default(),
+            meta["rows"],
+            meta["stage"].as_str().unwrap_or_default(),
+            meta["stage_version"],
+            meta["instance"].as_str().unwrap_or_default(),
+            meta["key"].as_str().unwrap_or_default(),
+        );
+        let _ = writeln!(out, "| column | type | unit | description |");
+        let _ = writeln!(out, "|---|---|---|---|");
+        for field in resource["schema"]["fields"]
+            .as_array()
+            .into_iter()
+            .flatten()
+        {
+            let _ = writeln!(
+                out,
+                "| `{}` | {} | {} | {} |",
+                field["name"].as_str().unwrap_or_default(),
+                field["type"].as_str().unwrap_or_default(),
+                field["unit"].as_str().unwrap_or(""),
+                field["description"]
+                    .as_str()
+                    .unwrap_or_default()
+                    .replace('|', "\\|"),
+            );
+        }
+        let _ = writeln!(out);
+    }
+    out
+}
+
+/// Every file of a bundle, relative, sorted.
+fn files_of(dir: &Path) -> Result<Vec<String>> {
+    let mut found = Vec::new();
+    let mut pending = vec![PathBuf::new()];
+    while let Some(relative) = pending.pop() {
+        for entry in fs::read_dir(dir.join(&relative))? {
+            let entry = entry?;
+            let path = relative.join(entry.file_name());
+            if entry.file_type()?.is_dir() {
+                pending.push(path);
+            } else {
+                found.push(path.to_string_lossy().into_owned());
+            }
+        }
+    }
+    found.sort();
+    Ok(found)
+}
+
+/// `<sha256>  <path>` of every file but `SHA256SUMS`.
+fn sha256sums(dir: &Path) -> Result<String> {
+    let mut out = String::new();
+    for path in files_of(dir)? {
+        if path == "SHA256SUMS" {
+            continue;
+        }
+        let bytes = fs::read(dir.join(&path))?;
+        let _ = writeln!(out, "{}  {path}", sha256_hex(&bytes));
+    }
+    Ok(out)
+}
+
+/// Checks a bundle: the descriptor's required fields, every resource's size
+/// and hash, and `SHA256SUMS` against every file. Returns the report and the
+/// number of problems.
+pub fn verify_bundle(dir: &Path) -> Result<(String, usize)> {
+    let mut problems = Vec::new();
+    let descriptor_path = dir.join("datapackage.json");
+    let descriptor: Value = match fs::read(&descriptor_path) {
+        Err(error) => {
+            problems.push(format!("datapackage.json: {error}"));
+            Value::Null
+        }
+        Ok(bytes) => serde_json::from_slice(&bytes).unwrap_or_else(|error| {
+            problems.push(format!("datapackage.json: not JSON ({error})"));
+            Value::Null
+        }),
+    };
+    if !descriptor.is_null() {
+        problems.extend(descriptor_problems(dir, &descriptor));
+    }
+    problems.extend(sums_problems(dir)?);
+    let mut out = String::new();
+    for problem in &problems {
+        let _ = writeln!(out, "PROBLEM  {problem}");
+    }
+    let resources = descriptor["resources"].as_array().map_or(0, Vec::len);
+    let _ = writeln!(
+        out,
+        "verify --bundle: {} resources, {} problems in {}",
+        resources,
+        problems.len(),
+        dir.display()
+    );
+    Ok((out, problems.len()))
+}
+
+/// Required fields of the package and of each resource, and each resource's
+/// file against its `bytes` and `hash`.
+fn descriptor_problems(dir: &Path, descriptor: &Value) -> Vec<String> {
+    let mut problems = Vec::new();
+    for field in [
+        "$schema",
+        "name",
+        "title",
+        "version",
+        "licenses",
+        "resources",
+    ] {
+        if descriptor.get(field).is_none_or(Value::is_null) {
+            problems.push(format!("datapackage.json: missing `{field}`"));
+        }
+    }
+    let resources = descriptor["resources"]
+        .as_array()
+        .cloned()
+        .unwrap_or_default();
+    if resources.is_empty() {
+        problems.push("datapackage.json: no resource".into());
+    }
+    for (k, resource) in resources.iter().enumerate() {
+        let Some(path) = resource["path"].as_str() else {
+            problems.push(format!("datapackage.json: resources[{k}] has no `path`"));
+            continue;
+        };
+        let table = resource["type"] == "table";
+        for field in ["name", "format", "mediatype", "bytes", "hash", "schema"] {
+            if (table || field != "schema") && resource.get(field).is_none_or(Value::is_null) {
+                problems.push(format!("{path}: the descriptor lacks `{field}`"));
+            }
+        }
+        if path.split('/').any(|part| part == ".." || part.is_empty()) {
+            problems.push(format!("{path}: not a path inside the bundle"));
+            continue;
+        }
+        match fs::read(dir.join(path)) {
+            Err(error) => problems.push(format!("{path}: {error}")),
+            Ok(bytes) => {
+                if resource["bytes"].as_u64() != Some(bytes.len() as u64) {
+                    problems.push(format!(
+                        "{path}: {} bytes but the descriptor records {}",
+                        bytes.len(),
+                        resource["bytes"]
+                    ));
+                }
+                let hash = format!("sha256:{}", sha256_hex(&bytes));
+                if resource["hash"].as_str() != Some(hash.as_str()) {
+                    problems.push(format!(
+                        "{path}: {hash} but the descriptor records {}",
+                        resource["hash"]
+                    ));
+                }
+            }
+        }
+    }
+    problems
+}
+
+/// `SHA256SUMS` against the files: each listed file hashes to its line, and
+/// every file of the bundle is listed.
+fn sums_problems(dir: &Path) -> Result<Vec<String>> {
+    let mut problems = Vec::new();
+    let sums = match fs::read_to_string(dir.join("SHA256SUMS")) {
+        Ok(text) => text,
+        Err(error) => return Ok(vec![format!("SHA256SUMS: {error}")]),
+    };
+    let mut listed = BTreeMap::new();
+    for line in sums.lines() {
+        match line.split_once("  ") {
+            Some((sha, path)) => {
+                listed.insert(path.to_string(), sha.to_string());
+            }
+            None => problems.push(format!("SHA256SUMS: malformed line `{line}`")),
+        }
+    }
+    for (path, sha) in &listed {
+        match fs::read(dir.join(path)) {
+            Err(error) => problems.push(format!("{path}: {error}")),
+            Ok(bytes) if &sha256_hex(&bytes) != sha => {
+                problems.push(format!("{path}: does not match its line in SHA256SUMS"))
+            }
+            Ok(_) => {}
+        }
+    }
+    for path in files_of(dir)? {
+        if path != "SHA256SUMS" && !listed.contains_key(&path) {
+            problems.push(format!("{path}: not listed in SHA256SUMS"));
+        }
+    }
+    Ok(problems)
+}

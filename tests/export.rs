@@ -1,0 +1,296 @@
+//! `ternary export` and `ternary verify --bundle`, checked by tools that are
+//! not ours: the `frictionless` validator, DuckDB and polars (Python) and
+//! `sha256sum -c`.
+
+use std::fs;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+mod common;
+
+use common::{
+    files_under, flip_byte, run_counts, small_study, stderr, stdout, ternary, workspace,
+    write_config,
+};
+
+const PUBLICATION: &str = r#"
+[publication]
+name = "ternary-test"
+title = "A test bundle"
+description = "A small study for checking exports."
+version = "0.1.0"
+date = "2026-11-23"
+keywords = ["test"]
+
+[[publication.authors]]
+given_names = "Ada"
+family_names = "Lovelace"
+orcid = "0000-0002-1825-0097"
+affiliation = "Analytical Engines Ltd"
+
+[[publication.authors]]
+name = "The ternary developers"
+"#;
+
+/// A computed small study with a `[publication]` section.
+fn computed(name: &str) -> (PathBuf, PathBuf) {
+    let dir = workspace(name);
+    let config = write_config(&dir, &format!("{}{PUBLICATION}", small_study("data")));
+    run_counts(&config, &[]);
+    (config, dir)
+}
+
+fn export(config: &Path, bundle: &Path, extra: &[&str]) -> std::process::Output {
+    let bundle = bundle.to_string_lossy().into_owned();
+    let args: Vec<&str> = [&["export", bundle.as_str()][..], extra].concat();
+    ternary(config, &args)
+}
+
+fn verify_bundle(config: &Path, bundle: &Path) -> std::process::Output {
+    ternary(config, &["verify", "--bundle", &bundle.to_string_lossy()])
+}
+
+fn python(script: &str, dir: &Path) -> String {
+    let output = Command::new("python3")
+        .arg("-c")
+        .arg(script)
+        .current_dir(dir)
+        .output()
+        .unwrap();
+    assert!(
+        output.status.success(),
+        "python failed (install the README's test packages): {}",
+        stderr(&output)
+    );
+    stdout(&output)
+}
+
+/// Rows and the sum of the first numeric column with a finite sum, as
+/// `ternary show` reports them for a file of the bundle.
+fn shown_rows_and_sum(config: &Path, file: &Path) -> (u64, String, f64) {
+    let text = stdout(&ternary(
+        config,
+        &["show", &file.to_string_lossy(), "--rows", "1"],
+    ));
+    let rows = text
+        .lines()
+        .next()
+        .and_then(|line| line.rsplit_once('(')?.1.split(' ').next()?.parse().ok())
+        .unwrap_or_else(|| panic!("no row count in {text}"));
+    let sums: Vec<(String, f64)> = text
+        .lines()
+        .filter_map(|line| {
+            let words: Vec<&str> = line.split_whitespace().collect();
+            let sum: f64 = words.get(2)?.parse().ok()?;
+            (sum.is_finite() && sum != 0.0 && words[1].starts_with("Float64"))
+                .then(|| (words[0].to_string(), sum))
+        })
+        .collect();
+    // An error column has no cancellation, so every reader's sum agrees closely.
+    let (column, sum) = sums
+        .iter()
+        .find(|(name, _)| name.ends_with("stderr") || name.ends_with("error"))
+        .or(sums.first())
+        .cloned()
+        .unwrap_or_else(|| panic!("no finite column sum in {text}"));
+    (rows, column, sum)
+}
+
+/// The bundle of the small study passes `frictionless validate`, `sha256sum
+/// -c`, and DuckDB and polars read every table with the row counts and
+/// column sums `ternary show` reports.
+#[test]
+fn a_bundle_passes_tools_that_are_not_ours() {
+    let (config, dir) = computed("export-tools");
+    let bundle = dir.join("bundle");
+    let output = export(&config, &bundle, &[]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    // frictionless reads Parquet through pandas and cannot count its bytes
+    // ("actual is None"): sizes and hashes are checked by sha256sum and
+    // `verify --bundle` below.
+    let validation = Command::new("python3")
+        .args([
+            "-m",
+            "frictionless",
+            "validate",
+            "--skip-errors",
+            "byte-count",
+        ])
+        .arg(bundle.join("datapackage.json"))
+        .output()
+        .unwrap();
+    assert!(
+        validation.status.success(),
+        "frictionless: {}{}",
+        stdout(&validation),
+        stderr(&validation)
+    );
+    let sums = Command::new("sha256sum")
+        .args(["-c", "SHA256SUMS"])
+        .current_dir(&bundle)
+        .output()
+        .unwrap();
+    assert!(sums.status.success(), "{}", stdout(&sums));
+    let descriptor: serde_json::Value =
+        serde_json::from_str(&fs::read_to_string(bundle.join("datapackage.json")).unwrap())
+            .unwrap();
+    let resources = descriptor["resources"].as_array().unwrap();
+    assert_eq!(resources.len(), 10, "6 tables and 4 documents");
+    for resource in resources.iter().filter(|r| r["type"] == "table") {
+        let path = resource["path"].as_str().unwrap();
+        let (rows, column, sum) = shown_rows_and_sum(&config, &bundle.join(path));
+        assert_eq!(resource["ternary"]["rows"].as_u64(), Some(rows), "{path}");
+        let script = format!(
+            r#"
+import duckdb, polars as pl
+rows = duckdb.sql("SELECT count(*) FROM '{path}'").fetchall()[0][0]
+total = duckdb.sql("SELECT sum(\"{column}\") FROM '{path}'").fetchall()[0][0]
+frame = pl.read_parquet("{path}")
+print(rows, total, frame.height, frame["{column}"].sum())
+"#
+        );
+        let line = python(&script, &bundle);
+        let values: Vec<f64> = line
+            .split_whitespace()
+            .map(|v| v.parse().unwrap())
+            .collect();
+        assert_eq!(values[0], rows as f64, "{path}: duckdb rows");
+        assert_eq!(values[2], rows as f64, "{path}: polars rows");
+        for reader_sum in [values[1], values[3]] {
+            assert!(
+                (reader_sum - sum).abs() <= 1e-9 * sum.abs(),
+                "{path}: sum of {column} {reader_sum} against {sum}"
+            );
+        }
+    }
+    let verify = verify_bundle(&config, &bundle);
+    assert!(verify.status.success(), "{}", stdout(&verify));
+    let citation = fs::read_to_string(bundle.join("CITATION.cff")).unwrap();
+    let zenodo: serde_json::Value =
+        serde_json::from_str(&fs::read_to_string(bundle.join(".zenodo.json")).unwrap()).unwrap();
+    assert!(
+        citation.contains("family-names: \"Lovelace\""),
+        "{citation}"
+    );
+    assert_eq!(zenodo["creators"][0]["name"], "Lovelace, Ada");
+    assert_eq!(zenodo["title"], descriptor["title"]);
+    assert_eq!(zenodo["version"], descriptor["version"]);
+}
+
+/// Two exports of one store are identical byte for byte.
+#[test]
+fn exporting_twice_gives_the_same_bytes() {
+    let (config, dir) = computed("export-twice");
+    let (one, two) = (dir.join("one"), dir.join("two"));
+    assert!(export(&config, &one, &[]).status.success());
+    assert!(export(&config, &two, &[]).status.success());
+    let files = files_under(&one);
+    assert_eq!(files, files_under(&two));
+    for file in files {
+        assert_eq!(
+            fs::read(one.join(&file)).unwrap(),
+            fs::read(two.join(&file)).unwrap(),
+            "{}",
+            file.display()
+        );
+    }
+}
+
+/// Options choose stages and add the scene tables; a stale instance or a
+/// non-empty target is refused, naming it.
+#[test]
+fn export_options_and_refusals() {
+    let (config, dir) = computed("export-options");
+    let kernel = dir.join("kernel-only");
+    assert!(
+        export(&config, &kernel, &["--stage", "kernel"])
+            .status
+            .success()
+    );
+    let paths: Vec<PathBuf> = files_under(&kernel)
+        .into_iter()
+        .filter(|p| p.extension().is_some_and(|e| e == "parquet"))
+        .collect();
+    assert_eq!(paths, [PathBuf::from("kernel/ipp-6_u0_rho0.parquet")]);
+    let events = dir.join("events");
+    assert!(
+        export(&config, &events, &["--include-events"])
+            .status
+            .success()
+    );
+    assert!(events.join("collisions/ipp-6.parquet").exists());
+    let refused = export(&config, &kernel, &[]);
+    assert!(!refused.status.success());
+    assert!(
+        stderr(&refused).contains("is not empty"),
+        "{}",
+        stderr(&refused)
+    );
+    let dir_of = config.parent().unwrap();
+    let changed =
+        format!("{}{PUBLICATION}", small_study("data")).replace("points = 7", "points = 9");
+    write_config(dir_of, &changed);
+    let stale = export(&config, &dir.join("stale"), &[]);
+    assert!(!stale.status.success());
+    assert!(
+        stderr(&stale).contains("scan[ipp-6]: stale: parameter grid.points: 7 -> 9"),
+        "{}",
+        stderr(&stale)
+    );
+    assert!(!dir.join("stale").exists());
+}
+
+/// A flipped byte, a missing file and an edited descriptor each fail
+/// `verify --bundle`, naming the file; `show` reads a bundle's table.
+#[test]
+fn verify_bundle_names_each_problem() {
+    let (config, dir) = computed("export-verify");
+    let bundle = dir.join("bundle");
+    assert!(export(&config, &bundle, &[]).status.success());
+    let copy = |name: &str| {
+        let target = dir.join(name);
+        for file in files_under(&bundle) {
+            let path = target.join(&file);
+            fs::create_dir_all(path.parent().unwrap()).unwrap();
+            fs::copy(bundle.join(&file), path).unwrap();
+        }
+        target
+    };
+    let flipped = copy("flipped");
+    flip_byte(&flipped.join("kernel/ipp-6_u0_rho0.parquet"));
+    let missing = copy("missing");
+    fs::remove_file(missing.join("fit/ipp-6_u0_rho0.parquet")).unwrap();
+    let edited = copy("edited");
+    let descriptor = fs::read_to_string(edited.join("datapackage.json")).unwrap();
+    fs::write(
+        edited.join("datapackage.json"),
+        descriptor.replace("A test bundle", "A better bundle"),
+    )
+    .unwrap();
+    for (bundle, file) in [
+        (&flipped, "kernel/ipp-6_u0_rho0.parquet"),
+        (&missing, "fit/ipp-6_u0_rho0.parquet"),
+        (&edited, "datapackage.json"),
+    ] {
+        let output = verify_bundle(&config, bundle);
+        assert!(!output.status.success(), "{file}: verify passed");
+        assert!(
+            stdout(&output)
+                .lines()
+                .any(|line| line.starts_with(&format!("PROBLEM  {file}"))),
+            "{file}: {}",
+            stdout(&output)
+        );
+    }
+    let shown = ternary(
+        &config,
+        &[
+            "show",
+            &bundle
+                .join("kernel/ipp-6_u0_rho0.parquet")
+                .to_string_lossy(),
+        ],
+    );
+    assert!(shown.status.success(), "{}", stderr(&shown));
+    assert!(stdout(&shown).contains("ternary.stage: kernel"));
+}
