@@ -282,39 +282,6 @@ fn same_key_gives_same_bytes_for_any_thread_count() {
 }
 
 #[test]
-fn concurrent_runs_on_one_store_compute_each_instance_once() {
-    let dir = workspace("concurrent");
-    let path = write_config(&dir, &config(20_001, ""));
-    let spawn = || {
-        Command::new(BINARY)
-            .arg("--config")
-            .arg(&path)
-            .arg("run")
-            .stdout(Stdio::piped())
-            .stderr(Stdio::piped())
-            .spawn()
-            .unwrap()
-    };
-    let (first, second) = (spawn(), spawn());
-    let outputs = [
-        first.wait_with_output().unwrap(),
-        second.wait_with_output().unwrap(),
-    ];
-    let computed: usize = outputs
-        .iter()
-        .map(|o| {
-            assert!(o.status.success(), "{}", stderr(o));
-            stdout(o)
-                .lines()
-                .filter(|l| l.contains("] ") && l.contains("computed in"))
-                .count()
-        })
-        .sum();
-    assert_eq!(computed, INSTANCES);
-    assert!(ternary(&path, &["verify"]).status.success());
-}
-
-#[test]
 fn artifacts_read_back_with_polars_and_show() {
     use polars::prelude::{ParquetReader, SerReader};
     let dir = workspace("polars");

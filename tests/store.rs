@@ -461,3 +461,45 @@ fn bench_arguments_are_validated() {
         assert!(started.elapsed() < Duration::from_secs(5), "{args:?}: slow");
     }
 }
+
+/// Runs share the store: three at once on an empty store all succeed (each
+/// commits what it computed first, or keeps an identical copy another run
+/// committed), the store holds the bytes of a single run and verifies, and
+/// `gc` afterwards finds nothing to remove and no debris.
+#[test]
+fn concurrent_runs_agree_on_every_byte() {
+    let single = workspace("concurrent-single");
+    let text = small_study("data").replace("points = 7", "points = 2001");
+    let config = write_config(&single, &text);
+    assert_eq!(run_counts(&config, &[]), (SMALL_STUDY_INSTANCES, 0));
+    let dir = workspace("concurrent");
+    let config = write_config(&dir, &text);
+    let runs: Vec<_> = (0..3)
+        .map(|_| {
+            Command::new(BINARY)
+                .arg("--config")
+                .arg(&config)
+                .arg("run")
+                .stdout(Stdio::piped())
+                .stderr(Stdio::piped())
+                .spawn()
+                .unwrap()
+        })
+        .collect();
+    let mut computed = 0;
+    for run in runs {
+        let output = run.wait_with_output().unwrap();
+        assert!(output.status.success(), "{}", stderr(&output));
+        computed += stdout(&output).matches("computed in").count();
+    }
+    assert!(computed >= SMALL_STUDY_INSTANCES, "{computed}");
+    let store = dir.join("data");
+    assert_eq!(result_bytes(&store), result_bytes(&single.join("data")));
+    assert!(ternary(&config, &["verify"]).status.success());
+    let gc = ternary(&config, &["gc"]);
+    assert!(
+        stdout(&gc).contains("removed 0 artifacts (0 bytes) and 0 staging entries"),
+        "{}",
+        stdout(&gc)
+    );
+}

@@ -197,7 +197,8 @@ fn checked(store: &Store, stage: &dyn Stage, key: &str) -> Result<Manifest, Opti
         .map_err(Some)
 }
 
-/// Write access of a run: the store lock, or why the store cannot be written.
+/// Write access of a run: the writers' lock (shared among runs, exclusive of
+/// `gc`), or why the store cannot be written.
 enum Access {
     /// The lock, held until the run ends.
     Locked {
@@ -207,14 +208,11 @@ enum Access {
 }
 
 impl Access {
-    /// Takes the lock and removes debris of interrupted runs; a store that
-    /// cannot be written is still read (everything may be fresh).
+    /// Takes the writers' (shared) lock; a store that cannot be written is
+    /// still read (everything may be fresh).
     fn acquire(store: &Store) -> Result<Access, ExecError> {
-        match store.lock() {
-            Ok(lock) => {
-                store.clean_staging(&lock)?;
-                Ok(Access::Locked { _lock: lock })
-            }
+        match store.lock_for_writing() {
+            Ok(lock) => Ok(Access::Locked { _lock: lock }),
             Err(StoreError::Io { path, source })
                 if matches!(
                     source.kind(),
@@ -283,9 +281,10 @@ pub fn run(
                         reason: reason.clone(),
                     });
                 }
+                let replace = !matches!(existing, Err(None));
                 let repaired = existing.err().flatten().map(|problems| problems.join("; "));
                 let (manifest, seconds) =
-                    compute(store, stage.as_ref(), &entry, &resolved, options)?;
+                    compute(store, stage.as_ref(), &entry, &resolved, options, replace)?;
                 resolved.insert(id.clone(), manifest);
                 Action::Computed { seconds, repaired }
             }
@@ -397,6 +396,7 @@ fn compute(
     entry: &InstanceRef,
     resolved: &BTreeMap<InstanceId, Manifest>,
     options: &RunOptions,
+    replace: bool,
 ) -> Result<(Manifest, f64), ExecError> {
     let id = stage.id();
     let key = &entry.key;
@@ -463,7 +463,7 @@ fn compute(
         wall_seconds: seconds,
         manifest_sha256: None,
     };
-    let manifest = staging.commit(manifest)?;
+    let manifest = staging.commit(manifest, replace)?;
     store.write_ref(&id.stage, &id.instance, entry)?;
     Ok((manifest, seconds))
 }

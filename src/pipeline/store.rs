@@ -4,7 +4,7 @@
 //!
 //! ```text
 //! ternary-store.json                  format marker: written when ternary creates the store
-//! store.lock                          exclusive lock held by writing `run`s and `gc`
+//! store.lock                          lock: shared by writing `run`s, exclusive for `gc`
 //! tmp/<key>.<pid>/                    staging directories (never trusted)
 //! tmp/<key>.<pid>.old/                an artifact being replaced (`--force`, repair)
 //! artifacts/<stage>/<key>/            one directory per artifact:
@@ -85,6 +85,12 @@ pub enum StoreError {
         /// What is wrong.
         message: String,
     },
+    /// Two writers of one key produced different files: a stage is not
+    /// deterministic.
+    #[error(
+        "{0}: a concurrent writer committed different bytes under the same key (a stage is not deterministic; please report it)"
+    )]
+    Diverged(PathBuf),
     /// The store directory does not exist (commands that only read).
     #[error("no store at {0}: `ternary run` creates it")]
     Missing(PathBuf),
@@ -232,13 +238,37 @@ pub fn is_key(name: &str) -> bool {
     name.len() == 64 && name.bytes().all(|b| matches!(b, b'0'..=b'9' | b'a'..=b'f'))
 }
 
-/// `true` for the staging names [`Store::begin`] creates: `<key>.<pid>` and
-/// `<key>.<pid>.old`.
+/// `true` for the staging names [`Store::begin`] creates: `<key>.<writer>`
+/// and `<key>.<writer>.old`, the writer `<pid>@<host>` (or `<pid>` from
+/// before hosts were named).
 fn is_staging_name(name: &str) -> bool {
     let name = name.strip_suffix(".old").unwrap_or(name);
-    name.split_once('.').is_some_and(|(key, pid)| {
-        is_key(key) && !pid.is_empty() && pid.bytes().all(|b| b.is_ascii_digit())
+    name.split_once('.').is_some_and(|(key, writer)| {
+        let (pid, host) = writer.split_once('@').unwrap_or((writer, "x"));
+        is_key(key)
+            && !pid.is_empty()
+            && pid.bytes().all(|b| b.is_ascii_digit())
+            && !host.is_empty()
+            && host
+                .bytes()
+                .all(|b| b.is_ascii_alphanumeric() || b == b'-' || b == b'.')
     })
+}
+
+/// `<pid>@<host>`: names this process among writers on many nodes sharing a store.
+fn writer_name() -> String {
+    let host = fs::read_to_string("/proc/sys/kernel/hostname").unwrap_or_default();
+    let host: String = host
+        .trim()
+        .chars()
+        .filter(|c| c.is_ascii_alphanumeric() || *c == '-' || *c == '.')
+        .collect();
+    let host = if host.is_empty() {
+        "localhost".into()
+    } else {
+        host
+    };
+    format!("{}@{host}", std::process::id())
 }
 
 /// `true` for the temporary names [`write_atomically`] creates for refs and
@@ -269,13 +299,18 @@ impl Store {
                 });
             }
             fs::create_dir_all(root).map_err(io_error(root))?;
-            let marker = serde_json::to_vec_pretty(&Marker::current()).map_err(|source| {
-                StoreError::Json {
-                    path: store.marker_path(),
-                    source,
-                }
-            })?;
-            write_atomically(&store.marker_path(), &marker)?;
+            // Under the exclusive lock, which debris cleaning also takes: a
+            // concurrent run never removes the marker's temporary file.
+            let _lock = store.lock()?;
+            if !store.check_marker()? {
+                let marker = serde_json::to_vec_pretty(&Marker::current()).map_err(|source| {
+                    StoreError::Json {
+                        path: store.marker_path(),
+                        source,
+                    }
+                })?;
+                write_atomically(&store.marker_path(), &marker)?;
+            }
         }
         for dir in ["artifacts", "refs", "tmp"] {
             let path = root.join(dir);
@@ -368,31 +403,59 @@ impl Store {
         &self.root
     }
 
-    /// Takes the exclusive lock, waiting (with a message on stderr) while another
-    /// process holds it.
-    pub fn lock(&self) -> Result<StoreLock, StoreError> {
+    fn lock_file(&self) -> Result<(File, PathBuf), StoreError> {
         let path = self.root.join("store.lock");
-        let mut file = OpenOptions::new()
+        let file = OpenOptions::new()
             .create(true)
             .truncate(false)
             .read(true)
             .write(true)
             .open(&path)
             .map_err(io_error(&path))?;
+        Ok((file, path))
+    }
+
+    /// Says on stderr who holds the lock a call is about to wait for.
+    fn announce_wait(path: &Path, what: &str) {
+        let holder = fs::read_to_string(path).unwrap_or_default();
+        let holder = match holder.trim() {
+            "" => "another process".to_string(),
+            writer => format!("process {writer}"),
+        };
+        eprintln!(
+            "waiting for the store lock {} (held by {holder}) {what}...",
+            path.display()
+        );
+    }
+
+    /// Takes the exclusive lock (`gc`: no writer runs meanwhile), waiting
+    /// with a message on stderr while another process holds it.
+    pub fn lock(&self) -> Result<StoreLock, StoreError> {
+        let (mut file, path) = self.lock_file()?;
         if file.try_lock().is_err() {
-            let holder = fs::read_to_string(&path).unwrap_or_default();
-            let holder = match holder.trim() {
-                "" => "another process".to_string(),
-                pid => format!("process {pid}"),
-            };
-            eprintln!(
-                "waiting for the store lock {} (held by {holder}) ...",
-                path.display()
-            );
+            Store::announce_wait(&path, "");
             file.lock().map_err(io_error(&path))?;
         }
         file.set_len(0).map_err(io_error(&path))?;
-        write!(file, "{}", std::process::id()).map_err(io_error(&path))?;
+        write!(file, "{}", writer_name()).map_err(io_error(&path))?;
+        Ok(StoreLock { _file: file })
+    }
+
+    /// Takes the lock of a writing run: shared with other runs (many writers,
+    /// on many nodes, commit artifacts at once), exclusive of `gc`. When no
+    /// other process holds it, first removes debris of interrupted runs.
+    pub fn lock_for_writing(&self) -> Result<StoreLock, StoreError> {
+        let (file, path) = self.lock_file()?;
+        if file.try_lock().is_ok() {
+            let lock = StoreLock { _file: file };
+            self.clean_staging(&lock)?;
+            lock._file.lock_shared().map_err(io_error(&path))?;
+            return Ok(lock);
+        }
+        if file.try_lock_shared().is_err() {
+            Store::announce_wait(&path, "for gc to finish ");
+            file.lock_shared().map_err(io_error(&path))?;
+        }
         Ok(StoreLock { _file: file })
     }
 
@@ -455,12 +518,15 @@ impl Store {
         }
     }
 
-    /// Starts writing the artifact `key` of `stage` in a fresh staging directory.
+    /// Starts writing the artifact `key` of `stage` in a fresh staging
+    /// directory named for this writer.
     pub fn begin(&self, stage: &str, key: &str) -> Result<Staging, StoreError> {
-        let dir = self
-            .root
-            .join("tmp")
-            .join(format!("{key}.{}", std::process::id()));
+        self.begin_as(stage, key, &writer_name())
+    }
+
+    /// [`Store::begin`] for the writer named `writer` (`<pid>@<host>`).
+    fn begin_as(&self, stage: &str, key: &str, writer: &str) -> Result<Staging, StoreError> {
+        let dir = self.root.join("tmp").join(format!("{key}.{writer}"));
         if dir.exists() {
             fs::remove_dir_all(&dir).map_err(io_error(&dir))?;
         }
@@ -468,10 +534,7 @@ impl Store {
         Ok(Staging {
             dir,
             target: self.artifact_dir(stage, key),
-            trash: self
-                .root
-                .join("tmp")
-                .join(format!("{key}.{}.old", std::process::id())),
+            trash: self.root.join("tmp").join(format!("{key}.{writer}.old")),
             files: Vec::new(),
             committed: false,
         })
@@ -804,9 +867,12 @@ impl Staging {
     }
 
     /// Seals and writes the manifest last, then renames the directory into
-    /// place, replacing an older or damaged artifact of the same key; returns
-    /// the sealed manifest.
-    pub fn commit(mut self, manifest: Manifest) -> Result<Manifest, StoreError> {
+    /// place and returns the sealed manifest. With `replace`, an artifact
+    /// already under the key (damaged, or recomputed by `--force`) is moved
+    /// aside first. Otherwise an artifact that appeared under the key
+    /// meanwhile (a concurrent writer) is kept and this copy discarded, after
+    /// checking that both hold the same files ([`StoreError::Diverged`] if not).
+    pub fn commit(mut self, manifest: Manifest, replace: bool) -> Result<Manifest, StoreError> {
         let manifest = manifest.sealed();
         let manifest_path = self.dir.join("manifest.json");
         let text = serde_json::to_vec_pretty(&manifest).map_err(|source| StoreError::Json {
@@ -817,10 +883,15 @@ impl Staging {
         sync_dir(&self.dir)?;
         let parent = self.target.parent().unwrap_or(&self.dir).to_path_buf();
         fs::create_dir_all(&parent).map_err(io_error(&parent))?;
-        if self.target.exists() {
+        if replace && self.target.exists() {
             fs::rename(&self.target, &self.trash).map_err(io_error(&self.target))?;
         }
-        fs::rename(&self.dir, &self.target).map_err(io_error(&self.target))?;
+        if let Err(error) = fs::rename(&self.dir, &self.target) {
+            if !self.target.is_dir() {
+                return Err(io_error(&self.target)(error));
+            }
+            return self.keep_theirs(manifest);
+        }
         self.committed = true;
         sync_dir(&parent)?;
         if self.trash.exists() {
@@ -828,12 +899,32 @@ impl Staging {
         }
         Ok(manifest)
     }
+
+    /// Another writer committed the same key first: keep its artifact when it
+    /// holds the same files (this copy is then removed on drop).
+    fn keep_theirs(self, ours: Manifest) -> Result<Manifest, StoreError> {
+        let theirs: Manifest = read_json(&self.target.join("manifest.json"))?;
+        let hashes = |m: &Manifest| -> Vec<(String, String)> {
+            let mut files: Vec<_> = m
+                .files
+                .iter()
+                .map(|f| (f.name.clone(), f.sha256.clone()))
+                .collect();
+            files.sort();
+            files
+        };
+        if hashes(&theirs) != hashes(&ours) {
+            return Err(StoreError::Diverged(self.target.clone()));
+        }
+        Ok(theirs)
+    }
 }
 
 impl Drop for Staging {
     fn drop(&mut self) {
         if !self.committed {
-            // Best effort: what remains is debris that the next locked run removes.
+            // Best effort: what remains is debris that the next run alone on
+            // the store, or gc, removes.
             let _ = fs::remove_dir_all(&self.dir);
         }
     }
@@ -923,9 +1014,58 @@ pub fn content_hashes(manifest: &Manifest) -> Vec<(String, String)> {
 mod tests {
     use super::*;
 
+    fn manifest_of(key: &str, files: &[FileRecord]) -> Manifest {
+        Manifest {
+            key: key.to_string(),
+            stage: "source".into(),
+            version: 1,
+            instance: "a".into(),
+            params: Value::Null,
+            inputs: Vec::new(),
+            files: files.to_vec(),
+            tool: "test".into(),
+            wall_seconds: 0.0,
+            manifest_sha256: None,
+        }
+    }
+
+    /// Two writers of one key: the first commits, the second keeps the
+    /// first's artifact and leaves no staging behind; different bytes under
+    /// one key are an error, not a silent overwrite.
+    #[test]
+    fn a_second_writer_of_a_key_keeps_the_first_copy() {
+        let root = std::env::temp_dir().join(format!("ternary-race-{}", std::process::id()));
+        let _ = fs::remove_dir_all(&root);
+        let store = Store::open(&root).unwrap();
+        let key = stage_key("source", 1, &Value::Null, &[]);
+        let write = |bytes: &[u8], writer: &str| {
+            let mut staging = store.begin_as("source", &key, writer).unwrap();
+            staging
+                .write_file("value.bin", bytes, 1, "c".into())
+                .unwrap();
+            let manifest = manifest_of(&key, staging.files());
+            (staging, manifest)
+        };
+        let (first, first_manifest) = write(b"one", "1@node-a");
+        let (second, second_manifest) = write(b"one", "1@node-b");
+        let (third, third_manifest) = write(b"two", "2@node-a");
+        let committed = first.commit(first_manifest, false).unwrap();
+        let kept = second.commit(second_manifest, false).unwrap();
+        assert_eq!(kept.manifest_sha256, committed.manifest_sha256);
+        assert!(matches!(
+            third.commit(third_manifest, false),
+            Err(StoreError::Diverged(_))
+        ));
+        assert!(store.staging_debris().unwrap().is_empty());
+        assert!(store.inspect("source", &key, None, Depth::Hashes).is_ok());
+    }
+
     #[test]
     fn only_ternary_names_are_staging_or_ref_debris() {
         let key = "a".repeat(64);
+        assert!(is_staging_name(&format!("{key}.123@node-7.cluster")));
+        assert!(is_staging_name(&format!("{key}.123@node-7.old")));
+        assert!(!is_staging_name(&format!("{key}.123@node/7")));
         assert!(is_staging_name(&format!("{key}.123")));
         assert!(is_staging_name(&format!("{key}.123.old")));
         assert!(!is_staging_name("my_project"));

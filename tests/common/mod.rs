@@ -153,10 +153,12 @@ pub fn strace_works() -> bool {
         .is_ok_and(|output| output.status.success())
 }
 
-/// Flips one bit of a file in its middle.
+/// Flips one bit of a file in its middle (an empty file gets one byte).
 pub fn flip_byte(path: &Path) {
     let mut bytes = fs::read(path).unwrap();
-    let middle = bytes.len() / 2;
-    bytes[middle] ^= 0x01;
+    match bytes.len() {
+        0 => bytes.push(0x01),
+        n => bytes[n / 2] ^= 0x01,
+    }
     fs::write(path, bytes).unwrap();
 }
