@@ -1,4 +1,5 @@
-//! Single adaptive-step kernels for small autonomous second-order systems `y'' = a(y)`.
+//! Adaptive integration of small autonomous second-order systems `y'' = a(y)`: single-step
+//! kernels and the one driver that strings their steps together.
 //!
 //! Each kernel takes one attempted step of size `h` from `(y, v = y')` with an embedded
 //! explicit Runge-Kutta(-Nystrom) pair and returns the propagated solution together with the
@@ -6,10 +7,17 @@
 //! The state is any [`Vector`]: fixed-size arrays on the stack for three-body scenes (no
 //! allocation, fully unrolled), `Vec<f64>` for systems sized at run time (the ring).
 //!
-//! Owned here: the tableaus (published coefficients as `const` tables, one method per file)
-//! and the arithmetic of one step. Not owned here: the step-size controller, step rejection,
-//! start/stop logic, dense output and the choice of error scales; the caller does all that.
-//! All quantities are dimensionless (the caller's scaled units).
+//! The driver ([`drive`], `driver.rs`) integrates systems of gaps (ordered particles: the
+//! three-body scene, the ring and its clusters) over a duration or until the caller stops it.
+//!
+//! Owned here: the tableaus (published coefficients as `const` tables, one method per file),
+//! the arithmetic of one step, and in the driver the attempt loop, the step budget, the
+//! step-size controller (accept/reject, growth bounds, rejection of NaN estimates and of
+//! steps that carry neighbours past each other), the local time scale and approach limit
+//! that size a step, and the stop exactly at the end time. Not owned here: the choice of
+//! error scales ([`ErrorScales`]) and what happens between steps (a scene's free-flight
+//! jumps and start/stop conditions, a ring's collision bookkeeping), given to the driver by
+//! the caller; dense output. All quantities are dimensionless (the caller's scaled units).
 //!
 //! | kernel | method | order | error ~ `h^(q+1)` | accelerations per step |
 //! | --- | --- | --- | --- | --- |
@@ -20,10 +28,12 @@
 mod dop853;
 mod dopri5;
 mod dprkn12;
+mod driver;
 
 pub use dop853::Dop853;
 pub use dopri5::Dopri5;
 pub use dprkn12::Dprkn12;
+pub use driver::{AfterStep, Drive, Ending, ErrorScales, Span, Work, drive};
 
 /// A state vector of `len` components: `[f64; D]` or `Vec<f64>`.
 pub trait Vector: Clone {
@@ -109,68 +119,6 @@ pub trait Integrator {
         position_scale: &V,
         velocity_scale: &V,
     ) -> Step<V>;
-}
-
-/// Step-size control in units of a caller's time scale (the ratio `h / tau`):
-/// the classical controller `ratio *= safety * error^(-1/(q+1))`, bounded per
-/// step, with no growth right after a rejection (Hairer, Norsett & Wanner, II.4).
-#[derive(Clone, Copy, Debug)]
-pub struct StepControl {
-    /// Current step in units of the caller's time scale.
-    pub ratio: f64,
-    exponent: f64,
-    just_rejected: bool,
-}
-
-/// Controller safety factor and bounds on the change per step.
-const SAFETY: f64 = 0.9;
-const MIN_STEP_FACTOR: f64 = 0.2;
-const MAX_STEP_FACTOR: f64 = 5.0;
-
-/// The step collapsed to rounding: the problem is singular at this point.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct StepCollapse;
-
-impl StepControl {
-    /// A controller for integrator `I` starting at `ratio`.
-    pub fn new<I: Integrator>(ratio: f64) -> StepControl {
-        StepControl {
-            ratio,
-            exponent: -1.0 / f64::from(I::ERROR_ORDER + 1),
-            just_rejected: false,
-        }
-    }
-
-    /// Shrinks the step after a rejected trial with estimate `error` (a trial
-    /// rejected for another reason with `error <= 1`, such as two particles
-    /// crossing, is halved).
-    pub fn reject(&mut self, error: f64) -> Result<(), StepCollapse> {
-        self.just_rejected = true;
-        let factor = if error > 1.0 && error.is_finite() {
-            (SAFETY * error.powf(self.exponent)).clamp(MIN_STEP_FACTOR, SAFETY)
-        } else if error <= 1.0 {
-            0.5
-        } else {
-            MIN_STEP_FACTOR
-        };
-        self.ratio *= factor;
-        if self.ratio.is_nan() || self.ratio <= f64::EPSILON {
-            Err(StepCollapse)
-        } else {
-            Ok(())
-        }
-    }
-
-    /// Adapts the step after an accepted trial with estimate `error`.
-    pub fn accept(&mut self, error: f64) {
-        let growth_cap = if self.just_rejected {
-            1.0
-        } else {
-            MAX_STEP_FACTOR
-        };
-        self.just_rejected = false;
-        self.ratio *= (SAFETY * error.powf(self.exponent)).clamp(MIN_STEP_FACTOR, growth_cap);
-    }
 }
 
 /// Stages of an explicit Runge-Kutta method applied to the first-order system

@@ -311,7 +311,7 @@ impl<P: PairPotential> ClusterRing<P> {
             duration,
             self.tolerance,
             max_steps,
-            |gaps, _, _, rates| {
+            |gaps, rates| {
                 let velocities = ring_velocities(rates, momentum);
                 lineages.observe(&members, &velocities, |k| {
                     touching(&forces_copy, collision_range, gaps[k])
@@ -559,7 +559,7 @@ impl RunJob<'_> {
             self.duration,
             self.tolerance,
             self.max_steps,
-            |gaps, _, _, rates| {
+            |gaps, rates| {
                 let velocities = run_velocities(rates, self.centre);
                 lineages.observe(self.run, &velocities, |k| {
                     touching(cluster.forces, self.collision_range, gaps[k])
@@ -831,7 +831,7 @@ mod tests {
                 period,
                 1e-14,
                 10_000_000,
-                |_, _, _, _| (),
+                |_, _| (),
             )
             .unwrap();
             assert!(

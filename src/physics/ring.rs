@@ -13,13 +13,16 @@
 //! This module integrates the whole ring on one adaptive step (DPRKN12, the
 //! step set by the fastest pair anywhere).
 
+use std::convert::Infallible;
 use std::f64::consts::PI;
 
 use rand::RngExt;
 use rand_distr::StandardNormal;
 
 use super::potential::PairPotential;
-use crate::integrate::{Acceleration, Dprkn12, Integrator, StepControl, Vector};
+use crate::integrate::{
+    Acceleration, AfterStep, Dprkn12, Drive, Ending, ErrorScales, Span, Vector, drive,
+};
 use crate::linalg::symmetric_eigen;
 
 /// Which pairs interact.
@@ -359,16 +362,8 @@ pub fn ring_velocities(rates: &[f64], momentum: f64) -> Vec<f64> {
     offsets.iter().map(|o| first + o).collect()
 }
 
-/// Work done by [`evolve`].
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct RingWork {
-    /// Accepted steps.
-    pub steps: u64,
-    /// Rejected steps.
-    pub rejected: u64,
-    /// Force evaluations (each a sweep over all interacting pairs).
-    pub evaluations: u64,
-}
+/// Work done by [`evolve`] and [`advance`].
+pub use crate::integrate::Work as RingWork;
 
 /// Why an evolution stopped early.
 #[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
@@ -379,30 +374,6 @@ pub enum RingError {
     /// The step size collapsed (a singular approach).
     #[error("step size collapsed")]
     Breakdown,
-}
-
-/// A step never lets an approaching gap close by more than this fraction.
-const APPROACH_FRACTION: f64 = 0.5;
-/// First step in units of the local time scale; the controller corrects it.
-const INITIAL_STEP_RATIO: f64 = 0.1;
-
-/// Local time scale of the fastest gap: `g / sqrt(w^2 + g |g''|)` (the time to
-/// close a gap, or to turn around in it), minimized over all gaps.
-fn local_time_scale(gaps: &[f64], rates: &[f64], accelerations: &[f64]) -> f64 {
-    gaps.iter()
-        .zip(rates)
-        .zip(accelerations)
-        .map(|((g, w), a)| g / (w * w + g * a.abs()).sqrt())
-        .fold(f64::INFINITY, f64::min)
-}
-
-/// Largest step by the free-flight time to contact of approaching neighbours.
-fn approach_limit(gaps: &[f64], rates: &[f64]) -> f64 {
-    gaps.iter()
-        .zip(rates)
-        .filter(|(_, w)| **w < 0.0)
-        .map(|(g, w)| APPROACH_FRACTION * g / -w)
-        .fold(f64::INFINITY, f64::min)
 }
 
 /// Advances `state` by `duration` with DPRKN12 on one adaptive step for the
@@ -422,16 +393,15 @@ pub fn evolve<P: PairPotential>(
         duration,
         tolerance,
         max_steps,
-        |_, _, _, _| (),
+        |_, _| (),
     )
 }
 
 /// Advances gaps and gap rates under `forces` by `duration` on adaptive
-/// DPRKN12 steps (the whole ring, or one cluster of it): the step is a
-/// controlled fraction of the fastest gap's time scale, never lets an
-/// approaching gap close by more than half, and ends exactly at `duration`.
-/// `on_step(gaps, accelerations, before, after)` sees the gaps and gap
-/// accelerations after every accepted step and the gap rates before and after it.
+/// DPRKN12 steps (the whole ring, or one cluster of it) with the [`drive`]r:
+/// the step is a controlled fraction of the fastest gap's time scale, never
+/// lets an approaching gap close by more than half, and ends exactly at
+/// `duration`. `on_step(gaps, rates)` sees the state after every accepted step.
 pub fn advance<V: Vector, A: Acceleration<V>>(
     forces: &A,
     gaps: &mut V,
@@ -439,70 +409,54 @@ pub fn advance<V: Vector, A: Acceleration<V>>(
     duration: f64,
     tolerance: f64,
     max_steps: u64,
-    mut on_step: impl FnMut(&[f64], &[f64], &[f64], &[f64]),
+    mut on_step: impl FnMut(&[f64], &[f64]),
 ) -> Result<RingWork, RingError> {
-    let mut work = RingWork {
-        evaluations: 1,
-        ..RingWork::default()
-    };
-    let mut accelerations = forces.acceleration(gaps);
-    let mut control = StepControl::new::<Dprkn12>(INITIAL_STEP_RATIO);
-    let mut velocity_scale = gaps.zeros_like();
-    velocity_scale
+    let mut rate_scale = gaps.zeros_like();
+    rate_scale
         .components_mut()
         .iter_mut()
         .for_each(|s| *s = tolerance);
-    let mut elapsed = 0.0;
-    while elapsed < duration {
-        if work.steps + work.rejected >= max_steps {
-            return Err(RingError::StepBudget(max_steps));
-        }
-        let remaining = duration - elapsed;
-        let (g, w) = (gaps.components(), rates.components());
-        let step = (control.ratio * local_time_scale(g, w, accelerations.components()))
-            .min(approach_limit(g, w))
-            .min(remaining);
-        let mut position_scale = gaps.clone();
-        position_scale
+    let scales = RingErrorScales {
+        tolerance,
+        rate_scale,
+    };
+    let span = Span {
+        duration,
+        max_attempts: max_steps,
+    };
+    let Drive { ending, work } =
+        drive::<Dprkn12, _, _, _>(forces, &scales, gaps, rates, span, |gaps, rates, _| {
+            on_step(gaps.components(), rates.components());
+            AfterStep::<Infallible>::Continue
+        });
+    match ending {
+        Ending::Elapsed => Ok(work),
+        Ending::Stopped(never) => match never {},
+        Ending::BudgetExhausted => Err(RingError::StepBudget(max_steps)),
+        Ending::Collapse => Err(RingError::Breakdown),
+    }
+}
+
+/// A ring's error scales: each gap to `tolerance` relative to itself, each
+/// rate to `tolerance` in `v_th`.
+struct RingErrorScales<V> {
+    tolerance: f64,
+    rate_scale: V,
+}
+
+impl<V: Vector> ErrorScales<V> for RingErrorScales<V> {
+    fn gap_scale(&self, gaps: &V) -> V {
+        let mut scale = gaps.clone();
+        scale
             .components_mut()
             .iter_mut()
-            .for_each(|s| *s *= tolerance);
-        let trial = Dprkn12::step(
-            forces,
-            gaps,
-            rates,
-            &accelerations,
-            step,
-            &position_scale,
-            &velocity_scale,
-        );
-        work.evaluations += u64::from(Dprkn12::EVALUATIONS_PER_STEP);
-        // `!(e <= 1)` also rejects a NaN error (overflowing forces at a
-        // trial stage that nearly closed a gap).
-        let admissible = trial.error <= 1.0 && trial.y.components().iter().all(|&g| g > 0.0);
-        if !admissible {
-            work.rejected += 1;
-            control
-                .reject(trial.error)
-                .map_err(|_| RingError::Breakdown)?;
-            continue;
-        }
-        work.steps += 1;
-        elapsed = if step == remaining {
-            duration
-        } else {
-            elapsed + step
-        };
-        on_step(
-            trial.y.components(),
-            trial.a.components(),
-            rates.components(),
-            trial.v.components(),
-        );
-        (*gaps, *rates, accelerations) = (trial.y, trial.v, trial.a);
-        control.accept(trial.error);
+            .for_each(|s| *s *= self.tolerance);
+        scale
     }
-    Ok(work)
+
+    fn rate_scale(&self) -> &V {
+        &self.rate_scale
+    }
 }
 
 #[cfg(test)]

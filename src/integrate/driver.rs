@@ -1,0 +1,505 @@
+//! The adaptive step driver for systems of gaps: particles on a line or a ring that keep their
+//! order, whose state is the gaps `g_k > 0` between neighbours and their rates `g_k'`.
+//!
+//! [`drive`] owns everything around a single step of an [`Integrator`]: the attempt loop, the
+//! step budget (accepted and rejected attempts alike), the step-size controller and the stop
+//! exactly at the end time. The caller supplies what differs: the acceleration field, the error
+//! scales ([`ErrorScales`]) and what happens after an accepted step ([`AfterStep`]: go on, a
+//! state moved by the caller such as a free-flight jump, or a stop).
+//!
+//! A step is `h = ratio * tau`: `tau` the local time scale of the fastest gap
+//! ([`local_time_scale`]), `ratio` the controlled quantity. It is capped by the approach limit
+//! (no approaching gap may close by more than [`APPROACH_FRACTION`] of itself in free flight) and
+//! by the time left. A trial is accepted when its error estimate is at most 1 and every gap stays
+//! positive; a NaN estimate (forces overflowing at a stage that nearly closed a gap) is rejected.
+//! All quantities are in the caller's scaled units.
+
+use super::{Acceleration, Integrator, Step, Vector};
+
+/// Fraction of the free-flight time to contact that one step may cover: a step never carries
+/// two approaching neighbours past each other.
+const APPROACH_FRACTION: f64 = 0.5;
+/// First step in units of the local time scale; the controller corrects it.
+const INITIAL_STEP_RATIO: f64 = 0.1;
+
+/// Absolute error allowed per step and component, the scales of [`Integrator::step`].
+pub trait ErrorScales<V> {
+    /// Allowed error of each gap in a step from `gaps`.
+    fn gap_scale(&self, gaps: &V) -> V;
+    /// Allowed error of each gap rate.
+    fn rate_scale(&self) -> &V;
+}
+
+/// What a drive does after an accepted step.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum AfterStep<T> {
+    /// Take the next step.
+    Continue,
+    /// The caller moved the gaps and rates along the trajectory (an exact free-flight jump):
+    /// the acceleration is evaluated anew there. The move's own duration is the caller's
+    /// business; the drive's clock counts integrated steps only.
+    Moved,
+    /// End the drive with `T`.
+    Stop(T),
+}
+
+/// How long a drive may run.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Span {
+    /// Integration time; infinite to run until [`AfterStep::Stop`].
+    pub duration: f64,
+    /// Step attempts, accepted and rejected, before the drive gives up.
+    pub max_attempts: u64,
+}
+
+/// Work done by a drive.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Work {
+    /// Accepted steps.
+    pub steps: u64,
+    /// Rejected step attempts.
+    pub rejected: u64,
+    /// Acceleration evaluations, including the one at the start and one per move.
+    pub evaluations: u64,
+}
+
+/// How a drive ended.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Ending<T> {
+    /// The whole duration was integrated; the state is at its end exactly.
+    Elapsed,
+    /// The caller stopped the drive after an accepted step.
+    Stopped(T),
+    /// The attempt budget ran out.
+    BudgetExhausted,
+    /// The step collapsed to rounding: the problem is singular here.
+    Collapse,
+}
+
+/// The result of [`drive`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Drive<T> {
+    /// How the drive ended.
+    pub ending: Ending<T>,
+    /// What it cost.
+    pub work: Work,
+}
+
+/// Integrates `gaps'' = acceleration(gaps)` from `(gaps, rates)` on adaptive steps of `I` for
+/// `span.duration`, leaving the final state in `gaps` and `rates` (the last accepted one when
+/// the drive fails). `after_step(gaps, rates, h)` runs after every accepted step of size `h`.
+pub fn drive<I: Integrator, V: Vector, A: Acceleration<V>, T>(
+    acceleration: &A,
+    scales: &impl ErrorScales<V>,
+    gaps: &mut V,
+    rates: &mut V,
+    span: Span,
+    mut after_step: impl FnMut(&mut V, &mut V, f64) -> AfterStep<T>,
+) -> Drive<T> {
+    let mut work = Work {
+        evaluations: 1,
+        ..Work::default()
+    };
+    let mut accelerations = acceleration.acceleration(gaps);
+    // The controller adapts the step in units of the local time scale, the quantity the
+    // error actually depends on (see `local_time_scale`).
+    let mut control = StepControl::new::<I>(INITIAL_STEP_RATIO);
+    let mut elapsed = 0.0;
+    while elapsed < span.duration {
+        if work.steps + work.rejected >= span.max_attempts {
+            return Drive {
+                ending: Ending::BudgetExhausted,
+                work,
+            };
+        }
+        let remaining = span.duration - elapsed;
+        let (g, w) = (gaps.components(), rates.components());
+        let step = (control.ratio * local_time_scale(g, w, accelerations.components()))
+            .min(approach_limit(g, w))
+            .min(remaining);
+        let trial = I::step(
+            acceleration,
+            gaps,
+            rates,
+            &accelerations,
+            step,
+            &scales.gap_scale(gaps),
+            scales.rate_scale(),
+        );
+        work.evaluations += u64::from(I::EVALUATIONS_PER_STEP);
+        if !admissible(&trial) {
+            work.rejected += 1;
+            if control.reject(trial.error).is_err() {
+                return Drive {
+                    ending: Ending::Collapse,
+                    work,
+                };
+            }
+            continue;
+        }
+        work.steps += 1;
+        elapsed = if step == remaining {
+            span.duration
+        } else {
+            elapsed + step
+        };
+        (*gaps, *rates, accelerations) = (trial.y, trial.v, trial.a);
+        control.accept(trial.error);
+        match after_step(gaps, rates, step) {
+            AfterStep::Continue => {}
+            AfterStep::Moved => {
+                accelerations = acceleration.acceleration(gaps);
+                work.evaluations += 1;
+            }
+            AfterStep::Stop(value) => {
+                return Drive {
+                    ending: Ending::Stopped(value),
+                    work,
+                };
+            }
+        }
+    }
+    Drive {
+        ending: Ending::Elapsed,
+        work,
+    }
+}
+
+/// Whether a trial step may be taken: its error within tolerance (`!(e <= 1)` also rejects a
+/// NaN estimate) and no two neighbours carried past each other (every gap still positive).
+#[inline(always)]
+fn admissible<V: Vector>(trial: &Step<V>) -> bool {
+    trial.error <= 1.0 && trial.y.components().iter().all(|&g| g > 0.0)
+}
+
+/// Time over which the gaps change appreciably:
+/// `tau = min_k g_k / sqrt(g_k'^2 + g_k |g_k''|)`, the time to contact in free approach and
+/// `sqrt(g / |g''|)` at a turning point. The local error of a step of size `h` is a steep
+/// function of `h / tau` (the force is analytic within a radius of order `tau` in complex
+/// time), so the controller adapts `h / tau` rather than `h`: the step then follows the
+/// geometry of approach and separation instead of lagging behind it.
+#[inline(always)]
+fn local_time_scale(gaps: &[f64], rates: &[f64], accelerations: &[f64]) -> f64 {
+    gaps.iter()
+        .zip(rates)
+        .zip(accelerations)
+        .map(|((g, w), a)| g / (w * w + g * a.abs()).sqrt())
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// Largest step allowed by the free-flight time to contact `g / -g'` of approaching gaps.
+#[inline(always)]
+fn approach_limit(gaps: &[f64], rates: &[f64]) -> f64 {
+    gaps.iter()
+        .zip(rates)
+        .filter(|(_, w)| **w < 0.0)
+        .map(|(g, w)| APPROACH_FRACTION * g / -w)
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// Step-size control in units of the local time scale (the ratio `h / tau`): the classical
+/// controller `ratio *= safety * error^(-1/(q+1))`, bounded per step, with no growth right
+/// after a rejection (Hairer, Norsett & Wanner, II.4).
+#[derive(Clone, Copy, Debug)]
+struct StepControl {
+    /// Current step in units of the local time scale.
+    ratio: f64,
+    /// `-1 / (q + 1)`, `q` the integrator's error order.
+    exponent: f64,
+    just_rejected: bool,
+}
+
+/// Controller safety factor and bounds on the change per step.
+const SAFETY: f64 = 0.9;
+const MIN_STEP_FACTOR: f64 = 0.2;
+const MAX_STEP_FACTOR: f64 = 5.0;
+
+/// The step collapsed to rounding: the problem is singular at this point.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct StepCollapse;
+
+impl StepControl {
+    /// A controller for integrator `I` starting at `ratio`.
+    fn new<I: Integrator>(ratio: f64) -> StepControl {
+        StepControl {
+            ratio,
+            exponent: -1.0 / f64::from(I::ERROR_ORDER + 1),
+            just_rejected: false,
+        }
+    }
+
+    /// Shrinks the step after a rejected trial with estimate `error` (a trial rejected for
+    /// another reason with `error <= 1`, such as two particles crossing, is halved; a NaN or
+    /// infinite estimate shrinks it by the largest factor).
+    fn reject(&mut self, error: f64) -> Result<(), StepCollapse> {
+        self.just_rejected = true;
+        let factor = if error > 1.0 && error.is_finite() {
+            (SAFETY * error.powf(self.exponent)).clamp(MIN_STEP_FACTOR, SAFETY)
+        } else if error <= 1.0 {
+            0.5
+        } else {
+            MIN_STEP_FACTOR
+        };
+        self.ratio *= factor;
+        if self.ratio.is_nan() || self.ratio <= f64::EPSILON {
+            Err(StepCollapse)
+        } else {
+            Ok(())
+        }
+    }
+
+    /// Adapts the step after an accepted trial with estimate `error`.
+    fn accept(&mut self, error: f64) {
+        let growth_cap = if self.just_rejected {
+            1.0
+        } else {
+            MAX_STEP_FACTOR
+        };
+        self.just_rejected = false;
+        self.ratio *= (SAFETY * error.powf(self.exponent)).clamp(MIN_STEP_FACTOR, growth_cap);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::integrate::{Dop853, Dopri5, Dprkn12};
+    use std::convert::Infallible;
+
+    /// Rest length of [`Spring`].
+    const REST: f64 = 2.0;
+
+    /// Two particles joined by a spring of rest length [`REST`] and unit angular frequency:
+    /// `g'' = REST - g`, solved by `g(t) = REST + A cos t + B sin t`.
+    struct Spring;
+
+    impl Acceleration<[f64; 1]> for Spring {
+        fn acceleration(&self, gap: &[f64; 1]) -> [f64; 1] {
+            [REST - gap[0]]
+        }
+    }
+
+    /// A field that is NaN everywhere, as forces overflowing at every trial stage.
+    struct Overflowing;
+
+    impl Acceleration<[f64; 1]> for Overflowing {
+        fn acceleration(&self, _gap: &[f64; 1]) -> [f64; 1] {
+            [f64::NAN]
+        }
+    }
+
+    /// The uniform field `g'' = PULL`, integrated exactly (to rounding) by every pair.
+    struct Uniform;
+
+    const PULL: f64 = 0.5;
+
+    impl Acceleration<[f64; 1]> for Uniform {
+        fn acceleration(&self, _gap: &[f64; 1]) -> [f64; 1] {
+            [PULL]
+        }
+    }
+
+    /// The same absolute error `tolerance` for the gap and its rate.
+    struct Absolute([f64; 1]);
+
+    impl ErrorScales<[f64; 1]> for Absolute {
+        fn gap_scale(&self, _gaps: &[f64; 1]) -> [f64; 1] {
+            self.0
+        }
+
+        fn rate_scale(&self) -> &[f64; 1] {
+            &self.0
+        }
+    }
+
+    /// Drives `field` from `(gap, rate)` for `duration` at tolerance `tolerance`, with
+    /// `after_step` after every accepted step.
+    fn run<I: Integrator, A: Acceleration<[f64; 1]>, T>(
+        field: &A,
+        (gap, rate): (f64, f64),
+        duration: f64,
+        tolerance: f64,
+        max_attempts: u64,
+        after_step: impl FnMut(&mut [f64; 1], &mut [f64; 1], f64) -> AfterStep<T>,
+    ) -> ([f64; 1], [f64; 1], Drive<T>) {
+        let (mut gaps, mut rates) = ([gap], [rate]);
+        let span = Span {
+            duration,
+            max_attempts,
+        };
+        let scales = Absolute([tolerance]);
+        let drive = drive::<I, _, _, _>(field, &scales, &mut gaps, &mut rates, span, after_step);
+        (gaps, rates, drive)
+    }
+
+    /// An observer that never stops a drive.
+    fn go_on(_: &mut [f64; 1], _: &mut [f64; 1], _: f64) -> AfterStep<Infallible> {
+        AfterStep::Continue
+    }
+
+    /// Largest deviation of `(gap, rate)` from the spring released at rest at `REST + 1`,
+    /// `(REST + cos t, -sin t)`, at time `t`.
+    fn spring_error(gaps: [f64; 1], rates: [f64; 1], t: f64) -> f64 {
+        (gaps[0] - (REST + t.cos()))
+            .abs()
+            .max((rates[0] + t.sin()).abs())
+    }
+
+    /// Over three periods the spring stays on its closed form within the local tolerance
+    /// summed over the accepted steps (the oscillator neither damps nor amplifies errors),
+    /// with every integrator.
+    fn assert_spring_follows_its_closed_form<I: Integrator>() {
+        let (duration, tolerance) = (6.0 * std::f64::consts::PI, 1e-10);
+        let (gaps, rates, drive) = run::<I, _, _>(
+            &Spring,
+            (REST + 1.0, 0.0),
+            duration,
+            tolerance,
+            100_000,
+            go_on,
+        );
+        assert_eq!(drive.ending, Ending::Elapsed, "{}", I::NAME);
+        let error = spring_error(gaps, rates, duration);
+        let bound = drive.work.steps as f64 * tolerance;
+        assert!(error <= bound, "{}: error {error:e} > {bound:e}", I::NAME);
+    }
+
+    #[test]
+    fn spring_follows_its_closed_form_at_the_tolerance() {
+        assert_spring_follows_its_closed_form::<Dopri5>();
+        assert_spring_follows_its_closed_form::<Dop853>();
+        assert_spring_follows_its_closed_form::<Dprkn12>();
+    }
+
+    /// The last accepted step is exactly the time left (the steps before it summed as the
+    /// drive sums them), so the state is the one at `duration`: in a uniform field, which
+    /// every step integrates exactly, `g + w T + PULL T^2 / 2` to rounding.
+    #[test]
+    fn the_drive_stops_exactly_at_its_duration() {
+        let ((gap, rate), duration) = ((1.0, 0.3), 7.3);
+        let mut steps = Vec::new();
+        let (gaps, rates, drive) = run::<Dprkn12, _, _>(
+            &Uniform,
+            (gap, rate),
+            duration,
+            1e-12,
+            1000,
+            |_, _, step| {
+                steps.push(step);
+                AfterStep::<Infallible>::Continue
+            },
+        );
+        assert_eq!(drive.ending, Ending::Elapsed);
+        let (last, before) = steps.split_last().unwrap();
+        assert!(!before.is_empty(), "a single step tests nothing: {steps:?}");
+        let elapsed = before.iter().fold(0.0, |t, h| t + h);
+        assert_eq!(*last, duration - elapsed, "{steps:?}");
+        // Rounding of O(10) numbers over a few steps.
+        let tolerance = 1e-13;
+        let exact_gap = gap + rate * duration + 0.5 * PULL * duration * duration;
+        assert!((gaps[0] - exact_gap).abs() < tolerance, "{gaps:?}");
+        assert!(
+            (rates[0] - (rate + PULL * duration)).abs() < tolerance,
+            "{rates:?}"
+        );
+    }
+
+    /// Accepted and rejected attempts alike use up the budget; each costs the integrator's
+    /// evaluations on top of the one at the start.
+    #[test]
+    fn the_budget_counts_accepted_and_rejected_attempts() {
+        let (_, _, accepted) = run::<Dprkn12, _, _>(&Spring, (3.0, 0.0), 1e3, 1e-10, 7, go_on);
+        let (_, _, rejected) = run::<Dprkn12, _, _>(&Overflowing, (3.0, 0.0), 1e3, 1e-10, 7, go_on);
+        for drive in [accepted, rejected] {
+            assert_eq!(drive.ending, Ending::BudgetExhausted);
+            let work = drive.work;
+            assert_eq!(work.steps + work.rejected, 7);
+            assert_eq!(
+                work.evaluations,
+                1 + 7 * u64::from(Dprkn12::EVALUATIONS_PER_STEP)
+            );
+        }
+        assert!(accepted.work.steps > 0);
+        assert_eq!(rejected.work.steps, 0);
+    }
+
+    /// A NaN error estimate is never accepted: the state stays put while the step shrinks
+    /// to rounding, and the drive reports the collapse.
+    #[test]
+    fn a_nan_error_estimate_is_rejected() {
+        let (gaps, rates, drive) =
+            run::<Dprkn12, _, _>(&Overflowing, (3.0, 0.5), 1e3, 1e-10, 1000, go_on);
+        assert_eq!(drive.ending, Ending::Collapse);
+        assert_eq!(drive.work.steps, 0);
+        assert!(drive.work.rejected > 1);
+        assert_eq!((gaps, rates), ([3.0], [0.5]));
+    }
+
+    /// A step never carries two neighbours past each other: approaching in free flight
+    /// towards contact at `t = 1`, the gap only shrinks (by at most half per step) and the
+    /// drive runs out of budget short of contact.
+    #[test]
+    fn approaching_neighbours_are_never_carried_past_each_other() {
+        let mut previous = 1.0;
+        let (gaps, _, drive) = run::<Dprkn12, _, _>(
+            &Uniform,
+            (1.0, -1.0 - PULL),
+            2.0,
+            1e-10,
+            200,
+            |gaps, _, _| {
+                assert!(gaps[0] >= 0.5 * previous, "{} after {previous}", gaps[0]);
+                previous = gaps[0];
+                AfterStep::<Infallible>::Continue
+            },
+        );
+        assert_eq!(drive.ending, Ending::BudgetExhausted);
+        assert!(gaps[0] > 0.0);
+    }
+
+    /// After [`AfterStep::Moved`] the drive goes on from the moved state with its
+    /// acceleration evaluated anew (one evaluation more), and [`AfterStep::Stop`] ends it
+    /// right after the step: a compressed spring moved to its release point after the first
+    /// step and stopped after the tenth is on the closed form at the time integrated since the
+    /// move.
+    #[test]
+    fn a_moved_state_is_continued_and_a_stop_ends_the_drive() {
+        let tolerance = 1e-10;
+        let (mut accepted, mut since_move) = (0, 0.0);
+        let (gaps, rates, drive) = run::<Dprkn12, _, _>(
+            &Spring,
+            (REST - 1.5, 0.0),
+            1e3,
+            tolerance,
+            1000,
+            |gaps, rates, step| {
+                accepted += 1;
+                match accepted {
+                    1 => {
+                        (*gaps, *rates) = ([REST + 1.0], [0.0]);
+                        AfterStep::Moved
+                    }
+                    10 => {
+                        since_move += step;
+                        AfterStep::Stop(accepted)
+                    }
+                    _ => {
+                        since_move += step;
+                        AfterStep::Continue
+                    }
+                }
+            },
+        );
+        assert_eq!(drive.ending, Ending::Stopped(10));
+        let work = drive.work;
+        assert_eq!(work.steps, 10);
+        let attempts = work.steps + work.rejected;
+        let evaluations = 1 + attempts * u64::from(Dprkn12::EVALUATIONS_PER_STEP) + 1;
+        assert_eq!(work.evaluations, evaluations);
+        let error = spring_error(gaps, rates, since_move);
+        // DPRKN12 propagates its 12th-order solution, far more accurate than the 10th-order
+        // estimate the tolerance bounds (here ~1e-13); continuing with the acceleration from
+        // before the move would leave ~3e-10.
+        assert!(error <= 0.01 * tolerance, "error {error:e}");
+    }
+}
