@@ -12,7 +12,9 @@ use ternary::config::{MAX_EXPONENT, MAX_GAS_DENSITY, MAX_RING_ENCOUNTERS, Study}
 use ternary::export::{self, ExportOptions};
 use ternary::physics::units::{Mass, PhysicalGas, ring_density_per_um};
 use ternary::pipeline::executor::{self, Action, Freshness, RunOptions, Verbosity};
+use ternary::pipeline::shards::Sharding;
 use ternary::pipeline::store::Store;
+use ternary::slurm::{self, SubmitOptions};
 use ternary::{report, stages};
 
 /// Three-body thermalization of dilute 1D gases: collision kernels, rates and
@@ -43,9 +45,21 @@ enum Command {
         /// Print only errors.
         #[arg(long)]
         quiet: bool,
+        /// Split shardable stages (collisions) into N shards, computing
+        /// missing shards and merging them (same bytes as unsharded).
+        #[arg(long, value_name = "N", default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=4096))]
+        shards: u32,
+        /// Compute only shard K of N of every shardable instance, nothing else
+        /// (one task of a Slurm array).
+        #[arg(long, value_name = "K", requires = "shards")]
+        shard: Option<u32>,
     },
     /// Show each stage instance as fresh, stale or missing, and why.
-    Status,
+    Status {
+        /// Also show which of N shards of each shardable instance are done.
+        #[arg(long, value_name = "N", default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=4096))]
+        shards: u32,
+    },
     /// Print the DAG of stage instances.
     Dag,
     /// Check every artifact to the bottom (or an exported bundle); exit non-zero on any problem.
@@ -78,10 +92,37 @@ enum Command {
         #[arg(long, default_value_t = 10)]
         rows: usize,
     },
+    /// Run the shardable stages as a Slurm array job, then merge and run the rest.
+    Slurm {
+        #[command(subcommand)]
+        which: SlurmCommand,
+    },
     /// Benchmarks (not tests); results go to docs/benchmarks.md.
     Bench {
         #[command(subcommand)]
         which: BenchCommand,
+    },
+}
+
+#[derive(Subcommand)]
+enum SlurmCommand {
+    /// Submit an array job (one task per missing shard) and a dependent merge job.
+    Submit {
+        /// Shards per shardable instance (array tasks).
+        #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u32).range(2..=4096))]
+        shards: u32,
+        /// Slurm partition.
+        #[arg(long)]
+        partition: Option<String>,
+        /// Time limit of each job (e.g. 2:00:00).
+        #[arg(long)]
+        time: Option<String>,
+        /// Most array tasks running at once.
+        #[arg(long, value_name = "K", value_parser = clap::value_parser!(u32).range(1..))]
+        max_parallel: Option<u32>,
+        /// Print the scripts instead of submitting them.
+        #[arg(long)]
+        dry_run: bool,
     },
 }
 
@@ -246,7 +287,12 @@ fn dispatch(cli: Cli) -> Result<ExitCode> {
             force,
             threads,
             quiet,
+            shards,
+            shard,
         } => {
+            if let Some(task) = shard.filter(|&task| task >= shards) {
+                bail!("--shard {task} is not below --shards {shards}");
+            }
             if let Some(threads) = threads {
                 if threads == 0 {
                     bail!("--threads must be at least 1");
@@ -266,6 +312,10 @@ fn dispatch(cli: Cli) -> Result<ExitCode> {
                 only,
                 force,
                 verbosity,
+                sharding: Sharding {
+                    shards,
+                    task: shard,
+                },
             };
             let reports = executor::run(&store, &plan, &options)?;
             let computed = reports
@@ -286,10 +336,17 @@ fn dispatch(cli: Cli) -> Result<ExitCode> {
             }
             Ok(ExitCode::SUCCESS)
         }
-        Command::Status => {
+        Command::Status { shards } => {
             let (study, store) = load(&cli.config, Opening::View)?;
-            for line in executor::status(&store, &stages::plan(&study))? {
+            for line in executor::status(&store, &stages::plan(&study), shards)? {
                 let id = line.id;
+                let progress = line.shards.map_or(String::new(), |progress| {
+                    format!(
+                        " (shards: {} of {shards} done, missing {:?})",
+                        progress.done.len(),
+                        progress.missing
+                    )
+                });
                 let key = line.key.as_deref().map_or("", |key| &key[..12]);
                 let line = match line.freshness {
                     Freshness::Fresh => format!("fresh (key {key})"),
@@ -300,7 +357,7 @@ fn dispatch(cli: Cli) -> Result<ExitCode> {
                     ),
                     Freshness::Missing(reason) => format!("missing: {reason}"),
                 };
-                emit(&format!("{:<24} {line}\n", id.to_string()));
+                emit(&format!("{:<24} {line}{progress}\n", id.to_string()));
             }
             Ok(ExitCode::SUCCESS)
         }
@@ -357,6 +414,32 @@ fn dispatch(cli: Cli) -> Result<ExitCode> {
                 Some(load(&cli.config, Opening::Existing)?.1)
             };
             emit(&report::show(store.as_ref(), &target, rows)?);
+            Ok(ExitCode::SUCCESS)
+        }
+        Command::Slurm {
+            which:
+                SlurmCommand::Submit {
+                    shards,
+                    partition,
+                    time,
+                    max_parallel,
+                    dry_run,
+                },
+        } => {
+            let (study, store) = load(&cli.config, Opening::Write)?;
+            let options = SubmitOptions {
+                shards,
+                partition,
+                time,
+                max_parallel,
+                dry_run,
+            };
+            emit(&slurm::submit(
+                &cli.config,
+                &store,
+                &stages::plan(&study),
+                &options,
+            )?);
             Ok(ExitCode::SUCCESS)
         }
         Command::Bench {

@@ -177,7 +177,7 @@ fn selected_entries(
     };
     let mut not_fresh = Vec::new();
     let mut entries = Vec::new();
-    for line in executor::status(store, plan)? {
+    for line in executor::status(store, plan, 1)? {
         let (stage, instance) = (&line.id.stage, &line.id.instance);
         if !selected(stage, instance) {
             continue;

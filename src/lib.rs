@@ -21,4 +21,5 @@ pub mod linalg;
 pub mod physics;
 pub mod pipeline;
 pub mod report;
+pub mod slurm;
 pub mod stages;

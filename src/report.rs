@@ -12,6 +12,7 @@ use polars::prelude::{DataFrame, ParquetReader, SerReader};
 
 use crate::pipeline::Stage;
 use crate::pipeline::executor::{self, Action, InstanceReport};
+use crate::pipeline::shards;
 use crate::pipeline::store::{Depth, Store, table_files};
 use crate::pipeline::table::read_parquet;
 
@@ -515,12 +516,13 @@ pub fn verify(store: &Store, stages: &[Box<dyn Stage>]) -> Result<(String, usize
 }
 
 /// Removes artifacts that neither the current key nor the last computed key of
-/// a current instance names, and staging debris. Only names ternary gives are
+/// a current instance names (shards are kept while their current artifact
+/// waits to be merged), and staging debris. Only names ternary gives are
 /// removed; foreign entries are reported and kept.
 pub fn gc(store: &Store, stages: &[Box<dyn Stage>]) -> Result<String> {
     let lock = store.lock()?;
     let mut keep: BTreeSet<(String, String)> = BTreeSet::new();
-    for line in executor::status(store, stages)? {
+    for line in executor::status(store, stages, 1)? {
         if let Some(key) = line.key {
             keep.insert((line.id.stage.clone(), key));
         }
@@ -530,8 +532,18 @@ pub fn gc(store: &Store, stages: &[Box<dyn Stage>]) -> Result<String> {
     }
     let mut removed = 0;
     let mut bytes = 0;
+    let awaiting_merge = |stage: &str, key: &str| {
+        let whole = store
+            .inspect(stage, key, None, Depth::Sizes)
+            .ok()
+            .as_ref()
+            .and_then(shards::whole_of);
+        whole.is_some_and(|(stage, key)| {
+            !store.artifact_dir(&stage, &key).is_dir() && keep.contains(&(stage, key))
+        })
+    };
     for (stage, key) in store.artifacts()? {
-        if !keep.contains(&(stage.clone(), key.clone())) {
+        if !keep.contains(&(stage.clone(), key.clone())) && !awaiting_merge(&stage, &key) {
             bytes += store.remove_artifact(&lock, &stage, &key)?;
             removed += 1;
         }

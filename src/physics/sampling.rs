@@ -378,7 +378,23 @@ impl SamplingPlan {
         engine: &EngineSettings,
         done: impl Fn(usize) + Sync,
     ) -> Vec<SceneRecord> {
+        self.integrate_randomizations(potential, engine, 0..self.randomizations, done)
+    }
+
+    /// [`SamplingPlan::integrate_all`] for the randomizations in
+    /// `randomizations` only: the same records, a contiguous part of the whole
+    /// set (records are ordered by randomization first).
+    pub fn integrate_randomizations(
+        &self,
+        potential: &Potential,
+        engine: &EngineSettings,
+        randomizations: std::ops::Range<u32>,
+        done: impl Fn(usize) + Sync,
+    ) -> Vec<SceneRecord> {
         self.chunks()
+            .into_iter()
+            .filter(|chunk| randomizations.contains(&chunk.randomization))
+            .collect::<Vec<_>>()
             .par_iter()
             .map(|chunk| {
                 let records = self.integrate(chunk, potential, engine);

@@ -8,16 +8,20 @@
 
 use std::collections::BTreeMap;
 use std::io::{ErrorKind, IsTerminal, Write};
+use std::ops::Range;
+use std::path::Path;
 use std::time::Instant;
 
 use indicatif::{ProgressBar, ProgressStyle};
 
 use super::key::{InputRecord, changed_params, sha256_hex, stage_key};
+use super::shards::{self, Sharding};
 use super::store::{
-    Depth, InstanceRef, Manifest, Store, StoreError, StoreLock, content_hashes, table_files,
+    Depth, FileRecord, InstanceRef, Manifest, Staging, Store, StoreError, StoreLock,
+    content_hashes, table_files,
 };
 use super::table::{PROVENANCE_KEYS, TableError, read_parquet_bytes};
-use super::{Input, InstanceId, Progress, Stage, StageError};
+use super::{Input, InstanceId, Progress, Stage, StageError, Table};
 
 /// A run could not proceed.
 #[derive(Debug, thiserror::Error)]
@@ -84,6 +88,8 @@ pub struct RunOptions {
     pub force: Vec<String>,
     /// Reporting.
     pub verbosity: Verbosity,
+    /// How shardable stages are split.
+    pub sharding: Sharding,
 }
 
 /// What the executor did with one instance.
@@ -98,8 +104,16 @@ pub enum Action {
         /// The problems of a damaged artifact under the same key that it replaced.
         repaired: Option<String>,
     },
-    /// Not selected by `--only` and not fresh.
+    /// Not selected by `--only` (or not shardable in a shard task) and not fresh.
     Skipped,
+    /// A shard task's shard of this instance: computed (seconds) or already
+    /// there (`None`).
+    Shard {
+        /// The shard's index.
+        index: u32,
+        /// Wall time when computed now.
+        seconds: Option<f64>,
+    },
 }
 
 /// One line of a run report.
@@ -241,11 +255,14 @@ pub fn run(
     let access = Access::acquire(store)?;
     let mut resolved: BTreeMap<InstanceId, Manifest> = BTreeMap::new();
     let mut reports = Vec::new();
+    let sharding = options.sharding;
     for stage in stages {
         let id = stage.id();
-        let selected = options.only.is_empty() || options.only.contains(&id.stage);
+        let shardable = stage.shard_units() > 0;
+        let selected = (options.only.is_empty() || options.only.contains(&id.stage))
+            && (sharding.task.is_none() || shardable);
         let Some(inputs) = input_records(stage.as_ref(), &resolved) else {
-            if selected {
+            if selected && sharding.task.is_none() {
                 return Err(ExecError::Plan(format!(
                     "{id}: an input is not available; run its upstream stages first (without --only)"
                 )));
@@ -283,10 +300,23 @@ pub fn run(
                 }
                 let replace = !matches!(existing, Err(None));
                 let repaired = existing.err().flatten().map(|problems| problems.join("; "));
-                let (manifest, seconds) =
-                    compute(store, stage.as_ref(), &entry, &resolved, options, replace)?;
-                resolved.insert(id.clone(), manifest);
-                Action::Computed { seconds, repaired }
+                let job = Job {
+                    store,
+                    stage: stage.as_ref(),
+                    resolved: &resolved,
+                    options,
+                };
+                match sharding.task {
+                    Some(index) => Action::Shard {
+                        index,
+                        seconds: job.shard(&entry, index)?,
+                    },
+                    None => {
+                        let (manifest, seconds) = job.compute(&entry, replace)?;
+                        resolved.insert(id.clone(), manifest);
+                        Action::Computed { seconds, repaired }
+                    }
+                }
             }
         };
         if options.verbosity == Verbosity::Normal {
@@ -327,6 +357,14 @@ fn report_line(id: &InstanceId, key: &str, action: &Action) -> String {
             repaired: Some(problems),
         } => format!("computed in {seconds:.2} s (replaced a damaged artifact: {problems})"),
         Action::Skipped => "skipped (not selected, not fresh)".to_string(),
+        Action::Shard {
+            index,
+            seconds: Some(seconds),
+        } => format!("shard {index} computed in {seconds:.2} s"),
+        Action::Shard {
+            index,
+            seconds: None,
+        } => format!("shard {index} present"),
     };
     format!("{:<24} {:<28} key {}", id.to_string(), what, &key[..12])
 }
@@ -360,17 +398,7 @@ fn load_inputs(
             let dir = store.artifact_dir(&input.stage, &manifest.key);
             let mut tables = BTreeMap::new();
             for file in &manifest.files {
-                let path = dir.join(&file.name);
-                let damaged = |detail: String| ExecError::DamagedInput {
-                    id: id.clone(),
-                    file: path.display().to_string(),
-                    detail,
-                };
-                let bytes = std::fs::read(&path).map_err(|error| damaged(error.to_string()))?;
-                let sha = sha256_hex(&bytes);
-                if sha != file.sha256 {
-                    return Err(damaged(format!("sha256 {sha}, recorded {}", file.sha256)));
-                }
+                let bytes = read_checked(&id, &dir, file)?;
                 let (batch, _) =
                     read_parquet_bytes(&file.name, bytes).map_err(|source| ExecError::Input {
                         id: id.clone(),
@@ -383,6 +411,23 @@ fn load_inputs(
         .collect()
 }
 
+/// The bytes of `file` in `dir`, hashed against the manifest's record: an
+/// input damaged since it was checked is refused.
+fn read_checked(id: &InstanceId, dir: &Path, file: &FileRecord) -> Result<Vec<u8>, ExecError> {
+    let path = dir.join(&file.name);
+    let damaged = |detail: String| ExecError::DamagedInput {
+        id: id.clone(),
+        file: path.display().to_string(),
+        detail,
+    };
+    let bytes = std::fs::read(&path).map_err(|error| damaged(error.to_string()))?;
+    let sha = sha256_hex(&bytes);
+    if sha != file.sha256 {
+        return Err(damaged(format!("sha256 {sha}, recorded {}", file.sha256)));
+    }
+    Ok(bytes)
+}
+
 fn stage_failure(id: &InstanceId) -> impl Fn(TableError) -> ExecError + '_ {
     move |source| ExecError::Stage {
         id: id.clone(),
@@ -390,82 +435,229 @@ fn stage_failure(id: &InstanceId) -> impl Fn(TableError) -> ExecError + '_ {
     }
 }
 
-fn compute(
+/// The intact shard of `stage`'s artifact `whole` over `units`, or why there
+/// is none (`None`: no shard artifact).
+fn shard_manifest(
     store: &Store,
     stage: &dyn Stage,
-    entry: &InstanceRef,
-    resolved: &BTreeMap<InstanceId, Manifest>,
-    options: &RunOptions,
-    replace: bool,
-) -> Result<(Manifest, f64), ExecError> {
-    let id = stage.id();
-    let key = &entry.key;
-    let started = Instant::now();
-    let mut staging = store.begin(&id.stage, key)?;
-    let loaded = load_inputs(store, stage, resolved)?;
-    let progress = progress_for(stage, options.verbosity);
-    let tables = stage
-        .run(&loaded, &progress)
-        .map_err(|source| ExecError::Stage {
+    whole: &InstanceRef,
+    units: &Range<u32>,
+) -> Result<Manifest, Option<Vec<String>>> {
+    let shard = shards::shard_entry(stage, whole, units);
+    let stage_name = shards::shard_stage(&stage.id().stage);
+    if !store.artifact_dir(&stage_name, &shard.key).is_dir() {
+        return Err(None);
+    }
+    store
+        .inspect(
+            &stage_name,
+            &shard.key,
+            Some(&table_files(stage.tables())),
+            Depth::Hashes,
+        )
+        .map_err(Some)
+}
+
+/// One instance to compute: the store, the stage, its resolved inputs.
+struct Job<'a> {
+    store: &'a Store,
+    stage: &'a dyn Stage,
+    resolved: &'a BTreeMap<InstanceId, Manifest>,
+    options: &'a RunOptions,
+}
+
+impl Job<'_> {
+    /// Computes and commits the whole artifact of `entry`: directly, or for a
+    /// sharded run from its shards (computing those still missing, then
+    /// concatenating them in order). `replace` moves a damaged or forced
+    /// artifact of the key aside.
+    fn compute(&self, entry: &InstanceRef, replace: bool) -> Result<(Manifest, f64), ExecError> {
+        let id = self.stage.id();
+        let started = Instant::now();
+        let mut staging = self.store.begin(&id.stage, &entry.key)?;
+        let shards = shards::ranges(self.stage.shard_units(), self.options.sharding.shards);
+        let tables = if shards.len() > 1 {
+            let mut parts = Vec::new();
+            for (_, units) in &shards {
+                parts.push(self.shard_tables(entry, units)?);
+            }
+            self.merge(parts)?
+        } else {
+            let loaded = load_inputs(self.store, self.stage, self.resolved)?;
+            self.produce(|progress| self.stage.run(&loaded, progress))?
+        };
+        let manifest = self.write(&mut staging, &id, entry, &tables, started)?;
+        let manifest = staging.commit(manifest, replace)?;
+        self.store.write_ref(&id.stage, &id.instance, entry)?;
+        Ok((manifest, started.elapsed().as_secs_f64()))
+    }
+
+    /// A shard task: computes and commits shard `index` of `entry` when it is
+    /// missing; its wall time, or `None` when it was there (or is empty).
+    fn shard(&self, entry: &InstanceRef, index: u32) -> Result<Option<f64>, ExecError> {
+        let sharding = self.options.sharding;
+        let units = shards::range(self.stage.shard_units(), sharding.shards, index);
+        if units.is_empty() || self.shard_manifest(entry, &units).is_ok() {
+            return Ok(None);
+        }
+        let started = Instant::now();
+        self.compute_shard(entry, &units)?;
+        Ok(Some(started.elapsed().as_secs_f64()))
+    }
+
+    /// The intact shard of `entry` over `units`, or why there is none.
+    fn shard_manifest(
+        &self,
+        entry: &InstanceRef,
+        units: &Range<u32>,
+    ) -> Result<Manifest, Option<Vec<String>>> {
+        shard_manifest(self.store, self.stage, entry, units)
+    }
+
+    /// Computes and commits the shard of `entry` over `units`.
+    fn compute_shard(
+        &self,
+        entry: &InstanceRef,
+        units: &Range<u32>,
+    ) -> Result<Manifest, ExecError> {
+        let id = self.stage.id();
+        let shard = shards::shard_entry(self.stage, entry, units);
+        let shard_id = InstanceId::new(
+            &shards::shard_stage(&id.stage),
+            &shards::shard_instance(&id.instance, units),
+        );
+        let started = Instant::now();
+        let mut staging = self.store.begin(&shard_id.stage, &shard.key)?;
+        let loaded = load_inputs(self.store, self.stage, self.resolved)?;
+        let tables =
+            self.produce(|progress| self.stage.run_shard(&loaded, units.clone(), progress))?;
+        let manifest = self.write(&mut staging, &shard_id, &shard, &tables, started)?;
+        let replace = self
+            .store
+            .artifact_dir(&shard_id.stage, &shard.key)
+            .is_dir();
+        Ok(staging.commit(manifest, replace)?)
+    }
+
+    /// The tables of the shard of `entry` over `units`, computed first when missing.
+    fn shard_tables(
+        &self,
+        entry: &InstanceRef,
+        units: &Range<u32>,
+    ) -> Result<Vec<Table>, ExecError> {
+        let manifest = match self.shard_manifest(entry, units) {
+            Ok(manifest) => manifest,
+            Err(_) => self.compute_shard(entry, units)?,
+        };
+        let dir = self.store.artifact_dir(&manifest.stage, &manifest.key);
+        manifest
+            .files
+            .iter()
+            .map(|file| {
+                let bytes = read_checked(&self.stage.id(), &dir, file)?;
+                Table::from_parquet(&file.name, bytes).map_err(stage_failure(&self.stage.id()))
+            })
+            .collect()
+    }
+
+    /// Each table of the shards' tables, rows concatenated in shard order.
+    fn merge(&self, parts: Vec<Vec<Table>>) -> Result<Vec<Table>, ExecError> {
+        let id = self.stage.id();
+        self.stage
+            .tables()
+            .iter()
+            .map(|name| {
+                let pieces: Vec<Table> = parts
+                    .iter()
+                    .flat_map(|tables| tables.iter().filter(|t| t.name == *name))
+                    .map(|table| Table {
+                        name: table.name.clone(),
+                        batch: table.batch.clone(),
+                        metadata: table.metadata.clone(),
+                    })
+                    .collect();
+                Table::concatenate(pieces).map_err(stage_failure(&id))
+            })
+            .collect()
+    }
+
+    /// Runs `compute` with a progress bar and checks it wrote the declared tables.
+    fn produce(
+        &self,
+        compute: impl FnOnce(&Progress) -> Result<Vec<Table>, StageError>,
+    ) -> Result<Vec<Table>, ExecError> {
+        let id = self.stage.id();
+        let progress = progress_for(self.stage, self.options.verbosity);
+        let tables = compute(&progress).map_err(|source| ExecError::Stage {
             id: id.clone(),
             source,
         })?;
-    if let Some(bar) = progress.bar {
-        bar.finish_and_clear();
+        if let Some(bar) = progress.bar {
+            bar.finish_and_clear();
+        }
+        let mut written: Vec<&str> = tables.iter().map(|t| t.name.as_str()).collect();
+        let mut declared = self.stage.tables().to_vec();
+        written.sort_unstable();
+        declared.sort_unstable();
+        if written != declared {
+            return Err(ExecError::Stage {
+                id,
+                source: StageError::Input(format!(
+                    "wrote tables [{}] but declares [{}]",
+                    written.join(", "),
+                    declared.join(", ")
+                )),
+            });
+        }
+        Ok(tables)
     }
-    let mut written: Vec<&str> = tables.iter().map(|t| t.name.as_str()).collect();
-    let mut declared = stage.tables().to_vec();
-    written.sort_unstable();
-    declared.sort_unstable();
-    if written != declared {
-        return Err(ExecError::Stage {
-            id,
-            source: StageError::Input(format!(
-                "wrote tables [{}] but declares [{}]",
-                written.join(", "),
-                declared.join(", ")
-            )),
-        });
+
+    /// Encodes `tables` with their provenance into `staging` and returns the
+    /// manifest of the artifact `id` under `entry`'s key.
+    fn write(
+        &self,
+        staging: &mut Staging,
+        id: &InstanceId,
+        entry: &InstanceRef,
+        tables: &[Table],
+        started: Instant,
+    ) -> Result<Manifest, ExecError> {
+        let values = [
+            id.stage.clone(),
+            entry.version.to_string(),
+            entry.key.clone(),
+            super::key::canonical_json(&entry.params),
+            super::key::embedded_inputs(&entry.inputs),
+            tool_version(),
+        ];
+        let provenance: BTreeMap<String, String> = PROVENANCE_KEYS
+            .iter()
+            .map(ToString::to_string)
+            .zip(values)
+            .collect();
+        for table in tables {
+            let bytes = table.to_parquet(&provenance).map_err(stage_failure(id))?;
+            let content = table.content_sha256().map_err(stage_failure(id))?;
+            staging.write_file(
+                &format!("{}.parquet", table.name),
+                &bytes,
+                table.rows(),
+                content,
+            )?;
+        }
+        Ok(Manifest {
+            key: entry.key.clone(),
+            stage: id.stage.clone(),
+            version: entry.version,
+            instance: id.instance.clone(),
+            params: entry.params.clone(),
+            inputs: entry.inputs.clone(),
+            files: staging.files().to_vec(),
+            tool: tool_version(),
+            wall_seconds: started.elapsed().as_secs_f64(),
+            manifest_sha256: None,
+        })
     }
-    let values = [
-        id.stage.clone(),
-        stage.version().to_string(),
-        key.to_string(),
-        super::key::canonical_json(&entry.params),
-        super::key::embedded_inputs(&entry.inputs),
-        tool_version(),
-    ];
-    let provenance: BTreeMap<String, String> = PROVENANCE_KEYS
-        .iter()
-        .map(ToString::to_string)
-        .zip(values)
-        .collect();
-    for table in &tables {
-        let bytes = table.to_parquet(&provenance).map_err(stage_failure(&id))?;
-        let content = table.content_sha256().map_err(stage_failure(&id))?;
-        staging.write_file(
-            &format!("{}.parquet", table.name),
-            &bytes,
-            table.rows(),
-            content,
-        )?;
-    }
-    let seconds = started.elapsed().as_secs_f64();
-    let manifest = Manifest {
-        key: key.to_string(),
-        stage: id.stage.clone(),
-        version: stage.version(),
-        instance: id.instance.clone(),
-        params: entry.params.clone(),
-        inputs: entry.inputs.clone(),
-        files: staging.files().to_vec(),
-        tool: tool_version(),
-        wall_seconds: seconds,
-        manifest_sha256: None,
-    };
-    let manifest = staging.commit(manifest, replace)?;
-    store.write_ref(&id.stage, &id.instance, entry)?;
-    Ok((manifest, seconds))
 }
 
 /// `ternary <crate version>`.
@@ -482,11 +674,29 @@ pub struct StatusLine {
     pub key: Option<String>,
     /// Fresh, stale or missing, and why.
     pub freshness: Freshness,
+    /// For a shardable instance that is not fresh, in a sharded status: the
+    /// shard indices present and missing.
+    pub shards: Option<ShardProgress>,
+}
+
+/// Shards of one instance present and missing.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct ShardProgress {
+    /// Indices of intact shards (empty shards count as done).
+    pub done: Vec<u32>,
+    /// Indices still to compute.
+    pub missing: Vec<u32>,
 }
 
 /// Freshness of every instance, with reasons, without computing anything.
-/// Artifacts are checked as `run` checks them (down to file hashes).
-pub fn status(store: &Store, stages: &[Box<dyn Stage>]) -> Result<Vec<StatusLine>, ExecError> {
+/// Artifacts are checked as `run` checks them (down to file hashes). With
+/// `shards > 1`, a shardable instance that is not fresh also reports which of
+/// its shards are done.
+pub fn status(
+    store: &Store,
+    stages: &[Box<dyn Stage>],
+    shards: u32,
+) -> Result<Vec<StatusLine>, ExecError> {
     check_plan(stages, &[])?;
     let mut resolved: BTreeMap<InstanceId, Manifest> = BTreeMap::new();
     let mut lines = Vec::new();
@@ -498,6 +708,7 @@ pub fn status(store: &Store, stages: &[Box<dyn Stage>]) -> Result<Vec<StatusLine
                 .map(|manifest| InstanceRef::from(&manifest))
         });
         let mut key = None;
+        let mut progress = None;
         let freshness = match input_records(stage.as_ref(), &resolved) {
             None => {
                 let waiting: Vec<String> = stage
@@ -522,13 +733,46 @@ pub fn status(store: &Store, stages: &[Box<dyn Stage>]) -> Result<Vec<StatusLine
                     Err(Some(problems)) => Freshness::Damaged(problems),
                     Err(None) => explain(stage.as_ref(), &current, &inputs, previous),
                 };
+                if freshness != Freshness::Fresh && stage.shard_units() > 0 && shards > 1 {
+                    let whole = InstanceRef {
+                        key: current.clone(),
+                        version: stage.version(),
+                        params: stage.params(),
+                        inputs,
+                    };
+                    progress = Some(shard_progress(store, stage.as_ref(), &whole, shards));
+                }
                 key = Some(current);
                 freshness
             }
         };
-        lines.push(StatusLine { id, key, freshness });
+        lines.push(StatusLine {
+            id,
+            key,
+            freshness,
+            shards: progress,
+        });
     }
     Ok(lines)
+}
+
+/// Which of the `shards` shards of `whole` are present.
+fn shard_progress(
+    store: &Store,
+    stage: &dyn Stage,
+    whole: &InstanceRef,
+    shards: u32,
+) -> ShardProgress {
+    let mut progress = ShardProgress::default();
+    for index in 0..shards {
+        let units = shards::range(stage.shard_units(), shards, index);
+        if units.is_empty() || shard_manifest(store, stage, whole, &units).is_ok() {
+            progress.done.push(index);
+        } else {
+            progress.missing.push(index);
+        }
+    }
+    progress
 }
 
 fn explain(
@@ -655,6 +899,7 @@ mod tests {
             only: Vec::new(),
             force: force.iter().map(ToString::to_string).collect(),
             verbosity: Verbosity::Quiet,
+            sharding: Sharding::default(),
         };
         run(store, stages, &options)
             .unwrap()
@@ -685,7 +930,7 @@ mod tests {
             ["source"]
         );
         // A real change propagates, and the reason is reported before the run.
-        let lines = status(&store, &plan("second", 2.5)).unwrap();
+        let lines = status(&store, &plan("second", 2.5), 1).unwrap();
         assert_eq!(
             lines[0].freshness,
             Freshness::Stale(vec!["parameter value: 1.5 -> 2.5".into()])
@@ -705,7 +950,7 @@ mod tests {
     fn downstream_reads_upstream_tables() {
         let store = temporary_store("read");
         computed(&store, &plan("x", 3.0), &[]);
-        let lines = status(&store, &plan("x", 3.0)).unwrap();
+        let lines = status(&store, &plan("x", 3.0), 1).unwrap();
         let key = lines[1].key.clone().unwrap();
         let (batch, metadata) = crate::pipeline::table::read_parquet(
             &store.artifact_dir("double", &key).join("value.parquet"),
@@ -727,6 +972,7 @@ mod tests {
             only: vec!["sorce".into()],
             force: Vec::new(),
             verbosity: Verbosity::Quiet,
+            sharding: Sharding::default(),
         };
         let error = run(&store, &plan("x", 1.0), &options).unwrap_err();
         assert!(

@@ -6,11 +6,13 @@
 
 pub mod executor;
 pub mod key;
+pub mod shards;
 pub mod store;
 pub mod table;
 
 use std::collections::BTreeMap;
 use std::fmt;
+use std::ops::Range;
 
 use arrow::array::RecordBatch;
 use indicatif::ProgressBar;
@@ -106,4 +108,23 @@ pub trait Stage: Sync {
     /// Computes the output tables. Must be deterministic: the same parameters and
     /// inputs give the same tables whatever the thread count.
     fn run(&self, inputs: &[Input], progress: &Progress) -> Result<Vec<Table>, StageError>;
+
+    /// Independent units of work (randomizations, runs) the stage can be
+    /// split into for sharded runs; 0 (the default) when it cannot be split.
+    fn shard_units(&self) -> u32 {
+        0
+    }
+
+    /// The tables of units `units` only: the rows those units contribute, in
+    /// order, so that each table concatenated over shards in unit order is
+    /// [`Stage::run`]'s table, byte for byte. Only called when
+    /// [`Stage::shard_units`] is positive.
+    fn run_shard(
+        &self,
+        _inputs: &[Input],
+        _units: Range<u32>,
+        _progress: &Progress,
+    ) -> Result<Vec<Table>, StageError> {
+        Err(StageError::Input("this stage cannot be sharded".into()))
+    }
 }

@@ -11,6 +11,7 @@
 //!     manifest.json                   key, parameters, inputs, file hashes, provenance
 //!     <table>.parquet                 output tables
 //! refs/<stage>/<instance>.json        the last key computed for a stage instance
+//! slurm/                              Slurm scripts and task logs (`ternary slurm`)
 //! ```
 //!
 //! An artifact is written into a staging directory, every file is fsynced,
@@ -45,7 +46,7 @@ pub const MARKER: &str = "ternary-store.json";
 pub const FORMAT_VERSION: u32 = 1;
 
 /// The top-level entries a ternary store consists of.
-const LAYOUT: [&str; 5] = [MARKER, "store.lock", "artifacts", "refs", "tmp"];
+const LAYOUT: [&str; 6] = [MARKER, "store.lock", "artifacts", "refs", "tmp", "slurm"];
 
 /// A store operation failed.
 #[derive(Debug, thiserror::Error)]

@@ -327,20 +327,75 @@ pub fn read_parquet_bytes(
     Ok((batch, metadata))
 }
 
+impl Table {
+    /// The table a stage returned, rebuilt from the Parquet file `name`
+    /// (`<table>.parquet`) with these bytes: its data and column metadata, and
+    /// the stage's `ternary.*` metadata without the executor's provenance.
+    pub fn from_parquet(name: &str, bytes: Vec<u8>) -> Result<Table, TableError> {
+        let (batch, metadata) = read_parquet_bytes(name, bytes)?;
+        let plain = Arc::new(
+            batch
+                .schema()
+                .as_ref()
+                .clone()
+                .with_metadata(HashMap::new()),
+        );
+        let batch = RecordBatch::try_new(plain, batch.columns().to_vec()).map_err(|source| {
+            TableError::Arrow {
+                name: name.to_string(),
+                source,
+            }
+        })?;
+        Ok(Table {
+            name: name.trim_end_matches(".parquet").to_string(),
+            batch,
+            metadata: metadata
+                .into_iter()
+                .filter(|(key, _)| {
+                    key.starts_with("ternary.") && !PROVENANCE_KEYS.contains(&key.as_str())
+                })
+                .collect(),
+        })
+    }
+
+    /// The rows of `parts` (tables of one name, schema and metadata) one after
+    /// the other: the table of a sharded stage from its shards, in order.
+    pub fn concatenate(parts: Vec<Table>) -> Result<Table, TableError> {
+        let first = parts.first().ok_or_else(|| TableError::Arrow {
+            name: "(no table)".into(),
+            source: arrow::error::ArrowError::InvalidArgumentError("nothing to concatenate".into()),
+        })?;
+        let (name, metadata, schema) = (
+            first.name.clone(),
+            first.metadata.clone(),
+            first.batch.schema(),
+        );
+        if let Some(other) = parts.iter().find(|part| part.metadata != metadata) {
+            return Err(TableError::Arrow {
+                name: name.clone(),
+                source: arrow::error::ArrowError::InvalidArgumentError(format!(
+                    "shards disagree on the metadata of `{}`",
+                    other.name
+                )),
+            });
+        }
+        let batches: Vec<RecordBatch> = parts.into_iter().map(|part| part.batch).collect();
+        let batch = arrow::compute::concat_batches(&schema, &batches).map_err(|source| {
+            TableError::Arrow {
+                name: name.clone(),
+                source,
+            }
+        })?;
+        Ok(Table {
+            name,
+            batch,
+            metadata,
+        })
+    }
+}
+
 /// The content hash ([`Table::content_sha256`]) of the Parquet file `name`
-/// (`<table>.parquet`) with these bytes: its data, column metadata and the
-/// stage's `ternary.*` metadata, without the executor's provenance.
+/// (`<table>.parquet`) with these bytes.
 pub fn content_sha256_of_file(name: &str, bytes: Vec<u8>) -> Result<String, TableError> {
-    let (batch, metadata) = read_parquet_bytes(name, bytes)?;
-    let table = Table {
-        name: name.trim_end_matches(".parquet").to_string(),
-        batch,
-        metadata: metadata
-            .into_iter()
-            .filter(|(key, _)| {
-                key.starts_with("ternary.") && !PROVENANCE_KEYS.contains(&key.as_str())
-            })
-            .collect(),
-    };
-    table.content_sha256()
+    Table::from_parquet(name, bytes)?.content_sha256()
 }

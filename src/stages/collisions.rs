@@ -8,6 +8,8 @@
 //! chunks run in parallel and are written in order, so the bytes do not depend
 //! on the thread count.
 
+use std::ops::Range;
+
 use serde_json::Value;
 
 use crate::config::CollisionsParams;
@@ -77,7 +79,21 @@ impl Stage for CollisionsStage {
         self.params.sampling.total()
     }
 
-    fn run(&self, _inputs: &[Input], progress: &Progress) -> Result<Vec<Table>, StageError> {
+    fn run(&self, inputs: &[Input], progress: &Progress) -> Result<Vec<Table>, StageError> {
+        self.run_shard(inputs, 0..self.params.sampling.randomizations, progress)
+    }
+
+    /// Randomizations are independent: a shard integrates some of them.
+    fn shard_units(&self) -> u32 {
+        self.params.sampling.randomizations
+    }
+
+    fn run_shard(
+        &self,
+        _inputs: &[Input],
+        randomizations: Range<u32>,
+        progress: &Progress,
+    ) -> Result<Vec<Table>, StageError> {
         let mut plan = self.params.sampling;
         if self.params.pilot_points > 0 {
             let target = Target::dilute(0.0);
@@ -92,10 +108,14 @@ impl Stage for CollisionsStage {
                 plan.allocate(self.params.points, fraction);
             }
         }
-        progress.set_total(plan.total());
-        let rows = plan.integrate_all(&self.params.potential, &self.params.engine, |count| {
-            progress.advance(count as u64)
-        });
+        let per_randomization = plan.total() / u64::from(plan.randomizations.max(1));
+        progress.set_total(per_randomization * u64::from(randomizations.len() as u32));
+        let rows = plan.integrate_randomizations(
+            &self.params.potential,
+            &self.params.engine,
+            randomizations,
+            |count| progress.advance(count as u64),
+        );
         let allocation = format!(
             "opposite {} same-side {} per randomization",
             plan.opposite_points, plan.same_side_points

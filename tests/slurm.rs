@@ -1,0 +1,190 @@
+//! Sharded runs: the merged artifacts are byte-identical to an unsharded
+//! run for any shard count; and on a real single-node Slurm cluster (started
+//! by `.ci/slurm-cluster start`, found through `SLURM_CONF`), an array job of
+//! shards with one task cancelled, resubmitted, ends with the store of a
+//! single process.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::time::{Duration, Instant};
+
+mod common;
+
+use common::{
+    result_bytes, run_counts, small_study, stderr, stdout, ternary, workspace, write_config,
+};
+
+/// The small study with 8 randomizations (8 shardable units).
+fn study() -> String {
+    small_study("data").replace("randomizations = 2", "randomizations = 8")
+}
+
+/// Result bytes without the shard artifacts (intermediate, not in an
+/// unsharded store).
+fn merged_bytes(store: &Path) -> BTreeMap<PathBuf, String> {
+    result_bytes(store)
+        .into_iter()
+        .filter(|(path, _)| !path.to_string_lossy().contains(".shard"))
+        .collect()
+}
+
+/// The bytes of an unsharded run of [`study`].
+fn single_process() -> BTreeMap<PathBuf, String> {
+    let dir = workspace("shards-single");
+    run_counts(&write_config(&dir, &study()), &[]);
+    merged_bytes(&dir.join("data"))
+}
+
+/// 2, 3, 5 and 8 shards, and more shards than units (12 of 8): shard tasks
+/// in any order, then a merging run, give the unsharded bytes.
+#[test]
+fn merged_shards_equal_an_unsharded_run() {
+    let reference = single_process();
+    for shards in [2u32, 3, 5, 8, 12] {
+        let dir = workspace(&format!("shards-{shards}"));
+        let config = write_config(&dir, &study());
+        let n = shards.to_string();
+        for task in (0..shards).rev() {
+            let output = ternary(
+                &config,
+                &["run", "--shards", &n, "--shard", &task.to_string()],
+            );
+            assert!(output.status.success(), "{}", stderr(&output));
+        }
+        let status = stdout(&ternary(&config, &["status", "--shards", &n]));
+        assert!(
+            status.contains(&format!("(shards: {shards} of {shards} done, missing [])")),
+            "{status}"
+        );
+        let merge = ternary(&config, &["run", "--shards", &n]);
+        assert!(merge.status.success(), "{}", stderr(&merge));
+        assert_eq!(
+            merged_bytes(&dir.join("data")),
+            reference,
+            "{shards} shards"
+        );
+        // gc keeps no shard once merged.
+        let gc = stdout(&ternary(&config, &["gc"]));
+        let kept = common::files_under(&dir.join("data/artifacts"))
+            .iter()
+            .filter(|p| p.to_string_lossy().contains(".shard"))
+            .count();
+        assert_eq!(kept, 0, "{gc}");
+    }
+}
+
+/// A merging run computes the shards still missing itself; shards present
+/// before a gc stay (their artifact is not merged yet).
+#[test]
+fn a_merging_run_computes_missing_shards_and_gc_keeps_pending_ones() {
+    let dir = workspace("shards-partial");
+    let config = write_config(&dir, &study());
+    assert!(
+        ternary(&config, &["run", "--shards", "4", "--shard", "1"])
+            .status
+            .success()
+    );
+    let gc = ternary(&config, &["gc"]);
+    assert!(
+        stdout(&gc).contains("removed 0 artifacts"),
+        "{}",
+        stdout(&gc)
+    );
+    let status = stdout(&ternary(&config, &["status", "--shards", "4"]));
+    assert!(status.contains("missing [0, 2, 3]"), "{status}");
+    assert!(ternary(&config, &["run", "--shards", "4"]).status.success());
+    assert_eq!(merged_bytes(&dir.join("data")), single_process());
+}
+
+fn slurm_available() -> bool {
+    std::env::var_os("SLURM_CONF").is_some()
+        && Command::new("sinfo")
+            .args(["-h", "-o", "%T"])
+            .output()
+            .is_ok_and(|o| o.status.success() && !o.stdout.is_empty())
+}
+
+/// Job ids of ternary's jobs still in the queue.
+fn queued() -> Vec<String> {
+    let output = Command::new("squeue")
+        .args(["-h", "-o", "%i %j"])
+        .output()
+        .unwrap();
+    stdout(&output)
+        .lines()
+        .filter(|line| line.contains("ternary-"))
+        .map(|line| line.split_whitespace().next().unwrap().to_string())
+        .collect()
+}
+
+fn wait_for_queue_to_empty() {
+    let started = Instant::now();
+    while !queued().is_empty() {
+        assert!(
+            started.elapsed() < Duration::from_secs(300),
+            "jobs still queued: {:?}",
+            queued()
+        );
+        std::thread::sleep(Duration::from_millis(500));
+    }
+}
+
+/// An array job of 4 shard tasks (one at a time), task 3 cancelled while
+/// pending: the merge job is cancelled with it, status shows shard 3
+/// missing, a resubmission runs only task 3 and the merge, and the store
+/// ends with the bytes of a single process.
+#[test]
+fn a_slurm_array_with_a_cancelled_task_resubmits_only_what_is_missing() {
+    if !slurm_available() {
+        eprintln!(
+            "skipped: no Slurm cluster (start one with .ci/slurm-cluster start and set SLURM_CONF)"
+        );
+        return;
+    }
+    wait_for_queue_to_empty();
+    let dir = workspace("slurm");
+    let config = write_config(&dir, &study());
+    let submit = |extra: &[&str]| {
+        let args = [
+            &["slurm", "submit", "--shards", "4", "--max-parallel", "1"][..],
+            extra,
+        ]
+        .concat();
+        let output = ternary(&config, &args);
+        assert!(output.status.success(), "{}", stderr(&output));
+        stdout(&output)
+    };
+    let dry = submit(&["--dry-run"]);
+    assert!(dry.contains("#SBATCH --array=0,1,2,3%1"), "{dry}");
+    let first = submit(&[]);
+    assert!(first.contains("tasks {0, 1, 2, 3} of 4"), "{first}");
+    let array = first
+        .split("submitted shards job ")
+        .nth(1)
+        .and_then(|rest| rest.split(':').next())
+        .unwrap()
+        .to_string();
+    let cancel = Command::new("scancel")
+        .arg(format!("{array}_3"))
+        .output()
+        .unwrap();
+    assert!(cancel.status.success(), "{}", stderr(&cancel));
+    wait_for_queue_to_empty();
+    let status = stdout(&ternary(&config, &["status", "--shards", "4"]));
+    assert!(
+        status.contains("collisions[ipp-6]") && status.contains("missing [3]"),
+        "{status}"
+    );
+    let logs = dir.join("data/slurm/logs");
+    assert!(logs.join(format!("shard-{array}_0.out")).exists());
+    let second = submit(&[]);
+    assert!(second.contains("tasks {3} of 4"), "{second}");
+    wait_for_queue_to_empty();
+    assert_eq!(merged_bytes(&dir.join("data")), single_process());
+    let status = stdout(&ternary(&config, &["status"]));
+    assert!(
+        status.lines().all(|line| line.contains("fresh")),
+        "{status}"
+    );
+}
