@@ -13,15 +13,15 @@ use serde_json::Value;
 
 use super::collisions::CollisionsStage;
 use super::kernel::{collision_events, target_of};
+use crate::analysis::{
+    FiniteSize, RingBins, boltzmann_on_bins, finite_size, thermal_window_variance_rates,
+};
+use crate::binning::Bins;
 use crate::config::{KernelParams, MdParams};
-use crate::evolve::Replicated;
-use crate::evolve::convolution::{self, overlap_rebin};
-use crate::kernel::{Bins, Estimate, Target, moments};
-use crate::linalg::simpson_weight;
-use crate::physics::launch::thermal_density;
-use crate::physics::md::THERMAL_BAND;
+use crate::evolve::convolution;
 use crate::pipeline::table::{f64_values, text_values};
 use crate::pipeline::{Column, Input, InstanceId, Progress, Stage, StageError, Table};
+use crate::stats::{ChiSquare, Estimate, Replicated, chi_square};
 
 /// Resolved parameters of the `compare` stage.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -34,9 +34,6 @@ pub struct CompareParams {
     /// The rings compared.
     pub systems: Vec<MdParams>,
 }
-
-/// Simpson intervals of the average over thermal starts in [-3, 3] (step 0.25).
-const THERMAL_INTERVALS: usize = 24;
 
 /// The `compare` stage.
 pub struct CompareStage {
@@ -96,8 +93,16 @@ fn read_md(input: &Input) -> Result<MdEstimates, StageError> {
 
 /// Half-width of a ring's estimator window (the outer edges of its bins), `v_th`.
 fn half_window(system: &MdParams) -> f64 {
-    let bins = Bins::for_window(system.window, system.bin_width);
-    bins.width * (bins.half_bins as f64 + 0.5)
+    Bins::for_window(system.window, system.bin_width).half_width()
+}
+
+/// A ring's estimator bins.
+fn ring_bins<'a>(system: &MdParams, ring: &'a MdEstimates) -> RingBins<'a> {
+    RingBins {
+        du: &ring.du,
+        width: system.bin_width,
+        window: system.window,
+    }
 }
 
 /// One goodness-of-fit row.
@@ -105,21 +110,7 @@ struct Fit {
     ring: String,
     reference: String,
     estimator: String,
-    chi2: f64,
-    dof: u32,
-}
-
-/// `sum (a - b)^2 / (sa^2 + sb^2)` over the bins where the MD estimate `a`
-/// has a nonzero error (bins no run reached carry no error estimate; their
-/// Gaussian error would be zero), and their number.
-fn chi_square(a: &[Estimate], b: &[Estimate]) -> (f64, usize) {
-    a.iter()
-        .zip(b)
-        .filter(|(x, _)| x.stderr > 0.0)
-        .fold((0.0, 0), |(sum, count), (x, y)| {
-            let variance = x.stderr.powi(2) + y.stderr.powi(2);
-            (sum + (x.mean - y.mean).powi(2) / variance, count + 1)
-        })
+    chi: ChiSquare,
 }
 
 impl CompareStage {
@@ -147,55 +138,34 @@ impl CompareStage {
         let kernel = &self.params.kernel;
         let bins = Bins::for_window(kernel.window, kernel.bin_width);
         let rates = convolution::replicated_kernel(&events, &draws, &target_of(kernel), &bins);
-        let exponent = kernel.potential.length_exponent();
-        self.params
+        Ok(self
+            .params
             .systems
             .iter()
             .zip(rings)
             .map(|(system, ring)| {
-                let time = system.final_time_ns * system.gas.rate_per_ns(1.0, exponent);
-                let size = convolution::periodic_size(&rates.full, bins.width, time)
-                    .max((4.0 * system.window / bins.width) as usize)
-                    .next_power_of_two();
-                let out_width = system.bin_width;
-                Ok(rates.map(|g| {
-                    let h = &convolution::evolve(g, size, &[time])[0];
-                    overlap_rebin(h, bins.width, size / 2, &ring.du, out_width)
-                        .iter()
-                        .map(|m| m / out_width)
-                        .collect::<Vec<f64>>()
-                }))
+                let time = self.scaled_time(system);
+                boltzmann_on_bins(&rates, bins.width, time, ring_bins(system, ring))
             })
-            .collect()
+            .collect())
+    }
+
+    /// A ring's final time `t_f` in units of its own `1 / (rho^2 l v_th)`.
+    fn scaled_time(&self, system: &MdParams) -> f64 {
+        let exponent = self.params.kernel.potential.length_exponent();
+        system.final_time_ns * system.gas.rate_per_ns(1.0, exponent)
     }
 
     /// Per ring, per kernel replicate: the self kernel's window variance rate
-    /// (truncated at the ring's half window) averaged over thermal starts
-    /// `u0` in [-3, 3] with weight `f0(u0)` (Simpson, step 0.25, normalized on
-    /// the band), `rho^2 l v_th`.
+    /// (truncated at the ring's half window) averaged over thermal starts,
+    /// `rho^2 l v_th` (`analysis::thermal_window_variance_rates`).
     fn thermal_rates(&self, collisions: &Input) -> Result<Vec<Vec<f64>>, StageError> {
         let (events, draws, _) = collision_events(collisions)?;
         let edges: Vec<f64> = self.params.systems.iter().map(half_window).collect();
-        let step = 2.0 * THERMAL_BAND / THERMAL_INTERVALS as f64;
-        let mut rates = vec![vec![0.0; draws.replicates()]; edges.len()];
-        let mut norm = 0.0;
-        for j in 0..=THERMAL_INTERVALS {
-            let u = -THERMAL_BAND + step * j as f64;
-            let weight = simpson_weight(j, THERMAL_INTERVALS) * thermal_density(u);
-            norm += weight;
-            let target = Target {
-                u_prime: u,
-                ..target_of(&self.params.kernel)
-            };
-            let sums = moments(&events, &target, &edges, &draws);
-            for (replicate, sums) in sums.iter().enumerate() {
-                for (ring, sum) in sums.iter().enumerate() {
-                    rates[ring][replicate] += weight * sum.self_variance;
-                }
-            }
-        }
-        rates.iter_mut().flatten().for_each(|r| *r /= norm);
-        Ok(rates)
+        let target = target_of(&self.params.kernel);
+        Ok(thermal_window_variance_rates(
+            &events, &draws, &target, &edges,
+        ))
     }
 
     /// The finite-size and density study: per ring, its size, density and
@@ -209,7 +179,6 @@ impl CompareStage {
         boltzmann: &[Replicated<Vec<f64>>],
         thermal_rates: &[Vec<f64>],
     ) -> Result<Table, StageError> {
-        let exponent = self.params.kernel.potential.length_exponent();
         let mut columns: [Vec<f64>; 14] = Default::default();
         for (((system, ring), predicted), rates) in self
             .params
@@ -219,35 +188,30 @@ impl CompareStage {
             .zip(boltzmann)
             .zip(thermal_rates)
         {
-            let width = system.bin_width;
-            let variance = predicted.scalar(|h| {
-                h.iter()
-                    .zip(&ring.du)
-                    .map(|(h, du)| h * du * du * width)
-                    .sum()
-            });
-            let time = system.final_time_ns * system.gas.rate_per_ns(1.0, exponent);
-            let thermal =
-                Estimate::from_replicates(&rates.iter().map(|r| r * time).collect::<Vec<f64>>());
-            let [tagged_ratio, thermal_ratio] = [
-                ring.tagged_variance.ratio(variance),
-                ring.thermal_variance.ratio(thermal),
-            ];
+            let time = self.scaled_time(system);
+            let FiniteSize { tagged, thermal } = finite_size(
+                ring.tagged_variance,
+                ring.thermal_variance,
+                predicted,
+                ring_bins(system, ring),
+                rates,
+                time,
+            );
             let row = [
                 f64::from(system.particles - 1) / system.circumference,
                 time,
-                ring.tagged_variance.mean,
-                ring.tagged_variance.stderr,
-                variance.mean,
-                variance.stderr,
-                tagged_ratio.mean,
-                tagged_ratio.stderr,
-                ring.thermal_variance.mean,
-                ring.thermal_variance.stderr,
-                thermal.mean,
-                thermal.stderr,
-                thermal_ratio.mean,
-                thermal_ratio.stderr,
+                tagged.md.mean,
+                tagged.md.stderr,
+                tagged.boltzmann.mean,
+                tagged.boltzmann.stderr,
+                tagged.ratio.mean,
+                tagged.ratio.stderr,
+                thermal.md.mean,
+                thermal.md.stderr,
+                thermal.boltzmann.mean,
+                thermal.boltzmann.stderr,
+                thermal.ratio.mean,
+                thermal.ratio.stderr,
             ];
             columns.iter_mut().zip(row).for_each(|(c, v)| c.push(v));
         }
@@ -376,16 +340,14 @@ impl Stage for CompareStage {
         let mut columns: [Vec<f64>; 7] = Default::default();
         let mut names = Vec::new();
         let mut fits: Vec<Fit> = Vec::new();
-        let mut record =
-            |ring: &str, reference: &str, estimator: &str, (chi2, dof): (f64, usize)| {
-                fits.push(Fit {
-                    ring: ring.to_string(),
-                    reference: reference.to_string(),
-                    estimator: estimator.to_string(),
-                    chi2,
-                    dof: dof as u32,
-                });
-            };
+        let mut record = |ring: &str, reference: &str, estimator: &str, chi: ChiSquare| {
+            fits.push(Fit {
+                ring: ring.to_string(),
+                reference: reference.to_string(),
+                estimator: estimator.to_string(),
+                chi,
+            });
+        };
         for ((system, ring), predicted) in self.params.systems.iter().zip(&rings).zip(&boltzmann) {
             for (k, boltzmann) in predicted.iter().enumerate() {
                 names.push(system.name.clone());
@@ -455,13 +417,9 @@ impl Stage for CompareStage {
             text(|f| &f.reference),
             text(|f| &f.estimator),
         );
-        let chi2: Vec<f64> = fits.iter().map(|f| f.chi2).collect();
-        let dof: Vec<u32> = fits.iter().map(|f| f.dof).collect();
-        let reduced: Vec<f64> = chi2
-            .iter()
-            .zip(&dof)
-            .map(|(c, d)| c / f64::from(*d))
-            .collect();
+        let chi2: Vec<f64> = fits.iter().map(|f| f.chi.chi2).collect();
+        let dof: Vec<u32> = fits.iter().map(|f| f.chi.dof as u32).collect();
+        let reduced: Vec<f64> = fits.iter().map(|f| f.chi.per_dof()).collect();
         let goodness = Table::new(
             "goodness",
             vec![

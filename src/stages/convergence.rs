@@ -12,9 +12,12 @@ use serde_json::Value;
 
 use super::collisions::CollisionsStage;
 use super::kernel::{collision_events, target_of};
+use crate::binning::Bins;
 use crate::config::ConvergenceParams;
-use crate::kernel::{Bins, Draws, Estimate, Event, Target, histograms, moments};
+use crate::kernel::equilibrium::self_rates;
+use crate::kernel::{Draws, Event, Target, histograms};
 use crate::pipeline::{Column, Input, InstanceId, Progress, Stage, StageError, Table};
+use crate::stats::Estimate;
 
 /// The `convergence` stage.
 pub struct ConvergenceStage {
@@ -38,10 +41,7 @@ impl ConvergenceStage {
 
     /// `a_n` per replicate from unbinned self kicks within half the window.
     fn self_variance(&self, events: &[Event], draws: &Draws, target: &Target) -> Vec<f64> {
-        moments(events, target, &[self.edge()], draws)
-            .iter()
-            .map(|r| r[0].self_variance)
-            .collect()
+        self_rates(events, target, self.edge(), draws).variance
     }
 
     /// `a_n` per replicate from the binned self kernel: `sum_k G_self,k x_k^2 dx`.

@@ -21,15 +21,20 @@ use serde_json::Value;
 
 use super::collisions::CollisionsStage;
 use super::kernel::{collision_events, target_of};
+use crate::binning::Bins;
 use crate::config::EvolveParams;
-use crate::evolve::convolution::{self, kernel_moments};
+use crate::evolve::convolution::{
+    self, closed_form_excess_kurtosis, closed_form_number, closed_form_variance, excess_kurtosis,
+    kernel_moments, state_mean, state_moment, state_variance,
+};
 use crate::evolve::grid::VelocityGrid;
 use crate::evolve::operator::{Generators, column_rates, fokker_planck, kernel_generators};
 use crate::evolve::propagate::Generator;
 use crate::evolve::spectral::Dissipative;
-use crate::evolve::{Replicated, jackknife};
-use crate::kernel::{Bins, Draws, Estimate, Event, moments};
+use crate::kernel::equilibrium::self_rates;
+use crate::kernel::{Draws, Event};
 use crate::pipeline::{Column, Input, InstanceId, Progress, Stage, StageError, Table};
+use crate::stats::{Estimate, Replicated, replicate_means};
 
 /// The `evolve` stage.
 pub struct EvolveStage {
@@ -47,19 +52,6 @@ struct Moment {
     ns: f64,
 }
 
-/// The mean generator and the means with each replicate left out.
-fn generator_means(replicates: &[Generator]) -> Replicated<Generator> {
-    let count = replicates.len();
-    let total = Generator::sum(replicates);
-    Replicated {
-        leave_one_out: replicates
-            .iter()
-            .map(|own| own.leave_out(&total, count))
-            .collect(),
-        full: total.scaled(1.0 / count as f64),
-    }
-}
-
 impl EvolveStage {
     /// An evolve stage with resolved parameters.
     pub fn new(params: EvolveParams) -> EvolveStage {
@@ -70,9 +62,8 @@ impl EvolveStage {
     /// `rho^2 l v_th`: `Gamma` in scaled units.
     fn gamma(&self, events: &[Event], draws: &Draws) -> f64 {
         let target = target_of(&self.params.kernel);
-        let sums = moments(events, &target, &[0.5 * self.params.kernel.window], draws);
-        let values: Vec<f64> = sums.iter().map(|r| r[0].self_variance).collect();
-        Estimate::from_replicates(&values).mean
+        let rates = self_rates(events, &target, 0.5 * self.params.kernel.window, draws);
+        Estimate::from_replicates(&rates.variance).mean
     }
 
     /// Every output time, ascending in scaled time.
@@ -120,20 +111,13 @@ impl EvolveStage {
         let size = convolution::periodic_size(&rates.full, bins.width, t_max)
             .max((2 * (half_out + 1) * rebin).next_power_of_two());
         let states = rates.map(|g| convolution::evolve(g, size, &times));
-        let (centre, half) = (size / 2, (size / 2) as f64);
-        let moment = |h: &[f64], p: i32| -> f64 {
-            h.iter()
-                .enumerate()
-                .map(|(i, m)| m * ((i as f64 - half) * bins.width).powi(p))
-                .sum()
-        };
-        let cumulants = rates.map(|g| kernel_moments(g, bins.width));
+        let (centre, width) = (size / 2, bins.width);
+        let cumulants = rates.map(|g| kernel_moments(g, width));
         let mut h_rows: [Vec<f64>; 7] = Default::default();
         let mut summary: [Vec<f64>; 16] = Default::default();
         for (k, at) in schedule.iter().enumerate() {
             let binned = states.map(|s| convolution::rebin(&s[k], centre, rebin, half_out));
-            let estimates = jackknife(&binned.full, &binned.leave_one_out);
-            for (m, estimate) in estimates.iter().enumerate() {
+            for (m, estimate) in binned.values().iter().enumerate() {
                 let x = (m as f64 - half_out as f64) * out_width;
                 let row = [
                     at.gamma,
@@ -146,22 +130,14 @@ impl EvolveStage {
                 ];
                 h_rows.iter_mut().zip(row).for_each(|(c, v)| c.push(v));
             }
-            let mass = states.estimate(k, |h| moment(h, 0));
-            let mean = states.estimate(k, |h| moment(h, 1) / moment(h, 0));
-            let variance = states.estimate(k, |h| {
-                let m0 = moment(h, 0);
-                moment(h, 2) / m0 - (moment(h, 1) / m0).powi(2)
-            });
-            let kurtosis = states.estimate(k, |h| excess_kurtosis(h, bins.width));
+            let mass = states.estimate(k, |h| state_moment(h, width, 0));
+            let mean = states.estimate(k, |h| state_mean(h, width));
+            let variance = states.estimate(k, |h| state_variance(h, width));
+            let kurtosis = states.estimate(k, |h| excess_kurtosis(h, width));
             let t = at.scaled;
-            let predicted = |f: &dyn Fn(&[f64; 5]) -> f64| {
-                let loo: Vec<Vec<f64>> =
-                    cumulants.leave_one_out.iter().map(|c| vec![f(c)]).collect();
-                jackknife(&[f(&cumulants.full)], &loo)[0]
-            };
-            let mass_closed = predicted(&|c| (t * c[0]).exp());
-            let variance_closed = predicted(&|c| t * c[2]);
-            let kurtosis_closed = predicted(&|c| c[4] / (t * c[2] * c[2]));
+            let mass_closed = cumulants.scalar(|c| closed_form_number(c, t));
+            let variance_closed = cumulants.scalar(|c| closed_form_variance(c, t));
+            let kurtosis_closed = cumulants.scalar(|c| closed_form_excess_kurtosis(c, t));
             let row = [
                 at.gamma,
                 at.scaled,
@@ -261,8 +237,8 @@ impl EvolveStage {
         let pick = |part: fn(&Generators) -> &Generator| -> Vec<Generator> {
             generators.iter().map(|g| part(g).clone()).collect()
         };
-        let full = generator_means(&pick(|g| &g.full));
-        let tagged = generator_means(&pick(|g| &g.tagged));
+        let full = replicate_means(&pick(|g| &g.full));
+        let tagged = replicate_means(&pick(|g| &g.tagged));
         let diffusion = tagged.map(|m| {
             let (drift, variance) = column_rates(m, &grid);
             fokker_planck(&grid, &drift, &variance)
@@ -279,11 +255,7 @@ impl EvolveStage {
         h0[start] = 1.0;
         let times: Vec<f64> = schedule.iter().map(|m| m.scaled).collect();
         let diagnostics = |d: &Replicated<Dissipative>| {
-            let estimate = |f: fn(&Dissipative) -> f64| {
-                let loo: Vec<Vec<f64>> = d.leave_one_out.iter().map(|x| vec![f(x)]).collect();
-                jackknife(&[f(&d.full)], &loo)[0]
-            };
-            [estimate(|d| d.largest_clipped), estimate(|d| d.asymmetry)]
+            [d.scalar(|d| d.largest_clipped), d.scalar(|d| d.asymmetry)]
         };
         let processes = [
             Process {
@@ -480,22 +452,6 @@ struct Process {
     states: Replicated<Vec<Vec<f64>>>,
     equilibrium: Vec<f64>,
     diagnostics: Option<[Estimate; 2]>,
-}
-
-/// Excess kurtosis `mu_4 / mu_2^2 - 3` of a periodic state centred at `len / 2`.
-fn excess_kurtosis(h: &[f64], width: f64) -> f64 {
-    let half = (h.len() / 2) as f64;
-    let x = |i: usize| (i as f64 - half) * width;
-    let mass: f64 = h.iter().sum();
-    let mean = h.iter().enumerate().map(|(i, m)| m * x(i)).sum::<f64>() / mass;
-    let central = |p: i32| {
-        h.iter()
-            .enumerate()
-            .map(|(i, m)| m * (x(i) - mean).powi(p))
-            .sum::<f64>()
-            / mass
-    };
-    central(4) / central(2).powi(2) - 3.0
 }
 
 fn time_gamma_column(values: Vec<f64>) -> Column {

@@ -7,9 +7,10 @@ use serde_json::Value;
 
 use super::collisions::CollisionsStage;
 use super::kernel::{input_events, target_instance, target_of};
+use crate::binning::Bins;
 use crate::config::{FitParams, KernelParams};
 use crate::kernel::fit::{FIT_GROUPS, KernelFit, Shape, fit_kernel};
-use crate::kernel::{Bins, Histogram, histograms};
+use crate::kernel::{Histogram, histograms};
 use crate::pipeline::{Column, Input, InstanceId, Progress, Stage, StageError, Table};
 
 /// The `fit` stage for one potential, `u'` and density.

@@ -6,9 +6,11 @@
 use serde_json::Value;
 
 use super::collisions::{CollisionsStage, read_events};
+use crate::binning::Bins;
 use crate::config::KernelParams;
-use crate::kernel::{Bins, Draws, Estimate, Event, Target, histograms};
+use crate::kernel::{Draws, Event, Histogram, Target, histograms};
 use crate::pipeline::{Column, Input, InstanceId, Progress, Stage, StageError, Table};
+use crate::stats::Estimate;
 
 /// The `kernel` stage for one potential, `u'` and density.
 pub struct KernelStage {
@@ -94,7 +96,7 @@ impl Stage for KernelStage {
         let (events, draws, failed) = input_events(inputs)?;
         let bins = Bins::for_window(self.params.window, self.params.bin_width);
         let replicates = histograms(&events, &target_of(&self.params), &bins, &draws);
-        let per_bin = |part: &dyn Fn(&crate::kernel::Histogram) -> f64| {
+        let per_bin = |part: &dyn Fn(&Histogram) -> f64| {
             let values: Vec<f64> = replicates.iter().map(|h| part(h) / bins.width).collect();
             Estimate::from_replicates(&values)
         };

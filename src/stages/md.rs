@@ -11,12 +11,13 @@ use rayon::prelude::*;
 use serde_json::Value;
 use sha2::{Digest, Sha256};
 
+use crate::binning::Bins;
 use crate::config::MdParams;
-use crate::kernel::{Bins, Estimate};
 use crate::physics::md::{RunResult, RunSettings, run};
 use crate::physics::potential::{PairPotential, PotentialVisitor};
 use crate::physics::ring::{Reach, RingForces};
 use crate::pipeline::{Column, Input, InstanceId, Progress, Stage, StageError, Table};
+use crate::stats::Estimate;
 
 /// The `md` stage for one ring.
 pub struct MdStage {

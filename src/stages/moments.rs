@@ -10,8 +10,9 @@ use serde_json::Value;
 use super::collisions::CollisionsStage;
 use super::kernel::{input_events, target_instance, target_of};
 use crate::config::KernelParams;
-use crate::kernel::{Estimate, MomentSums, moments};
+use crate::kernel::{MomentSums, moments};
 use crate::pipeline::{Column, Input, InstanceId, Progress, Stage, StageError, Table};
+use crate::stats::Estimate;
 
 /// Truncation half-widths per decade below the window edge.
 const TRUNCATIONS_PER_DECADE: u32 = 5;

@@ -4,21 +4,19 @@
 //! velocities (physics.md §8). All from one event set by reweighting; every
 //! uncertainty from the spread of randomizations (per-replicate differences, so
 //! the correlation of quantities computed from the same events is kept).
-//!
-//! Fokker-Planck reading: with drift `D1(u)` and variance rate `D2(u)`, zero
-//! probability flux in the state `f0` requires `D1 f0 = 1/2 d(D2 f0)/du`, i.e.
-//! `D1 = (D2' - u D2) / 2`; the table gives both sides and their difference.
-//! Higher Kramers-Moyal terms (third moment of kicks of ~0.02 v_th) are not
-//! included, so differences of a few percent of `D1` are expected.
+//! The Fokker-Planck reading `D1 = (D2' - u D2) / 2` and the balance
+//! arithmetic are `kernel::equilibrium`'s; the table gives both sides of
+//! each and their difference.
 
 use rayon::prelude::*;
 use serde_json::Value;
 
 use super::collisions::CollisionsStage;
 use super::kernel::input_events;
+use crate::binning::Bins;
 use crate::config::SweepParams;
-use crate::kernel::{Bins, Draws, Estimate, Event, Target, moments, self_bin};
-use crate::physics::launch::thermal_density;
+use crate::kernel::equilibrium::{SelfRates, detailed_balance, fokker_planck_check, self_rates};
+use crate::kernel::{Draws, Event, Target, self_bin};
 use crate::pipeline::{Column, Input, InstanceId, Progress, Stage, StageError, Table};
 
 /// The `sweep` stage for one potential.
@@ -50,47 +48,25 @@ impl SweepStage {
     }
 
     /// Self drift and variance rates (within half the window) per replicate at every grid point.
-    fn rates(&self, events: &[Event], draws: &Draws, grid: &[f64]) -> Vec<[Vec<f64>; 2]> {
+    fn rates(&self, events: &[Event], draws: &Draws, grid: &[f64]) -> Vec<SelfRates> {
         let edge = 0.5 * self.params.kernel.window;
         grid.par_iter()
-            .map(|&u| {
-                let sums = moments(events, &self.target(u), &[edge], draws);
-                [
-                    sums.iter().map(|r| r[0].self_drift).collect(),
-                    sums.iter().map(|r| r[0].self_variance).collect(),
-                ]
-            })
+            .map(|&u| self_rates(events, &self.target(u), edge, draws))
             .collect()
     }
 
-    fn rates_table(&self, grid: &[f64], rates: &[[Vec<f64>; 2]]) -> Result<Table, StageError> {
-        let replicates = rates[0][0].len();
-        let last = grid.len() - 1;
+    fn rates_table(&self, grid: &[f64], rates: &[SelfRates]) -> Result<Table, StageError> {
         let mut columns: [Vec<f64>; 8] = Default::default();
-        for (k, &u) in grid.iter().enumerate() {
-            // Central differences inside the grid, one-sided at its ends.
-            let (low, high) = (k.saturating_sub(1), (k + 1).min(last));
-            let predicted: Vec<f64> = (0..replicates)
-                .map(|r| {
-                    let slope = (rates[high][1][r] - rates[low][1][r]) / (grid[high] - grid[low]);
-                    0.5 * (slope - u * rates[k][1][r])
-                })
-                .collect();
-            let residual: Vec<f64> = (0..replicates)
-                .map(|r| rates[k][0][r] - predicted[r])
-                .collect();
-            let [drift, variance, predicted, residual] =
-                [&rates[k][0], &rates[k][1], &predicted, &residual]
-                    .map(|v| Estimate::from_replicates(v));
+        for (&u, point) in grid.iter().zip(fokker_planck_check(grid, rates)) {
             let row = [
                 u,
-                drift.mean,
-                drift.stderr,
-                variance.mean,
-                variance.stderr,
-                predicted.mean,
-                predicted.stderr,
-                residual.mean / residual.stderr,
+                point.drift.mean,
+                point.drift.stderr,
+                point.variance.mean,
+                point.variance.stderr,
+                point.predicted_drift.mean,
+                point.predicted_drift.stderr,
+                point.z,
             ];
             for (column, value) in columns.iter_mut().zip(row) {
                 column.push(value);
@@ -170,7 +146,7 @@ impl SweepStage {
             .copied()
             .fold(0.0, f64::max);
         let bins = Bins::for_window(2.0 * largest + 4.0 * width, width);
-        let rows: Vec<[f64; 9]> = grid
+        let rows: Vec<[f64; 10]> = grid
             .par_iter()
             .flat_map_iter(|&a| {
                 self.params
@@ -187,29 +163,23 @@ impl SweepStage {
                         };
                         let there = self_kernel(a, bins.half_bins + steps);
                         let back = self_kernel(b, bins.half_bins - steps);
-                        let imbalance: Vec<f64> = there
-                            .iter()
-                            .zip(&back)
-                            .map(|(x, y)| thermal_density(a) * x - thermal_density(b) * y)
-                            .collect();
-                        let [there, back, imbalance] =
-                            [&there, &back, &imbalance].map(|v| Estimate::from_replicates(v));
-                        let ratio = there.ratio(back);
+                        let balance = detailed_balance(a, b, &there, &back);
                         [
                             a,
                             b,
-                            there.mean,
-                            there.stderr,
-                            back.mean,
-                            back.stderr,
-                            ratio.mean,
-                            ratio.stderr,
-                            imbalance.mean / imbalance.stderr,
+                            balance.forward.mean,
+                            balance.forward.stderr,
+                            balance.backward.mean,
+                            balance.backward.stderr,
+                            balance.ratio.mean,
+                            balance.ratio.stderr,
+                            balance.expected_ratio,
+                            balance.imbalance_z,
                         ]
                     })
             })
             .collect();
-        let mut columns: [Vec<f64>; 9] = Default::default();
+        let mut columns: [Vec<f64>; 10] = Default::default();
         for row in rows {
             for (column, value) in columns.iter_mut().zip(row) {
                 column.push(value);
@@ -224,13 +194,9 @@ impl SweepStage {
             backward_err,
             ratio,
             ratio_err,
+            expected,
             z,
         ] = columns;
-        let expected: Vec<f64> = from
-            .iter()
-            .zip(&to)
-            .map(|(a, b)| thermal_density(*b) / thermal_density(*a))
-            .collect();
         let unit = "rho^2 l v_th / v_th";
         Ok(Table::new(
             "detailed_balance",
