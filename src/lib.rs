@@ -12,6 +12,8 @@
 //! * [`pipeline`]: the generic content-addressed DAG (keys, store, executor,
 //!   Parquet tables); no physics.
 //! * [`stages`]: one adapter per stage between the two.
+//! * [`contract`]: every output table's columns, declared once for the
+//!   stages that write and read them and for the report.
 //! * [`config`]: `pipeline.toml`, parsed strictly.
 //! * [`report`]: what `ternary run` prints and `ternary show` displays.
 //! * [`bench`]: work-precision benchmarks.
@@ -20,6 +22,7 @@ pub mod analysis;
 pub mod bench;
 pub mod binning;
 pub mod config;
+pub mod contract;
 pub mod evolve;
 pub mod integrate;
 pub mod kernel;

@@ -15,9 +15,12 @@ use super::collisions::CollisionsStage;
 use super::kernel::input_events;
 use crate::binning::Bins;
 use crate::config::SweepParams;
-use crate::kernel::equilibrium::{SelfRates, detailed_balance, fokker_planck_check, self_rates};
+use crate::contract::{self, Rows};
+use crate::kernel::equilibrium::{
+    Balance, FokkerPlanckPoint, SelfRates, detailed_balance, fokker_planck_check, self_rates,
+};
 use crate::kernel::{Draws, Event, Target, self_bin};
-use crate::pipeline::{Column, Input, InstanceId, Progress, Stage, StageError, Table};
+use crate::pipeline::{Input, InstanceId, Progress, Stage, StageError, Table};
 
 /// The `sweep` stage for one potential.
 pub struct SweepStage {
@@ -56,80 +59,19 @@ impl SweepStage {
     }
 
     fn rates_table(&self, grid: &[f64], rates: &[SelfRates]) -> Result<Table, StageError> {
-        let mut columns: [Vec<f64>; 8] = Default::default();
-        for (&u, point) in grid.iter().zip(fokker_planck_check(grid, rates)) {
-            let row = [
-                u,
-                point.drift.mean,
-                point.drift.stderr,
-                point.variance.mean,
-                point.variance.stderr,
-                point.predicted_drift.mean,
-                point.predicted_drift.stderr,
-                point.z,
-            ];
-            for (column, value) in columns.iter_mut().zip(row) {
-                column.push(value);
-            }
-        }
-        let [
-            u,
-            drift,
-            drift_err,
-            variance,
-            variance_err,
-            predicted,
-            predicted_err,
-            z,
-        ] = columns;
-        let rate = "rho^2 l v_th";
-        Ok(Table::new(
-            "rates",
-            vec![
-                Column::f64("u_prime", "v_th", "velocity of the special particle", u),
-                Column::f64(
-                    "self_drift",
-                    rate,
-                    "D1 = d<u - u'>/dt of the special particle (|u - u'| <= window/2)",
-                    drift,
-                ),
-                Column::f64("self_drift_stderr", rate, "standard error", drift_err),
-                Column::f64(
-                    "self_variance",
-                    "rho^2 l v_th",
-                    "D2 = d<(u - u')^2>/dt of the special particle",
-                    variance,
-                ),
-                Column::f64(
-                    "self_variance_stderr",
-                    "rho^2 l v_th",
-                    "standard error",
-                    variance_err,
-                ),
-                Column::f64(
-                    "fokker_planck_drift",
-                    rate,
-                    "(dD2/du - u D2) / 2: the drift for which f0 is stationary",
-                    predicted,
-                ),
-                Column::f64(
-                    "fokker_planck_drift_stderr",
-                    rate,
-                    "standard error (finite differences on the grid)",
-                    predicted_err,
-                ),
-                Column::f64(
-                    "fokker_planck_z",
-                    "1",
-                    "(D1 - Fokker-Planck drift) / its standard error (per-replicate differences)",
-                    z,
-                ),
-            ],
-        )?
-        .with_metadata(
-            "ternary.description",
-            "drift and variance rates against u', dilute limit".into(),
-        ))
+        use contract::sweep::rates::*;
+        let rows: Vec<(f64, FokkerPlanckPoint)> = grid
+            .iter()
+            .copied()
+            .zip(fokker_planck_check(grid, rates))
+            .collect();
+        Ok(Rows::new(&rows)
+            .with(U_PRIME, |(u, _)| *u)
+            .estimate(SELF_DRIFT, |(_, p)| p.drift)
+            .estimate(SELF_VARIANCE, |(_, p)| p.variance)
+            .estimate(FOKKER_PLANCK_DRIFT, |(_, p)| p.predicted_drift)
+            .with(FOKKER_PLANCK_Z, |(_, p)| p.z)
+            .table(&TABLE)?)
     }
 
     fn balance_table(
@@ -138,6 +80,7 @@ impl SweepStage {
         draws: &Draws,
         grid: &[f64],
     ) -> Result<Table, StageError> {
+        use contract::sweep::detailed_balance::*;
         let width = self.params.balance_bin_width;
         let largest = self
             .params
@@ -146,7 +89,7 @@ impl SweepStage {
             .copied()
             .fold(0.0, f64::max);
         let bins = Bins::for_window(2.0 * largest + 4.0 * width, width);
-        let rows: Vec<[f64; 10]> = grid
+        let rows: Vec<(f64, f64, Balance)> = grid
             .par_iter()
             .flat_map_iter(|&a| {
                 self.params
@@ -163,63 +106,25 @@ impl SweepStage {
                         };
                         let there = self_kernel(a, bins.half_bins + steps);
                         let back = self_kernel(b, bins.half_bins - steps);
-                        let balance = detailed_balance(a, b, &there, &back);
-                        [
-                            a,
-                            b,
-                            balance.forward.mean,
-                            balance.forward.stderr,
-                            balance.backward.mean,
-                            balance.backward.stderr,
-                            balance.ratio.mean,
-                            balance.ratio.stderr,
-                            balance.expected_ratio,
-                            balance.imbalance_z,
-                        ]
+                        (a, b, detailed_balance(a, b, &there, &back))
                     })
             })
             .collect();
-        let mut columns: [Vec<f64>; 10] = Default::default();
-        for row in rows {
-            for (column, value) in columns.iter_mut().zip(row) {
-                column.push(value);
-            }
-        }
-        let [
-            from,
-            to,
-            forward,
-            forward_err,
-            backward,
-            backward_err,
-            ratio,
-            ratio_err,
-            expected,
-            z,
-        ] = columns;
-        let unit = "rho^2 l v_th / v_th";
-        Ok(Table::new(
-            "detailed_balance",
-            vec![
-                Column::f64("a", "v_th", "initial velocity", from),
-                Column::f64("b", "v_th", "final velocity (a plus a whole number of bins)", to),
-                Column::f64("G_self_ab", unit, "self kernel G(a -> b), bin centred on b", forward),
-                Column::f64("G_self_ab_stderr", unit, "standard error", forward_err),
-                Column::f64("G_self_ba", unit, "self kernel G(b -> a)", backward),
-                Column::f64("G_self_ba_stderr", unit, "standard error", backward_err),
-                Column::f64("ratio", "1", "G(a -> b) / G(b -> a)", ratio),
-                Column::f64("ratio_stderr", "1", "standard error (first order, estimates treated as independent)", ratio_err),
-                Column::f64("expected_ratio", "1", "f0(b) / f0(a): detailed balance", expected),
-                Column::f64("imbalance_z", "1", "(f0(a) G(a->b) - f0(b) G(b->a)) / its standard error (per-replicate differences)", z),
-            ],
-        )?
-        .with_metadata("ternary.description", "detailed balance of the self kernel for nearby velocities".into()))
+        Ok(Rows::new(&rows)
+            .with(A, |(a, ..)| *a)
+            .with(B, |(_, b, _)| *b)
+            .estimate(G_SELF_AB, |(.., balance)| balance.forward)
+            .estimate(G_SELF_BA, |(.., balance)| balance.backward)
+            .estimate(RATIO, |(.., balance)| balance.ratio)
+            .with(EXPECTED_RATIO, |(.., balance)| balance.expected_ratio)
+            .with(IMBALANCE_Z, |(.., balance)| balance.imbalance_z)
+            .table(&TABLE)?)
     }
 }
 
 impl Stage for SweepStage {
     fn id(&self) -> InstanceId {
-        InstanceId::new("sweep", &self.params.kernel.potential.id())
+        InstanceId::new(contract::sweep::STAGE, &self.params.kernel.potential.id())
     }
 
     fn version(&self) -> u32 {
@@ -231,7 +136,10 @@ impl Stage for SweepStage {
     }
 
     fn tables(&self) -> &'static [&'static str] {
-        &["rates", "detailed_balance"]
+        &[
+            contract::sweep::rates::TABLE.name,
+            contract::sweep::detailed_balance::TABLE.name,
+        ]
     }
 
     fn inputs(&self) -> Vec<InstanceId> {
