@@ -8,14 +8,16 @@ use std::time::Instant;
 use rand::rngs::StdRng;
 use rand::{RngExt, SeedableRng};
 
+use crate::binning::Bins;
 use crate::config::KernelConfig;
 use crate::kernel::fit::{FIT_GROUPS, Shape, fit_kernel};
-use crate::kernel::{Bins, Draws, Estimate, Event, Histogram, Target, histograms, moments};
+use crate::kernel::{Draws, Event, Histogram, Target, histograms, moments};
 use crate::physics::launch::thermal_launch_speed;
 use crate::physics::potential::Potential;
 use crate::physics::sampling::{LaunchProposal, OffsetProposal, SamplingPlan, SceneRecord};
 use crate::physics::scan::{LaunchPair, TIGHTEST_TOLERANCE};
 use crate::physics::scene::{Collision, EngineSettings, FreeLine, Method, collide};
+use crate::stats::Estimate;
 
 /// What `ternary bench integrators` measures.
 #[derive(Clone, Copy, Debug)]

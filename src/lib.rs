@@ -1,18 +1,28 @@
 //! `ternary`: three-body thermalization of a dilute one-dimensional classical gas.
 //!
 //! * [`physics`]: pure physics (potentials, the three-body scattering engine,
-//!   mono-energetic scans); no IO.
+//!   mono-energetic scans, ring molecular dynamics); no IO.
+//! * [`binning`]: velocity bins around `u'`, shared by physics and kernel.
+//! * [`stats`]: estimates over replicates (standard errors, ratios,
+//!   jackknife, chi-square).
 //! * [`integrate`]: embedded Runge-Kutta(-Nystrom) steps for tiny systems.
 //! * [`kernel`]: the collision kernel and its moments from integrated scenes.
+//! * [`evolve`]: the evolution of `h(u, t)` under the kernel.
+//! * [`analysis`]: molecular dynamics against the Boltzmann evolution.
 //! * [`pipeline`]: the generic content-addressed DAG (keys, store, executor,
 //!   Parquet tables); no physics.
 //! * [`stages`]: one adapter per stage between the two.
+//! * [`contract`]: every output table's columns, declared once for the
+//!   stages that write and read them and for the report.
 //! * [`config`]: `pipeline.toml`, parsed strictly.
 //! * [`report`]: what `ternary run` prints and `ternary show` displays.
 //! * [`bench`]: work-precision benchmarks.
 
+pub mod analysis;
 pub mod bench;
+pub mod binning;
 pub mod config;
+pub mod contract;
 pub mod evolve;
 pub mod export;
 pub mod integrate;
@@ -23,3 +33,4 @@ pub mod pipeline;
 pub mod report;
 pub mod slurm;
 pub mod stages;
+pub mod stats;

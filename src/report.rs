@@ -1,6 +1,8 @@
 //! What the command line prints: the run summary, the DAG, verification and
 //! garbage-collection reports, and artifact listings. Reads artifacts with
-//! polars, as any user would.
+//! polars, as any user would, by the columns the stages declare
+//! (`contract`). Numbers are printed to the digits their errors justify
+//! ([`with_error`]); a number that does not exist says why.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::fmt::Write as _;
@@ -10,43 +12,156 @@ use std::path::Path;
 use anyhow::{Context, Result, bail};
 use polars::prelude::{DataFrame, ParquetReader, SerReader};
 
+use crate::contract::{self, Col, Pair, TableSpec};
 use crate::pipeline::Stage;
 use crate::pipeline::executor::{self, Action, InstanceReport};
 use crate::pipeline::shards;
 use crate::pipeline::store::{Depth, Store, table_files};
 use crate::pipeline::table::read_parquet;
 
-/// `value ± error` with as many decimals as the error's leading two digits need.
-pub fn with_error(value: f64, error: f64) -> String {
-    if !error.is_finite() || !value.is_finite() {
-        return format!("{value} ± {error}");
+/// Significant digits of a value printed without an error to round it to.
+const BARE_DIGITS: i32 = 6;
+
+/// Significant digits of a value above which its error is written in the
+/// concise form `1.23456789(12)` rather than as `± 0.00000012`.
+const CONCISE_DIGITS: i32 = 8;
+
+/// `value ± error` to the digits the error justifies: the error with two
+/// significant digits, the value to the same decimal place; in fixed
+/// notation for magnitudes from `1e-4` to `1e6`, otherwise as
+/// `(m ± e)e<exponent>` with one shared exponent. A value known to more than
+/// [`CONCISE_DIGITS`] digits is written `m(ee)`, the error in units of the
+/// last digit. A value that is not a number (NaN, infinite) prints
+/// `undefined`, which says why; a zero error prints as `± 0` after six
+/// significant digits, a missing one as `(no error estimate)`.
+pub fn with_error(value: f64, error: f64, undefined: &str) -> String {
+    if !value.is_finite() {
+        return undefined.to_string();
     }
-    let decimals = if error > 0.0 {
-        (1.0 - error.log10().floor()).clamp(0.0, 16.0) as usize
+    if !error.is_finite() {
+        return format!("{} (no error estimate)", significant(value));
+    }
+    if error == 0.0 {
+        return format!("{} ± 0", significant(value));
+    }
+    let error = error.abs();
+    // Decimal exponent of the error's second significant digit, after
+    // rounding it to two digits (9.96 rounds to 10: one place up).
+    let mut last = error.log10().floor() as i32 - 1;
+    if (error / 10f64.powi(last)).round() >= 100.0 {
+        last += 1;
+    }
+    let digits = (error / 10f64.powi(last)).round();
+    let rounded = digits * 10f64.powi(last);
+    let magnitude = value.abs().max(rounded).log10().floor() as i32;
+    let concise = magnitude - last + 1 > CONCISE_DIGITS;
+    if (-4..=5).contains(&magnitude) {
+        // Errors of 100 and more round the value to tens, hundreds, ...
+        let value = if last > 0 {
+            (value / 10f64.powi(last)).round() * 10f64.powi(last)
+        } else {
+            value
+        };
+        let decimals = (-last).max(0) as usize;
+        if concise {
+            format!("{}({digits})", fixed(value, decimals))
+        } else {
+            format!("{} ± {}", fixed(value, decimals), fixed(rounded, decimals))
+        }
     } else {
-        16
+        let scale = 10f64.powi(magnitude);
+        let decimals = (magnitude - last) as usize;
+        if concise {
+            format!("{}({digits})e{magnitude}", fixed(value / scale, decimals))
+        } else {
+            format!(
+                "({} ± {})e{magnitude}",
+                fixed(value / scale, decimals),
+                fixed(rounded / scale, decimals)
+            )
+        }
+    }
+}
+
+/// `x` with `decimals` decimals; a value that rounds to zero has no sign.
+fn fixed(x: f64, decimals: usize) -> String {
+    let text = format!("{x:.decimals$}");
+    match text.strip_prefix('-') {
+        Some(unsigned) if unsigned.chars().all(|c| c == '0' || c == '.') => unsigned.to_string(),
+        _ => text,
+    }
+}
+
+/// `x` to [`BARE_DIGITS`] significant digits without trailing zeros, in
+/// fixed notation for magnitudes from `1e-4` to `1e6`.
+fn significant(x: f64) -> String {
+    if x == 0.0 {
+        return "0".to_string();
+    }
+    let magnitude = x.abs().log10().floor() as i32;
+    let trim = |digits: &str| -> String {
+        if digits.contains('.') {
+            digits
+                .trim_end_matches('0')
+                .trim_end_matches('.')
+                .to_string()
+        } else {
+            digits.to_string()
+        }
     };
-    format!("{value:.decimals$} ± {error:.1e}")
+    if (-4..=5).contains(&magnitude) {
+        let decimals = (BARE_DIGITS - 1 - magnitude).max(0) as usize;
+        trim(&fixed(x, decimals))
+    } else {
+        let text = format!("{x:.*e}", (BARE_DIGITS - 1) as usize);
+        let (mantissa, exponent) = text.split_once('e').unwrap_or((&text, "0"));
+        format!("{}e{exponent}", trim(mantissa))
+    }
 }
 
-/// Cell `name` of `row` as a number (NaN when null).
-fn number(frame: &DataFrame, row: usize, name: &str) -> Result<f64> {
-    Ok(frame.column(name)?.f64()?.get(row).unwrap_or(f64::NAN))
+/// `x` as `format` shows it, or `undefined` when it is not a number.
+fn or_why(x: f64, format: impl Fn(f64) -> String, undefined: &str) -> String {
+    if x.is_finite() {
+        format(x)
+    } else {
+        undefined.to_string()
+    }
 }
 
-/// Cell `name` of `row` as a count (0 when null).
-fn count(frame: &DataFrame, row: usize, name: &str) -> Result<u32> {
-    Ok(frame.column(name)?.u32()?.get(row).unwrap_or(0))
+/// Cell `col` of `row` as a number (NaN when null).
+fn number(frame: &DataFrame, row: usize, col: Col<f64>) -> Result<f64> {
+    Ok(frame.column(col.name)?.f64()?.get(row).unwrap_or(f64::NAN))
 }
 
-/// Cell `name` of `row` as text (empty when null).
-fn text(frame: &DataFrame, row: usize, name: &str) -> Result<String> {
+/// Cells `pair` of `row` as `value ± error` ([`with_error`]).
+fn estimate(frame: &DataFrame, row: usize, pair: Pair, undefined: &str) -> Result<String> {
+    Ok(with_error(
+        number(frame, row, pair.value)?,
+        number(frame, row, pair.stderr)?,
+        undefined,
+    ))
+}
+
+/// Cell `col` of `row` as a count (0 when null).
+fn count(frame: &DataFrame, row: usize, col: Col<u32>) -> Result<u32> {
+    Ok(frame.column(col.name)?.u32()?.get(row).unwrap_or(0))
+}
+
+/// Cell `col` of `row` as text (empty when null).
+fn text(frame: &DataFrame, row: usize, col: Col<String>) -> Result<String> {
     Ok(frame
-        .column(name)?
+        .column(col.name)?
         .str()?
         .get(row)
         .unwrap_or_default()
         .to_string())
+}
+
+/// The row whose label in `col` is `label`.
+fn row_of(frame: &DataFrame, col: Col<String>, label: &str) -> Result<usize> {
+    (0..frame.height())
+        .find(|&row| text(frame, row, col).is_ok_and(|l| l == label))
+        .with_context(|| format!("no {} `{label}`", col.name))
 }
 
 fn read_frame(path: &Path) -> Result<DataFrame> {
@@ -65,81 +180,26 @@ pub fn summary(store: &Store, reports: &[InstanceReport]) -> Result<String> {
     out.push_str(&evolve_table(store, reports)?);
     out.push_str(&md_table(store, reports)?);
     out.push_str(&compare_table(store, reports)?);
-    let scans = reports.iter().filter(|r| r.id.stage == "scan");
-    for (k, report) in scans.enumerate() {
-        let Some(key) = report
-            .key
-            .as_ref()
-            .filter(|_| report.action != Action::Skipped)
-        else {
-            continue;
-        };
-        if k == 0 {
-            writeln!(
-                out,
-                "\nmono-energetic scans: largest |u1f| (error bound) and its arrival offset"
-            )?;
-            writeln!(
-                out,
-                "{:<10} {:<12} {:<34} {:<30} {:>6} {:>12}",
-                "potential",
-                "launch",
-                "|u1f,max| [v_th]",
-                "offset [l/v_th]",
-                "failed",
-                "max |dE/E|"
-            )?;
-        }
-        let frame = read_frame(&store.artifact_dir("scan", key).join("peak.parquet"))?;
-        for row in 0..frame.height() {
-            let failed = count(&frame, row, "failed_scenes")?;
-            writeln!(
-                out,
-                "{:<10} {:<12} {:<34} {:<30} {:>6} {:>12.1e}",
-                report.id.instance,
-                text(&frame, row, "launch")?,
-                with_error(
-                    number(&frame, row, "u1_final_max_abs")?,
-                    number(&frame, row, "u1_final_max_abs_error")?
-                ),
-                with_error(
-                    number(&frame, row, "arrival_offset_at_max")?,
-                    number(&frame, row, "arrival_offset_at_max_error")?
-                ),
-                failed,
-                number(&frame, row, "worst_energy_error")?,
-            )?;
-        }
-    }
+    out.push_str(&scan_table(store, reports)?);
     Ok(out)
 }
 
-/// The table `<stage>.parquet` of every intact artifact of `stage` in a run.
-fn stage_frames(
-    store: &Store,
-    reports: &[InstanceReport],
-    stage: &str,
-) -> Result<Vec<(String, DataFrame)>> {
-    table_frames(store, reports, stage, stage)
-}
-
-/// The table `<table>.parquet` of every intact artifact of `stage` in a run.
+/// The table `spec` of every intact artifact of its stage in a run.
 fn table_frames(
     store: &Store,
     reports: &[InstanceReport],
-    stage: &str,
-    table: &str,
+    spec: &TableSpec,
 ) -> Result<Vec<(String, DataFrame)>> {
     reports
         .iter()
-        .filter(|r| r.id.stage == stage)
+        .filter(|r| r.id.stage == spec.stage)
         .filter(|r| r.action != Action::Skipped)
         .filter_map(|r| r.key.as_ref().map(|key| (r, key)))
         .map(|(report, key)| {
             let frame = read_frame(
                 &store
-                    .artifact_dir(stage, key)
-                    .join(format!("{table}.parquet")),
+                    .artifact_dir(spec.stage, key)
+                    .join(format!("{}.parquet", spec.name)),
             )?;
             Ok((report.id.instance.clone(), frame))
         })
@@ -148,8 +208,9 @@ fn table_frames(
 
 /// The `table` stage's output: `a_n` with standard errors per potential.
 fn study_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
+    use contract::table::*;
     let mut out = String::new();
-    let Some((_, frame)) = stage_frames(store, reports, "table")?.into_iter().next() else {
+    let Some((_, frame)) = table_frames(store, reports, &TABLE)?.into_iter().next() else {
         return Ok(out);
     };
     writeln!(
@@ -159,47 +220,43 @@ fn study_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
     writeln!(
         out,
         "{:<10} {:<26} {:>8} {:<26} {:<20} {:<22} {:>13}",
-        "potential",
+        POTENTIAL.name,
         "a_n (|u-u'| <= window/2)",
         "rel.err",
         "a_n untruncated",
-        "beta",
+        BETA.value.name,
         "sigma [v_th]",
         "failed"
     )?;
     for row in 0..frame.height() {
-        let potential = text(&frame, row, "potential")?;
         let (a, a_err) = (
-            number(&frame, row, "a_n")?,
-            number(&frame, row, "a_n_stderr")?,
+            number(&frame, row, A_N.value)?,
+            number(&frame, row, A_N.stderr)?,
         );
         let relative = if a == 0.0 {
             "-".to_string()
         } else {
             format!("{:.3}%", 100.0 * a_err / a.abs())
         };
+        // No shape to fit when nothing was kicked (the integrable n = 2).
+        let no_shape = if a == 0.0 && a_err == 0.0 {
+            "no kicks"
+        } else {
+            "no fit"
+        };
         writeln!(
             out,
             "{:<10} {:<26} {:>8} {:<26} {:<20} {:<22} {:>13}",
-            potential,
-            with_error(a, a_err),
+            text(&frame, row, POTENTIAL)?,
+            with_error(a, a_err, "-"),
             relative,
-            with_error(
-                number(&frame, row, "a_n_untruncated")?,
-                number(&frame, row, "a_n_untruncated_stderr")?
-            ),
-            with_error(
-                number(&frame, row, "beta")?,
-                number(&frame, row, "beta_stderr")?
-            ),
-            with_error(
-                number(&frame, row, "sigma")?,
-                number(&frame, row, "sigma_stderr")?
-            ),
+            estimate(&frame, row, A_N_UNTRUNCATED, "-")?,
+            estimate(&frame, row, BETA, no_shape)?,
+            estimate(&frame, row, SIGMA, no_shape)?,
             format!(
                 "{}/{}",
-                count(&frame, row, "failed_events")?,
-                count(&frame, row, "events")?
+                count(&frame, row, FAILED_EVENTS)?,
+                count(&frame, row, EVENTS)?
             ),
         )?;
     }
@@ -208,8 +265,9 @@ fn study_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
 
 /// The `gases` stage's output: rates in physical units.
 fn gases_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
+    use contract::gases::*;
     let mut out = String::new();
-    let Some((_, frame)) = stage_frames(store, reports, "gases")?.into_iter().next() else {
+    let Some((_, frame)) = table_frames(store, reports, &TABLE)?.into_iter().next() else {
         return Ok(out);
     };
     writeln!(
@@ -219,8 +277,8 @@ fn gases_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
     writeln!(
         out,
         "{:<22} {:<8} {:>9} {:>11} {:<26} {:<26} {:<24}",
-        "gas",
-        "potential",
+        GAS.name,
+        POTENTIAL.name,
         "kT [eV]",
         "rho l",
         "Gamma [1/ns] (dilute)",
@@ -231,25 +289,13 @@ fn gases_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
         writeln!(
             out,
             "{:<22} {:<8} {:>9.3} {:>11.3e} {:<26} {:<26} {:<24}",
-            text(&frame, row, "gas")?,
-            text(&frame, row, "potential")?,
-            number(&frame, row, "kt")?,
-            number(&frame, row, "rho_l")?,
-            format!(
-                "{:.5e} ± {:.1e}",
-                number(&frame, row, "gamma")?,
-                number(&frame, row, "gamma_stderr")?
-            ),
-            format!(
-                "{:.5e} ± {:.1e}",
-                number(&frame, row, "gamma_at_density")?,
-                number(&frame, row, "gamma_at_density_stderr")?
-            ),
-            format!(
-                "{:.5e} ± {:.1e}",
-                number(&frame, row, "relaxation_time")?,
-                number(&frame, row, "relaxation_time_stderr")?
-            ),
+            text(&frame, row, GAS)?,
+            text(&frame, row, POTENTIAL)?,
+            number(&frame, row, KT)?,
+            number(&frame, row, RHO_L)?,
+            estimate(&frame, row, GAMMA, "-")?,
+            estimate(&frame, row, GAMMA_AT_DENSITY, "-")?,
+            estimate(&frame, row, RELAXATION_TIME, "never: no kicks")?,
         )?;
     }
     Ok(out)
@@ -257,8 +303,9 @@ fn gases_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
 
 /// The `convergence` stage's output: shifts of `a_n` against the defaults.
 fn convergence_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
+    use contract::convergence::*;
     let mut out = String::new();
-    for (instance, frame) in stage_frames(store, reports, "convergence")? {
+    for (instance, frame) in table_frames(store, reports, &TABLE)? {
         writeln!(
             out,
             "\nconvergence of a_n for {} (shift = a_n - default, paired over randomizations)",
@@ -267,24 +314,22 @@ fn convergence_table(store: &Store, reports: &[InstanceReport]) -> Result<String
         writeln!(
             out,
             "{:<14} {:>10} {:<30} {:<28} {:>16}",
-            "parameter", "value", "a_n", "shift", "shift / a_n error"
+            PARAMETER.name, VALUE.name, A_N.value.name, SHIFT.value.name, "shift / a_n error"
         )?;
         for row in 0..frame.height() {
-            let parameter = text(&frame, row, "parameter")?;
             writeln!(
                 out,
-                "{:<14} {:>10.3e} {:<30} {:<28} {:>16.3}",
-                parameter,
-                number(&frame, row, "value")?,
-                with_error(
-                    number(&frame, row, "a_n")?,
-                    number(&frame, row, "a_n_stderr")?
+                "{:<14} {:>10} {:<30} {:<28} {:>16}",
+                text(&frame, row, PARAMETER)?,
+                // The default row has no value: it is the configuration itself.
+                or_why(number(&frame, row, VALUE)?, |v| format!("{v:.3e}"), "-"),
+                estimate(&frame, row, A_N, "-")?,
+                estimate(&frame, row, SHIFT, "-")?,
+                or_why(
+                    number(&frame, row, SHIFT_OVER_ERROR)?,
+                    |z| format!("{z:.3}"),
+                    "-"
                 ),
-                with_error(
-                    number(&frame, row, "shift")?,
-                    number(&frame, row, "shift_stderr")?
-                ),
-                number(&frame, row, "shift_over_error")?,
             )?;
         }
     }
@@ -293,8 +338,9 @@ fn convergence_table(store: &Store, reports: &[InstanceReport]) -> Result<String
 
 /// The `evolve` stage's summary: spread and approach to equilibrium of `h`.
 fn evolve_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
+    use contract::evolve::evolution_summary::*;
     let mut out = String::new();
-    for (instance, frame) in table_frames(store, reports, "evolve", "evolution_summary")? {
+    for (instance, frame) in table_frames(store, reports, &TABLE)? {
         writeln!(
             out,
             "\nevolution of h from delta(u - u') for {instance}: full = linearized operator, tagged = special particle, fokker_planck (+- jackknife errors)"
@@ -302,7 +348,7 @@ fn evolve_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
         writeln!(
             out,
             "{:<14} {:>10} {:>9} {:<28} {:<26} {:<26}",
-            "process",
+            PROCESS.name,
             "t Gamma",
             "t [ns]",
             "<(u-u')^2>, |u-u'|<=X",
@@ -312,22 +358,14 @@ fn evolve_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
         for row in 0..frame.height() {
             writeln!(
                 out,
-                "{:<14} {:>10.3e} {:>9.0} {:<28} {:<26} {:<26}",
-                text(&frame, row, "process")?,
-                number(&frame, row, "time_gamma")?,
-                number(&frame, row, "time_ns")?,
-                with_error(
-                    number(&frame, row, "window_variance")?,
-                    number(&frame, row, "window_variance_stderr")?
-                ),
-                with_error(
-                    number(&frame, row, "variance")?,
-                    number(&frame, row, "variance_stderr")?
-                ),
-                with_error(
-                    number(&frame, row, "distance_to_equilibrium")?,
-                    number(&frame, row, "distance_to_equilibrium_stderr")?
-                ),
+                "{:<14} {:>10.3e} {:>9} {:<28} {:<26} {:<26}",
+                text(&frame, row, PROCESS)?,
+                number(&frame, row, TIME_GAMMA)?,
+                // Times given in 1/Gamma have no time in ns.
+                or_why(number(&frame, row, TIME_NS)?, |t| format!("{t:.0}"), "-"),
+                estimate(&frame, row, WINDOW_VARIANCE, "-")?,
+                estimate(&frame, row, VARIANCE, "-")?,
+                estimate(&frame, row, DISTANCE_TO_EQUILIBRIUM, "-")?,
             )?;
         }
     }
@@ -336,8 +374,9 @@ fn evolve_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
 
 /// The `md` stage's summaries: moments of `h(u, t_f)` by both estimators.
 fn md_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
+    use contract::md::summary::*;
     let mut out = String::new();
-    let frames = table_frames(store, reports, "md", "summary")?;
+    let frames = table_frames(store, reports, &TABLE)?;
     if frames.is_empty() {
         return Ok(out);
     }
@@ -348,7 +387,10 @@ fn md_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
     writeln!(
         out,
         "{:<22} {:<10} {:<24} {:<28}",
-        "ring", "estimator", "sum h du", "<(u-u')^2>_window [v_th^2]"
+        contract::compare::RING.name,
+        ESTIMATOR.name,
+        "sum h du",
+        "<(u-u')^2>_window [v_th^2]"
     )?;
     for (instance, frame) in frames {
         for row in 0..frame.height() {
@@ -356,15 +398,9 @@ fn md_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
                 out,
                 "{:<22} {:<10} {:<24} {:<28}",
                 instance,
-                text(&frame, row, "estimator")?,
-                with_error(
-                    number(&frame, row, "number")?,
-                    number(&frame, row, "number_stderr")?
-                ),
-                with_error(
-                    number(&frame, row, "window_variance")?,
-                    number(&frame, row, "window_variance_stderr")?
-                ),
+                text(&frame, row, ESTIMATOR)?,
+                estimate(&frame, row, NUMBER, "-")?,
+                estimate(&frame, row, WINDOW_VARIANCE, "-")?,
             )?;
         }
     }
@@ -375,8 +411,10 @@ fn md_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
 /// The `compare` stage: goodness of fit of MD against Boltzmann and of the
 /// scaling collapse, and the finite-size and density study.
 fn compare_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
+    use contract::compare::{finite_size, goodness};
+    use contract::estimator;
     let mut out = String::new();
-    for (_, frame) in table_frames(store, reports, "compare", "goodness")? {
+    for (_, frame) in table_frames(store, reports, &goodness::TABLE)? {
         writeln!(
             out,
             "\nMD against Boltzmann and the scaling collapse (chi2 per degree of freedom)"
@@ -384,21 +422,30 @@ fn compare_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
         writeln!(
             out,
             "{:<22} {:<22} {:<10} {:>8} {:>5}",
-            "ring", "reference", "estimator", "chi2/dof", "dof"
+            goodness::RING.name,
+            goodness::REFERENCE.name,
+            goodness::ESTIMATOR.name,
+            "chi2/dof",
+            goodness::DOF.name
         )?;
         for row in 0..frame.height() {
             writeln!(
                 out,
-                "{:<22} {:<22} {:<10} {:>8.2} {:>5}",
-                text(&frame, row, "ring")?,
-                text(&frame, row, "reference")?,
-                text(&frame, row, "estimator")?,
-                number(&frame, row, "chi2_per_dof")?,
-                count(&frame, row, "dof")?,
+                "{:<22} {:<22} {:<10} {:>8} {:>5}",
+                text(&frame, row, goodness::RING)?,
+                text(&frame, row, goodness::REFERENCE)?,
+                text(&frame, row, goodness::ESTIMATOR)?,
+                // No bin where the MD estimate has an error: nothing to compare.
+                or_why(
+                    number(&frame, row, goodness::CHI2_PER_DOF)?,
+                    |c| format!("{c:.2}"),
+                    "no bins"
+                ),
+                count(&frame, row, goodness::DOF)?,
             )?;
         }
     }
-    for (_, frame) in table_frames(store, reports, "compare", "finite_size")? {
+    for (_, frame) in table_frames(store, reports, &finite_size::TABLE)? {
         writeln!(
             out,
             "\nfinite size and density: window variance at t_f, MD / Boltzmann (+- standard errors); tagged: starts near u', thermal: every start"
@@ -406,24 +453,63 @@ fn compare_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
         writeln!(
             out,
             "{:<22} {:>5} {:>10} {:>16} {:<24} {:<24}",
-            "ring", "N", "rho l", "rho^2 l v_th t_f", "tagged", "thermal"
+            finite_size::RING.name,
+            "N",
+            "rho l",
+            "rho^2 l v_th t_f",
+            estimator::TAGGED,
+            estimator::THERMAL
         )?;
         for row in 0..frame.height() {
-            let ratio = |name: &str| -> Result<String> {
-                Ok(with_error(
-                    number(&frame, row, name)?,
-                    number(&frame, row, &format!("{name}_stderr"))?,
-                ))
-            };
             writeln!(
                 out,
                 "{:<22} {:>5} {:>10.3e} {:>16.4e} {:<24} {:<24}",
-                text(&frame, row, "ring")?,
-                count(&frame, row, "particles")?,
-                number(&frame, row, "density")?,
-                number(&frame, row, "scaled_time")?,
-                ratio("ratio")?,
-                ratio("thermal_ratio")?,
+                text(&frame, row, finite_size::RING)?,
+                count(&frame, row, finite_size::PARTICLES)?,
+                number(&frame, row, finite_size::DENSITY)?,
+                number(&frame, row, finite_size::SCALED_TIME)?,
+                estimate(&frame, row, finite_size::RATIO, "0/0: no spread")?,
+                estimate(&frame, row, finite_size::THERMAL_RATIO, "0/0: no spread")?,
+            )?;
+        }
+    }
+    Ok(out)
+}
+
+/// The `scan` stages' peaks: largest `|u1f|` per launch pair.
+fn scan_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
+    use contract::scan::{LAUNCH, peak::*};
+    let mut out = String::new();
+    for (k, (instance, frame)) in table_frames(store, reports, &TABLE)?
+        .into_iter()
+        .enumerate()
+    {
+        if k == 0 {
+            writeln!(
+                out,
+                "\nmono-energetic scans: largest |u1f| (error bound) and its arrival offset"
+            )?;
+            writeln!(
+                out,
+                "{:<10} {:<12} {:<34} {:<30} {:>6} {:>12}",
+                contract::POTENTIAL.name,
+                LAUNCH.name,
+                "|u1f,max| [v_th]",
+                "offset [l/v_th]",
+                "failed",
+                "max |dE/E|"
+            )?;
+        }
+        for row in 0..frame.height() {
+            writeln!(
+                out,
+                "{:<10} {:<12} {:<34} {:<30} {:>6} {:>12.1e}",
+                instance,
+                text(&frame, row, LAUNCH)?,
+                estimate(&frame, row, U1_FINAL_MAX_ABS, "-")?,
+                estimate(&frame, row, ARRIVAL_OFFSET_AT_MAX, "no peak")?,
+                count(&frame, row, FAILED_SCENES)?,
+                number(&frame, row, WORST_ENERGY_ERROR)?,
             )?;
         }
     }
@@ -433,22 +519,24 @@ fn compare_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
 /// Bound neighbour pairs of the rings with a well: sampled, after the
 /// dynamics, and the dilute limit.
 fn bound_pairs_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
+    use contract::md::pairs::*;
     let mut out = String::new();
-    let frames = table_frames(store, reports, "md", "pairs")?;
-    let bound = |frame: &DataFrame, row: usize| -> Result<String> {
-        Ok(with_error(
-            number(frame, row, "bound_fraction")?,
-            number(frame, row, "bound_fraction_stderr")?,
-        ))
-    };
-    for (instance, frame) in frames {
-        let dilute = number(&frame, 2, "bound_fraction")?;
+    for (instance, frame) in table_frames(store, reports, &TABLE)? {
+        let bound = |state: &str| -> Result<String> {
+            estimate(&frame, row_of(&frame, STATE, state)?, BOUND_FRACTION, "-")
+        };
+        let dilute = number(
+            &frame,
+            row_of(&frame, STATE, DILUTE_LIMIT)?,
+            BOUND_FRACTION.value,
+        )?;
         if dilute > 0.0 {
             writeln!(
                 out,
-                "{instance}: bound neighbour pairs per gap {} initial, {} final, {dilute:.5} dilute limit rho K_b",
-                bound(&frame, 0)?,
-                bound(&frame, 1)?,
+                "{instance}: bound neighbour pairs per gap {} initial, {} final, {} dilute limit rho K_b",
+                bound(INITIAL)?,
+                bound(FINAL)?,
+                significant(dilute),
             )?;
         }
     }
@@ -635,4 +723,70 @@ pub fn show(store: Option<&Store>, target: &str, rows: usize) -> Result<String> 
         out.push_str(&show_file(&dir.join(name), rows)?);
     }
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Two significant digits of the error, the value to the same place.
+    #[test]
+    fn values_are_rounded_to_the_error() {
+        assert_eq!(
+            with_error(3.1234e-4, 1.234e-6, "-"),
+            "0.0003123 ± 0.0000012"
+        );
+        assert_eq!(with_error(1.23456, 0.0123, "-"), "1.235 ± 0.012");
+        assert_eq!(with_error(12345.0, 234.0, "-"), "12350 ± 230");
+    }
+
+    /// A value known to more digits than fit a line gives its error in units
+    /// of its last digit.
+    #[test]
+    fn precise_values_are_concise() {
+        assert_eq!(
+            with_error(-0.51370614225, 7.7e-10, "-"),
+            "-0.51370614225(77)"
+        );
+        assert_eq!(
+            with_error(3.0787446190007e7, 6.0e-2, "-"),
+            "3.0787446190(60)e7"
+        );
+        assert_eq!(
+            with_error(0.012345678, 1.2e-8, "-"),
+            "0.012345678 ± 0.000000012"
+        );
+    }
+
+    /// An error that rounds up to the next power of ten keeps two digits.
+    #[test]
+    fn an_error_rounding_up_keeps_two_digits() {
+        assert_eq!(with_error(0.5, 0.00996, "-"), "0.500 ± 0.010");
+    }
+
+    /// Very small or large magnitudes share one exponent.
+    #[test]
+    fn small_and_large_magnitudes_share_an_exponent() {
+        assert_eq!(with_error(2.5e-9, 1.2e-11, "-"), "(2.500 ± 0.012)e-9");
+        assert_eq!(with_error(4.14864e6, 6.6e4, "-"), "(4.149 ± 0.066)e6");
+        assert_eq!(with_error(-1.85e-17, 1.8e-15, "-"), "(0.0 ± 1.8)e-15");
+    }
+
+    /// A value that rounds to zero carries no sign.
+    #[test]
+    fn a_value_rounding_to_zero_has_no_sign() {
+        assert_eq!(with_error(-1e-9, 1e-3, "-"), "0.0000 ± 0.0010");
+    }
+
+    /// Zero and missing errors, and values that are not numbers, say so.
+    #[test]
+    fn missing_numbers_say_why() {
+        assert_eq!(with_error(0.0, 0.0, "-"), "0 ± 0");
+        assert_eq!(with_error(1.1637580872059066, 0.0, "-"), "1.16376 ± 0");
+        assert_eq!(with_error(2.0, f64::NAN, "-"), "2 (no error estimate)");
+        assert_eq!(with_error(f64::NAN, f64::NAN, "no fit"), "no fit");
+        assert_eq!(with_error(f64::INFINITY, f64::NAN, "never"), "never");
+        assert_eq!(significant(4.14864123e7), "4.14864e7");
+        assert_eq!(significant(0.0154299), "0.0154299");
+    }
 }

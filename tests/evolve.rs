@@ -6,16 +6,17 @@
 //! translation-invariant kernel, the master equation on a grid) agree at
 //! early times within their uncertainties.
 
+use ternary::binning::Bins;
 use ternary::evolve::convolution::{self, kernel_moments};
 use ternary::evolve::grid::VelocityGrid;
-use ternary::evolve::jackknife;
 use ternary::evolve::operator::{Generators, column_rates, kernel_generators};
 use ternary::evolve::propagate::Generator;
 use ternary::evolve::spectral::Dissipative;
-use ternary::kernel::{Bins, Draws, Estimate, Event, Target, contributions, histograms, moments};
+use ternary::kernel::{Draws, Event, Target, contributions, histograms, moments};
 use ternary::physics::potential::Potential;
 use ternary::physics::sampling::{LaunchProposal, OffsetProposal, SamplingPlan};
 use ternary::physics::scene::{EngineSettings, Method};
+use ternary::stats::{Entries, Estimate, jackknife};
 
 const KICK_FLOOR: f64 = 1e-10;
 

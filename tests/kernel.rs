@@ -3,10 +3,11 @@
 //! the importance sampler with the literal algorithm, and honest error bars.
 
 use rayon::prelude::*;
+use ternary::binning::Bins;
 use ternary::config::DEFAULT_KICK_FLOOR;
 use ternary::kernel::{
-    Bins, Draws, Estimate, Event, Histogram, MomentSums, Target, contributions, histograms,
-    moments, pilot_same_side_fraction, self_bin,
+    Draws, Event, Histogram, MomentSums, Target, contributions, histograms, moments,
+    pilot_same_side_fraction, self_bin,
 };
 use ternary::physics::launch::thermal_density;
 use ternary::physics::potential::Potential;
@@ -16,6 +17,7 @@ use ternary::physics::sampling::{
 };
 use ternary::physics::scan::LaunchPair;
 use ternary::physics::scene::{EngineSettings, Method, collide};
+use ternary::stats::Estimate;
 
 fn engine() -> EngineSettings {
     EngineSettings::new(Method::Dprkn12, 1e-12, 100_000)

@@ -7,14 +7,17 @@
 //!
 //! The log of `h^` is `t g^`, so the cumulants of `h` are `t` times the
 //! kernel's moments `kappa_p = sum_k g_k x_k^p`: mass `exp(t kappa_0)`, mean
-//! `t kappa_1`, variance `t kappa_2` — a closed form the FFT result is checked
-//! against. Units: `x` in `v_th`, `g` in `rho^2 l v_th`, `t` in `1 / (rho^2 l v_th)`.
+//! `t kappa_1`, variance `t kappa_2`, excess kurtosis `kappa_4 / (t kappa_2^2)`
+//! — a closed form the FFT result is checked against ([`state_moment`] and
+//! its normalized shape against [`closed_form_variance`] and the like).
+//! Units: `x` in `v_th`, `g` in `rho^2 l v_th`, `t` in `1 / (rho^2 l v_th)`.
 
 use rustfft::FftPlanner;
 use rustfft::num_complex::Complex;
 
-use super::{Replicated, replicate_means};
-use crate::kernel::{Bins, Draws, Event, Target, histograms};
+use crate::binning::Bins;
+use crate::kernel::{Draws, Event, Target, histograms};
+use crate::stats::{Replicated, replicate_means};
 
 /// The binned kernel `g_k = G_k dx` (self plus bath) at `target` on `bins`,
 /// per replicate: its mean and its means with each replicate left out, for
@@ -46,6 +49,61 @@ pub fn kernel_moments(rates: &[f64], width: f64) -> [f64; 5] {
         }
     }
     moments
+}
+
+/// Number `exp(t kappa_0)` of `h` at time `t` from the kernel's moments
+/// ([`kernel_moments`]).
+pub fn closed_form_number(kappa: &[f64; 5], t: f64) -> f64 {
+    (t * kappa[0]).exp()
+}
+
+/// Variance `t kappa_2` of the normalized `h` at time `t`, `v_th^2`.
+pub fn closed_form_variance(kappa: &[f64; 5], t: f64) -> f64 {
+    t * kappa[2]
+}
+
+/// Excess kurtosis `kappa_4 / (t kappa_2^2)` of `h` at time `t`: the fourth
+/// cumulant `t kappa_4` over the squared variance, decaying as `1/t`.
+pub fn closed_form_excess_kurtosis(kappa: &[f64; 5], t: f64) -> f64 {
+    kappa[4] / (t * kappa[2] * kappa[2])
+}
+
+/// Moment `sum_i h_i x_i^p` of a state on periodic bins of `width`, index
+/// `len / 2` at `x = 0` (as [`evolve`] returns them).
+pub fn state_moment(h: &[f64], width: f64, p: i32) -> f64 {
+    let half = (h.len() / 2) as f64;
+    h.iter()
+        .enumerate()
+        .map(|(i, m)| m * ((i as f64 - half) * width).powi(p))
+        .sum()
+}
+
+/// Mean `<x>_h = m_1 / m_0` of a periodic state (normalized), `v_th`.
+pub fn state_mean(h: &[f64], width: f64) -> f64 {
+    state_moment(h, width, 1) / state_moment(h, width, 0)
+}
+
+/// Variance `m_2 / m_0 - (m_1 / m_0)^2` of a periodic state (normalized), `v_th^2`.
+pub fn state_variance(h: &[f64], width: f64) -> f64 {
+    let mass = state_moment(h, width, 0);
+    state_moment(h, width, 2) / mass - (state_moment(h, width, 1) / mass).powi(2)
+}
+
+/// Excess kurtosis `mu_4 / mu_2^2 - 3` of a periodic state (normalized;
+/// `mu_p` the central moments).
+pub fn excess_kurtosis(h: &[f64], width: f64) -> f64 {
+    let half = (h.len() / 2) as f64;
+    let x = |i: usize| (i as f64 - half) * width;
+    let mass: f64 = h.iter().sum();
+    let mean = h.iter().enumerate().map(|(i, m)| m * x(i)).sum::<f64>() / mass;
+    let central = |p: i32| {
+        h.iter()
+            .enumerate()
+            .map(|(i, m)| m * (x(i) - mean).powi(p))
+            .sum::<f64>()
+            / mass
+    };
+    central(4) / central(2).powi(2) - 3.0
 }
 
 /// Periodic grid size (a power of two) holding `h` up to time `t_max`: the
@@ -128,7 +186,8 @@ mod tests {
     use super::*;
 
     /// A kernel with a loss at the centre and asymmetric gains: the FFT
-    /// evolution's mass, mean and variance equal the cumulant closed form.
+    /// evolution's mass, mean, variance and excess kurtosis equal the
+    /// cumulant closed form.
     #[test]
     fn fourier_evolution_matches_the_cumulants() {
         let width = 0.01;
@@ -138,34 +197,51 @@ mod tests {
             *rate = (-x * x / 0.005).exp() * (1.0 + 3.0 * x);
         }
         rates[20] = -rates.iter().sum::<f64>() + rates[20] - 0.02;
-        let [k0, k1, k2, ..] = kernel_moments(&rates, width);
+        let kappa = kernel_moments(&rates, width);
         let times = [0.5, 5.0, 40.0];
         let size = periodic_size(&rates, width, 40.0);
         for (h, t) in evolve(&rates, size, &times).iter().zip(times) {
             let half = (size / 2) as f64;
-            let moment = |p: i32| -> f64 {
-                h.iter()
-                    .enumerate()
-                    .map(|(i, m)| m * ((i as f64 - half) * width).powi(p))
-                    .sum()
-            };
             // FFT rounding leaves ~EPSILON per bin everywhere on the periodic
-            // grid; weighted by x^2 it bounds the variance's error.
-            let floor = f64::EPSILON
-                * (0..size)
-                    .map(|i| ((i as f64 - half) * width).powi(2))
-                    .sum::<f64>();
-            let mass = moment(0);
-            let mean = moment(1) / mass;
-            let variance = moment(2) / mass - mean * mean;
-            assert!((mass - (t * k0).exp()).abs() < 1e-12, "t {t}: {mass}");
-            assert!((mean - t * k1).abs() < 1e-12, "t {t}: {mean} vs {}", t * k1);
+            // grid; weighted by x^p it bounds the p-th moment's error.
+            let floor = |p: i32| {
+                f64::EPSILON
+                    * (0..size)
+                        .map(|i| ((i as f64 - half) * width).powi(p))
+                        .sum::<f64>()
+            };
+            let mass = state_moment(h, width, 0);
+            let mean = state_mean(h, width);
+            let variance = state_variance(h, width);
+            let kurtosis = excess_kurtosis(h, width);
+            let number = closed_form_number(&kappa, t);
+            assert!((mass - number).abs() < 1e-12, "t {t}: {mass}");
+            assert!((mean - t * kappa[1]).abs() < 1e-12, "t {t}: {mean}");
+            let closed = closed_form_variance(&kappa, t);
             assert!(
-                (variance - t * k2).abs() < floor,
-                "t {t}: {variance} vs {}",
-                t * k2
+                (variance - closed).abs() < floor(2),
+                "t {t}: {variance} vs {closed}"
+            );
+            // mu_4 / mu_2^2 carries the fourth moment's floor over mu_2^2.
+            let closed = closed_form_excess_kurtosis(&kappa, t);
+            assert!(
+                (kurtosis - closed).abs() < floor(4) / variance.powi(2),
+                "t {t}: {kurtosis} vs {closed}"
             );
         }
+    }
+
+    /// Half the mass at `-a`, half at `+a`: mean 0, variance `a^2`, excess
+    /// kurtosis `1 - 3 = -2`.
+    #[test]
+    fn a_two_point_state_has_excess_kurtosis_minus_two() {
+        let width = 0.5;
+        let mut h = vec![0.0; 16];
+        (h[5], h[11]) = (0.25, 0.25);
+        let a = 3.0 * width;
+        assert_eq!(state_mean(&h, width), 0.0);
+        assert!((state_variance(&h, width) - a * a).abs() < 1e-15);
+        assert!((excess_kurtosis(&h, width) + 2.0).abs() < 1e-15);
     }
 
     #[test]

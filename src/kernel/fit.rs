@@ -17,7 +17,7 @@
 //! does not describe the kernel exactly (chi2/dof of 20 at 1.2e6 scenes for
 //! n = 6): the `fit` stage then scales the errors by sqrt(chi2/dof).
 
-use super::Estimate;
+use crate::stats::Estimate;
 
 /// Fitted shape parameters.
 #[derive(Clone, Copy, Debug, PartialEq)]

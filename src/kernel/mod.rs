@@ -1,20 +1,30 @@
 //! The collision kernel `G(u' -> u)` and its moments from integrated scenes
 //! (physics.md §3): reweighting one event set to any `u'` and density
 //! (Galilean invariance), the +-1 histogram rule, self/bath split by sorted
-//! matching, and replicate-based standard errors. Pure math: no IO.
+//! matching, per-replicate sums (their statistics live in `stats`), and the
+//! kernel's consistency with relaxation to `f0` ([`equilibrium`]). Pure math:
+//! no IO.
 //!
 //! Units: velocities in `v_th`, `G` in `rho^2 l v_th` per unit velocity, rates
 //! of the scaled moments `d<u - u'>/dt`, `d<(u - u')^2>/dt` in `rho^2 l v_th`
 //! (physics.md §3: `Gamma = a_n rho^2 l v_th`).
 
+pub mod equilibrium;
 pub mod fit;
 
 use rayon::prelude::*;
 
+use crate::binning::Bins;
 use crate::physics::launch::{launch_rate, thermal_density};
 use crate::physics::potential::Potential;
 use crate::physics::sampling::{SamplingPlan, SceneRecord, Stratum};
 use crate::physics::scene::EngineSettings;
+
+/// Only for the tests of `physics::ring`, which still name
+/// `crate::kernel::Estimate`; remove with that import (physics does not
+/// depend on the kernel).
+#[cfg(test)]
+pub use crate::stats::Estimate;
 
 /// One integrated scene as the kernel needs it (special particle's frame).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -238,46 +248,6 @@ pub fn images(event: &Event, kick_floor: f64) -> impl ExactSizeIterator<Item = C
     })
 }
 
-/// Velocity bins centred on `u' + k * width`, `|k| <= half_bins`.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Bins {
-    /// Bin width, `v_th`.
-    pub width: f64,
-    /// Bins on each side of the centre bin.
-    pub half_bins: usize,
-}
-
-impl Bins {
-    /// Bins covering a window of total width `window` around `u'`.
-    pub fn for_window(window: f64, width: f64) -> Bins {
-        Bins {
-            width,
-            half_bins: (0.5 * window / width).round() as usize,
-        }
-    }
-
-    /// Number of bins.
-    pub fn len(&self) -> usize {
-        2 * self.half_bins + 1
-    }
-
-    /// `true` when there are no bins (never: the centre bin always exists).
-    pub fn is_empty(&self) -> bool {
-        false
-    }
-
-    /// Index of the bin holding relative velocity `x`, if inside the window.
-    pub fn index(&self, x: f64) -> Option<usize> {
-        let k = (x / self.width).round();
-        (k.abs() <= self.half_bins as f64).then_some((k + self.half_bins as f64) as usize)
-    }
-
-    /// Centre of bin `index` relative to `u'`.
-    pub fn centre(&self, index: usize) -> f64 {
-        (index as f64 - self.half_bins as f64) * self.width
-    }
-}
-
 /// Weighted +-1 histograms of one replicate, split into self and bath.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Histogram {
@@ -322,38 +292,6 @@ impl Histogram {
             if let Some(k) = bins.index(outgoing) {
                 part[k] += weight;
             }
-        }
-    }
-}
-
-/// Mean and standard error over independent replicates.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Estimate {
-    /// Mean over replicates.
-    pub mean: f64,
-    /// Standard error of the mean (sample standard deviation / sqrt(R)).
-    pub stderr: f64,
-}
-
-impl Estimate {
-    /// From one value per replicate (at least two).
-    pub fn from_replicates(values: &[f64]) -> Estimate {
-        let count = values.len() as f64;
-        let mean = values.iter().sum::<f64>() / count;
-        let variance = values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (count - 1.0);
-        Estimate {
-            mean,
-            stderr: (variance / count).sqrt(),
-        }
-    }
-
-    /// `self / other`, with the two relative standard errors combined to
-    /// first order (the two estimates treated as independent).
-    pub fn ratio(self, other: Estimate) -> Estimate {
-        let mean = self.mean / other.mean;
-        Estimate {
-            mean,
-            stderr: mean.abs() * (self.stderr / self.mean).hypot(other.stderr / other.mean),
         }
     }
 }

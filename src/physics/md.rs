@@ -25,7 +25,7 @@ use super::quasi_random::standard_normal_cdf;
 use super::ring::{
     Reach, RingError, RingForces, RingState, RingWork, bound_pairs, evolve, thermal_start,
 };
-use crate::kernel::Bins;
+use crate::binning::Bins;
 
 /// What one run does.
 #[derive(Clone, Debug, PartialEq)]
@@ -236,7 +236,7 @@ fn sample(
     let thermal_starters: Vec<usize> = (1..start.len())
         .filter(|&k| start[k].abs() <= THERMAL_BAND)
         .collect();
-    let half_window = bins.width * (bins.half_bins as f64 + 0.5);
+    let half_window = bins.half_width();
     let mut thermal = [0.0; 2];
     let mut now = 0.0;
     for &time in &settings.sample_times {

@@ -13,11 +13,10 @@ use std::ops::Range;
 use serde_json::Value;
 
 use crate::config::CollisionsParams;
-use crate::kernel::Event;
-use crate::kernel::{Target, pilot_same_side_fraction};
+use crate::contract::{self, Rows};
+use crate::kernel::{Event, Target, pilot_same_side_fraction};
 use crate::physics::sampling::{SceneRecord, Stratum};
-use crate::pipeline::table::{f64_values, text_values, u32_values};
-use crate::pipeline::{Column, Input, InstanceId, Progress, Stage, StageError, Table};
+use crate::pipeline::{Input, InstanceId, Progress, Stage, StageError, Table};
 
 /// The `collisions` stage for one potential.
 pub struct CollisionsStage {
@@ -39,7 +38,7 @@ impl CollisionsStage {
 
     /// Instance id of the collisions named `name` (a potential id, or a variant's name).
     pub fn instance(name: &str) -> InstanceId {
-        InstanceId::new("collisions", name)
+        InstanceId::new(contract::collisions::STAGE, name)
     }
 
     /// The instances of scene sets `main` and `other`, `other` left out when
@@ -55,7 +54,7 @@ impl CollisionsStage {
 
 impl Stage for CollisionsStage {
     fn id(&self) -> InstanceId {
-        InstanceId::new("collisions", &self.instance)
+        InstanceId::new(contract::collisions::STAGE, &self.instance)
     }
 
     fn version(&self) -> u32 {
@@ -67,7 +66,7 @@ impl Stage for CollisionsStage {
     }
 
     fn tables(&self) -> &'static [&'static str] {
-        &["events"]
+        &[contract::collisions::TABLE.name]
     }
 
     fn inputs(&self) -> Vec<InstanceId> {
@@ -128,118 +127,40 @@ impl Stage for CollisionsStage {
 
 /// The events table of integrated scenes.
 pub fn events_table(rows: &[SceneRecord]) -> Result<Table, StageError> {
-    let f64_of = |f: &dyn Fn(&SceneRecord) -> f64| rows.iter().map(f).collect::<Vec<f64>>();
-    let u32_of = |f: &dyn Fn(&SceneRecord) -> u32| rows.iter().map(f).collect::<Vec<u32>>();
-    let columns = vec![
-        Column::u32(
-            "randomization",
-            "1",
-            "independent randomization (replicate) of the point set",
-            u32_of(&|r| r.randomization),
-        ),
-        Column::u32(
-            "stratum",
-            "1",
-            "sign pattern: 0 opposite sides (u2 > 0 > u3), 1 same side (u2, u3 > 0; mirror image stands for both < 0)",
-            u32_of(&|r| r.scene.stratum.index()),
-        ),
-        Column::u32(
-            "point",
-            "1",
-            "index of the scrambled Sobol' point",
-            u32_of(&|r| r.point),
-        ),
-        Column::f64(
-            "u2",
-            "v_th",
-            "launch velocity of the first arrival, special particle's frame",
-            f64_of(&|r| r.scene.u2),
-        ),
-        Column::f64(
-            "u3",
-            "v_th",
-            "launch velocity of the second arrival",
-            f64_of(&|r| r.scene.u3),
-        ),
-        Column::f64(
-            "arrival_offset",
-            "l/v_th",
-            "free-flight arrival time of particle 3 minus that of particle 2 at the special particle",
-            f64_of(&|r| r.scene.offset),
-        ),
-        Column::f64(
-            "proposal_density",
-            "1/(v_th^2 l/v_th)",
-            "joint sampling density of (|u2|, |u3|, arrival_offset) within the stratum",
-            f64_of(&|r| r.scene.proposal_density),
-        ),
-        Column::f64(
-            "out_slow",
-            "v_th",
-            "slowest outgoing velocity, special particle's frame",
-            f64_of(&|r| r.collision.outgoing[0]),
-        ),
-        Column::f64(
-            "out_middle",
-            "v_th",
-            "middle outgoing velocity",
-            f64_of(&|r| r.collision.outgoing[1]),
-        ),
-        Column::f64(
-            "out_fast",
-            "v_th",
-            "fastest outgoing velocity",
-            f64_of(&|r| r.collision.outgoing[2]),
-        ),
-        Column::f64(
-            "self_kick",
-            "v_th",
-            "velocity change of the special particle (sorted matching)",
-            f64_of(&|r| r.collision.self_kick(0.0)),
-        ),
-        Column::text(
-            "outcome",
-            "scattered, recombined or failed_*",
-            rows.iter()
-                .map(|r| r.collision.outcome.name().to_string())
-                .collect(),
-        ),
-        Column::f64(
-            "energy_error",
-            "1",
-            "(E_out - E_in) / (E_in + well depth) of the relative motion",
-            f64_of(&|r| r.collision.energy_error),
-        ),
-        Column::u32(
-            "force_evaluations",
-            "1",
-            "evaluations of the three pair forces",
-            u32_of(&|r| r.collision.evaluations),
-        ),
-    ];
-    Ok(Table::new("events", columns)?.with_metadata(
-        "ternary.description",
-        "integrated three-body scenes for the collision kernel".into(),
-    ))
+    use contract::collisions::*;
+    Ok(Rows::new(rows)
+        .with(RANDOMIZATION, |r| r.randomization)
+        .with(STRATUM, |r| r.scene.stratum.index())
+        .with(POINT, |r| r.point)
+        .with(U2, |r| r.scene.u2)
+        .with(U3, |r| r.scene.u3)
+        .with(ARRIVAL_OFFSET, |r| r.scene.offset)
+        .with(PROPOSAL_DENSITY, |r| r.scene.proposal_density)
+        .with(OUT_SLOW, |r| r.collision.outgoing[0])
+        .with(OUT_MIDDLE, |r| r.collision.outgoing[1])
+        .with(OUT_FAST, |r| r.collision.outgoing[2])
+        .with(SELF_KICK, |r| r.collision.self_kick(0.0))
+        .with(OUTCOME, |r| r.collision.outcome.name().to_string())
+        .with(ENERGY_ERROR, |r| r.collision.energy_error)
+        .with(FORCE_EVALUATIONS, |r| r.collision.evaluations)
+        .table(&TABLE)?)
 }
 
 /// The events of a `collisions` artifact, for the kernel estimators.
 pub fn read_events(input: &Input) -> Result<Vec<Event>, StageError> {
-    let batch = input
-        .tables
-        .get("events")
-        .ok_or_else(|| StageError::Input(format!("{} has no events table", input.id)))?;
-    let randomization = u32_values(batch, "randomization")?;
-    let stratum = u32_values(batch, "stratum")?;
-    let (u2, u3) = (f64_values(batch, "u2")?, f64_values(batch, "u3")?);
-    let offset = f64_values(batch, "arrival_offset")?;
-    let density = f64_values(batch, "proposal_density")?;
+    use contract::collisions::*;
+    let batch = TABLE.of(input)?;
+    let randomization = RANDOMIZATION.read(batch)?;
+    let stratum = STRATUM.read(batch)?;
+    let (u2, u3) = (U2.read(batch)?, U3.read(batch)?);
+    let offset = ARRIVAL_OFFSET.read(batch)?;
+    let density = PROPOSAL_DENSITY.read(batch)?;
     let outgoing = [
-        f64_values(batch, "out_slow")?,
-        f64_values(batch, "out_middle")?,
-        f64_values(batch, "out_fast")?,
+        OUT_SLOW.read(batch)?,
+        OUT_MIDDLE.read(batch)?,
+        OUT_FAST.read(batch)?,
     ];
-    let outcome = text_values(batch, "outcome")?;
+    let outcome = OUTCOME.read(batch)?;
     (0..batch.num_rows())
         .map(|k| {
             let stratum = Stratum::from_index(stratum[k]).ok_or_else(|| {

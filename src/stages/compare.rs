@@ -13,15 +13,16 @@ use serde_json::Value;
 
 use super::collisions::CollisionsStage;
 use super::kernel::{collision_events, target_of};
+use super::md::MdStage;
+use crate::analysis::{
+    FiniteSize, RingBins, boltzmann_on_bins, finite_size, thermal_window_variance_rates,
+};
+use crate::binning::Bins;
 use crate::config::{KernelParams, MdParams};
-use crate::evolve::Replicated;
-use crate::evolve::convolution::{self, overlap_rebin};
-use crate::kernel::{Bins, Estimate, Target, moments};
-use crate::linalg::simpson_weight;
-use crate::physics::launch::thermal_density;
-use crate::physics::md::THERMAL_BAND;
-use crate::pipeline::table::{f64_values, text_values};
-use crate::pipeline::{Column, Input, InstanceId, Progress, Stage, StageError, Table};
+use crate::contract::{self, Rows};
+use crate::evolve::convolution;
+use crate::pipeline::{Input, InstanceId, Progress, Stage, StageError, Table};
+use crate::stats::{ChiSquare, Estimate, Replicated, chi_square};
 
 /// Resolved parameters of the `compare` stage.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -34,9 +35,6 @@ pub struct CompareParams {
     /// The rings compared.
     pub systems: Vec<MdParams>,
 }
-
-/// Simpson intervals of the average over thermal starts in [-3, 3] (step 0.25).
-const THERMAL_INTERVALS: usize = 24;
 
 /// The `compare` stage.
 pub struct CompareStage {
@@ -55,49 +53,35 @@ struct MdEstimates {
 }
 
 fn read_md(input: &Input) -> Result<MdEstimates, StageError> {
-    let batch = input
-        .tables
-        .get("h")
-        .ok_or_else(|| StageError::Input(format!("{} has no h table", input.id)))?;
-    let pair = |mean: &str, error: &str| -> Result<Vec<Estimate>, StageError> {
-        Ok(f64_values(batch, mean)?
-            .into_iter()
-            .zip(f64_values(batch, error)?)
-            .map(|(mean, stderr)| Estimate { mean, stderr })
-            .collect())
-    };
-    let summary = input
-        .tables
-        .get("summary")
-        .ok_or_else(|| StageError::Input(format!("{} has no summary table", input.id)))?;
-    let estimators = text_values(summary, "estimator")?;
-    let (means, errors) = (
-        f64_values(summary, "window_variance")?,
-        f64_values(summary, "window_variance_stderr")?,
-    );
-    let variance = |name: &str| -> Result<Estimate, StageError> {
-        let row = estimators
-            .iter()
-            .position(|e| e == name)
-            .ok_or_else(|| StageError::Input(format!("{} summary has no {name} row", input.id)))?;
-        Ok(Estimate {
-            mean: means[row],
-            stderr: errors[row],
-        })
+    use contract::estimator::{TAGGED, THERMAL};
+    use contract::md::{h, summary};
+    let batch = h::TABLE.of(input)?;
+    let moments = summary::TABLE.of(input)?;
+    let variances = summary::WINDOW_VARIANCE.read(moments)?;
+    let variance = |estimator: &str| -> Result<Estimate, StageError> {
+        Ok(variances[summary::ESTIMATOR.row_of(moments, estimator)?])
     };
     Ok(MdEstimates {
-        du: f64_values(batch, "du")?,
-        published: pair("h_published", "h_published_stderr")?,
-        tagged: pair("h_tagged", "h_tagged_stderr")?,
-        tagged_variance: variance("tagged")?,
-        thermal_variance: variance("thermal")?,
+        du: h::DU.read(batch)?,
+        published: h::H_PUBLISHED.read(batch)?,
+        tagged: h::H_TAGGED.read(batch)?,
+        tagged_variance: variance(TAGGED)?,
+        thermal_variance: variance(THERMAL)?,
     })
 }
 
 /// Half-width of a ring's estimator window (the outer edges of its bins), `v_th`.
 fn half_window(system: &MdParams) -> f64 {
-    let bins = Bins::for_window(system.window, system.bin_width);
-    bins.width * (bins.half_bins as f64 + 0.5)
+    Bins::for_window(system.window, system.bin_width).half_width()
+}
+
+/// A ring's estimator bins.
+fn ring_bins<'a>(system: &MdParams, ring: &'a MdEstimates) -> RingBins<'a> {
+    RingBins {
+        du: &ring.du,
+        width: system.bin_width,
+        window: system.window,
+    }
 }
 
 /// One goodness-of-fit row.
@@ -105,21 +89,7 @@ struct Fit {
     ring: String,
     reference: String,
     estimator: String,
-    chi2: f64,
-    dof: u32,
-}
-
-/// `sum (a - b)^2 / (sa^2 + sb^2)` over the bins where the MD estimate `a`
-/// has a nonzero error (bins no run reached carry no error estimate; their
-/// Gaussian error would be zero), and their number.
-fn chi_square(a: &[Estimate], b: &[Estimate]) -> (f64, usize) {
-    a.iter()
-        .zip(b)
-        .filter(|(x, _)| x.stderr > 0.0)
-        .fold((0.0, 0), |(sum, count), (x, y)| {
-            let variance = x.stderr.powi(2) + y.stderr.powi(2);
-            (sum + (x.mean - y.mean).powi(2) / variance, count + 1)
-        })
+    chi: ChiSquare,
 }
 
 impl CompareStage {
@@ -147,55 +117,34 @@ impl CompareStage {
         let kernel = &self.params.kernel;
         let bins = Bins::for_window(kernel.window, kernel.bin_width);
         let rates = convolution::replicated_kernel(&events, &draws, &target_of(kernel), &bins);
-        let exponent = kernel.potential.length_exponent();
-        self.params
+        Ok(self
+            .params
             .systems
             .iter()
             .zip(rings)
             .map(|(system, ring)| {
-                let time = system.final_time_ns * system.gas.rate_per_ns(1.0, exponent);
-                let size = convolution::periodic_size(&rates.full, bins.width, time)
-                    .max((4.0 * system.window / bins.width) as usize)
-                    .next_power_of_two();
-                let out_width = system.bin_width;
-                Ok(rates.map(|g| {
-                    let h = &convolution::evolve(g, size, &[time])[0];
-                    overlap_rebin(h, bins.width, size / 2, &ring.du, out_width)
-                        .iter()
-                        .map(|m| m / out_width)
-                        .collect::<Vec<f64>>()
-                }))
+                let time = self.scaled_time(system);
+                boltzmann_on_bins(&rates, bins.width, time, ring_bins(system, ring))
             })
-            .collect()
+            .collect())
+    }
+
+    /// A ring's final time `t_f` in units of its own `1 / (rho^2 l v_th)`.
+    fn scaled_time(&self, system: &MdParams) -> f64 {
+        let exponent = self.params.kernel.potential.length_exponent();
+        system.final_time_ns * system.gas.rate_per_ns(1.0, exponent)
     }
 
     /// Per ring, per kernel replicate: the self kernel's window variance rate
-    /// (truncated at the ring's half window) averaged over thermal starts
-    /// `u0` in [-3, 3] with weight `f0(u0)` (Simpson, step 0.25, normalized on
-    /// the band), `rho^2 l v_th`.
+    /// (truncated at the ring's half window) averaged over thermal starts,
+    /// `rho^2 l v_th` (`analysis::thermal_window_variance_rates`).
     fn thermal_rates(&self, collisions: &Input) -> Result<Vec<Vec<f64>>, StageError> {
         let (events, draws, _) = collision_events(collisions)?;
         let edges: Vec<f64> = self.params.systems.iter().map(half_window).collect();
-        let step = 2.0 * THERMAL_BAND / THERMAL_INTERVALS as f64;
-        let mut rates = vec![vec![0.0; draws.replicates()]; edges.len()];
-        let mut norm = 0.0;
-        for j in 0..=THERMAL_INTERVALS {
-            let u = -THERMAL_BAND + step * j as f64;
-            let weight = simpson_weight(j, THERMAL_INTERVALS) * thermal_density(u);
-            norm += weight;
-            let target = Target {
-                u_prime: u,
-                ..target_of(&self.params.kernel)
-            };
-            let sums = moments(&events, &target, &edges, &draws);
-            for (replicate, sums) in sums.iter().enumerate() {
-                for (ring, sum) in sums.iter().enumerate() {
-                    rates[ring][replicate] += weight * sum.self_variance;
-                }
-            }
-        }
-        rates.iter_mut().flatten().for_each(|r| *r /= norm);
-        Ok(rates)
+        let target = target_of(&self.params.kernel);
+        Ok(thermal_window_variance_rates(
+            &events, &draws, &target, &edges,
+        ))
     }
 
     /// The finite-size and density study: per ring, its size, density and
@@ -209,133 +158,126 @@ impl CompareStage {
         boltzmann: &[Replicated<Vec<f64>>],
         thermal_rates: &[Vec<f64>],
     ) -> Result<Table, StageError> {
-        let exponent = self.params.kernel.potential.length_exponent();
-        let mut columns: [Vec<f64>; 14] = Default::default();
-        for (((system, ring), predicted), rates) in self
+        use contract::compare::finite_size::*;
+        let rows: Vec<(&MdParams, f64, FiniteSize)> = self
             .params
             .systems
             .iter()
             .zip(rings)
             .zip(boltzmann)
             .zip(thermal_rates)
-        {
-            let width = system.bin_width;
-            let variance = predicted.scalar(|h| {
-                h.iter()
-                    .zip(&ring.du)
-                    .map(|(h, du)| h * du * du * width)
-                    .sum()
-            });
-            let time = system.final_time_ns * system.gas.rate_per_ns(1.0, exponent);
-            let thermal =
-                Estimate::from_replicates(&rates.iter().map(|r| r * time).collect::<Vec<f64>>());
-            let [tagged_ratio, thermal_ratio] = [
-                ring.tagged_variance.ratio(variance),
-                ring.thermal_variance.ratio(thermal),
-            ];
-            let row = [
-                f64::from(system.particles - 1) / system.circumference,
-                time,
-                ring.tagged_variance.mean,
-                ring.tagged_variance.stderr,
-                variance.mean,
-                variance.stderr,
-                tagged_ratio.mean,
-                tagged_ratio.stderr,
-                ring.thermal_variance.mean,
-                ring.thermal_variance.stderr,
-                thermal.mean,
-                thermal.stderr,
-                thermal_ratio.mean,
-                thermal_ratio.stderr,
-            ];
-            columns.iter_mut().zip(row).for_each(|(c, v)| c.push(v));
-        }
-        let [
-            density,
-            time,
-            md,
-            md_err,
-            b,
-            b_err,
-            ratio,
-            ratio_err,
-            thermal_md,
-            thermal_md_err,
-            thermal_b,
-            thermal_b_err,
-            thermal_ratio,
-            thermal_ratio_err,
-        ] = columns;
-        let names = self.params.systems.iter().map(|s| s.name.clone()).collect();
-        let particles = self.params.systems.iter().map(|s| s.particles).collect();
-        let variance = "v_th^2";
-        Ok(Table::new(
-            "finite_size",
-            vec![
-                Column::text("ring", "md system", names),
-                Column::u32("particles", "1", "N", particles),
-                Column::f64("density", "1", "rho l = (N - 1) l / (2 pi R)", density),
-                Column::f64(
-                    "scaled_time",
-                    "1",
-                    "rho^2 l v_th t_f (Gamma t_f = a_n times this)",
+            .map(|(((system, ring), predicted), rates)| {
+                let time = self.scaled_time(system);
+                let compared = finite_size(
+                    ring.tagged_variance,
+                    ring.thermal_variance,
+                    predicted,
+                    ring_bins(system, ring),
+                    rates,
                     time,
-                ),
-                Column::f64(
-                    "md_variance",
-                    variance,
-                    "tagged estimator: window variance sum (u - u')^2 h du at t_f",
-                    md,
-                ),
-                Column::f64(
-                    "md_variance_stderr",
-                    variance,
-                    "standard error over runs",
-                    md_err,
-                ),
-                Column::f64(
-                    "boltzmann_variance",
-                    variance,
-                    "the same of the Boltzmann h (dilute kernel) on the ring's bins",
-                    b,
-                ),
-                Column::f64(
-                    "boltzmann_variance_stderr",
-                    variance,
-                    "jackknife over the kernel's randomizations",
-                    b_err,
-                ),
-                Column::f64(
-                    "ratio",
-                    "1",
-                    "md_variance / boltzmann_variance: 1 at large N and small rho l",
-                    ratio,
-                ),
-                Column::f64(
-                    "ratio_stderr",
-                    "1",
-                    "propagated from both standard errors",
-                    ratio_err,
-                ),
-                Column::f64("thermal_md_variance", variance, "thermal estimator: mean over every lineage starting with |u| <= 3 of its squared change within the window", thermal_md),
-                Column::f64("thermal_md_variance_stderr", variance, "standard error over runs", thermal_md_err),
-                Column::f64("thermal_boltzmann_variance", variance, "t_f times the self kernel's window variance rate averaged over thermal starts (f0 on [-3, 3]); first order in Gamma t_f", thermal_b),
-                Column::f64("thermal_boltzmann_variance_stderr", variance, "standard error over the kernel's randomizations", thermal_b_err),
-                Column::f64("thermal_ratio", "1", "thermal_md_variance / thermal_boltzmann_variance", thermal_ratio),
-                Column::f64("thermal_ratio_stderr", "1", "propagated from both standard errors", thermal_ratio_err),
-            ],
-        )?
-        .with_metadata(
-            "ternary.description",
-            "finite-size and density study: MD window variance against Boltzmann per ring".into(),
-        ))
+                );
+                (system, time, compared)
+            })
+            .collect();
+        Ok(Rows::new(&rows)
+            .with(RING, |(system, ..)| system.name.clone())
+            .with(PARTICLES, |(system, ..)| system.particles)
+            .with(DENSITY, |(system, ..)| {
+                f64::from(system.particles - 1) / system.circumference
+            })
+            .with(SCALED_TIME, |(_, time, _)| *time)
+            .estimate(MD_VARIANCE, |(.., c)| c.tagged.md)
+            .estimate(BOLTZMANN_VARIANCE, |(.., c)| c.tagged.boltzmann)
+            .estimate(RATIO, |(.., c)| c.tagged.ratio)
+            .estimate(THERMAL_MD_VARIANCE, |(.., c)| c.thermal.md)
+            .estimate(THERMAL_BOLTZMANN_VARIANCE, |(.., c)| c.thermal.boltzmann)
+            .estimate(THERMAL_RATIO, |(.., c)| c.thermal.ratio)
+            .table(&TABLE)?)
+    }
+
+    /// `h` of every ring, MD against Boltzmann, bin by bin.
+    fn comparison(
+        &self,
+        rings: &[MdEstimates],
+        boltzmann: &[Vec<Estimate>],
+    ) -> Result<Table, StageError> {
+        use contract::compare::comparison::*;
+        let rows: Vec<(&str, &MdEstimates, usize, Estimate)> = self
+            .params
+            .systems
+            .iter()
+            .zip(rings)
+            .zip(boltzmann)
+            .flat_map(|((system, ring), predicted)| {
+                predicted
+                    .iter()
+                    .enumerate()
+                    .map(move |(k, h)| (system.name.as_str(), ring, k, *h))
+            })
+            .collect();
+        Ok(Rows::new(&rows)
+            .with(RING, |(name, ..)| name.to_string())
+            .with(DU, |(_, ring, k, _)| ring.du[*k])
+            .estimate(H_BOLTZMANN, |(.., h)| *h)
+            .estimate(H_PUBLISHED, |(_, ring, k, _)| ring.published[*k])
+            .estimate(H_TAGGED, |(_, ring, k, _)| ring.tagged[*k])
+            .table(&TABLE)?)
+    }
+
+    /// Chi-square of both MD estimators against Boltzmann per ring, and of
+    /// every later ring's tagged `h` against the first ring's on the same
+    /// bins (the scaling collapse).
+    fn goodness(
+        &self,
+        rings: &[MdEstimates],
+        boltzmann: &[Vec<Estimate>],
+    ) -> Result<Table, StageError> {
+        use contract::compare::goodness::*;
+        use contract::estimator::{PUBLISHED, TAGGED};
+        let mut fits: Vec<Fit> = Vec::new();
+        let mut record = |ring: &str, reference: &str, estimator: &str, chi: ChiSquare| {
+            fits.push(Fit {
+                ring: ring.to_string(),
+                reference: reference.to_string(),
+                estimator: estimator.to_string(),
+                chi,
+            });
+        };
+        for ((system, ring), predicted) in self.params.systems.iter().zip(rings).zip(boltzmann) {
+            let name = system.name.as_str();
+            record(
+                name,
+                BOLTZMANN,
+                PUBLISHED,
+                chi_square(&ring.published, predicted),
+            );
+            record(name, BOLTZMANN, TAGGED, chi_square(&ring.tagged, predicted));
+            if let (Some(first), Some(reference)) = (rings.first(), self.params.systems.first())
+                && reference.name != system.name
+                && first.du == ring.du
+            {
+                record(
+                    name,
+                    &reference.name,
+                    TAGGED,
+                    chi_square(&ring.tagged, &first.tagged),
+                );
+            }
+        }
+        Ok(Rows::new(&fits)
+            .with(RING, |f| f.ring.clone())
+            .with(REFERENCE, |f| f.reference.clone())
+            .with(ESTIMATOR, |f| f.estimator.clone())
+            .with(CHI2, |f| f.chi.chi2)
+            .with(DOF, |f| f.chi.dof as u32)
+            .with(CHI2_PER_DOF, |f| f.chi.per_dof())
+            .table(&TABLE)?)
     }
 }
 
 impl Stage for CompareStage {
     fn id(&self) -> InstanceId {
-        InstanceId::new("compare", "study")
+        InstanceId::new(contract::compare::STAGE, "study")
     }
 
     fn version(&self) -> u32 {
@@ -347,7 +289,12 @@ impl Stage for CompareStage {
     }
 
     fn tables(&self) -> &'static [&'static str] {
-        &["comparison", "goodness", "finite_size"]
+        use contract::compare::*;
+        &[
+            comparison::TABLE.name,
+            goodness::TABLE.name,
+            finite_size::TABLE.name,
+        ]
     }
 
     fn inputs(&self) -> Vec<InstanceId> {
@@ -356,7 +303,7 @@ impl Stage for CompareStage {
             self.params
                 .systems
                 .iter()
-                .map(|s| InstanceId::new("md", &s.name)),
+                .map(|s| MdStage::instance(&s.name)),
         );
         ids
     }
@@ -373,129 +320,9 @@ impl Stage for CompareStage {
             .collect::<Result<_, _>>()?;
         let replicated = self.boltzmann(&inputs[0], &rings)?;
         let boltzmann: Vec<Vec<Estimate>> = replicated.iter().map(Replicated::values).collect();
-        let mut columns: [Vec<f64>; 7] = Default::default();
-        let mut names = Vec::new();
-        let mut fits: Vec<Fit> = Vec::new();
-        let mut record =
-            |ring: &str, reference: &str, estimator: &str, (chi2, dof): (f64, usize)| {
-                fits.push(Fit {
-                    ring: ring.to_string(),
-                    reference: reference.to_string(),
-                    estimator: estimator.to_string(),
-                    chi2,
-                    dof: dof as u32,
-                });
-            };
-        for ((system, ring), predicted) in self.params.systems.iter().zip(&rings).zip(&boltzmann) {
-            for (k, boltzmann) in predicted.iter().enumerate() {
-                names.push(system.name.clone());
-                let row = [
-                    ring.du[k],
-                    boltzmann.mean,
-                    boltzmann.stderr,
-                    ring.published[k].mean,
-                    ring.published[k].stderr,
-                    ring.tagged[k].mean,
-                    ring.tagged[k].stderr,
-                ];
-                columns.iter_mut().zip(row).for_each(|(c, v)| c.push(v));
-            }
-            record(
-                &system.name,
-                "boltzmann",
-                "published",
-                chi_square(&ring.published, predicted),
-            );
-            record(
-                &system.name,
-                "boltzmann",
-                "tagged",
-                chi_square(&ring.tagged, predicted),
-            );
-            if let (Some(first), Some(reference)) = (rings.first(), self.params.systems.first())
-                && reference.name != system.name
-                && first.du == ring.du
-            {
-                record(
-                    &system.name,
-                    &reference.name,
-                    "tagged",
-                    chi_square(&ring.tagged, &first.tagged),
-                );
-            }
-        }
+        let comparison = self.comparison(&rings, &boltzmann)?;
+        let goodness = self.goodness(&rings, &boltzmann)?;
         progress.advance(1);
-        let [
-            du,
-            h_b,
-            h_b_err,
-            published,
-            published_err,
-            tagged,
-            tagged_err,
-        ] = columns;
-        let density = "1/v_th";
-        let comparison = Table::new(
-            "comparison",
-            vec![
-                Column::text("ring", "md system", names),
-                Column::f64("du", "v_th", "bin centre relative to u'", du),
-                Column::f64("h_boltzmann", density, "master equation with the translation-invariant kernel at t_f, exact in Fourier space, on the ring's bins", h_b),
-                Column::f64("h_boltzmann_stderr", density, "jackknife standard error over the kernel's randomizations", h_b_err),
-                Column::f64("h_published", density, "MD, published estimator", published),
-                Column::f64("h_published_stderr", density, "standard error over runs", published_err),
-                Column::f64("h_tagged", density, "MD, tagged-velocity estimator", tagged),
-                Column::f64("h_tagged_stderr", density, "standard error over runs", tagged_err),
-            ],
-        )?
-        .with_metadata("ternary.description", "h(u, t_f) of every ring: MD against Boltzmann".into());
-        let text = |f: fn(&Fit) -> &String| fits.iter().map(|x| f(x).clone()).collect::<Vec<_>>();
-        let (system, reference, estimator) = (
-            text(|f| &f.ring),
-            text(|f| &f.reference),
-            text(|f| &f.estimator),
-        );
-        let chi2: Vec<f64> = fits.iter().map(|f| f.chi2).collect();
-        let dof: Vec<u32> = fits.iter().map(|f| f.dof).collect();
-        let reduced: Vec<f64> = chi2
-            .iter()
-            .zip(&dof)
-            .map(|(c, d)| c / f64::from(*d))
-            .collect();
-        let goodness = Table::new(
-            "goodness",
-            vec![
-                Column::text("ring", "md system", system),
-                Column::text(
-                    "reference",
-                    "boltzmann, or the ring it is compared with (scaling collapse)",
-                    reference,
-                ),
-                Column::text("estimator", "MD estimator", estimator),
-                Column::f64(
-                    "chi2",
-                    "1",
-                    "sum over bins of (difference / combined standard error)^2",
-                    chi2,
-                ),
-                Column::u32(
-                    "dof",
-                    "1",
-                    "bins where the MD estimate has a nonzero error",
-                    dof,
-                ),
-                Column::f64(
-                    "chi2_per_dof",
-                    "1",
-                    "chi2 / dof: ~1 when the two agree within errors",
-                    reduced,
-                ),
-            ],
-        )?
-        .with_metadata(
-            "ternary.description",
-            "goodness of fit of MD against Boltzmann, and of the scaling collapse".into(),
-        );
         let thermal_rates = self.thermal_rates(&inputs[collisions - 1])?;
         let finite_size = self.finite_size(&rings, &replicated, &thermal_rates)?;
         Ok(vec![comparison, goodness, finite_size])

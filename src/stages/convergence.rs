@@ -12,9 +12,13 @@ use serde_json::Value;
 
 use super::collisions::CollisionsStage;
 use super::kernel::{collision_events, target_of};
+use crate::binning::Bins;
 use crate::config::ConvergenceParams;
-use crate::kernel::{Bins, Draws, Estimate, Event, Target, histograms, moments};
-use crate::pipeline::{Column, Input, InstanceId, Progress, Stage, StageError, Table};
+use crate::contract::{self, Rows};
+use crate::kernel::equilibrium::self_rates;
+use crate::kernel::{Draws, Event, Target, histograms};
+use crate::pipeline::{Input, InstanceId, Progress, Stage, StageError, Table};
+use crate::stats::Estimate;
 
 /// The `convergence` stage.
 pub struct ConvergenceStage {
@@ -38,10 +42,7 @@ impl ConvergenceStage {
 
     /// `a_n` per replicate from unbinned self kicks within half the window.
     fn self_variance(&self, events: &[Event], draws: &Draws, target: &Target) -> Vec<f64> {
-        moments(events, target, &[self.edge()], draws)
-            .iter()
-            .map(|r| r[0].self_variance)
-            .collect()
+        self_rates(events, target, self.edge(), draws).variance
     }
 
     /// `a_n` per replicate from the binned self kernel: `sum_k G_self,k x_k^2 dx`.
@@ -67,7 +68,10 @@ struct Row {
 
 impl Stage for ConvergenceStage {
     fn id(&self) -> InstanceId {
-        InstanceId::new("convergence", &self.params.kernel.potential.id())
+        InstanceId::new(
+            contract::convergence::STAGE,
+            &self.params.kernel.potential.id(),
+        )
     }
 
     fn version(&self) -> u32 {
@@ -79,7 +83,7 @@ impl Stage for ConvergenceStage {
     }
 
     fn tables(&self) -> &'static [&'static str] {
-        &["convergence"]
+        &[contract::convergence::TABLE.name]
     }
 
     fn inputs(&self) -> Vec<InstanceId> {
@@ -89,7 +93,7 @@ impl Stage for ConvergenceStage {
             self.params
                 .tolerances
                 .iter()
-                .map(|&t| InstanceId::new("collisions", &Self::tolerance_instance(&id, t))),
+                .map(|&t| CollisionsStage::instance(&Self::tolerance_instance(&id, t))),
         );
         inputs
     }
@@ -99,18 +103,19 @@ impl Stage for ConvergenceStage {
     }
 
     fn run(&self, inputs: &[Input], progress: &Progress) -> Result<Vec<Table>, StageError> {
+        use contract::convergence::parameter::*;
         let (events, draws, _) = collision_events(&inputs[0])?;
         let target = target_of(&self.params.kernel);
         let baseline = self.self_variance(&events, &draws, &target);
         let mut rows = vec![Row {
-            parameter: "default",
+            parameter: DEFAULT,
             value: f64::NAN,
             replicates: baseline.clone(),
         }];
         for &density in &self.params.densities {
             let dense = Target { density, ..target };
             rows.push(Row {
-                parameter: "density",
+                parameter: DENSITY,
                 value: density,
                 replicates: self.self_variance(&events, &draws, &dense),
             });
@@ -125,7 +130,7 @@ impl Stage for ConvergenceStage {
                 .copied()
                 .collect();
             rows.push(Row {
-                parameter: "offset_bound",
+                parameter: OFFSET_BOUND,
                 value: bound,
                 replicates: self.self_variance(&kept, &draws, &target),
             });
@@ -134,7 +139,7 @@ impl Stage for ConvergenceStage {
         for (input, &tolerance) in inputs[1..].iter().zip(&self.params.tolerances) {
             let (events, draws, _) = collision_events(input)?;
             rows.push(Row {
-                parameter: "tolerance",
+                parameter: TOLERANCE,
                 value: tolerance,
                 replicates: self.self_variance(&events, &draws, &target),
             });
@@ -142,7 +147,7 @@ impl Stage for ConvergenceStage {
         progress.advance(1);
         for &width in &self.params.bin_widths {
             rows.push(Row {
-                parameter: "bin_width",
+                parameter: BIN_WIDTH,
                 value: width,
                 replicates: self.binned_self_variance(&events, &draws, width),
             });
@@ -153,41 +158,25 @@ impl Stage for ConvergenceStage {
 }
 
 fn convergence_table(rows: &[Row], baseline: &[f64]) -> Result<Table, StageError> {
+    use contract::convergence::*;
     let default = Estimate::from_replicates(baseline);
-    let mut columns: [Vec<f64>; 6] = Default::default();
-    for row in rows {
-        let value = Estimate::from_replicates(&row.replicates);
-        let differences: Vec<f64> = row
-            .replicates
-            .iter()
-            .zip(baseline)
-            .map(|(a, b)| a - b)
-            .collect();
-        let shift = Estimate::from_replicates(&differences);
-        for (column, number) in columns.iter_mut().zip([
-            row.value,
-            value.mean,
-            value.stderr,
-            shift.mean,
-            shift.stderr,
-            shift.mean / default.stderr,
-        ]) {
-            column.push(number);
-        }
-    }
-    let [value, a, a_err, shift, shift_err, relative] = columns;
-    let unit = "rho^2 l v_th";
-    Ok(Table::new(
-        "convergence",
-        vec![
-            Column::text("parameter", "default, density (rho l), offset_bound (|tau| <= B T), tolerance, bin_width (a_n from the binned kernel)", rows.iter().map(|r| r.parameter.to_string()).collect()),
-            Column::f64("value", "as parameter", "the setting's value (NaN for the default)", value),
-            Column::f64("a_n", unit, "self variance rate at u' = 0 within half the window", a),
-            Column::f64("a_n_stderr", unit, "standard error (spread of randomizations)", a_err),
-            Column::f64("shift", unit, "a_n minus the default's, per replicate, averaged", shift),
-            Column::f64("shift_stderr", unit, "standard error of the paired shift", shift_err),
-            Column::f64("shift_over_error", "1", "shift divided by the default's standard error: |value| << 1 means converged", relative),
-        ],
-    )?
-    .with_metadata("ternary.description", "a_n under changes of the numerical settings".into()))
+    let shifts: Vec<(&Row, Estimate)> = rows
+        .iter()
+        .map(|row| {
+            let differences: Vec<f64> = row
+                .replicates
+                .iter()
+                .zip(baseline)
+                .map(|(a, b)| a - b)
+                .collect();
+            (row, Estimate::from_replicates(&differences))
+        })
+        .collect();
+    Ok(Rows::new(&shifts)
+        .with(PARAMETER, |(r, _)| r.parameter.to_string())
+        .with(VALUE, |(r, _)| r.value)
+        .estimate(A_N, |(r, _)| Estimate::from_replicates(&r.replicates))
+        .estimate(SHIFT, |(_, shift)| *shift)
+        .with(SHIFT_OVER_ERROR, |(_, shift)| shift.mean / default.stderr)
+        .table(&TABLE)?)
 }

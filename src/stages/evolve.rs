@@ -21,15 +21,21 @@ use serde_json::Value;
 
 use super::collisions::CollisionsStage;
 use super::kernel::{collision_events, target_of};
+use crate::binning::Bins;
 use crate::config::EvolveParams;
-use crate::evolve::convolution::{self, kernel_moments};
+use crate::contract::{self, Rows};
+use crate::evolve::convolution::{
+    self, closed_form_excess_kurtosis, closed_form_number, closed_form_variance, excess_kurtosis,
+    kernel_moments, state_mean, state_moment, state_variance,
+};
 use crate::evolve::grid::VelocityGrid;
 use crate::evolve::operator::{Generators, column_rates, fokker_planck, kernel_generators};
 use crate::evolve::propagate::Generator;
 use crate::evolve::spectral::Dissipative;
-use crate::evolve::{Replicated, jackknife};
-use crate::kernel::{Bins, Draws, Estimate, Event, moments};
-use crate::pipeline::{Column, Input, InstanceId, Progress, Stage, StageError, Table};
+use crate::kernel::equilibrium::self_rates;
+use crate::kernel::{Draws, Event};
+use crate::pipeline::{Input, InstanceId, Progress, Stage, StageError, Table};
+use crate::stats::{Estimate, Replicated, replicate_means};
 
 /// The `evolve` stage.
 pub struct EvolveStage {
@@ -47,19 +53,6 @@ struct Moment {
     ns: f64,
 }
 
-/// The mean generator and the means with each replicate left out.
-fn generator_means(replicates: &[Generator]) -> Replicated<Generator> {
-    let count = replicates.len();
-    let total = Generator::sum(replicates);
-    Replicated {
-        leave_one_out: replicates
-            .iter()
-            .map(|own| own.leave_out(&total, count))
-            .collect(),
-        full: total.scaled(1.0 / count as f64),
-    }
-}
-
 impl EvolveStage {
     /// An evolve stage with resolved parameters.
     pub fn new(params: EvolveParams) -> EvolveStage {
@@ -70,9 +63,8 @@ impl EvolveStage {
     /// `rho^2 l v_th`: `Gamma` in scaled units.
     fn gamma(&self, events: &[Event], draws: &Draws) -> f64 {
         let target = target_of(&self.params.kernel);
-        let sums = moments(events, &target, &[0.5 * self.params.kernel.window], draws);
-        let values: Vec<f64> = sums.iter().map(|r| r[0].self_variance).collect();
-        Estimate::from_replicates(&values).mean
+        let rates = self_rates(events, &target, 0.5 * self.params.kernel.window, draws);
+        Estimate::from_replicates(&rates.variance).mean
     }
 
     /// Every output time, ascending in scaled time.
@@ -120,124 +112,54 @@ impl EvolveStage {
         let size = convolution::periodic_size(&rates.full, bins.width, t_max)
             .max((2 * (half_out + 1) * rebin).next_power_of_two());
         let states = rates.map(|g| convolution::evolve(g, size, &times));
-        let (centre, half) = (size / 2, (size / 2) as f64);
-        let moment = |h: &[f64], p: i32| -> f64 {
-            h.iter()
-                .enumerate()
-                .map(|(i, m)| m * ((i as f64 - half) * bins.width).powi(p))
-                .sum()
-        };
-        let cumulants = rates.map(|g| kernel_moments(g, bins.width));
-        let mut h_rows: [Vec<f64>; 7] = Default::default();
-        let mut summary: [Vec<f64>; 16] = Default::default();
-        for (k, at) in schedule.iter().enumerate() {
+        let (centre, width) = (size / 2, bins.width);
+        let cumulants = rates.map(|g| kernel_moments(g, width));
+        let mut h_rows = Vec::new();
+        let mut summary = Vec::new();
+        for (k, &at) in schedule.iter().enumerate() {
             let binned = states.map(|s| convolution::rebin(&s[k], centre, rebin, half_out));
-            let estimates = jackknife(&binned.full, &binned.leave_one_out);
-            for (m, estimate) in estimates.iter().enumerate() {
-                let x = (m as f64 - half_out as f64) * out_width;
-                let row = [
-                    at.gamma,
-                    at.scaled,
-                    at.ns,
-                    x,
-                    x + kernel.u_prime,
-                    estimate.mean / out_width,
-                    estimate.stderr / out_width,
-                ];
-                h_rows.iter_mut().zip(row).for_each(|(c, v)| c.push(v));
+            for (m, estimate) in binned.values().iter().enumerate() {
+                h_rows.push(EarlyBin {
+                    at,
+                    x: (m as f64 - half_out as f64) * out_width,
+                    h: Estimate {
+                        mean: estimate.mean / out_width,
+                        stderr: estimate.stderr / out_width,
+                    },
+                });
             }
-            let mass = states.estimate(k, |h| moment(h, 0));
-            let mean = states.estimate(k, |h| moment(h, 1) / moment(h, 0));
-            let variance = states.estimate(k, |h| {
-                let m0 = moment(h, 0);
-                moment(h, 2) / m0 - (moment(h, 1) / m0).powi(2)
-            });
-            let kurtosis = states.estimate(k, |h| excess_kurtosis(h, bins.width));
             let t = at.scaled;
-            let predicted = |f: &dyn Fn(&[f64; 5]) -> f64| {
-                let loo: Vec<Vec<f64>> =
-                    cumulants.leave_one_out.iter().map(|c| vec![f(c)]).collect();
-                jackknife(&[f(&cumulants.full)], &loo)[0]
-            };
-            let mass_closed = predicted(&|c| (t * c[0]).exp());
-            let variance_closed = predicted(&|c| t * c[2]);
-            let kurtosis_closed = predicted(&|c| c[4] / (t * c[2] * c[2]));
-            let row = [
-                at.gamma,
-                at.scaled,
-                at.ns,
-                mass.mean,
-                mass.stderr,
-                mass_closed.mean,
-                mean.mean,
-                mean.stderr,
-                variance.mean,
-                variance.stderr,
-                variance_closed.mean,
-                variance_closed.stderr,
-                kurtosis.mean,
-                kurtosis.stderr,
-                kurtosis_closed.mean,
-                kurtosis_closed.stderr,
-            ];
-            summary.iter_mut().zip(row).for_each(|(c, v)| c.push(v));
+            summary.push(EarlyMoments {
+                at,
+                number: states.estimate(k, |h| state_moment(h, width, 0)),
+                number_closed: cumulants.scalar(|c| closed_form_number(c, t)),
+                mean: states.estimate(k, |h| state_mean(h, width)),
+                variance: states.estimate(k, |h| state_variance(h, width)),
+                variance_closed: cumulants.scalar(|c| closed_form_variance(c, t)),
+                kurtosis: states.estimate(k, |h| excess_kurtosis(h, width)),
+                kurtosis_closed: cumulants.scalar(|c| closed_form_excess_kurtosis(c, t)),
+            });
         }
-        let [gamma, scaled, ns, x, u, h, h_err] = h_rows;
-        let density = "1/v_th";
-        let h_table = Table::new(
-            "early_evolution",
-            vec![
-                time_gamma_column(gamma),
-                time_scaled_column(scaled),
-                time_ns_column(ns),
-                Column::f64("du", "v_th", "bin centre relative to u'", x),
-                Column::f64("u", "v_th", "bin centre", u),
-                Column::f64("h", density, "h(u, t) from delta(u - u') under the translation-invariant kernel (self plus bath, within the kernel window), exact in Fourier space", h),
-                Column::f64("h_stderr", density, "jackknife standard error over randomizations", h_err),
-            ],
-        )?
-        .with_metadata("ternary.description", "early-time h(u, t): convolution semigroup of the kernel at u'".into());
-        let [
-            g,
-            s,
-            ns,
-            mass,
-            mass_err,
-            mass_closed,
-            mean,
-            mean_err,
-            var,
-            var_err,
-            var_closed,
-            var_closed_err,
-            kurt,
-            kurt_err,
-            kurt_closed,
-            kurt_closed_err,
-        ] = summary;
-        let rate = "rho^2 l v_th";
-        let summary_table = Table::new(
-            "early_summary",
-            vec![
-                time_gamma_column(g),
-                time_scaled_column(s),
-                time_ns_column(ns),
-                Column::f64("number", "1", "integral of h (the window loses what leaves it)", mass),
-                Column::f64("number_stderr", "1", "jackknife standard error", mass_err),
-                Column::f64("number_closed_form", "1", "exp(t kappa_0), kappa_p = sum_k g_k x_k^p of the kernel", mass_closed),
-                Column::f64("mean", "v_th", "<u - u'>_h (normalized)", mean),
-                Column::f64("mean_stderr", "v_th", "jackknife standard error", mean_err),
-                Column::f64("variance", "v_th^2", "variance of h (normalized): grows as t kappa_2 (kappa_2: the window variance rate, ~a_n)", var),
-                Column::f64("variance_stderr", "v_th^2", "jackknife standard error", var_err),
-                Column::f64("variance_closed_form", "v_th^2", "t kappa_2", var_closed),
-                Column::f64("variance_closed_form_stderr", "v_th^2", "jackknife standard error", var_closed_err),
-                Column::f64("excess_kurtosis", "1", "of h: the cusp's non-Gaussianity, decaying as 1/t (central limit)", kurt),
-                Column::f64("excess_kurtosis_stderr", "1", "jackknife standard error", kurt_err),
-                Column::f64("excess_kurtosis_closed_form", "1", "kappa_4 / (t kappa_2^2)", kurt_closed),
-                Column::f64("excess_kurtosis_closed_form_stderr", "1", "jackknife standard error", kurt_closed_err),
-            ],
-        )?
-        .with_metadata("ternary.description", format!("early-time moments of h; kernel rates in {rate}"));
+        let h_table = {
+            use contract::evolve::early_evolution::*;
+            with_times(Rows::new(&h_rows), |r| r.at)
+                .with(DU, |r| r.x)
+                .with(BIN_CENTRE, |r| r.x + kernel.u_prime)
+                .estimate(H, |r| r.h)
+                .table(&TABLE)?
+        };
+        let summary_table = {
+            use contract::evolve::early_summary::*;
+            with_times(Rows::new(&summary), |r| r.at)
+                .estimate(NUMBER, |r| r.number)
+                .with(NUMBER_CLOSED_FORM, |r| r.number_closed.mean)
+                .estimate(MEAN, |r| r.mean)
+                .estimate(VARIANCE, |r| r.variance)
+                .estimate(VARIANCE_CLOSED_FORM, |r| r.variance_closed)
+                .estimate(EXCESS_KURTOSIS, |r| r.kurtosis)
+                .estimate(EXCESS_KURTOSIS_CLOSED_FORM, |r| r.kurtosis_closed)
+                .table(&TABLE)?
+        };
         Ok(vec![h_table, summary_table])
     }
 
@@ -261,8 +183,8 @@ impl EvolveStage {
         let pick = |part: fn(&Generators) -> &Generator| -> Vec<Generator> {
             generators.iter().map(|g| part(g).clone()).collect()
         };
-        let full = generator_means(&pick(|g| &g.full));
-        let tagged = generator_means(&pick(|g| &g.tagged));
+        let full = replicate_means(&pick(|g| &g.full));
+        let tagged = replicate_means(&pick(|g| &g.tagged));
         let diffusion = tagged.map(|m| {
             let (drift, variance) = column_rates(m, &grid);
             fokker_planck(&grid, &drift, &variance)
@@ -279,27 +201,24 @@ impl EvolveStage {
         h0[start] = 1.0;
         let times: Vec<f64> = schedule.iter().map(|m| m.scaled).collect();
         let diagnostics = |d: &Replicated<Dissipative>| {
-            let estimate = |f: fn(&Dissipative) -> f64| {
-                let loo: Vec<Vec<f64>> = d.leave_one_out.iter().map(|x| vec![f(x)]).collect();
-                jackknife(&[f(&d.full)], &loo)[0]
-            };
-            [estimate(|d| d.largest_clipped), estimate(|d| d.asymmetry)]
+            [d.scalar(|d| d.largest_clipped), d.scalar(|d| d.asymmetry)]
         };
+        use contract::evolve::evolution_summary::{FOKKER_PLANCK, FULL, TAGGED};
         let processes = [
             Process {
-                name: "full",
+                name: FULL,
                 states: full.map(|m| m.propagate(&h0, &times)),
                 equilibrium: grid.conserving_equilibrium(p.kernel.u_prime),
                 diagnostics: Some(diagnostics(&full)),
             },
             Process {
-                name: "tagged",
+                name: TAGGED,
                 states: tagged.map(|m| m.propagate(&h0, &times)),
                 equilibrium: maxwellian.clone(),
                 diagnostics: None,
             },
             Process {
-                name: "fokker_planck",
+                name: FOKKER_PLANCK,
                 states: diffusion.map(|m| m.propagate(&h0, &times)),
                 equilibrium: maxwellian,
                 diagnostics: None,
@@ -318,55 +237,30 @@ impl EvolveStage {
         schedule: &[Moment],
         processes: &[Process; 3],
     ) -> Result<Table, StageError> {
-        let mut columns: [Vec<f64>; 12] = Default::default();
-        for (k, at) in schedule.iter().enumerate() {
-            let states: Vec<Vec<Estimate>> = processes.iter().map(|p| p.states.states(k)).collect();
-            for i in 0..grid.len() {
-                let mut row = vec![at.gamma, at.scaled, at.ns, grid.velocity(i)];
-                for state in &states {
-                    row.extend([state[i].mean / grid.step, state[i].stderr / grid.step]);
-                }
-                row.extend([
-                    processes[0].equilibrium[i] / grid.step,
-                    processes[1].equilibrium[i] / grid.step,
-                ]);
-                columns.iter_mut().zip(row).for_each(|(c, v)| c.push(v));
-            }
+        use contract::evolve::evolution::*;
+        let per_node = |e: &Estimate| Estimate {
+            mean: e.mean / grid.step,
+            stderr: e.stderr / grid.step,
+        };
+        let mut rows = Vec::new();
+        for (k, &at) in schedule.iter().enumerate() {
+            let states = processes.each_ref().map(|p| p.states.states(k));
+            rows.extend((0..grid.len()).map(|node| GridNode {
+                at,
+                u: grid.velocity(node),
+                h: states.each_ref().map(|state| per_node(&state[node])),
+                equilibrium: [0, 1].map(|p| processes[p].equilibrium[node] / grid.step),
+            }));
         }
-        let [
-            gamma,
-            scaled,
-            ns,
-            u,
-            full,
-            full_err,
-            tagged,
-            tagged_err,
-            fp,
-            fp_err,
-            eq_full,
-            eq_tagged,
-        ] = columns;
-        let density = "1/v_th";
-        Ok(Table::new(
-            "evolution",
-            vec![
-                time_gamma_column(gamma),
-                time_scaled_column(scaled),
-                time_ns_column(ns),
-                Column::f64("u", "v_th", "grid node", u),
-                Column::f64("h_full", density, "h(u, t) from delta(u - u') under the linearized three-body operator (all three particles' velocity changes)", full),
-                Column::f64("h_full_stderr", density, "jackknife standard error over randomizations", full_err),
-                Column::f64("h_tagged", density, "distribution of the special particle's own velocity (its kicks alone)", tagged),
-                Column::f64("h_tagged_stderr", density, "jackknife standard error", tagged_err),
-                Column::f64("h_fokker_planck", density, "Fokker-Planck evolution with the tagged drift and variance rates", fp),
-                Column::f64("h_fokker_planck_stderr", density, "jackknife standard error", fp_err),
-                Column::f64("equilibrium_full", density, "f0 (1 + u u' + (u'^2 - 1)(u^2 - 1)/2): the limit of h_full (number, momentum, energy conserved)", eq_full),
-                Column::f64("equilibrium_tagged", density, "f0: the limit of h_tagged and h_fokker_planck", eq_tagged),
-            ],
-        )?
-        .with_metadata("ternary.description", "h(u, t) by the master equation on a velocity grid (node masses / step)".into())
-        .with_metadata("ternary.grid_step", grid.step.to_string()))
+        Ok(with_times(Rows::new(&rows), |r| r.at)
+            .with(U, |r| r.u)
+            .estimate(H_FULL, |r| r.h[0])
+            .estimate(H_TAGGED, |r| r.h[1])
+            .estimate(H_FOKKER_PLANCK, |r| r.h[2])
+            .with(EQUILIBRIUM_FULL, |r| r.equilibrium[0])
+            .with(EQUILIBRIUM_TAGGED, |r| r.equilibrium[1])
+            .table(&TABLE)?
+            .with_metadata("ternary.grid_step", grid.step.to_string()))
     }
 
     fn summary_table(
@@ -375,101 +269,102 @@ impl EvolveStage {
         schedule: &[Moment],
         processes: &[Process; 3],
     ) -> Result<Table, StageError> {
+        use contract::evolve::evolution_summary::*;
         let u_prime = self.params.kernel.u_prime;
         let reach = 0.5 * self.params.kernel.window;
-        let mut names = Vec::new();
-        let mut columns: [Vec<f64>; 21] = Default::default();
+        let none = Estimate {
+            mean: f64::NAN,
+            stderr: f64::NAN,
+        };
+        let mut rows = Vec::new();
         for process in processes {
-            let none = Estimate {
-                mean: f64::NAN,
-                stderr: f64::NAN,
-            };
             let [clipped, asymmetry] = process.diagnostics.unwrap_or([none, none]);
-            for (k, at) in schedule.iter().enumerate() {
+            for (k, &at) in schedule.iter().enumerate() {
                 let all = |h: &[f64]| grid.moments(h, 0.0, f64::INFINITY);
-                let estimates = [
-                    process.states.estimate(k, |h| all(h)[0]),
-                    process.states.estimate(k, |h| all(h)[1]),
-                    process.states.estimate(k, |h| all(h)[2]),
-                    process
-                        .states
-                        .estimate(k, |h| grid.moments(h, u_prime, f64::INFINITY)[2]),
-                    process
-                        .states
-                        .estimate(k, |h| grid.moments(h, u_prime, reach)[2]),
-                    process.states.estimate(k, |h| {
+                let estimate = |f: &dyn Fn(&[f64]) -> f64| process.states.estimate(k, f);
+                rows.push(ProcessMoments {
+                    process: process.name,
+                    at,
+                    number: estimate(&|h| all(h)[0]),
+                    momentum: estimate(&|h| all(h)[1]),
+                    second_moment: estimate(&|h| all(h)[2]),
+                    variance: estimate(&|h| grid.moments(h, u_prime, f64::INFINITY)[2]),
+                    window_variance: estimate(&|h| grid.moments(h, u_prime, reach)[2]),
+                    distance: estimate(&|h| {
                         h.iter()
                             .zip(&process.equilibrium)
                             .map(|(a, b)| (a - b).abs())
                             .sum()
                     }),
-                ];
-                let mut row = vec![
-                    at.gamma,
-                    at.scaled,
-                    at.ns,
-                    grid.step,
-                    0.5 * self.params.kernel.window,
-                ];
-                for e in estimates.into_iter().chain([clipped, asymmetry]) {
-                    row.extend([e.mean, e.stderr]);
-                }
-                names.push(process.name.to_string());
-                columns.iter_mut().zip(row).for_each(|(c, v)| c.push(v));
+                    clipped,
+                    asymmetry,
+                });
             }
         }
-        let [
-            gamma,
-            scaled,
-            ns,
-            step,
-            window,
-            number,
-            number_err,
-            momentum,
-            momentum_err,
-            energy,
-            energy_err,
-            spread,
-            spread_err,
-            window_spread,
-            window_spread_err,
-            distance,
-            distance_err,
-            clipped,
-            clipped_err,
-            asymmetry,
-            asymmetry_err,
-        ] = columns;
-        Ok(Table::new(
-            "evolution_summary",
-            vec![
-                Column::text("process", "full (linearized operator), tagged (special particle alone), fokker_planck", names),
-                time_gamma_column(gamma),
-                time_scaled_column(scaled),
-                time_ns_column(ns),
-                Column::f64("grid_step", "v_th", "node spacing", step),
-                Column::f64("window_half_width", "v_th", "X of window_variance", window),
-                Column::f64("number", "1", "sum of h: 1 for every process (exact up to rounding and the grid's ends)", number),
-                Column::f64("number_stderr", "1", "jackknife standard error", number_err),
-                Column::f64("momentum", "v_th", "sum u h: u' for full (momentum conservation)", momentum),
-                Column::f64("momentum_stderr", "v_th", "jackknife standard error", momentum_err),
-                Column::f64("second_moment", "v_th^2", "sum u^2 h: u'^2 for full (energy conservation), 1 in equilibrium for tagged", energy),
-                Column::f64("second_moment_stderr", "v_th^2", "jackknife standard error", energy_err),
-                Column::f64("variance", "v_th^2", "<(u - u')^2>_h over the whole grid", spread),
-                Column::f64("variance_stderr", "v_th^2", "jackknife standard error", spread_err),
-                Column::f64("window_variance", "v_th^2", "<(u - u')^2>_h within |u - u'| <= X (the published window): slope a_n at early times", window_spread),
-                Column::f64("window_variance_stderr", "v_th^2", "jackknife standard error", window_spread_err),
-                Column::f64("distance_to_equilibrium", "1", "sum |h - h_eq| over the nodes (L1), h_eq the process's limit", distance),
-                Column::f64("distance_to_equilibrium_stderr", "1", "jackknife standard error", distance_err),
-                Column::f64("largest_clipped_rate", "rho^2 l v_th", "largest positive eigenvalue of the estimated generator (symmetrized, invariants projected out), set to zero: Monte Carlo noise (NaN: not projected)", clipped),
-                Column::f64("largest_clipped_rate_stderr", "rho^2 l v_th", "jackknife standard error", clipped_err),
-                Column::f64("asymmetry", "1", "||S - S^T|| / ||S + S^T|| of S = f0^(-1/2) M f0^(1/2): detailed-balance violation of the raw estimate, removed", asymmetry),
-                Column::f64("asymmetry_stderr", "1", "jackknife standard error", asymmetry_err),
-            ],
-        )?
-        .with_metadata("ternary.description", "conservation laws, spread and approach to equilibrium of h(u, t)".into()))
+        let rows = Rows::new(&rows).with(PROCESS, |r| r.process.to_string());
+        Ok(with_times(rows, |r| r.at)
+            .with(GRID_STEP, |_| grid.step)
+            .with(WINDOW_HALF_WIDTH, |_| reach)
+            .estimate(NUMBER, |r| r.number)
+            .estimate(MOMENTUM, |r| r.momentum)
+            .estimate(SECOND_MOMENT, |r| r.second_moment)
+            .estimate(VARIANCE, |r| r.variance)
+            .estimate(WINDOW_VARIANCE, |r| r.window_variance)
+            .estimate(DISTANCE_TO_EQUILIBRIUM, |r| r.distance)
+            .estimate(LARGEST_CLIPPED_RATE, |r| r.clipped)
+            .estimate(ASYMMETRY, |r| r.asymmetry)
+            .table(&TABLE)?)
     }
+}
+
+/// One output bin of the early-time `h` at one time (`h` per `v_th`).
+struct EarlyBin {
+    at: Moment,
+    x: f64,
+    h: Estimate,
+}
+
+/// The moments of the early-time `h` at one time, and their closed forms.
+struct EarlyMoments {
+    at: Moment,
+    number: Estimate,
+    number_closed: Estimate,
+    mean: Estimate,
+    variance: Estimate,
+    variance_closed: Estimate,
+    kurtosis: Estimate,
+    kurtosis_closed: Estimate,
+}
+
+/// `h` of the three processes at one grid node and time, and the limits of
+/// the first two (per `v_th`).
+struct GridNode {
+    at: Moment,
+    u: f64,
+    h: [Estimate; 3],
+    equilibrium: [f64; 2],
+}
+
+/// The moments of one process's `h` at one time.
+struct ProcessMoments {
+    process: &'static str,
+    at: Moment,
+    number: Estimate,
+    momentum: Estimate,
+    second_moment: Estimate,
+    variance: Estimate,
+    window_variance: Estimate,
+    distance: Estimate,
+    clipped: Estimate,
+    asymmetry: Estimate,
+}
+
+/// Adds the three time columns of every evolve table.
+fn with_times<'r, R>(rows: Rows<'r, R>, at: impl Fn(&R) -> Moment) -> Rows<'r, R> {
+    use contract::evolve::*;
+    rows.with(TIME_GAMMA, |r| at(r).gamma)
+        .with(TIME_SCALED, |r| at(r).scaled)
+        .with(TIME_NS, |r| at(r).ns)
 }
 
 /// One evolved process: its states, its equilibrium (node masses) and, for
@@ -482,53 +377,10 @@ struct Process {
     diagnostics: Option<[Estimate; 2]>,
 }
 
-/// Excess kurtosis `mu_4 / mu_2^2 - 3` of a periodic state centred at `len / 2`.
-fn excess_kurtosis(h: &[f64], width: f64) -> f64 {
-    let half = (h.len() / 2) as f64;
-    let x = |i: usize| (i as f64 - half) * width;
-    let mass: f64 = h.iter().sum();
-    let mean = h.iter().enumerate().map(|(i, m)| m * x(i)).sum::<f64>() / mass;
-    let central = |p: i32| {
-        h.iter()
-            .enumerate()
-            .map(|(i, m)| m * (x(i) - mean).powi(p))
-            .sum::<f64>()
-            / mass
-    };
-    central(4) / central(2).powi(2) - 3.0
-}
-
-fn time_gamma_column(values: Vec<f64>) -> Column {
-    Column::f64(
-        "time_gamma",
-        "1/Gamma",
-        "time t Gamma, Gamma = the special particle's variance rate at u' (a_n rho^2 l v_th at u' = 0)",
-        values,
-    )
-}
-
-fn time_scaled_column(values: Vec<f64>) -> Column {
-    Column::f64(
-        "time_scaled",
-        "1/(rho^2 l v_th)",
-        "time t rho^2 l v_th",
-        values,
-    )
-}
-
-fn time_ns_column(values: Vec<f64>) -> Column {
-    Column::f64(
-        "time_ns",
-        "ns",
-        "physical time of the configured gas (NaN when given in 1/Gamma)",
-        values,
-    )
-}
-
 impl Stage for EvolveStage {
     fn id(&self) -> InstanceId {
         InstanceId::new(
-            "evolve",
+            contract::evolve::STAGE,
             &super::kernel::target_instance(&self.params.kernel),
         )
     }
@@ -542,11 +394,12 @@ impl Stage for EvolveStage {
     }
 
     fn tables(&self) -> &'static [&'static str] {
+        use contract::evolve::*;
         &[
-            "early_evolution",
-            "early_summary",
-            "evolution",
-            "evolution_summary",
+            early_evolution::TABLE.name,
+            early_summary::TABLE.name,
+            evolution::TABLE.name,
+            evolution_summary::TABLE.name,
         ]
     }
 

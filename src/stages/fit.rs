@@ -7,10 +7,13 @@ use serde_json::Value;
 
 use super::collisions::CollisionsStage;
 use super::kernel::{input_events, target_instance, target_of};
+use crate::binning::Bins;
 use crate::config::{FitParams, KernelParams};
+use crate::contract::{self, Rows};
 use crate::kernel::fit::{FIT_GROUPS, KernelFit, Shape, fit_kernel};
-use crate::kernel::{Bins, Histogram, histograms};
-use crate::pipeline::{Column, Input, InstanceId, Progress, Stage, StageError, Table};
+use crate::kernel::{Histogram, histograms};
+use crate::pipeline::{Input, InstanceId, Progress, Stage, StageError, Table};
+use crate::stats::Estimate;
 
 /// The `fit` stage for one potential, `u'` and density.
 pub struct FitStage {
@@ -25,7 +28,7 @@ impl FitStage {
 
     /// Instance id for kernel parameters.
     pub fn instance(params: &KernelParams) -> InstanceId {
-        InstanceId::new("fit", &target_instance(params))
+        InstanceId::new(contract::fit::STAGE, &target_instance(params))
     }
 }
 
@@ -48,7 +51,7 @@ impl Stage for FitStage {
     }
 
     fn tables(&self) -> &'static [&'static str] {
-        &["fit"]
+        &[contract::fit::TABLE.name]
     }
 
     fn inputs(&self) -> Vec<InstanceId> {
@@ -86,88 +89,30 @@ impl Stage for FitStage {
 
 /// The one-row fit table; NaN where nothing could be fitted.
 fn fit_table(fit: &KernelFit, status: &str, (low, high): (f64, f64)) -> Result<Table, StageError> {
+    use contract::fit::*;
     let [alpha, beta, sigma]: [fn(&Shape) -> f64; 3] = [|s| s.alpha, |s| s.beta, |s| s.sigma];
-    let mean = |f: fn(&Shape) -> f64| vec![fit.mean.map_or(f64::NAN, |m| f(&m.shape))];
-    let one = |value: f64| vec![value];
+    let parameter = |f: fn(&Shape) -> f64| {
+        move |_: &()| Estimate {
+            mean: fit.mean.map_or(f64::NAN, |m| f(&m.shape)),
+            stderr: fit.stderr(f),
+        }
+    };
     let bins = fit.mean.map_or(fit.measured, |m| m.bins);
-    let columns = vec![
-        Column::f64(
-            "alpha",
-            "rho^2 l v_th (v_th)^(beta-1)",
-            "amplitude of g(x) = alpha |x|^-beta exp(-x^2/2 sigma^2), fit to the mean kernel",
-            mean(|s| s.alpha),
-        ),
-        Column::f64(
-            "alpha_stderr",
-            "as alpha",
-            "standard error: spread of per-randomization refits times the scale factor",
-            one(fit.stderr(alpha)),
-        ),
-        Column::f64("beta", "1", "power-law exponent near u'", mean(|s| s.beta)),
-        Column::f64(
-            "beta_stderr",
-            "1",
-            "standard error: spread of per-randomization refits times the scale factor",
-            one(fit.stderr(beta)),
-        ),
-        Column::f64(
-            "sigma",
-            "v_th",
-            "Gaussian cut-off: largest momentum transfer of a collision",
-            mean(|s| s.sigma),
-        ),
-        Column::f64(
-            "sigma_stderr",
-            "v_th",
-            "standard error: spread of per-randomization refits times the scale factor",
-            one(fit.stderr(sigma)),
-        ),
-        Column::f64(
-            "cov_alpha_beta",
-            "mixed",
-            "covariance of the means of alpha and beta over replicates",
-            one(fit.covariance(alpha, beta)),
-        ),
-        Column::f64(
-            "cov_alpha_sigma",
-            "mixed",
-            "covariance of the means of alpha and sigma",
-            one(fit.covariance(alpha, sigma)),
-        ),
-        Column::f64(
-            "cov_beta_sigma",
-            "mixed",
-            "covariance of the means of beta and sigma",
-            one(fit.covariance(beta, sigma)),
-        ),
-        Column::f64(
-            "scale_factor",
-            "1",
-            "sqrt(max(1, chi2/dof)) applied to the errors and covariances",
-            one(fit.scale().sqrt()),
-        ),
-        Column::f64(
-            "chi2_per_dof",
-            "1",
-            "chi-square per degree of freedom of the mean fit (bins treated as independent)",
-            one(fit.mean.map_or(f64::NAN, |f| f.chi2_per_dof)),
-        ),
-        Column::u32(
-            "bins",
-            "1",
-            "log-spaced groups of bins fitted (with a non-zero error)",
-            vec![bins as u32],
-        ),
-        Column::u32(
-            "replicates_fitted",
-            "1",
-            "randomizations whose own fit converged",
-            vec![fit.replicates.len() as u32],
-        ),
-        Column::f64("range_min", "v_th", "smallest |u - u'| fitted", one(low)),
-        Column::f64("range_max", "v_th", "largest |u - u'| fitted", one(high)),
-        Column::text("status", "fitted, or why not", vec![status.to_string()]),
-    ];
-    Ok(Table::new("fit", columns)?
-        .with_metadata("ternary.description", "kernel shape fit near u'".into()))
+    Ok(Rows::new(&[()])
+        .estimate(ALPHA, parameter(alpha))
+        .estimate(BETA, parameter(beta))
+        .estimate(SIGMA, parameter(sigma))
+        .with(COV_ALPHA_BETA, |_| fit.covariance(alpha, beta))
+        .with(COV_ALPHA_SIGMA, |_| fit.covariance(alpha, sigma))
+        .with(COV_BETA_SIGMA, |_| fit.covariance(beta, sigma))
+        .with(SCALE_FACTOR, |_| fit.scale().sqrt())
+        .with(CHI2_PER_DOF, |_| {
+            fit.mean.map_or(f64::NAN, |f| f.chi2_per_dof)
+        })
+        .with(BINS, |_| bins as u32)
+        .with(REPLICATES_FITTED, |_| fit.replicates.len() as u32)
+        .with(RANGE_MIN, |_| low)
+        .with(RANGE_MAX, |_| high)
+        .with(STATUS, |_| status.to_string())
+        .table(&TABLE)?)
 }

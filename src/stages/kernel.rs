@@ -6,9 +6,12 @@
 use serde_json::Value;
 
 use super::collisions::{CollisionsStage, read_events};
+use crate::binning::Bins;
 use crate::config::KernelParams;
-use crate::kernel::{Bins, Draws, Estimate, Event, Target, histograms};
-use crate::pipeline::{Column, Input, InstanceId, Progress, Stage, StageError, Table};
+use crate::contract::{self, Rows};
+use crate::kernel::{Draws, Event, Histogram, Target, histograms};
+use crate::pipeline::{Input, InstanceId, Progress, Stage, StageError, Table};
+use crate::stats::Estimate;
 
 /// The `kernel` stage for one potential, `u'` and density.
 pub struct KernelStage {
@@ -67,7 +70,7 @@ pub fn input_events(inputs: &[Input]) -> Result<(Vec<Event>, Draws, usize), Stag
 
 impl Stage for KernelStage {
     fn id(&self) -> InstanceId {
-        InstanceId::new("kernel", &target_instance(&self.params))
+        InstanceId::new(contract::kernel::STAGE, &target_instance(&self.params))
     }
 
     fn version(&self) -> u32 {
@@ -79,7 +82,7 @@ impl Stage for KernelStage {
     }
 
     fn tables(&self) -> &'static [&'static str] {
-        &["kernel"]
+        &[contract::kernel::TABLE.name]
     }
 
     fn inputs(&self) -> Vec<InstanceId> {
@@ -91,84 +94,25 @@ impl Stage for KernelStage {
     }
 
     fn run(&self, inputs: &[Input], progress: &Progress) -> Result<Vec<Table>, StageError> {
+        use contract::kernel::*;
         let (events, draws, failed) = input_events(inputs)?;
         let bins = Bins::for_window(self.params.window, self.params.bin_width);
         let replicates = histograms(&events, &target_of(&self.params), &bins, &draws);
-        let per_bin = |part: &dyn Fn(&crate::kernel::Histogram) -> f64| {
-            let values: Vec<f64> = replicates.iter().map(|h| part(h) / bins.width).collect();
+        let per_bin = |k: usize, part: fn(&Histogram, usize) -> f64| {
+            let values: Vec<f64> = replicates.iter().map(|h| part(h, k) / bins.width).collect();
             Estimate::from_replicates(&values)
         };
-        let mut columns: [Vec<f64>; 8] = Default::default();
-        for k in 0..bins.len() {
-            let total = per_bin(&|h| h.self_part[k] + h.bath_part[k]);
-            let own = per_bin(&|h| h.self_part[k]);
-            let bath = per_bin(&|h| h.bath_part[k]);
-            let row = [
-                self.params.u_prime + bins.centre(k),
-                bins.centre(k),
-                total.mean,
-                total.stderr,
-                own.mean,
-                own.stderr,
-                bath.mean,
-                bath.stderr,
-            ];
-            for (column, value) in columns.iter_mut().zip(row) {
-                column.push(value);
-            }
-        }
+        let rows: Vec<usize> = (0..bins.len()).collect();
         progress.advance(1);
-        let [u, du, g, g_err, g_self, g_self_err, g_bath, g_bath_err] = columns;
-        let unit = "rho^2 l v_th / v_th";
-        let table = Table::new(
-            "kernel",
-            vec![
-                Column::f64("u", "v_th", "bin centre (lab velocity)", u),
-                Column::f64("du", "v_th", "bin centre relative to u'", du),
-                Column::f64(
-                    "G",
-                    unit,
-                    "kernel G(u' -> u): rate per unit velocity, +-1 rule, self plus bath",
-                    g,
-                ),
-                Column::f64(
-                    "G_stderr",
-                    unit,
-                    "standard error of G from the spread of randomizations",
-                    g_err,
-                ),
-                Column::f64(
-                    "G_self",
-                    unit,
-                    "part of G from the special particle's own velocity",
-                    g_self,
-                ),
-                Column::f64(
-                    "G_self_stderr",
-                    unit,
-                    "standard error of G_self",
-                    g_self_err,
-                ),
-                Column::f64(
-                    "G_bath",
-                    unit,
-                    "part of G from the bath particles' velocities",
-                    g_bath,
-                ),
-                Column::f64(
-                    "G_bath_stderr",
-                    unit,
-                    "standard error of G_bath",
-                    g_bath_err,
-                ),
-            ],
-        )?
-        .with_metadata(
-            "ternary.description",
-            "collision kernel G(u' -> u) in units of rho^2 l v_th per v_th".into(),
-        )
-        .with_metadata("ternary.events", events.len().to_string())
-        .with_metadata("ternary.failed_events", failed.to_string());
+        let table = Rows::new(&rows)
+            .with(U, |&k| self.params.u_prime + bins.centre(k))
+            .with(DU, |&k| bins.centre(k))
+            .estimate(G, |&k| per_bin(k, |h, k| h.self_part[k] + h.bath_part[k]))
+            .estimate(G_SELF, |&k| per_bin(k, |h, k| h.self_part[k]))
+            .estimate(G_BATH, |&k| per_bin(k, |h, k| h.bath_part[k]))
+            .table(&TABLE)?
+            .with_metadata("ternary.events", events.len().to_string())
+            .with_metadata("ternary.failed_events", failed.to_string());
         Ok(vec![table])
     }
 }

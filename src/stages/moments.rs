@@ -5,26 +5,21 @@
 //! events without binning; standard errors from the spread of randomizations.
 //! `a_n` is the self variance rate at `u' = 0`, dilute limit, `X` = half the window.
 
+use arrow::array::RecordBatch;
 use serde_json::Value;
 
 use super::collisions::CollisionsStage;
 use super::kernel::{input_events, target_instance, target_of};
 use crate::config::KernelParams;
-use crate::kernel::{Estimate, MomentSums, moments};
-use crate::pipeline::{Column, Input, InstanceId, Progress, Stage, StageError, Table};
+use crate::contract::{self, Rows};
+use crate::kernel::{MomentSums, moments};
+use crate::pipeline::{Input, InstanceId, Progress, Stage, StageError, Table};
+use crate::stats::Estimate;
 
 /// Truncation half-widths per decade below the window edge.
 const TRUNCATIONS_PER_DECADE: u32 = 5;
 /// Decades of truncation below the window edge.
 const TRUNCATION_DECADES: u32 = 3;
-
-/// Name, unit, description and accessor of one moment column.
-type MomentColumn = (
-    &'static str,
-    &'static str,
-    &'static str,
-    fn(&MomentSums) -> f64,
-);
 
 /// The `moments` stage for one potential, `u'` and density.
 pub struct MomentsStage {
@@ -39,7 +34,7 @@ impl MomentsStage {
 
     /// Instance id for kernel parameters.
     pub fn instance(params: &KernelParams) -> InstanceId {
-        InstanceId::new("moments", &target_instance(params))
+        InstanceId::new(contract::moments::STAGE, &target_instance(params))
     }
 
     /// Log-spaced `X` from `10^-3` of the half window to the half window, then infinity.
@@ -52,6 +47,20 @@ impl MomentsStage {
         grid.push(f64::INFINITY);
         grid
     }
+}
+
+/// The special particle's variance rate at truncation `limit` (a value of
+/// the table's grid, or infinity) from a moments table, `rho^2 l v_th`: `a_n`
+/// at the window edge for `u' = 0` in the dilute limit.
+pub fn self_variance_at(batch: &RecordBatch, limit: f64) -> Result<Estimate, StageError> {
+    use contract::moments::*;
+    let row = TRUNCATION
+        .read(batch)?
+        .iter()
+        // The grid's edge is `edge * 10^0`: equal up to rounding of the limit's own arithmetic.
+        .position(|&x| x == limit || (limit.is_finite() && (x - limit).abs() <= 1e-12 * limit))
+        .ok_or_else(|| StageError::Input(format!("no truncation {limit} in the moments table")))?;
+    Ok(SELF_VARIANCE.read(batch)?[row])
 }
 
 impl Stage for MomentsStage {
@@ -68,7 +77,7 @@ impl Stage for MomentsStage {
     }
 
     fn tables(&self) -> &'static [&'static str] {
-        &["moments"]
+        &[contract::moments::TABLE.name]
     }
 
     fn inputs(&self) -> Vec<InstanceId> {
@@ -80,82 +89,32 @@ impl Stage for MomentsStage {
     }
 
     fn run(&self, inputs: &[Input], progress: &Progress) -> Result<Vec<Table>, StageError> {
+        use contract::moments::*;
         let (events, draws, failed) = input_events(inputs)?;
         let truncations = self.truncations();
         let sums = moments(&events, &target_of(&self.params), &truncations, &draws);
-        let estimate = |k: usize, part: fn(&MomentSums) -> f64| {
-            Estimate::from_replicates(
-                &sums
-                    .iter()
-                    .map(|replicate| part(&replicate[k]))
-                    .collect::<Vec<_>>(),
-            )
+        let rows: Vec<usize> = (0..truncations.len()).collect();
+        let sums = &sums;
+        let estimate = |part: fn(&MomentSums) -> f64| {
+            move |&k: &usize| {
+                Estimate::from_replicates(
+                    &sums
+                        .iter()
+                        .map(|replicate| part(&replicate[k]))
+                        .collect::<Vec<_>>(),
+                )
+            }
         };
-        let parts: [MomentColumn; 4] = [
-            (
-                "self_drift",
-                "rho^2 l v_th",
-                "drift rate d<u - u'>/dt of the special particle",
-                |m| m.self_drift,
-            ),
-            (
-                "self_variance",
-                "rho^2 l v_th",
-                "variance rate d<(u - u')^2>/dt of the special particle (a_n at u' = 0)",
-                |m| m.self_variance,
-            ),
-            (
-                "window_drift",
-                "rho^2 l v_th",
-                "drift rate of all particles within the truncation",
-                |m| m.window_drift,
-            ),
-            (
-                "window_variance",
-                "rho^2 l v_th",
-                "variance rate of all particles within the truncation",
-                |m| m.window_variance,
-            ),
-        ];
-        let mut columns = vec![Column::f64(
-            "truncation",
-            "v_th",
-            "half-width X: only |u - u'| <= X counts (inf: no truncation)",
-            truncations.clone(),
-        )];
-        for (name, unit, description, part) in parts {
-            let values: Vec<Estimate> = (0..truncations.len()).map(|k| estimate(k, part)).collect();
-            columns.push(Column::f64(
-                name,
-                unit,
-                description,
-                values.iter().map(|e| e.mean).collect(),
-            ));
-            columns.push(Column::f64(
-                &format!("{name}_stderr"),
-                unit,
-                "standard error from the spread of randomizations",
-                values.iter().map(|e| e.stderr).collect(),
-            ));
-        }
-        let rows = truncations.len();
-        columns.push(Column::u32(
-            "events",
-            "1",
-            "scenes drawn",
-            vec![events.len() as u32; rows],
-        ));
-        columns.push(Column::u32(
-            "failed_events",
-            "1",
-            "scenes that failed (counted as drawn, contributing nothing)",
-            vec![failed as u32; rows],
-        ));
         progress.advance(1);
-        let table = Table::new("moments", columns)?.with_metadata(
-            "ternary.description",
-            "drift and variance rates against truncation, units of rho^2 l v_th".into(),
-        );
+        let table = Rows::new(&rows)
+            .with(TRUNCATION, |&k| truncations[k])
+            .estimate(SELF_DRIFT, estimate(|m| m.self_drift))
+            .estimate(SELF_VARIANCE, estimate(|m| m.self_variance))
+            .estimate(WINDOW_DRIFT, estimate(|m| m.window_drift))
+            .estimate(WINDOW_VARIANCE, estimate(|m| m.window_variance))
+            .with(EVENTS, |_| events.len() as u32)
+            .with(FAILED_EVENTS, |_| failed as u32)
+            .table(&TABLE)?;
         Ok(vec![table])
     }
 }

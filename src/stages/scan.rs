@@ -8,12 +8,15 @@ use rayon::prelude::*;
 use serde_json::Value;
 
 use crate::config::{NamedLaunch, ScanParams};
+use crate::contract::{self, Rows};
+use crate::physics::potential::Potential;
 use crate::physics::scan::{
     LaunchPair, Peak, ScanPoint, TIGHTEST_TOLERANCE, refine_peak, scan_point,
     special_final_velocity,
 };
 use crate::physics::scene::EngineSettings;
-use crate::pipeline::{Column, Input, InstanceId, Progress, Stage, StageError, Table};
+use crate::pipeline::{Input, InstanceId, Progress, Stage, StageError, Table};
+use crate::stats::Estimate;
 
 /// The `scan` stage for one potential.
 pub struct ScanStage {
@@ -24,6 +27,11 @@ impl ScanStage {
     /// A scan with resolved parameters.
     pub fn new(params: ScanParams) -> ScanStage {
         ScanStage { params }
+    }
+
+    /// Instance id of the scan of `potential`.
+    pub fn instance(potential: &Potential) -> InstanceId {
+        InstanceId::new(contract::scan::STAGE, &potential.id())
     }
 
     fn tight_engine(&self) -> EngineSettings {
@@ -69,7 +77,7 @@ fn pair_of(launch: &NamedLaunch) -> LaunchPair {
 
 impl Stage for ScanStage {
     fn id(&self) -> InstanceId {
-        InstanceId::new("scan", &self.params.potential.id())
+        ScanStage::instance(&self.params.potential)
     }
 
     fn version(&self) -> u32 {
@@ -81,7 +89,10 @@ impl Stage for ScanStage {
     }
 
     fn tables(&self) -> &'static [&'static str] {
-        &["curve", "peak"]
+        &[
+            contract::scan::curve::TABLE.name,
+            contract::scan::peak::TABLE.name,
+        ]
     }
 
     fn inputs(&self) -> Vec<InstanceId> {
@@ -139,121 +150,37 @@ impl ScanStage {
     }
 
     fn curve_table(&self, curves: &[Vec<CurvePoint>]) -> Result<Table, StageError> {
-        let rows = || {
-            self.params
-                .launches
-                .iter()
-                .zip(curves)
-                .flat_map(|(l, c)| c.iter().map(move |p| (l, p)))
-        };
-        let f64_of = |f: &dyn Fn(&NamedLaunch, &CurvePoint) -> f64| {
-            rows().map(|(l, p)| f(l, p)).collect::<Vec<f64>>()
-        };
-        let u32_of =
-            |f: &dyn Fn(&CurvePoint) -> u32| rows().map(|(_, p)| f(p)).collect::<Vec<u32>>();
+        use contract::scan::{curve::*, *};
+        let rows: Vec<(&NamedLaunch, &CurvePoint)> = self
+            .params
+            .launches
+            .iter()
+            .zip(curves)
+            .flat_map(|(l, c)| c.iter().map(move |p| (l, p)))
+            .collect();
         let length = self.params.launch_length;
-        let columns = vec![
-            Column::text(
-                "launch",
-                "name of the launch pair",
-                rows().map(|(l, _)| l.name.clone()).collect(),
-            ),
-            Column::f64(
-                "u2",
-                "v_th",
-                "velocity of the first arrival (special particle at rest)",
-                f64_of(&|l, _| l.u2),
-            ),
-            Column::f64(
-                "u3",
-                "v_th",
-                "velocity of the second arrival",
-                f64_of(&|l, _| l.u3),
-            ),
-            Column::f64(
-                "arrival_offset",
-                "l/v_th",
-                "free-flight arrival time of particle 3 minus that of particle 2 at the special particle",
-                f64_of(&|_, p| p.nominal.offset),
-            ),
-            Column::f64(
-                "launch_delay",
-                "l/v_th",
-                "launch time of particle 3 minus that of particle 2 for entry at -sign(u) L/2",
-                f64_of(&|l, p| pair_of(l).launch_delay(p.nominal.offset, length)),
-            ),
-            Column::f64(
-                "u1_final",
-                "v_th",
-                "final velocity of the special particle (sorted matching)",
-                f64_of(&|_, p| p.kick()),
-            ),
-            Column::f64(
-                "u1_final_error",
-                "v_th",
-                "|u1_final - u1_final at 100x tighter tolerance|",
-                f64_of(&|_, p| p.kick_error()),
-            ),
-            Column::f64(
-                "out_slow",
-                "v_th",
-                "slowest outgoing velocity",
-                f64_of(&|_, p| p.nominal.collision.outgoing[0]),
-            ),
-            Column::f64(
-                "out_middle",
-                "v_th",
-                "middle outgoing velocity",
-                f64_of(&|_, p| p.nominal.collision.outgoing[1]),
-            ),
-            Column::f64(
-                "out_fast",
-                "v_th",
-                "fastest outgoing velocity",
-                f64_of(&|_, p| p.nominal.collision.outgoing[2]),
-            ),
-            Column::text(
-                "outcome",
-                "scattered, recombined or failed_*",
-                rows()
-                    .map(|(_, p)| p.nominal.collision.outcome.name().to_string())
-                    .collect(),
-            ),
-            Column::f64(
-                "energy_error",
-                "1",
-                "(E_out - E_in) / E_in of the relative motion",
-                f64_of(&|_, p| p.nominal.collision.energy_error),
-            ),
-            Column::f64(
-                "momentum_error",
-                "1",
-                "|P_out - P_in| / relative-speed scale",
-                f64_of(&|_, p| p.nominal.collision.momentum_error),
-            ),
-            Column::u32(
-                "steps",
-                "1",
-                "accepted integrator steps",
-                u32_of(&|p| p.nominal.collision.steps),
-            ),
-            Column::u32(
-                "rejected_steps",
-                "1",
-                "rejected integrator steps",
-                u32_of(&|p| p.nominal.collision.rejected_steps),
-            ),
-            Column::u32(
-                "force_evaluations",
-                "1",
-                "evaluations of the three pair forces",
-                u32_of(&|p| p.nominal.collision.evaluations),
-            ),
-        ];
-        Ok(Table::new("curve", columns)?.with_metadata(
-            "ternary.description",
-            "mono-energetic kick curves u1f(arrival offset)".into(),
-        ))
+        Ok(Rows::new(&rows)
+            .with(LAUNCH, |(l, _)| l.name.clone())
+            .with(U2, |(l, _)| l.u2)
+            .with(U3, |(l, _)| l.u3)
+            .with(ARRIVAL_OFFSET, |(_, p)| p.nominal.offset)
+            .with(LAUNCH_DELAY, |(l, p)| {
+                pair_of(l).launch_delay(p.nominal.offset, length)
+            })
+            .with(U1_FINAL, |(_, p)| p.kick())
+            .with(U1_FINAL_ERROR, |(_, p)| p.kick_error())
+            .with(OUT_SLOW, |(_, p)| p.nominal.collision.outgoing[0])
+            .with(OUT_MIDDLE, |(_, p)| p.nominal.collision.outgoing[1])
+            .with(OUT_FAST, |(_, p)| p.nominal.collision.outgoing[2])
+            .with(OUTCOME, |(_, p)| {
+                p.nominal.collision.outcome.name().to_string()
+            })
+            .with(ENERGY_ERROR, |(_, p)| p.nominal.collision.energy_error)
+            .with(MOMENTUM_ERROR, |(_, p)| p.nominal.collision.momentum_error)
+            .with(STEPS, |(_, p)| p.nominal.collision.steps)
+            .with(REJECTED_STEPS, |(_, p)| p.nominal.collision.rejected_steps)
+            .with(FORCE_EVALUATIONS, |(_, p)| p.nominal.collision.evaluations)
+            .table(&TABLE)?)
     }
 
     fn peak_table(
@@ -261,105 +188,65 @@ impl ScanStage {
         curves: &[Vec<CurvePoint>],
         peaks: &[Option<Peak>],
     ) -> Result<Table, StageError> {
-        let launches = &self.params.launches;
+        use contract::scan::{peak::*, *};
         let grid = self.params.grid;
         let spacing = (grid.offset_max - grid.offset_min) / f64::from(grid.points - 1);
-        let peak_of = |f: &dyn Fn(&Peak) -> f64| {
-            peaks
-                .iter()
-                .map(|p| p.as_ref().map_or(f64::NAN, f))
-                .collect::<Vec<f64>>()
-        };
         let length = self.params.launch_length;
-        let delays = launches
+        let rows: Vec<PeakRow> = self
+            .params
+            .launches
             .iter()
             .zip(peaks)
-            .map(|(l, p)| {
-                p.as_ref()
-                    .map_or(f64::NAN, |p| pair_of(l).launch_delay(p.offset, length))
+            .zip(curves)
+            .map(|((launch, peak), curve)| PeakRow {
+                launch,
+                peak: peak.as_ref(),
+                curve,
             })
             .collect();
-        let failures = curves
-            .iter()
-            .map(|c| c.iter().filter(|p| p.failed()).count() as u32)
-            .collect();
-        let worst_energy = curves
-            .iter()
-            .map(|c| {
-                c.iter()
+        Ok(Rows::new(&rows)
+            .with(LAUNCH, |r| r.launch.name.clone())
+            .with(U2, |r| r.launch.u2)
+            .with(U3, |r| r.launch.u3)
+            .estimate(U1_FINAL_MAX_ABS, |r| {
+                r.bounded(|p| p.kick, |p| p.kick_error)
+            })
+            .estimate(ARRIVAL_OFFSET_AT_MAX, |r| {
+                r.bounded(|p| p.offset, |p| p.offset_error)
+            })
+            .with(LAUNCH_DELAY_AT_MAX, |r| {
+                r.peak.map_or(f64::NAN, |p| {
+                    pair_of(r.launch).launch_delay(p.offset, length)
+                })
+            })
+            .with(GRID_SPACING, |_| spacing)
+            .with(FAILED_SCENES, |r| {
+                r.curve.iter().filter(|p| p.failed()).count() as u32
+            })
+            .with(WORST_ENERGY_ERROR, |r| {
+                r.curve
+                    .iter()
                     .filter(|p| !p.failed())
                     .map(|p| p.nominal.collision.energy_error.abs())
                     .fold(0.0, f64::max)
             })
-            .collect();
-        let columns = vec![
-            Column::text(
-                "launch",
-                "name of the launch pair",
-                launches.iter().map(|l| l.name.clone()).collect(),
-            ),
-            Column::f64(
-                "u2",
-                "v_th",
-                "velocity of the first arrival",
-                launches.iter().map(|l| l.u2).collect(),
-            ),
-            Column::f64(
-                "u3",
-                "v_th",
-                "velocity of the second arrival",
-                launches.iter().map(|l| l.u3).collect(),
-            ),
-            Column::f64(
-                "u1_final_max_abs",
-                "v_th",
-                "largest |u1f| over arrival offsets, refined between grid points",
-                peak_of(&|p| p.kick),
-            ),
-            Column::f64(
-                "u1_final_max_abs_error",
-                "v_th",
-                "error bound of u1_final_max_abs (tolerance sensitivity plus bracket spread)",
-                peak_of(&|p| p.kick_error),
-            ),
-            Column::f64(
-                "arrival_offset_at_max",
-                "l/v_th",
-                "arrival offset of the maximum",
-                peak_of(&|p| p.offset),
-            ),
-            Column::f64(
-                "arrival_offset_at_max_error",
-                "l/v_th",
-                "half-width of the final bracket",
-                peak_of(&|p| p.offset_error),
-            ),
-            Column::f64(
-                "launch_delay_at_max",
-                "l/v_th",
-                "launch delay of the maximum for entry at -sign(u) L/2",
-                delays,
-            ),
-            Column::f64(
-                "grid_spacing",
-                "l/v_th",
-                "spacing of the offset grid",
-                vec![spacing; launches.len()],
-            ),
-            Column::u32(
-                "failed_scenes",
-                "1",
-                "scenes of the curve that failed (excluded)",
-                failures,
-            ),
-            Column::f64(
-                "worst_energy_error",
-                "1",
-                "largest |relative energy error| on the curve",
-                worst_energy,
-            ),
-        ];
-        Ok(Table::new("peak", columns)?
-            .with_metadata("ternary.description", "peak of each kick curve".into()))
+            .table(&TABLE)?)
+    }
+}
+
+/// One launch pair's curve and refined peak (none when every scene failed).
+struct PeakRow<'a> {
+    launch: &'a NamedLaunch,
+    peak: Option<&'a Peak>,
+    curve: &'a [CurvePoint],
+}
+
+impl PeakRow<'_> {
+    /// A peak quantity with its error bound (NaN without a peak).
+    fn bounded(&self, value: fn(&Peak) -> f64, bound: fn(&Peak) -> f64) -> Estimate {
+        Estimate {
+            mean: self.peak.map_or(f64::NAN, value),
+            stderr: self.peak.map_or(f64::NAN, bound),
+        }
     }
 }

@@ -4,22 +4,23 @@
 //! velocities (physics.md §8). All from one event set by reweighting; every
 //! uncertainty from the spread of randomizations (per-replicate differences, so
 //! the correlation of quantities computed from the same events is kept).
-//!
-//! Fokker-Planck reading: with drift `D1(u)` and variance rate `D2(u)`, zero
-//! probability flux in the state `f0` requires `D1 f0 = 1/2 d(D2 f0)/du`, i.e.
-//! `D1 = (D2' - u D2) / 2`; the table gives both sides and their difference.
-//! Higher Kramers-Moyal terms (third moment of kicks of ~0.02 v_th) are not
-//! included, so differences of a few percent of `D1` are expected.
+//! The Fokker-Planck reading `D1 = (D2' - u D2) / 2` and the balance
+//! arithmetic are `kernel::equilibrium`'s; the table gives both sides of
+//! each and their difference.
 
 use rayon::prelude::*;
 use serde_json::Value;
 
 use super::collisions::CollisionsStage;
 use super::kernel::input_events;
+use crate::binning::Bins;
 use crate::config::SweepParams;
-use crate::kernel::{Bins, Draws, Estimate, Event, Target, moments, self_bin};
-use crate::physics::launch::thermal_density;
-use crate::pipeline::{Column, Input, InstanceId, Progress, Stage, StageError, Table};
+use crate::contract::{self, Rows};
+use crate::kernel::equilibrium::{
+    Balance, FokkerPlanckPoint, SelfRates, detailed_balance, fokker_planck_check, self_rates,
+};
+use crate::kernel::{Draws, Event, Target, self_bin};
+use crate::pipeline::{Input, InstanceId, Progress, Stage, StageError, Table};
 
 /// The `sweep` stage for one potential.
 pub struct SweepStage {
@@ -50,110 +51,27 @@ impl SweepStage {
     }
 
     /// Self drift and variance rates (within half the window) per replicate at every grid point.
-    fn rates(&self, events: &[Event], draws: &Draws, grid: &[f64]) -> Vec<[Vec<f64>; 2]> {
+    fn rates(&self, events: &[Event], draws: &Draws, grid: &[f64]) -> Vec<SelfRates> {
         let edge = 0.5 * self.params.kernel.window;
         grid.par_iter()
-            .map(|&u| {
-                let sums = moments(events, &self.target(u), &[edge], draws);
-                [
-                    sums.iter().map(|r| r[0].self_drift).collect(),
-                    sums.iter().map(|r| r[0].self_variance).collect(),
-                ]
-            })
+            .map(|&u| self_rates(events, &self.target(u), edge, draws))
             .collect()
     }
 
-    fn rates_table(&self, grid: &[f64], rates: &[[Vec<f64>; 2]]) -> Result<Table, StageError> {
-        let replicates = rates[0][0].len();
-        let last = grid.len() - 1;
-        let mut columns: [Vec<f64>; 8] = Default::default();
-        for (k, &u) in grid.iter().enumerate() {
-            // Central differences inside the grid, one-sided at its ends.
-            let (low, high) = (k.saturating_sub(1), (k + 1).min(last));
-            let predicted: Vec<f64> = (0..replicates)
-                .map(|r| {
-                    let slope = (rates[high][1][r] - rates[low][1][r]) / (grid[high] - grid[low]);
-                    0.5 * (slope - u * rates[k][1][r])
-                })
-                .collect();
-            let residual: Vec<f64> = (0..replicates)
-                .map(|r| rates[k][0][r] - predicted[r])
-                .collect();
-            let [drift, variance, predicted, residual] =
-                [&rates[k][0], &rates[k][1], &predicted, &residual]
-                    .map(|v| Estimate::from_replicates(v));
-            let row = [
-                u,
-                drift.mean,
-                drift.stderr,
-                variance.mean,
-                variance.stderr,
-                predicted.mean,
-                predicted.stderr,
-                residual.mean / residual.stderr,
-            ];
-            for (column, value) in columns.iter_mut().zip(row) {
-                column.push(value);
-            }
-        }
-        let [
-            u,
-            drift,
-            drift_err,
-            variance,
-            variance_err,
-            predicted,
-            predicted_err,
-            z,
-        ] = columns;
-        let rate = "rho^2 l v_th";
-        Ok(Table::new(
-            "rates",
-            vec![
-                Column::f64("u_prime", "v_th", "velocity of the special particle", u),
-                Column::f64(
-                    "self_drift",
-                    rate,
-                    "D1 = d<u - u'>/dt of the special particle (|u - u'| <= window/2)",
-                    drift,
-                ),
-                Column::f64("self_drift_stderr", rate, "standard error", drift_err),
-                Column::f64(
-                    "self_variance",
-                    "rho^2 l v_th",
-                    "D2 = d<(u - u')^2>/dt of the special particle",
-                    variance,
-                ),
-                Column::f64(
-                    "self_variance_stderr",
-                    "rho^2 l v_th",
-                    "standard error",
-                    variance_err,
-                ),
-                Column::f64(
-                    "fokker_planck_drift",
-                    rate,
-                    "(dD2/du - u D2) / 2: the drift for which f0 is stationary",
-                    predicted,
-                ),
-                Column::f64(
-                    "fokker_planck_drift_stderr",
-                    rate,
-                    "standard error (finite differences on the grid)",
-                    predicted_err,
-                ),
-                Column::f64(
-                    "fokker_planck_z",
-                    "1",
-                    "(D1 - Fokker-Planck drift) / its standard error (per-replicate differences)",
-                    z,
-                ),
-            ],
-        )?
-        .with_metadata(
-            "ternary.description",
-            "drift and variance rates against u', dilute limit".into(),
-        ))
+    fn rates_table(&self, grid: &[f64], rates: &[SelfRates]) -> Result<Table, StageError> {
+        use contract::sweep::rates::*;
+        let rows: Vec<(f64, FokkerPlanckPoint)> = grid
+            .iter()
+            .copied()
+            .zip(fokker_planck_check(grid, rates))
+            .collect();
+        Ok(Rows::new(&rows)
+            .with(U_PRIME, |(u, _)| *u)
+            .estimate(SELF_DRIFT, |(_, p)| p.drift)
+            .estimate(SELF_VARIANCE, |(_, p)| p.variance)
+            .estimate(FOKKER_PLANCK_DRIFT, |(_, p)| p.predicted_drift)
+            .with(FOKKER_PLANCK_Z, |(_, p)| p.z)
+            .table(&TABLE)?)
     }
 
     fn balance_table(
@@ -162,6 +80,7 @@ impl SweepStage {
         draws: &Draws,
         grid: &[f64],
     ) -> Result<Table, StageError> {
+        use contract::sweep::detailed_balance::*;
         let width = self.params.balance_bin_width;
         let largest = self
             .params
@@ -170,7 +89,7 @@ impl SweepStage {
             .copied()
             .fold(0.0, f64::max);
         let bins = Bins::for_window(2.0 * largest + 4.0 * width, width);
-        let rows: Vec<[f64; 9]> = grid
+        let rows: Vec<(f64, f64, Balance)> = grid
             .par_iter()
             .flat_map_iter(|&a| {
                 self.params
@@ -187,73 +106,25 @@ impl SweepStage {
                         };
                         let there = self_kernel(a, bins.half_bins + steps);
                         let back = self_kernel(b, bins.half_bins - steps);
-                        let imbalance: Vec<f64> = there
-                            .iter()
-                            .zip(&back)
-                            .map(|(x, y)| thermal_density(a) * x - thermal_density(b) * y)
-                            .collect();
-                        let [there, back, imbalance] =
-                            [&there, &back, &imbalance].map(|v| Estimate::from_replicates(v));
-                        let ratio = there.ratio(back);
-                        [
-                            a,
-                            b,
-                            there.mean,
-                            there.stderr,
-                            back.mean,
-                            back.stderr,
-                            ratio.mean,
-                            ratio.stderr,
-                            imbalance.mean / imbalance.stderr,
-                        ]
+                        (a, b, detailed_balance(a, b, &there, &back))
                     })
             })
             .collect();
-        let mut columns: [Vec<f64>; 9] = Default::default();
-        for row in rows {
-            for (column, value) in columns.iter_mut().zip(row) {
-                column.push(value);
-            }
-        }
-        let [
-            from,
-            to,
-            forward,
-            forward_err,
-            backward,
-            backward_err,
-            ratio,
-            ratio_err,
-            z,
-        ] = columns;
-        let expected: Vec<f64> = from
-            .iter()
-            .zip(&to)
-            .map(|(a, b)| thermal_density(*b) / thermal_density(*a))
-            .collect();
-        let unit = "rho^2 l v_th / v_th";
-        Ok(Table::new(
-            "detailed_balance",
-            vec![
-                Column::f64("a", "v_th", "initial velocity", from),
-                Column::f64("b", "v_th", "final velocity (a plus a whole number of bins)", to),
-                Column::f64("G_self_ab", unit, "self kernel G(a -> b), bin centred on b", forward),
-                Column::f64("G_self_ab_stderr", unit, "standard error", forward_err),
-                Column::f64("G_self_ba", unit, "self kernel G(b -> a)", backward),
-                Column::f64("G_self_ba_stderr", unit, "standard error", backward_err),
-                Column::f64("ratio", "1", "G(a -> b) / G(b -> a)", ratio),
-                Column::f64("ratio_stderr", "1", "standard error (first order, estimates treated as independent)", ratio_err),
-                Column::f64("expected_ratio", "1", "f0(b) / f0(a): detailed balance", expected),
-                Column::f64("imbalance_z", "1", "(f0(a) G(a->b) - f0(b) G(b->a)) / its standard error (per-replicate differences)", z),
-            ],
-        )?
-        .with_metadata("ternary.description", "detailed balance of the self kernel for nearby velocities".into()))
+        Ok(Rows::new(&rows)
+            .with(A, |(a, ..)| *a)
+            .with(B, |(_, b, _)| *b)
+            .estimate(G_SELF_AB, |(.., balance)| balance.forward)
+            .estimate(G_SELF_BA, |(.., balance)| balance.backward)
+            .estimate(RATIO, |(.., balance)| balance.ratio)
+            .with(EXPECTED_RATIO, |(.., balance)| balance.expected_ratio)
+            .with(IMBALANCE_Z, |(.., balance)| balance.imbalance_z)
+            .table(&TABLE)?)
     }
 }
 
 impl Stage for SweepStage {
     fn id(&self) -> InstanceId {
-        InstanceId::new("sweep", &self.params.kernel.potential.id())
+        InstanceId::new(contract::sweep::STAGE, &self.params.kernel.potential.id())
     }
 
     fn version(&self) -> u32 {
@@ -265,7 +136,10 @@ impl Stage for SweepStage {
     }
 
     fn tables(&self) -> &'static [&'static str] {
-        &["rates", "detailed_balance"]
+        &[
+            contract::sweep::rates::TABLE.name,
+            contract::sweep::detailed_balance::TABLE.name,
+        ]
     }
 
     fn inputs(&self) -> Vec<InstanceId> {

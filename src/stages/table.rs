@@ -7,11 +7,13 @@
 use serde_json::Value;
 
 use super::fit::FitStage;
-use super::moments::MomentsStage;
+use super::moments::{MomentsStage, self_variance_at};
+use super::scan::ScanStage;
 use crate::config::KernelParams;
+use crate::contract::{self, Pair, Rows, table};
 use crate::physics::potential::Potential;
-use crate::pipeline::table::{f64_values, text_values, u32_values};
 use crate::pipeline::{Column, Input, InstanceId, Progress, Stage, StageError, Table};
+use crate::stats::Estimate;
 
 /// The `table` stage.
 pub struct TableStage {
@@ -26,42 +28,74 @@ impl TableStage {
     }
 }
 
-fn scan_instance(potential: &Potential) -> InstanceId {
-    InstanceId::new("scan", &potential.id())
+/// One potential's row.
+struct PotentialRow {
+    params: KernelParams,
+    a_n: Estimate,
+    a_n_untruncated: Estimate,
+    /// `alpha`, `beta`, `sigma` of the fit.
+    shape: [Estimate; 3],
+    /// Scanned launch pairs with their `|u1f,max|` and its error bound.
+    maxima: Vec<(String, Estimate)>,
+    events: u32,
+    failed_events: u32,
 }
 
-/// One value with its error from a moments table at the truncation `limit`.
-fn moment_at(
-    batch: &arrow::array::RecordBatch,
-    name: &str,
-    limit: f64,
-) -> Result<(f64, f64), StageError> {
-    let truncation = f64_values(batch, "truncation")?;
-    let row = truncation
-        .iter()
-        .position(|&x| x == limit || (limit.is_finite() && (x - limit).abs() <= 1e-12 * limit))
-        .ok_or_else(|| StageError::Input(format!("no truncation {limit} in moments")))?;
-    Ok((
-        f64_values(batch, name)?[row],
-        f64_values(batch, &format!("{name}_stderr"))?[row],
-    ))
+impl TableStage {
+    /// The row of the potential of `params` from its inputs.
+    fn row(&self, inputs: &[Input], params: &KernelParams) -> Result<PotentialRow, StageError> {
+        let moments = contract::moments::TABLE.find(inputs, &MomentsStage::instance(params))?;
+        let fit = contract::fit::TABLE.find(inputs, &FitStage::instance(params))?;
+        let peaks =
+            contract::scan::peak::TABLE.find(inputs, &ScanStage::instance(&params.potential))?;
+        let first = |pair: Pair| -> Result<Estimate, StageError> { Ok(pair.read(fit)?[0]) };
+        let launches = contract::scan::LAUNCH.read(peaks)?;
+        let maxima = contract::scan::peak::U1_FINAL_MAX_ABS.read(peaks)?;
+        Ok(PotentialRow {
+            params: *params,
+            a_n: self_variance_at(moments, 0.5 * params.window)?,
+            a_n_untruncated: self_variance_at(moments, f64::INFINITY)?,
+            shape: [
+                first(contract::fit::ALPHA)?,
+                first(contract::fit::BETA)?,
+                first(contract::fit::SIGMA)?,
+            ],
+            maxima: launches.into_iter().zip(maxima).collect(),
+            events: contract::moments::EVENTS.read(moments)?[0],
+            failed_events: contract::moments::FAILED_EVENTS.read(moments)?[0],
+        })
+    }
 }
 
-fn input<'a>(
-    inputs: &'a [Input],
-    id: &InstanceId,
-    table: &str,
-) -> Result<&'a arrow::array::RecordBatch, StageError> {
-    inputs
-        .iter()
-        .find(|input| &input.id == id)
-        .and_then(|input| input.tables.get(table))
-        .ok_or_else(|| StageError::Input(format!("missing {id} table {table}")))
+/// The scan maxima's columns, one pair per launch pair of the first potential.
+fn scan_maxima(rows: &[PotentialRow]) -> Result<Vec<Column>, StageError> {
+    let launches: Vec<&String> = rows
+        .first()
+        .map(|r| r.maxima.iter().map(|(launch, _)| launch).collect())
+        .unwrap_or_default();
+    let mut columns = Vec::new();
+    for (k, launch) in launches.into_iter().enumerate() {
+        let maxima = rows
+            .iter()
+            .map(|r| match r.maxima.get(k) {
+                Some((name, maximum)) if name == launch => Ok(*maximum),
+                _ => Err(StageError::Input(format!(
+                    "the potentials' scans differ in launch pair {launch}"
+                ))),
+            })
+            .collect::<Result<Vec<Estimate>, StageError>>()?;
+        columns.extend(table::scan_maximum(
+            launch,
+            maxima.iter().map(|e| e.mean).collect(),
+            maxima.iter().map(|e| e.stderr).collect(),
+        ));
+    }
+    Ok(columns)
 }
 
 impl Stage for TableStage {
     fn id(&self) -> InstanceId {
-        InstanceId::new("table", "study")
+        InstanceId::new(contract::table::STAGE, "study")
     }
 
     fn version(&self) -> u32 {
@@ -73,7 +107,7 @@ impl Stage for TableStage {
     }
 
     fn tables(&self) -> &'static [&'static str] {
-        &["table"]
+        &[contract::table::TABLE.name]
     }
 
     fn inputs(&self) -> Vec<InstanceId> {
@@ -83,7 +117,7 @@ impl Stage for TableStage {
                 [
                     MomentsStage::instance(params),
                     FitStage::instance(params),
-                    scan_instance(&params.potential),
+                    ScanStage::instance(&params.potential),
                 ]
             })
             .collect()
@@ -94,137 +128,34 @@ impl Stage for TableStage {
     }
 
     fn run(&self, inputs: &[Input], progress: &Progress) -> Result<Vec<Table>, StageError> {
-        let mut numbers: Vec<(String, &str, &str, Vec<f64>)> = Vec::new();
-        let mut push =
-            |name: &str, unit: &'static str, description: &'static str, value: f64| match numbers
-                .iter_mut()
-                .find(|(n, ..)| n == name)
-            {
-                Some((.., values)) => values.push(value),
-                None => numbers.push((name.to_string(), unit, description, vec![value])),
-            };
-        let mut counts: [Vec<u32>; 2] = Default::default();
-        for params in &self.rows {
-            let moments = input(inputs, &MomentsStage::instance(params), "moments")?;
-            let edge = 0.5 * params.window;
-            let (a, a_err) = moment_at(moments, "self_variance", edge)?;
-            let (a_all, a_all_err) = moment_at(moments, "self_variance", f64::INFINITY)?;
-            let (exponent, theta) = match params.potential {
-                Potential::InversePower { n } => (n, f64::NAN),
-                Potential::LennardJones { theta } => (6.0, theta),
-            };
-            push(
-                "n",
-                "1",
-                "exponent of the inverse power law (6 for Lennard-Jones: sets the length unit)",
-                exponent,
-            );
-            push(
-                "theta",
-                "1",
-                "kT/eps of Lennard-Jones (NaN for inverse power laws)",
-                theta,
-            );
-            push(
-                "a_n",
-                "rho^2 l v_th",
-                "self variance rate at u' = 0, dilute limit, |u - u'| <= window/2",
-                a,
-            );
-            push(
-                "a_n_stderr",
-                "rho^2 l v_th",
-                "standard error of a_n (spread of randomizations)",
-                a_err,
-            );
-            push(
-                "a_n_untruncated",
-                "rho^2 l v_th",
-                "self variance rate without truncation",
-                a_all,
-            );
-            push(
-                "a_n_untruncated_stderr",
-                "rho^2 l v_th",
-                "standard error of a_n_untruncated",
-                a_all_err,
-            );
-            let fit = input(inputs, &FitStage::instance(params), "fit")?;
-            for (name, description) in [
-                (
-                    "alpha",
-                    "amplitude of the kernel shape fit alpha |x|^-beta exp(-x^2/2 sigma^2) at u' = 0",
-                ),
-                ("beta", "power-law exponent of the kernel near u'"),
-                (
-                    "sigma",
-                    "Gaussian cut-off of the kernel (largest momentum transfer), v_th",
-                ),
-            ] {
-                push(
-                    name,
-                    "see fit stage",
-                    description,
-                    f64_values(fit, name)?[0],
-                );
-                push(
-                    &format!("{name}_stderr"),
-                    "see fit stage",
-                    "standard error from refitting each randomization",
-                    f64_values(fit, &format!("{name}_stderr"))?[0],
-                );
-            }
-            counts[0].push(u32_values(moments, "events")?[0]);
-            counts[1].push(u32_values(moments, "failed_events")?[0]);
-            let peaks = input(inputs, &scan_instance(&params.potential), "peak")?;
-            let launches = text_values(peaks, "launch")?;
-            let kicks = f64_values(peaks, "u1_final_max_abs")?;
-            let errors = f64_values(peaks, "u1_final_max_abs_error")?;
-            for (k, launch) in launches.iter().enumerate() {
-                push(
-                    &format!("u1f_max_{launch}"),
-                    "v_th",
-                    "largest |u1f| of the mono-energetic scan of this launch pair",
-                    kicks[k],
-                );
-                push(
-                    &format!("u1f_max_{launch}_error"),
-                    "v_th",
-                    "error bound of the scan maximum",
-                    errors[k],
-                );
-            }
-            progress.advance(1);
-        }
-        let mut columns = vec![Column::text(
-            "potential",
-            "potential id",
-            self.rows.iter().map(|p| p.potential.id()).collect(),
-        )];
-        columns.extend(
-            numbers
-                .into_iter()
-                .map(|(name, unit, description, values)| {
-                    Column::f64(&name, unit, description, values)
-                }),
-        );
-        let [events, failed] = counts;
-        columns.push(Column::u32(
-            "events",
-            "1",
-            "scenes drawn for the kernel",
-            events,
-        ));
-        columns.push(Column::u32(
-            "failed_events",
-            "1",
-            "scenes that failed",
-            failed,
-        ));
-        let table = Table::new("table", columns)?.with_metadata(
-            "ternary.description",
-            "thermalization constants a_n and scan maxima per potential".into(),
-        );
+        use contract::table::*;
+        let rows = self
+            .rows
+            .iter()
+            .map(|params| {
+                let row = self.row(inputs, params)?;
+                progress.advance(1);
+                Ok(row)
+            })
+            .collect::<Result<Vec<_>, StageError>>()?;
+        // The exponent (6 for Lennard-Jones: it sets the length unit) and kT/eps.
+        let exponent_and_theta = |r: &PotentialRow| match r.params.potential {
+            Potential::InversePower { n } => (n, f64::NAN),
+            Potential::LennardJones { theta } => (6.0, theta),
+        };
+        let table = Rows::new(&rows)
+            .with(POTENTIAL, |r| r.params.potential.id())
+            .with(N, |r| exponent_and_theta(r).0)
+            .with(THETA, |r| exponent_and_theta(r).1)
+            .estimate(A_N, |r| r.a_n)
+            .estimate(A_N_UNTRUNCATED, |r| r.a_n_untruncated)
+            .estimate(ALPHA, |r| r.shape[0])
+            .estimate(BETA, |r| r.shape[1])
+            .estimate(SIGMA, |r| r.shape[2])
+            .columns(scan_maxima(&rows)?)
+            .with(EVENTS, |r| r.events)
+            .with(FAILED_EVENTS, |r| r.failed_events)
+            .table(&TABLE)?;
         Ok(vec![table])
     }
 }

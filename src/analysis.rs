@@ -1,0 +1,227 @@
+//! Molecular dynamics against the Boltzmann evolution (physics.md §7, §8):
+//! the Boltzmann `h(u, t_f)` of the translation-invariant kernel on a ring's
+//! bins, window variances of `h`, the self kernel's window variance rate
+//! averaged over thermal starts (the thermal estimator's counterpart), and
+//! the finite-size ratios of MD to Boltzmann. The chi-square of two `h`
+//! estimates is `stats::chi_square`.
+//!
+//! Owns the arithmetic of the comparison; not the MD runs (`physics::md`),
+//! the kernel (`kernel`), the evolution (`evolve`) nor the tables (`stages::compare`).
+//! Pure math: no IO. Units: velocities in `v_th`, `h` per `v_th`, rates in
+//! `rho^2 l v_th`, times in `1 / (rho^2 l v_th)`.
+
+use crate::evolve::convolution::{self, overlap_rebin};
+use crate::kernel::{Draws, Event, Target, moments};
+use crate::linalg::simpson_weight;
+use crate::physics::launch::thermal_density;
+use crate::physics::md::THERMAL_BAND;
+use crate::stats::{Estimate, Replicated};
+
+/// Simpson intervals of the average over thermal starts in
+/// `[-THERMAL_BAND, THERMAL_BAND]` (step 0.25).
+pub const THERMAL_INTERVALS: usize = 24;
+
+/// A ring's estimator bins: centres relative to `u'` and their width, `v_th`.
+#[derive(Clone, Copy, Debug)]
+pub struct RingBins<'a> {
+    /// Bin centres `u - u'`.
+    pub du: &'a [f64],
+    /// Bin width.
+    pub width: f64,
+    /// Total width of the ring's estimator window.
+    pub window: f64,
+}
+
+/// Boltzmann `h(u, t)` from `delta(u - u')` under the translation-invariant
+/// kernel `rates` (binned on `width`, see `evolve::convolution`) at scaled
+/// time `time`, exact in Fourier space, on the ring's bins (bin masses over
+/// the bin width: `1/v_th`), for the mean kernel and every leave-one-out set.
+pub fn boltzmann_on_bins(
+    rates: &Replicated<Vec<f64>>,
+    width: f64,
+    time: f64,
+    bins: RingBins,
+) -> Replicated<Vec<f64>> {
+    let size = convolution::periodic_size(&rates.full, width, time)
+        .max((4.0 * bins.window / width) as usize)
+        .next_power_of_two();
+    rates.map(|g| {
+        let h = &convolution::evolve(g, size, &[time])[0];
+        overlap_rebin(h, width, size / 2, bins.du, bins.width)
+            .iter()
+            .map(|m| m / bins.width)
+            .collect::<Vec<f64>>()
+    })
+}
+
+/// Window variance `sum_k h_k du_k^2 width` of a binned `h` (per `v_th`), `v_th^2`.
+pub fn window_variance(h: &[f64], du: &[f64], width: f64) -> f64 {
+    h.iter().zip(du).map(|(h, du)| h * du * du * width).sum()
+}
+
+/// The thermal average over starts `u0` in `[-THERMAL_BAND, THERMAL_BAND]`
+/// of every component of `value(u0)` with weight `f0(u0)`, normalized on the
+/// band: `sum_j s_j f0(u_j) v(u_j) / sum_j s_j f0(u_j)`, `s_j` the composite
+/// Simpson weights of [`THERMAL_INTERVALS`] intervals.
+pub fn thermal_average(value: impl Fn(f64) -> Vec<f64>) -> Vec<f64> {
+    let step = 2.0 * THERMAL_BAND / THERMAL_INTERVALS as f64;
+    let mut average: Vec<f64> = Vec::new();
+    let mut norm = 0.0;
+    for j in 0..=THERMAL_INTERVALS {
+        let u = -THERMAL_BAND + step * j as f64;
+        let weight = simpson_weight(j, THERMAL_INTERVALS) * thermal_density(u);
+        norm += weight;
+        let values = value(u);
+        average.resize(values.len(), 0.0);
+        average
+            .iter_mut()
+            .zip(values)
+            .for_each(|(a, v)| *a += weight * v);
+    }
+    average.iter_mut().for_each(|a| *a /= norm);
+    average
+}
+
+/// Per truncation edge (a ring's half window), per replicate: the self
+/// kernel's window variance rate `int_{|x| <= edge} G_self x^2 dx` averaged
+/// over thermal starts ([`thermal_average`]), `rho^2 l v_th`. `target` gives
+/// everything but `u'`.
+pub fn thermal_window_variance_rates(
+    events: &[Event],
+    draws: &Draws,
+    target: &Target,
+    edges: &[f64],
+) -> Vec<Vec<f64>> {
+    let replicates = draws.replicates();
+    let averaged = thermal_average(|u_prime| {
+        let target = Target { u_prime, ..*target };
+        let sums = moments(events, &target, edges, draws);
+        (0..edges.len())
+            .flat_map(|ring| {
+                sums.iter()
+                    .map(move |replicate| replicate[ring].self_variance)
+            })
+            .collect()
+    });
+    averaged.chunks(replicates).map(<[f64]>::to_vec).collect()
+}
+
+/// An MD window variance against Boltzmann's, `v_th^2`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct VarianceRatio {
+    /// Molecular dynamics (standard error over runs).
+    pub md: Estimate,
+    /// Boltzmann (error over the kernel's randomizations).
+    pub boltzmann: Estimate,
+    /// `md / boltzmann`: 1 at large `N` and small `rho l`.
+    pub ratio: Estimate,
+}
+
+impl VarianceRatio {
+    /// The two variances and their ratio.
+    pub fn new(md: Estimate, boltzmann: Estimate) -> VarianceRatio {
+        VarianceRatio {
+            md,
+            boltzmann,
+            ratio: md.ratio(boltzmann),
+        }
+    }
+}
+
+/// The finite-size and density comparison of one ring at scaled time `time`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FiniteSize {
+    /// The tagged estimator (starts near `u'`) against the window variance
+    /// of the Boltzmann `h` on the ring's bins (jackknife).
+    pub tagged: VarianceRatio,
+    /// The thermal estimator (every start) against `time` times the
+    /// thermally averaged rate per kernel replicate (first order in `Gamma t`).
+    pub thermal: VarianceRatio,
+}
+
+/// [`FiniteSize`] from the ring's window variances (`tagged`, `thermal`),
+/// its Boltzmann `h` ([`boltzmann_on_bins`]) and its thermal rate per kernel
+/// replicate ([`thermal_window_variance_rates`]).
+pub fn finite_size(
+    tagged: Estimate,
+    thermal: Estimate,
+    boltzmann: &Replicated<Vec<f64>>,
+    bins: RingBins,
+    thermal_rates: &[f64],
+    time: f64,
+) -> FiniteSize {
+    let tagged_boltzmann = boltzmann.scalar(|h| window_variance(h, bins.du, bins.width));
+    let thermal_boltzmann =
+        Estimate::from_replicates(&thermal_rates.iter().map(|r| r * time).collect::<Vec<f64>>());
+    FiniteSize {
+        tagged: VarianceRatio::new(tagged, tagged_boltzmann),
+        thermal: VarianceRatio::new(thermal, thermal_boltzmann),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::physics::quasi_random::standard_normal_cdf;
+
+    /// The thermal average of a constant is that constant (to rounding of
+    /// 25 terms).
+    #[test]
+    fn thermal_average_of_a_constant_is_the_constant() {
+        let average = thermal_average(|_| vec![2.5, -1.0]);
+        assert!((average[0] - 2.5).abs() < 1e-14);
+        assert!((average[1] + 1.0).abs() < 1e-14);
+    }
+
+    /// `<u^2>` of `f0` restricted to `|u| <= a`: `1 - 2 a f0(a) / (2 Phi(a) - 1)`.
+    /// Simpson's error `(b - a) h^4 / 180 max|f''''|` with `h = 1/4` and
+    /// `|d^4 (u^2 f0) / du^4| <= 12 f0(0)` bounds the numerator's error by
+    /// 6.2e-4 and the normalization's by 1.6e-4 of itself: 1e-3 covers both.
+    #[test]
+    fn thermal_average_of_u_squared_is_the_truncated_second_moment() {
+        let a = THERMAL_BAND;
+        let exact = 1.0 - 2.0 * a * thermal_density(a) / (2.0 * standard_normal_cdf(a) - 1.0);
+        let average = thermal_average(|u| vec![u * u])[0];
+        assert!((average - exact).abs() < 1e-3, "{average} vs {exact}");
+        assert!((average - 1.0).abs() > 0.02, "truncation resolved");
+    }
+
+    /// Without collisions `h` stays `delta(u - u')`: all its mass, `1 /
+    /// width` per `v_th`, in the ring's centre bin, and no window variance.
+    #[test]
+    fn boltzmann_h_without_collisions_is_a_delta() {
+        let rates = Replicated {
+            full: vec![0.0; 21],
+            leave_one_out: vec![vec![0.0; 21]; 3],
+        };
+        let du = [-0.2, -0.1, 0.0, 0.1, 0.2];
+        let bins = RingBins {
+            du: &du,
+            width: 0.1,
+            window: 0.5,
+        };
+        let h = boltzmann_on_bins(&rates, 0.01, 100.0, bins);
+        for h in std::iter::once(&h.full).chain(&h.leave_one_out) {
+            for (k, value) in h.iter().enumerate() {
+                let expected = if k == 2 { 10.0 } else { 0.0 };
+                assert!((value - expected).abs() < 1e-12, "bin {k}: {value}");
+            }
+        }
+        let md = Estimate {
+            mean: 1.0,
+            stderr: 0.1,
+        };
+        let FiniteSize { tagged, thermal } = finite_size(md, md, &h, bins, &[1.0, 2.0, 3.0], 0.5);
+        assert!(tagged.boltzmann.mean.abs() < 1e-14);
+        assert_eq!(thermal.boltzmann.mean, 1.0);
+        assert_eq!(thermal.ratio.mean, 1.0);
+    }
+
+    /// Mass `1/2` at `du = +-0.2` per bins of width 0.1: variance `0.04`.
+    #[test]
+    fn window_variance_weighs_bins_by_their_squared_offset() {
+        let du = [-0.2, -0.1, 0.0, 0.1, 0.2];
+        let h = [5.0, 0.0, 0.0, 0.0, 5.0];
+        assert!((window_variance(&h, &du, 0.1) - 0.04).abs() < 1e-15);
+    }
+}

@@ -1,0 +1,193 @@
+//! The special particle's kernel against relaxation to `f0` (physics.md §3,
+//! §8): its drift and variance rates per replicate, the Fokker-Planck
+//! stationarity of `f0` under them, and detailed balance of the self kernel
+//! between two velocities. Every uncertainty is the spread of per-replicate
+//! values (differences taken replicate by replicate, so the correlation of
+//! quantities from the same events is kept).
+//!
+//! Fokker-Planck reading: with drift `D1(u)` and variance rate `D2(u)`, zero
+//! probability flux in the state `f0` requires `D1 f0 = 1/2 d(D2 f0)/du`, i.e.
+//! `D1 = (D2' - u D2) / 2`. Higher Kramers-Moyal terms (third moment of kicks
+//! of ~0.02 v_th) are not included, so differences of a few percent of `D1`
+//! are expected.
+//!
+//! Owns the arithmetic of the checks, not the choice of grid, separations or
+//! bins (the `sweep` stage's parameters). Units: rates in `rho^2 l v_th`,
+//! velocities in `v_th`.
+
+use super::{Draws, Event, Target, moments};
+use crate::physics::launch::thermal_density;
+use crate::stats::Estimate;
+
+/// Self drift `D1 = d<u - u'>/dt` and variance rate `D2 = d<(u - u')^2>/dt`
+/// of the special particle at one `u'`, kicks within a truncation, one value
+/// per replicate, `rho^2 l v_th`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SelfRates {
+    /// `D1` per replicate.
+    pub drift: Vec<f64>,
+    /// `D2` per replicate (`a_n` at `u' = 0` in the dilute limit).
+    pub variance: Vec<f64>,
+}
+
+/// The special particle's rates at `target`, counting kicks `|u - u'| <= truncation`.
+pub fn self_rates(events: &[Event], target: &Target, truncation: f64, draws: &Draws) -> SelfRates {
+    let sums = moments(events, target, &[truncation], draws);
+    SelfRates {
+        drift: sums.iter().map(|r| r[0].self_drift).collect(),
+        variance: sums.iter().map(|r| r[0].self_variance).collect(),
+    }
+}
+
+/// The Fokker-Planck check at one grid point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FokkerPlanckPoint {
+    /// Measured drift `D1`.
+    pub drift: Estimate,
+    /// Measured variance rate `D2`.
+    pub variance: Estimate,
+    /// `(D2' - u D2) / 2`: the drift for which `f0` is stationary.
+    pub predicted_drift: Estimate,
+    /// `(D1 - predicted) / its standard error`, per-replicate differences.
+    pub z: f64,
+}
+
+/// The Fokker-Planck check at every point of `grid` (ascending `u'`, at least
+/// two points), `rates[k]` measured at `grid[k]`: `D2'` by central
+/// differences inside the grid, one-sided at its ends.
+pub fn fokker_planck_check(grid: &[f64], rates: &[SelfRates]) -> Vec<FokkerPlanckPoint> {
+    let replicates = rates[0].variance.len();
+    let last = grid.len() - 1;
+    grid.iter()
+        .enumerate()
+        .map(|(k, &u)| {
+            let (low, high) = (k.saturating_sub(1), (k + 1).min(last));
+            let predicted: Vec<f64> = (0..replicates)
+                .map(|r| {
+                    let slope = (rates[high].variance[r] - rates[low].variance[r])
+                        / (grid[high] - grid[low]);
+                    0.5 * (slope - u * rates[k].variance[r])
+                })
+                .collect();
+            let residual: Vec<f64> = (0..replicates)
+                .map(|r| rates[k].drift[r] - predicted[r])
+                .collect();
+            let [drift, variance, predicted_drift, residual] =
+                [&rates[k].drift, &rates[k].variance, &predicted, &residual]
+                    .map(|v| Estimate::from_replicates(v));
+            FokkerPlanckPoint {
+                drift,
+                variance,
+                predicted_drift,
+                z: residual.z(),
+            }
+        })
+        .collect()
+}
+
+/// Detailed balance of the self kernel between velocities `a` and `b`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Balance {
+    /// `G_self(a -> b)`.
+    pub forward: Estimate,
+    /// `G_self(b -> a)`.
+    pub backward: Estimate,
+    /// `G(a -> b) / G(b -> a)`, first-order error (estimates treated as independent).
+    pub ratio: Estimate,
+    /// `f0(b) / f0(a)`: the ratio detailed balance requires.
+    pub expected_ratio: f64,
+    /// `(f0(a) G(a -> b) - f0(b) G(b -> a)) / its standard error`,
+    /// per-replicate differences.
+    pub imbalance_z: f64,
+}
+
+/// Detailed balance from the self kernel per replicate: `forward` =
+/// `G_self(a -> b)`, `backward` = `G_self(b -> a)` (same units, e.g.
+/// `rho^2 l v_th / v_th`).
+pub fn detailed_balance(a: f64, b: f64, forward: &[f64], backward: &[f64]) -> Balance {
+    let imbalance: Vec<f64> = forward
+        .iter()
+        .zip(backward)
+        .map(|(x, y)| thermal_density(a) * x - thermal_density(b) * y)
+        .collect();
+    let [forward, backward, imbalance] =
+        [forward, backward, &imbalance].map(Estimate::from_replicates);
+    Balance {
+        forward,
+        backward,
+        ratio: forward.ratio(backward),
+        expected_ratio: thermal_density(b) / thermal_density(a),
+        imbalance_z: imbalance.z(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Relative rounding of a central difference of O(1) rates on a 0.25 grid.
+    const ROUNDING: f64 = 1e-13;
+
+    /// Replicate `r`'s amplitude: four replicates around 1.
+    fn amplitude(r: usize) -> f64 {
+        1.0 + 0.01 * (r as f64 - 1.5)
+    }
+
+    /// `D2 = c_r (1 + u^2)` on a grid: inside it, central differences of the
+    /// quadratic are exact, so the predicted drift is `c_r (u - u^3) / 2`.
+    fn rates_with_drift(grid: &[f64], drift: impl Fn(f64, f64) -> f64) -> Vec<SelfRates> {
+        grid.iter()
+            .map(|&u| SelfRates {
+                drift: (0..4).map(|r| drift(amplitude(r), u)).collect(),
+                variance: (0..4).map(|r| amplitude(r) * (1.0 + u * u)).collect(),
+            })
+            .collect()
+    }
+
+    #[test]
+    fn the_stationary_drift_of_a_quadratic_variance_rate_passes() {
+        let grid: Vec<f64> = (0..9).map(|k| -1.0 + 0.25 * f64::from(k)).collect();
+        let exact = |c: f64, u: f64| 0.5 * c * (u - u * u * u);
+        let points = fokker_planck_check(&grid, &rates_with_drift(&grid, exact));
+        for (point, &u) in points.iter().zip(&grid).skip(1).take(grid.len() - 2) {
+            let expected = Estimate::from_replicates(
+                &(0..4).map(|r| exact(amplitude(r), u)).collect::<Vec<_>>(),
+            );
+            assert!((point.predicted_drift.mean - expected.mean).abs() < ROUNDING);
+            assert!((point.predicted_drift.stderr - expected.stderr).abs() < ROUNDING);
+            assert_eq!(point.drift, expected);
+        }
+    }
+
+    /// A drift of zero where `f0` needs `(u - u^3) / 2` fails by many
+    /// standard errors wherever that drift is not zero.
+    #[test]
+    fn a_missing_drift_fails_the_check() {
+        let grid: Vec<f64> = (0..9).map(|k| -1.0 + 0.25 * f64::from(k)).collect();
+        let points = fokker_planck_check(&grid, &rates_with_drift(&grid, |_, _| 0.0));
+        for (point, &u) in points.iter().zip(&grid).skip(1).take(grid.len() - 2) {
+            if u.abs() > 0.1 && (u.abs() - 1.0).abs() > 0.1 {
+                assert!(point.z.abs() > 10.0, "u = {u}: z = {}", point.z);
+            }
+        }
+    }
+
+    /// A self kernel in detailed balance, `G(a -> b) = f0(b) g` and
+    /// `G(b -> a) = f0(a) g` with replicate noise in the symmetric `g`, has
+    /// the thermal ratio `f0(b) / f0(a)`; one whose backward rate is 10%
+    /// too large fails by many standard errors.
+    #[test]
+    fn a_balanced_kernel_has_the_thermal_ratio() {
+        let (a, b) = (0.3, 0.8);
+        let g = [1.0, 1.1, 0.9, 1.05];
+        let forward: Vec<f64> = g.iter().map(|g| thermal_density(b) * g).collect();
+        let backward: Vec<f64> = g.iter().map(|g| thermal_density(a) * g).collect();
+        let balance = detailed_balance(a, b, &forward, &backward);
+        let expected = (-0.5 * (b * b - a * a)).exp();
+        assert!((balance.expected_ratio / expected - 1.0).abs() < 1e-15);
+        assert!((balance.ratio.mean / expected - 1.0).abs() < 1e-15);
+        let heavier: Vec<f64> = backward.iter().map(|y| 1.1 * y).collect();
+        let unbalanced = detailed_balance(a, b, &forward, &heavier);
+        assert!(unbalanced.imbalance_z < -10.0, "{unbalanced:?}");
+    }
+}

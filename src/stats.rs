@@ -1,0 +1,339 @@
+//! Statistics over independent Monte Carlo replicates (randomizations of the
+//! collision events, runs of a ring): the mean and standard error of a
+//! quantity measured once per replicate ([`Estimate`]), ratios with
+//! first-order error propagation, the jackknife over leave-one-out replicate
+//! sets for nonlinear functions of replicate means ([`Replicated`],
+//! [`replicate_means`], [`jackknife`]), and the chi-square of two estimate
+//! vectors ([`chi_square`]).
+//!
+//! Owns the estimators only: what a replicate is (a histogram, a generator
+//! matrix, a run's moments) and what is computed from it belong to `kernel`,
+//! `evolve` and `analysis`. Pure math: no IO. Units are those of the
+//! quantities estimated.
+
+use rayon::prelude::*;
+
+/// Mean and standard error over independent replicates.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Estimate {
+    /// Mean over replicates.
+    pub mean: f64,
+    /// Standard error of the mean (sample standard deviation / sqrt(R)).
+    pub stderr: f64,
+}
+
+impl Estimate {
+    /// From one value per replicate (at least two): mean `sum v / R` and
+    /// standard error `sqrt(sum (v - mean)^2 / ((R - 1) R))`.
+    pub fn from_replicates(values: &[f64]) -> Estimate {
+        let count = values.len() as f64;
+        let mean = values.iter().sum::<f64>() / count;
+        let variance = values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (count - 1.0);
+        Estimate {
+            mean,
+            stderr: (variance / count).sqrt(),
+        }
+    }
+
+    /// `self / other`, with the two relative standard errors combined to
+    /// first order (the two estimates treated as independent):
+    /// `s_r = |r| hypot(s_a / a, s_b / b)`. A ratio without a value (`0/0`)
+    /// has no error either: NaN, written as `f64::NAN` because the sign of a
+    /// product of two NaNs depends on the compiler's choice of operand order,
+    /// and files must not.
+    pub fn ratio(self, other: Estimate) -> Estimate {
+        let mean = self.mean / other.mean;
+        let relative = (self.stderr / self.mean).hypot(other.stderr / other.mean);
+        Estimate {
+            mean,
+            stderr: if mean.is_nan() {
+                f64::NAN
+            } else {
+                mean.abs() * relative
+            },
+        }
+    }
+
+    /// `mean / stderr`: how many standard errors the mean lies from zero
+    /// (NaN when both vanish, infinite for a nonzero mean without spread).
+    pub fn z(self) -> f64 {
+        self.mean / self.stderr
+    }
+}
+
+/// A replicate's value as a flat list of numbers (a vector, a matrix), so that
+/// means and leave-one-out means are one implementation for every shape.
+pub trait Entries: Clone {
+    /// The numbers.
+    fn entries(&self) -> &[f64];
+
+    /// The numbers, to change in place.
+    fn entries_mut(&mut self) -> &mut [f64];
+
+    /// Entry-wise sum of `all` (at least one), added in their order starting
+    /// from the first.
+    fn sum(all: &[Self]) -> Self {
+        let mut sum = all[0].clone();
+        for other in &all[1..] {
+            for (a, b) in sum.entries_mut().iter_mut().zip(other.entries()) {
+                *a += b;
+            }
+        }
+        sum
+    }
+
+    /// `sum / count`: the mean of `count` replicates whose total is `sum`.
+    fn mean(mut sum: Self, count: usize) -> Self {
+        sum.entries_mut()
+            .iter_mut()
+            .for_each(|t| *t /= count as f64);
+        sum
+    }
+
+    /// `(sum - self) / (count - 1)`: the mean of the other members when `sum`
+    /// is the total of `count` replicates and `self` one of them.
+    fn leave_out(&self, sum: &Self, count: usize) -> Self {
+        let others = (count - 1) as f64;
+        let mut mean = self.clone();
+        for (own, total) in mean.entries_mut().iter_mut().zip(sum.entries()) {
+            *own = (total - *own) / others;
+        }
+        mean
+    }
+}
+
+impl Entries for Vec<f64> {
+    fn entries(&self) -> &[f64] {
+        self
+    }
+
+    fn entries_mut(&mut self) -> &mut [f64] {
+        self
+    }
+}
+
+/// A quantity evaluated on the mean of all replicates and on every
+/// leave-one-out replicate set.
+pub struct Replicated<T> {
+    /// On all replicates.
+    pub full: T,
+    /// With each replicate left out.
+    pub leave_one_out: Vec<T>,
+}
+
+/// The mean of `replicates` (at least two), [`Entries::mean`], and the means
+/// with each one left out, `(sum - own) / (R - 1)`.
+pub fn replicate_means<T: Entries>(replicates: &[T]) -> Replicated<T> {
+    let count = replicates.len();
+    let sum = T::sum(replicates);
+    Replicated {
+        leave_one_out: replicates
+            .iter()
+            .map(|own| own.leave_out(&sum, count))
+            .collect(),
+        full: T::mean(sum, count),
+    }
+}
+
+impl<T: Sync> Replicated<T> {
+    /// Applies `f` to every member, in parallel.
+    pub fn map<U: Send>(&self, f: impl Fn(&T) -> U + Sync) -> Replicated<U> {
+        Replicated {
+            full: f(&self.full),
+            leave_one_out: self.leave_one_out.par_iter().map(&f).collect(),
+        }
+    }
+
+    /// Jackknife estimate of the scalar `f` of the member.
+    pub fn scalar(&self, f: impl Fn(&T) -> f64) -> Estimate {
+        let loo: Vec<[f64; 1]> = self.leave_one_out.iter().map(|x| [f(x)]).collect();
+        jackknife(&[f(&self.full)], &loo)[0]
+    }
+}
+
+impl<T: Entries> Replicated<T> {
+    /// Jackknife estimates, entry by entry.
+    pub fn values(&self) -> Vec<Estimate> {
+        let loo: Vec<&[f64]> = self.leave_one_out.iter().map(Entries::entries).collect();
+        jackknife(self.full.entries(), &loo)
+    }
+}
+
+impl Replicated<Vec<Vec<f64>>> {
+    /// Jackknife estimate of `f` of the state at time index `k`.
+    pub fn estimate(&self, k: usize, f: impl Fn(&[f64]) -> f64) -> Estimate {
+        self.scalar(|states| f(&states[k]))
+    }
+
+    /// Jackknife estimates of the state at time index `k`, node by node.
+    pub fn states(&self, k: usize) -> Vec<Estimate> {
+        let loo: Vec<&[f64]> = self.leave_one_out.iter().map(|s| s[k].as_slice()).collect();
+        jackknife(&self.full[k], &loo)
+    }
+}
+
+/// Jackknife estimates of a vector-valued function of `R` replicates, given
+/// its value on all of them (`full`) and with each one left out
+/// (`leave_one_out`): mean `full`, standard error
+/// `sqrt((R - 1)/R sum_r (f_(-r) - mean_r f_(-r))^2)`. This is how the
+/// uncertainty of a nonlinear function of replicate means (such as
+/// `exp(t M)` of a mean generator) is carried.
+pub fn jackknife<V: AsRef<[f64]>>(full: &[f64], leave_one_out: &[V]) -> Vec<Estimate> {
+    let count = leave_one_out.len() as f64;
+    full.iter()
+        .enumerate()
+        .map(|(i, &value)| {
+            let mean = leave_one_out.iter().map(|v| v.as_ref()[i]).sum::<f64>() / count;
+            let spread = leave_one_out
+                .iter()
+                .map(|v| (v.as_ref()[i] - mean).powi(2))
+                .sum::<f64>();
+            Estimate {
+                mean: value,
+                stderr: ((count - 1.0) / count * spread).sqrt(),
+            }
+        })
+        .collect()
+}
+
+/// Chi-square of two estimate vectors and its degrees of freedom.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ChiSquare {
+    /// `sum (a - b)^2 / (s_a^2 + s_b^2)`.
+    pub chi2: f64,
+    /// Entries summed.
+    pub dof: usize,
+}
+
+impl ChiSquare {
+    /// `chi2 / dof`: ~1 when the two agree within their errors.
+    pub fn per_dof(self) -> f64 {
+        self.chi2 / self.dof as f64
+    }
+}
+
+/// `chi2 = sum (a - b)^2 / (s_a^2 + s_b^2)` over the entries where `a` has a
+/// nonzero error (an entry without an error estimate, e.g. a bin no run
+/// reached, would have zero Gaussian error), and their number as `dof`.
+pub fn chi_square(a: &[Estimate], b: &[Estimate]) -> ChiSquare {
+    let (chi2, dof) =
+        a.iter()
+            .zip(b)
+            .filter(|(x, _)| x.stderr > 0.0)
+            .fold((0.0, 0), |(sum, count), (x, y)| {
+                let variance = x.stderr.powi(2) + y.stderr.powi(2);
+                (sum + (x.mean - y.mean).powi(2) / variance, count + 1)
+            });
+    ChiSquare { chi2, dof }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Rounding of sums of a handful of O(1) numbers.
+    const ROUNDING: f64 = 1e-14;
+
+    /// Mean 2.5 and sample variance 5/3 of 1..=4: standard error sqrt(5/12).
+    #[test]
+    fn standard_error_of_four_replicates_is_the_closed_form() {
+        let estimate = Estimate::from_replicates(&[1.0, 2.0, 3.0, 4.0]);
+        assert_eq!(estimate.mean, 2.5);
+        assert!((estimate.stderr - (5.0f64 / 12.0).sqrt()).abs() < ROUNDING);
+    }
+
+    /// `(6 +- 0.6) / (3 +- 0.4)`: relative errors 1/10 and 2/15 add in
+    /// quadrature to 1/6 of the ratio 2.
+    #[test]
+    fn ratio_adds_relative_errors_in_quadrature() {
+        let ratio = Estimate {
+            mean: 6.0,
+            stderr: 0.6,
+        }
+        .ratio(Estimate {
+            mean: 3.0,
+            stderr: 0.4,
+        });
+        assert_eq!(ratio.mean, 2.0);
+        assert!((ratio.stderr - 2.0 / 6.0).abs() < ROUNDING);
+    }
+
+    /// For the mean of replicates the jackknife error is the usual standard error.
+    #[test]
+    fn jackknife_of_a_mean_is_the_standard_error() {
+        let values = [1.0, 4.0, 2.5, 3.0, 7.0];
+        let replicates: Vec<Vec<f64>> = values.iter().map(|&v| vec![v]).collect();
+        let jack = replicate_means(&replicates).values()[0];
+        let usual = Estimate::from_replicates(&values);
+        assert!((jack.stderr - usual.stderr).abs() < ROUNDING);
+        assert_eq!(jack.mean, usual.mean);
+    }
+
+    /// A linear statistic `3 x - 2 y` of replicate means: its jackknife error
+    /// is the standard error of the per-replicate statistic.
+    #[test]
+    fn jackknife_of_a_linear_statistic_is_its_standard_error() {
+        let replicates = vec![
+            vec![1.0, 0.5],
+            vec![2.0, -1.0],
+            vec![0.5, 0.25],
+            vec![3.0, 2.0],
+        ];
+        let linear = |v: &Vec<f64>| 3.0 * v[0] - 2.0 * v[1];
+        let jack = replicate_means(&replicates).scalar(linear);
+        let direct =
+            Estimate::from_replicates(&replicates.iter().map(linear).collect::<Vec<f64>>());
+        assert!((jack.mean - direct.mean).abs() < ROUNDING);
+        assert!((jack.stderr - direct.stderr).abs() < ROUNDING);
+    }
+
+    /// The full mean and every leave-one-out mean of three vectors.
+    #[test]
+    fn replicate_means_leave_each_replicate_out() {
+        let replicates = vec![vec![1.0, 10.0], vec![2.0, 20.0], vec![6.0, 60.0]];
+        let means = replicate_means(&replicates);
+        assert_eq!(means.full, vec![3.0, 30.0]);
+        assert_eq!(
+            means.leave_one_out,
+            vec![vec![4.0, 40.0], vec![3.5, 35.0], vec![1.5, 15.0]]
+        );
+    }
+
+    /// Identical vectors have chi-square 0; the degrees of freedom count only
+    /// the entries of the first with a nonzero error.
+    #[test]
+    fn chi_square_of_identical_vectors_is_zero() {
+        let a = [
+            Estimate {
+                mean: 1.0,
+                stderr: 0.1,
+            },
+            Estimate {
+                mean: 2.0,
+                stderr: 0.0,
+            },
+            Estimate {
+                mean: -3.0,
+                stderr: 0.2,
+            },
+        ];
+        assert_eq!(chi_square(&a, &a), ChiSquare { chi2: 0.0, dof: 2 });
+    }
+
+    /// `(1 +- 1)` against `(3 +- 1)`: difference 2, combined variance 2,
+    /// chi-square 2 on one degree of freedom.
+    #[test]
+    fn chi_square_of_one_entry_is_its_squared_pull() {
+        let a = Estimate {
+            mean: 1.0,
+            stderr: 1.0,
+        };
+        let b = Estimate {
+            mean: 3.0,
+            stderr: 1.0,
+        };
+        let chi = chi_square(&[a], &[b]);
+        assert_eq!(chi, ChiSquare { chi2: 2.0, dof: 1 });
+        assert_eq!(chi.per_dof(), 2.0);
+    }
+}
