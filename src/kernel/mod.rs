@@ -20,12 +20,6 @@ use crate::physics::potential::Potential;
 use crate::physics::sampling::{SamplingPlan, SceneRecord, Stratum};
 use crate::physics::scene::EngineSettings;
 
-/// Only for the tests of `physics::ring`, which still name
-/// `crate::kernel::Estimate`; remove with that import (physics does not
-/// depend on the kernel).
-#[cfg(test)]
-pub use crate::stats::Estimate;
-
 /// One integrated scene as the kernel needs it (special particle's frame).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Event {

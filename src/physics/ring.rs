@@ -462,8 +462,8 @@ impl<V: Vector> ErrorScales<V> for RingErrorScales<V> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::kernel::Estimate;
     use crate::physics::potential::{InverseIntegerPower, LennardJones};
+    use crate::stats::Estimate;
     use rand::SeedableRng;
     use rand::rngs::StdRng;
 

@@ -452,7 +452,7 @@ fn shard_manifest(
         .inspect(
             &stage_name,
             &shard.key,
-            Some(&table_files(stage.tables())),
+            Some(&table_files(stage.shard_tables())),
             Depth::Hashes,
         )
         .map_err(Some)
@@ -481,10 +481,15 @@ impl Job<'_> {
             for (_, units) in &shards {
                 parts.push(self.shard_tables(entry, units)?);
             }
-            self.merge(parts)?
+            self.stage.merge(parts).map_err(|source| ExecError::Stage {
+                id: id.clone(),
+                source,
+            })?
         } else {
             let loaded = load_inputs(self.store, self.stage, self.resolved)?;
-            self.produce(|progress| self.stage.run(&loaded, progress))?
+            self.produce(self.stage.tables(), |progress| {
+                self.stage.run(&loaded, progress)
+            })?
         };
         let manifest = self.write(&mut staging, &id, entry, &tables, started)?;
         let manifest = staging.commit(manifest, replace)?;
@@ -529,8 +534,9 @@ impl Job<'_> {
         let started = Instant::now();
         let mut staging = self.store.begin(&shard_id.stage, &shard.key)?;
         let loaded = load_inputs(self.store, self.stage, self.resolved)?;
-        let tables =
-            self.produce(|progress| self.stage.run_shard(&loaded, units.clone(), progress))?;
+        let tables = self.produce(self.stage.shard_tables(), |progress| {
+            self.stage.run_shard(&loaded, units.clone(), progress)
+        })?;
         let manifest = self.write(&mut staging, &shard_id, &shard, &tables, started)?;
         let replace = self
             .store
@@ -560,30 +566,10 @@ impl Job<'_> {
             .collect()
     }
 
-    /// Each table of the shards' tables, rows concatenated in shard order.
-    fn merge(&self, parts: Vec<Vec<Table>>) -> Result<Vec<Table>, ExecError> {
-        let id = self.stage.id();
-        self.stage
-            .tables()
-            .iter()
-            .map(|name| {
-                let pieces: Vec<Table> = parts
-                    .iter()
-                    .flat_map(|tables| tables.iter().filter(|t| t.name == *name))
-                    .map(|table| Table {
-                        name: table.name.clone(),
-                        batch: table.batch.clone(),
-                        metadata: table.metadata.clone(),
-                    })
-                    .collect();
-                Table::concatenate(pieces).map_err(stage_failure(&id))
-            })
-            .collect()
-    }
-
-    /// Runs `compute` with a progress bar and checks it wrote the declared tables.
+    /// Runs `compute` with a progress bar and checks it wrote the `declared` tables.
     fn produce(
         &self,
+        declared: &[&str],
         compute: impl FnOnce(&Progress) -> Result<Vec<Table>, StageError>,
     ) -> Result<Vec<Table>, ExecError> {
         let id = self.stage.id();
@@ -596,7 +582,7 @@ impl Job<'_> {
             bar.finish_and_clear();
         }
         let mut written: Vec<&str> = tables.iter().map(|t| t.name.as_str()).collect();
-        let mut declared = self.stage.tables().to_vec();
+        let mut declared = declared.to_vec();
         written.sort_unstable();
         declared.sort_unstable();
         if written != declared {

@@ -115,9 +115,9 @@ pub trait Stage: Sync {
         0
     }
 
-    /// The tables of units `units` only: the rows those units contribute, in
-    /// order, so that each table concatenated over shards in unit order is
-    /// [`Stage::run`]'s table, byte for byte. Only called when
+    /// The tables of units `units` only ([`Stage::shard_tables`]), which
+    /// [`Stage::merge`] turns into [`Stage::run`]'s tables; by default the
+    /// rows those units contribute, in order. Only called when
     /// [`Stage::shard_units`] is positive.
     fn run_shard(
         &self,
@@ -126,5 +126,16 @@ pub trait Stage: Sync {
         _progress: &Progress,
     ) -> Result<Vec<Table>, StageError> {
         Err(StageError::Input("this stage cannot be sharded".into()))
+    }
+
+    /// Names of the tables a shard writes (default: the stage's own).
+    fn shard_tables(&self) -> &'static [&'static str] {
+        self.tables()
+    }
+
+    /// The stage's tables from its shards' tables, in unit order; must equal
+    /// [`Stage::run`]'s, byte for byte. Default: each table's rows concatenated.
+    fn merge(&self, shards: Vec<Vec<Table>>) -> Result<Vec<Table>, StageError> {
+        Ok(shards::concatenate(self.tables(), shards)?)
     }
 }

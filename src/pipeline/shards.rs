@@ -11,9 +11,10 @@ use std::ops::Range;
 
 use serde_json::{Value, json};
 
-use super::Stage;
 use super::key::stage_key;
 use super::store::{InstanceRef, Manifest};
+use super::table::TableError;
+use super::{Stage, Table};
 
 /// How a run splits shardable stages.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -69,6 +70,18 @@ pub fn shard_entry(stage: &dyn Stage, whole: &InstanceRef, units: &Range<u32>) -
         params,
         inputs: whole.inputs.clone(),
     }
+}
+
+/// Each of `names`' tables from the shards' tables, rows concatenated in
+/// shard order: the default [`Stage::merge`].
+pub fn concatenate(names: &[&str], shards: Vec<Vec<Table>>) -> Result<Vec<Table>, TableError> {
+    let mut by_name: Vec<Vec<Table>> = names.iter().map(|_| Vec::new()).collect();
+    for table in shards.into_iter().flatten() {
+        if let Some(k) = names.iter().position(|name| *name == table.name) {
+            by_name[k].push(table);
+        }
+    }
+    by_name.into_iter().map(Table::concatenate).collect()
 }
 
 /// The whole artifact a shard belongs to: `(stage, key)`, or `None` when the
