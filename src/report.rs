@@ -14,7 +14,7 @@ use polars::prelude::{DataFrame, ParquetReader, SerReader};
 
 use crate::contract::{self, Col, Pair, TableSpec};
 use crate::pipeline::Stage;
-use crate::pipeline::executor::{self, Action, InstanceReport};
+use crate::pipeline::executor::{self, InstanceReport};
 use crate::pipeline::shards;
 use crate::pipeline::store::{Depth, Store, table_files};
 use crate::pipeline::table::read_parquet;
@@ -193,7 +193,7 @@ fn table_frames(
     reports
         .iter()
         .filter(|r| r.id.stage == spec.stage)
-        .filter(|r| r.action != Action::Skipped)
+        .filter(|r| r.action.has_artifact())
         .filter_map(|r| r.key.as_ref().map(|key| (r, key)))
         .map(|(report, key)| {
             let frame = read_frame(

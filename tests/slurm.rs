@@ -74,6 +74,51 @@ fn merged_shards_equal_an_unsharded_run() {
     }
 }
 
+/// The small study with rings: an inverse power law ring of 5 runs and the
+/// n = 2 Sutherland ring of 3 (md shards by runs, aggregates in the merge).
+fn ring_study() -> String {
+    let ring = |name: &str, potential: &str, particles: u32, radius: f64| {
+        format!(
+            "[[gas]]\nname = \"{name}\"\npotential = \"{potential}\"\nl0_um = 1.0\neps_ev = 1.0\nkt_ev = 0.1\nmass_electron = 1.0\nring_particles = {particles}\nring_radius_um = {radius}\n\n"
+        )
+    };
+    format!(
+        "{}\n{}{}[md]\nenabled = true\nruns = 5\n\n[[md.system]]\nname = \"ring\"\ngas = \"ring\"\nfinal_time_ns = 50.0\n\n[[md.system]]\nname = \"sutherland\"\ngas = \"sutherland\"\nfinal_time_ns = 5.0\nruns = 3\n",
+        small_study("data").replace("inverse_power = [6]", "inverse_power = [2, 6]"),
+        ring("ring", "ipp-6", 21, 1600.0),
+        ring("sutherland", "ipp-2", 11, 200.0),
+    )
+}
+
+/// Rings shard by runs: 2, 3 and 7 shards of the md and compare stages'
+/// inputs merge to the bytes of an unsharded run.
+#[test]
+fn md_shards_by_runs_merge_to_the_same_bytes() {
+    let single = workspace("md-shards-single");
+    run_counts(&write_config(&single, &ring_study()), &[]);
+    let reference = merged_bytes(&single.join("data"));
+    assert!(reference.keys().any(|p| p.starts_with("artifacts/md")));
+    for shards in [2u32, 3, 7] {
+        let dir = workspace(&format!("md-shards-{shards}"));
+        let config = write_config(&dir, &ring_study());
+        let n = shards.to_string();
+        for task in 0..shards {
+            let output = ternary(
+                &config,
+                &["run", "--shards", &n, "--shard", &task.to_string()],
+            );
+            assert!(output.status.success(), "{}", stderr(&output));
+        }
+        let merge = ternary(&config, &["run", "--shards", &n]);
+        assert!(merge.status.success(), "{}", stderr(&merge));
+        assert_eq!(
+            merged_bytes(&dir.join("data")),
+            reference,
+            "{shards} shards"
+        );
+    }
+}
+
 /// A merging run computes the shards still missing itself; shards present
 /// before a gc stay (their artifact is not merged yet).
 #[test]

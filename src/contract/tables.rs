@@ -950,6 +950,55 @@ pub mod md {
         );
     }
 
+    /// The tables of a shard of a ring's runs (stage `md.shard`): every run's
+    /// estimators and diagnostics, exactly, for the merge into the ring's tables.
+    pub mod shard {
+        pub use super::runs::{
+            BOUND_PAIRS_END, BOUND_PAIRS_START, ENERGY_ERROR, INVARIANT_DRIFT, LINEAGES,
+            MACRO_STEPS, MOMENTUM_ERROR, PAIR_FORCES, RUN, THERMAL_LINEAGES,
+        };
+        use super::*;
+
+        /// One row per run.
+        pub const RESULTS: TableSpec = TableSpec {
+            stage: STAGE,
+            name: "run_results",
+            description: "each run's diagnostics and thermal-lineage estimates (a shard of the runs)",
+        };
+        /// Thermal lineages within the window.
+        pub const THERMAL_NUMBER: Col<f64> = Col::f64(
+            "thermal_number",
+            "1",
+            "fraction of thermal lineages whose change stays within the window",
+        );
+        /// Their mean square change.
+        pub const THERMAL_WINDOW_VARIANCE: Col<f64> = Col::f64(
+            "thermal_window_variance",
+            "v_th^2",
+            "mean square change of the thermal lineages within the window",
+        );
+        /// One row per run and bin.
+        pub const BINS: TableSpec = TableSpec {
+            stage: STAGE,
+            name: "run_bins",
+            description: "each run's estimators per bin (a shard of the runs)",
+        };
+        /// Bin index.
+        pub const BIN: Col<u32> = Col::u32("bin", "1", "bin index");
+        /// The run's published estimator.
+        pub const PUBLISHED: Col<f64> = Col::f64(
+            "published",
+            "1/v_th",
+            "the run's published estimator, averaged over the sample times",
+        );
+        /// The run's tagged estimator.
+        pub const TAGGED: Col<f64> = Col::f64(
+            "tagged",
+            "1/v_th",
+            "the run's tagged-velocity estimator, averaged over the sample times",
+        );
+    }
+
     /// `pairs.parquet`: one row per state.
     pub mod pairs {
         use super::*;

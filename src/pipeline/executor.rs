@@ -116,6 +116,13 @@ pub enum Action {
     },
 }
 
+impl Action {
+    /// `true` when the instance's artifact is in the store after the run.
+    pub fn has_artifact(&self) -> bool {
+        matches!(self, Action::Fresh | Action::Computed { .. })
+    }
+}
+
 /// One line of a run report.
 #[derive(Clone, Debug)]
 pub struct InstanceReport {

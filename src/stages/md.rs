@@ -7,14 +7,16 @@
 //! conserved rapidities. Lennard-Jones rings also report their bound pairs,
 //! sampled and after the dynamics, against the dilute limit.
 
+use std::ops::Range;
+
 use rayon::prelude::*;
 use serde_json::Value;
 use sha2::{Digest, Sha256};
 
 use crate::binning::Bins;
 use crate::config::MdParams;
-use crate::contract::{self, Rows};
-use crate::physics::md::{RunResult, RunSettings, run};
+use crate::contract::{self, Col, Rows, TableSpec};
+use crate::physics::md::{RunResult, RunSettings, ThermalLineages, run};
 use crate::physics::potential::{PairPotential, PotentialVisitor};
 use crate::physics::ring::{Reach, RingForces};
 use crate::pipeline::{Input, InstanceId, Progress, Stage, StageError, Table};
@@ -62,9 +64,10 @@ impl MdStage {
     }
 }
 
-/// Runs every seed with the concrete potential.
+/// Runs the seeds of `runs` with the concrete potential.
 struct Runs<'a> {
     stage: &'a MdStage,
+    runs: Range<u32>,
     progress: &'a Progress,
 }
 
@@ -84,7 +87,8 @@ impl PotentialVisitor for Runs<'_> {
             reach,
         };
         let settings = self.stage.settings();
-        (0..p.runs)
+        self.runs
+            .clone()
             .into_par_iter()
             .map(|k| {
                 let result = run(&forces, &settings, self.stage.seed(k))
@@ -236,6 +240,104 @@ impl MdStage {
     }
 }
 
+impl MdStage {
+    /// The results of the runs in `runs`, in run order.
+    fn results(&self, runs: Range<u32>, progress: &Progress) -> Result<Vec<RunResult>, StageError> {
+        self.params.potential.visit(Runs {
+            stage: self,
+            runs,
+            progress,
+        })
+    }
+
+    /// The ring's tables from the results of all its runs.
+    fn tables_of(&self, results: &[RunResult]) -> Result<Vec<Table>, StageError> {
+        Ok(vec![
+            self.h_table(results)?,
+            self.summary_table(results)?,
+            self.runs_table(results)?,
+            self.pairs_table(results)?,
+        ])
+    }
+}
+
+/// A shard's tables: every field of each run's result, exactly (run indices
+/// from `first`).
+fn shard_tables(first: u32, results: &[RunResult]) -> Result<Vec<Table>, StageError> {
+    use contract::md::shard::*;
+    let rows: Vec<(u32, &RunResult)> = (first..).zip(results).collect();
+    let per_run = Rows::new(&rows)
+        .with(RUN, |(k, _)| *k)
+        .with(LINEAGES, |(_, r)| r.lineages as f64)
+        .with(THERMAL_LINEAGES, |(_, r)| r.thermal.lineages as f64)
+        .with(THERMAL_NUMBER, |(_, r)| r.thermal.number)
+        .with(THERMAL_WINDOW_VARIANCE, |(_, r)| r.thermal.window_variance)
+        .with(ENERGY_ERROR, |(_, r)| r.energy_error)
+        .with(MOMENTUM_ERROR, |(_, r)| r.momentum_error)
+        .with(MACRO_STEPS, |(_, r)| r.macro_steps as f64)
+        .with(PAIR_FORCES, |(_, r)| r.pair_forces as f64)
+        .with(BOUND_PAIRS_START, |(_, r)| r.bound_pairs[0] as u32)
+        .with(BOUND_PAIRS_END, |(_, r)| r.bound_pairs[1] as u32)
+        .with(INVARIANT_DRIFT, |(_, r)| r.invariant_drift)
+        .table(&RESULTS)?;
+    let bins: Vec<(u32, usize, f64, f64)> = rows
+        .iter()
+        .flat_map(|(k, r)| {
+            (0..r.published.len()).map(move |b| (*k, b, r.published[b], r.tagged[b]))
+        })
+        .collect();
+    let per_bin = Rows::new(&bins)
+        .with(RUN, |row| row.0)
+        .with(BIN, |row| row.1 as u32)
+        .with(PUBLISHED, |row| row.2)
+        .with(TAGGED, |row| row.3)
+        .table(&BINS)?;
+    Ok(vec![per_run, per_bin])
+}
+
+/// The runs' results in a shard's tables, in run order (`bins` per run).
+fn results_of(tables: &[Table], bins: usize) -> Result<Vec<RunResult>, StageError> {
+    use contract::md::shard::*;
+    let table = |spec: &TableSpec| {
+        tables
+            .iter()
+            .find(|t| t.name == spec.name)
+            .map(|t| &t.batch)
+            .ok_or_else(|| StageError::Input(format!("a shard lacks `{}`", spec.name)))
+    };
+    let (per_run, per_bin) = (table(&RESULTS)?, table(&BINS)?);
+    let published = PUBLISHED.read(per_bin)?;
+    let tagged = TAGGED.read(per_bin)?;
+    let column = |col: Col<f64>| col.read(per_run);
+    let (lineages, thermal_lineages) = (column(LINEAGES)?, column(THERMAL_LINEAGES)?);
+    let (number, variance) = (column(THERMAL_NUMBER)?, column(THERMAL_WINDOW_VARIANCE)?);
+    let (energy, momentum) = (column(ENERGY_ERROR)?, column(MOMENTUM_ERROR)?);
+    let (steps, forces) = (column(MACRO_STEPS)?, column(PAIR_FORCES)?);
+    let drift = column(INVARIANT_DRIFT)?;
+    let (start, end) = (
+        BOUND_PAIRS_START.read(per_run)?,
+        BOUND_PAIRS_END.read(per_run)?,
+    );
+    Ok((0..lineages.len())
+        .map(|k| RunResult {
+            published: published[k * bins..(k + 1) * bins].to_vec(),
+            tagged: tagged[k * bins..(k + 1) * bins].to_vec(),
+            lineages: lineages[k] as usize,
+            thermal: ThermalLineages {
+                lineages: thermal_lineages[k] as usize,
+                number: number[k],
+                window_variance: variance[k],
+            },
+            energy_error: energy[k],
+            momentum_error: momentum[k],
+            macro_steps: steps[k] as u64,
+            pair_forces: forces[k] as u64,
+            bound_pairs: [start[k] as usize, end[k] as usize],
+            invariant_drift: drift[k],
+        })
+        .collect())
+}
+
 impl Stage for MdStage {
     fn id(&self) -> InstanceId {
         MdStage::instance(&self.params.name)
@@ -268,15 +370,37 @@ impl Stage for MdStage {
     }
 
     fn run(&self, _inputs: &[Input], progress: &Progress) -> Result<Vec<Table>, StageError> {
-        let results = self.params.potential.visit(Runs {
-            stage: self,
-            progress,
-        })?;
-        Ok(vec![
-            self.h_table(&results)?,
-            self.summary_table(&results)?,
-            self.runs_table(&results)?,
-            self.pairs_table(&results)?,
-        ])
+        self.tables_of(&self.results(0..self.params.runs, progress)?)
+    }
+
+    /// Runs are independent: a shard computes some of them.
+    fn shard_units(&self) -> u32 {
+        self.params.runs
+    }
+
+    fn run_shard(
+        &self,
+        _inputs: &[Input],
+        runs: Range<u32>,
+        progress: &Progress,
+    ) -> Result<Vec<Table>, StageError> {
+        let first = runs.start;
+        let results = self.results(runs, progress)?;
+        shard_tables(first, &results)
+    }
+
+    fn shard_tables(&self) -> &'static [&'static str] {
+        use contract::md::shard::*;
+        &[RESULTS.name, BINS.name]
+    }
+
+    /// The ring's tables from every run's results, read back from the shards
+    /// in run order.
+    fn merge(&self, shards: Vec<Vec<Table>>) -> Result<Vec<Table>, StageError> {
+        let mut results = Vec::new();
+        for tables in &shards {
+            results.extend(results_of(tables, self.settings().bins.len())?);
+        }
+        self.tables_of(&results)
     }
 }
