@@ -36,6 +36,23 @@ fn single_process() -> BTreeMap<PathBuf, String> {
     merged_bytes(&dir.join("data"))
 }
 
+/// Runs the shard tasks `tasks` of `shards`, then a merging run; returns the
+/// sharded status between the two.
+fn shard_then_merge(config: &Path, shards: u32, tasks: impl IntoIterator<Item = u32>) -> String {
+    let n = shards.to_string();
+    for task in tasks {
+        let output = ternary(
+            config,
+            &["run", "--shards", &n, "--shard", &task.to_string()],
+        );
+        assert!(output.status.success(), "{}", stderr(&output));
+    }
+    let status = stdout(&ternary(config, &["status", "--shards", &n]));
+    let merge = ternary(config, &["run", "--shards", &n]);
+    assert!(merge.status.success(), "{}", stderr(&merge));
+    status
+}
+
 /// 2, 3, 5 and 8 shards, and more shards than units (12 of 8): shard tasks
 /// in any order, then a merging run, give the unsharded bytes.
 #[test]
@@ -44,21 +61,11 @@ fn merged_shards_equal_an_unsharded_run() {
     for shards in [2u32, 3, 5, 8, 12] {
         let dir = workspace(&format!("shards-{shards}"));
         let config = write_config(&dir, &study());
-        let n = shards.to_string();
-        for task in (0..shards).rev() {
-            let output = ternary(
-                &config,
-                &["run", "--shards", &n, "--shard", &task.to_string()],
-            );
-            assert!(output.status.success(), "{}", stderr(&output));
-        }
-        let status = stdout(&ternary(&config, &["status", "--shards", &n]));
+        let status = shard_then_merge(&config, shards, (0..shards).rev());
         assert!(
             status.contains(&format!("(shards: {shards} of {shards} done, missing [])")),
             "{status}"
         );
-        let merge = ternary(&config, &["run", "--shards", &n]);
-        assert!(merge.status.success(), "{}", stderr(&merge));
         assert_eq!(
             merged_bytes(&dir.join("data")),
             reference,
@@ -101,16 +108,7 @@ fn md_shards_by_runs_merge_to_the_same_bytes() {
     for shards in [2u32, 3, 7] {
         let dir = workspace(&format!("md-shards-{shards}"));
         let config = write_config(&dir, &ring_study());
-        let n = shards.to_string();
-        for task in 0..shards {
-            let output = ternary(
-                &config,
-                &["run", "--shards", &n, "--shard", &task.to_string()],
-            );
-            assert!(output.status.success(), "{}", stderr(&output));
-        }
-        let merge = ternary(&config, &["run", "--shards", &n]);
-        assert!(merge.status.success(), "{}", stderr(&merge));
+        shard_then_merge(&config, shards, 0..shards);
         assert_eq!(
             merged_bytes(&dir.join("data")),
             reference,

@@ -224,19 +224,10 @@ impl MdStage {
     fn runs_table(&self, results: &[RunResult]) -> Result<Table, StageError> {
         use contract::md::runs::*;
         let rows: Vec<(u32, &RunResult)> = (0..self.params.runs).zip(results).collect();
-        Ok(Rows::new(&rows)
+        let rows = Rows::new(&rows)
             .with(RUN, |(k, _)| *k)
-            .with(SEED, |(k, _)| self.seed(*k).to_string())
-            .with(LINEAGES, |(_, r)| r.lineages as f64)
-            .with(THERMAL_LINEAGES, |(_, r)| r.thermal.lineages as f64)
-            .with(ENERGY_ERROR, |(_, r)| r.energy_error)
-            .with(MOMENTUM_ERROR, |(_, r)| r.momentum_error)
-            .with(MACRO_STEPS, |(_, r)| r.macro_steps as f64)
-            .with(PAIR_FORCES, |(_, r)| r.pair_forces as f64)
-            .with(BOUND_PAIRS_START, |(_, r)| r.bound_pairs[0] as u32)
-            .with(BOUND_PAIRS_END, |(_, r)| r.bound_pairs[1] as u32)
-            .with(INVARIANT_DRIFT, |(_, r)| r.invariant_drift)
-            .table(&TABLE)?)
+            .with(SEED, |(k, _)| self.seed(*k).to_string());
+        Ok(with_diagnostics(rows).table(&TABLE)?)
     }
 }
 
@@ -261,17 +252,11 @@ impl MdStage {
     }
 }
 
-/// A shard's tables: every field of each run's result, exactly (run indices
-/// from `first`).
-fn shard_tables(first: u32, results: &[RunResult]) -> Result<Vec<Table>, StageError> {
-    use contract::md::shard::*;
-    let rows: Vec<(u32, &RunResult)> = (first..).zip(results).collect();
-    let per_run = Rows::new(&rows)
-        .with(RUN, |(k, _)| *k)
-        .with(LINEAGES, |(_, r)| r.lineages as f64)
+/// The per-run diagnostics columns that `runs` and the shards share.
+fn with_diagnostics<'r>(rows: Rows<'r, (u32, &'r RunResult)>) -> Rows<'r, (u32, &'r RunResult)> {
+    use contract::md::runs::*;
+    rows.with(LINEAGES, |(_, r)| r.lineages as f64)
         .with(THERMAL_LINEAGES, |(_, r)| r.thermal.lineages as f64)
-        .with(THERMAL_NUMBER, |(_, r)| r.thermal.number)
-        .with(THERMAL_WINDOW_VARIANCE, |(_, r)| r.thermal.window_variance)
         .with(ENERGY_ERROR, |(_, r)| r.energy_error)
         .with(MOMENTUM_ERROR, |(_, r)| r.momentum_error)
         .with(MACRO_STEPS, |(_, r)| r.macro_steps as f64)
@@ -279,6 +264,16 @@ fn shard_tables(first: u32, results: &[RunResult]) -> Result<Vec<Table>, StageEr
         .with(BOUND_PAIRS_START, |(_, r)| r.bound_pairs[0] as u32)
         .with(BOUND_PAIRS_END, |(_, r)| r.bound_pairs[1] as u32)
         .with(INVARIANT_DRIFT, |(_, r)| r.invariant_drift)
+}
+
+/// A shard's tables: every field of each run's result, exactly (run indices
+/// from `first`).
+fn shard_tables(first: u32, results: &[RunResult]) -> Result<Vec<Table>, StageError> {
+    use contract::md::shard::*;
+    let rows: Vec<(u32, &RunResult)> = (first..).zip(results).collect();
+    let per_run = with_diagnostics(Rows::new(&rows).with(RUN, |(k, _)| *k))
+        .with(THERMAL_NUMBER, |(_, r)| r.thermal.number)
+        .with(THERMAL_WINDOW_VARIANCE, |(_, r)| r.thermal.window_variance)
         .table(&RESULTS)?;
     let bins: Vec<(u32, usize, f64, f64)> = rows
         .iter()
