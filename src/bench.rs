@@ -1,23 +1,24 @@
 //! Work-precision benchmarks (not tests): error against CPU time, measured in
 //! one process so that ratios between methods are meaningful. Results are
-//! recorded in docs/benchmarks.md with the command that produced them.
+//! recorded in docs/benchmarks.md with the command that produced them. Part of
+//! the command line, not of the library; the kernel benchmark takes the
+//! study's engine, offset proposal, bins and fit range from `--config`.
 
 use std::fmt::Write as _;
 use std::time::Instant;
 
+use rand::SeedableRng;
 use rand::rngs::StdRng;
-use rand::{RngExt, SeedableRng};
 
-use crate::binning::Bins;
-use crate::config::KernelConfig;
-use crate::kernel::fit::{FIT_GROUPS, Shape, fit_kernel};
-use crate::kernel::{Draws, Event, Histogram, Target, histograms, moments};
-use crate::physics::launch::thermal_launch_speed;
-use crate::physics::potential::Potential;
-use crate::physics::sampling::{LaunchProposal, OffsetProposal, SamplingPlan, SceneRecord};
-use crate::physics::scan::{LaunchPair, TIGHTEST_TOLERANCE};
-use crate::physics::scene::{Collision, EngineSettings, FreeLine, Method, collide};
-use crate::stats::Estimate;
+use ternary::binning::Bins;
+use ternary::config::{KernelConfig, Study};
+use ternary::kernel::fit::{FIT_GROUPS, Shape, fit_kernel};
+use ternary::kernel::{Draws, Event, Histogram, Target, histograms, moments};
+use ternary::physics::potential::Potential;
+use ternary::physics::sampling::{LaunchProposal, OffsetProposal, SamplingPlan, SceneRecord};
+use ternary::physics::scan::{TIGHTEST_TOLERANCE, thermal_scenes};
+use ternary::physics::scene::{Collision, EngineSettings, FreeLine, Method, collide};
+use ternary::stats::Estimate;
 
 /// What `ternary bench integrators` measures.
 #[derive(Clone, Copy, Debug)]
@@ -38,27 +39,6 @@ const TOLERANCES: [f64; 10] = [
 const REPEATS: usize = 3;
 /// Step budget generous enough that no benchmark scene fails for lack of steps.
 const MAX_STEPS: u32 = 1_000_000;
-
-/// Thermal scenes at `u' = 0`: launch speeds from the exact inverse CDF, random
-/// directions, arrival offsets uniform within `+-1.5 T` (`T = 1/|u2| + 1/|u3|`),
-/// where over 99% of the thermalization rate comes from (numerics.md).
-pub fn thermal_scenes(scenes: usize, seed: u64) -> Vec<[FreeLine; 3]> {
-    let mut rng = StdRng::seed_from_u64(seed);
-    (0..scenes)
-        .map(|_| {
-            let mut velocity = || {
-                let speed = thermal_launch_speed(rng.random::<f64>());
-                if rng.random::<bool>() { speed } else { -speed }
-            };
-            let pair = LaunchPair {
-                u2: velocity(),
-                u3: velocity(),
-            };
-            let offset = (2.0 * rng.random::<f64>() - 1.0) * 1.5 * pair.collision_time();
-            pair.lines(offset)
-        })
-        .collect()
-}
 
 /// One method at one tolerance over the whole sample.
 struct Measurement {
@@ -238,6 +218,46 @@ pub struct KernelBenchOptions {
     pub points: u32,
     /// Seed.
     pub seed: u64,
+    /// The study's settings the samplers share.
+    pub study: StudySettings,
+}
+
+/// The settings of a study that the kernel benchmark uses: its engine (with a
+/// step budget no benchmark scene exhausts), its offset proposal (the
+/// default sampler), its kernel bins and its fit range.
+#[derive(Clone, Copy, Debug)]
+pub struct StudySettings {
+    /// Engine of every sampler.
+    pub engine: EngineSettings,
+    /// Offset proposal of the default sampler.
+    pub proposal: OffsetProposal,
+    /// Kernel window and bin width, `v_th`.
+    pub window: f64,
+    /// Bin width, `v_th`.
+    pub bin_width: f64,
+    /// Range of `|u - u'|` of the shape fit.
+    pub fit_range: [f64; 2],
+}
+
+impl StudySettings {
+    /// The settings of `study`, or the defaults without one.
+    pub fn of(study: Option<&Study>) -> StudySettings {
+        let kernel = study.map_or_else(KernelConfig::default, |s| s.config.kernel.clone());
+        let engine = study.map_or_else(
+            || EngineSettings::new(Method::Dprkn12, 1e-12, MAX_STEPS),
+            Study::engine,
+        );
+        StudySettings {
+            engine: EngineSettings {
+                max_steps: MAX_STEPS,
+                ..engine
+            },
+            proposal: study.map_or_else(OffsetProposal::default, |s| s.config.collisions.proposal),
+            window: kernel.window,
+            bin_width: kernel.bin_width,
+            fit_range: kernel.fit_range,
+        }
+    }
 }
 
 /// A sampler variant of the comparison.
@@ -309,13 +329,13 @@ fn median_relative_error(replicates: &[Histogram], bins: &Bins, low: f64, high: 
 /// Relative standard errors of the shape parameters `alpha`, `beta`,
 /// `sigma` (the `fit` stage's fit over the default range) and the mean fit's
 /// chi-square per degree of freedom.
-fn shape_errors(replicates: &[Histogram], bins: &Bins) -> ([f64; 3], f64) {
+fn shape_errors(replicates: &[Histogram], bins: &Bins, study: &StudySettings) -> ([f64; 3], f64) {
     let fine: Vec<Vec<f64>> = replicates
         .iter()
         .map(|h| h.total().iter().map(|v| v / bins.width).collect())
         .collect();
     let offsets: Vec<f64> = (0..bins.len()).map(|k| bins.centre(k)).collect();
-    let [low, high] = KernelConfig::default().fit_range;
+    let [low, high] = study.fit_range;
     let fit = fit_kernel(&fine, &offsets, (low, high), FIT_GROUPS);
     let Some(mean) = fit.mean else {
         return ([f64::NAN; 3], f64::NAN);
@@ -327,10 +347,9 @@ fn shape_errors(replicates: &[Histogram], bins: &Bins) -> ([f64; 3], f64) {
     )
 }
 
-fn run_sampler(potential: &Potential, plan: &SamplingPlan) -> KernelRun {
-    let engine = EngineSettings::new(Method::Dprkn12, 1e-12, MAX_STEPS);
+fn run_sampler(potential: &Potential, plan: &SamplingPlan, study: &StudySettings) -> KernelRun {
     let started = Instant::now();
-    let records = plan.integrate_all(potential, &engine, |_| ());
+    let records = plan.integrate_all(potential, &study.engine, |_| ());
     let events: Vec<Event> = records.iter().map(Event::from_record).collect();
     let draws = Draws::count(&events);
     let target = Target::dilute(0.0);
@@ -338,9 +357,9 @@ fn run_sampler(potential: &Potential, plan: &SamplingPlan) -> KernelRun {
     let a_n =
         Estimate::from_replicates(&sums.iter().map(|r| r[0].self_variance).collect::<Vec<_>>());
     let seconds = started.elapsed().as_secs_f64();
-    let bins = Bins::for_window(0.2, 5e-5);
+    let bins = Bins::for_window(study.window, study.bin_width);
     let replicates = histograms(&events, &target, &bins, &draws);
-    let (shape, chi2_per_dof) = shape_errors(&replicates, &bins);
+    let (shape, chi2_per_dof) = shape_errors(&replicates, &bins, study);
     KernelRun {
         seconds,
         scenes: plan.total(),
@@ -382,7 +401,8 @@ fn merit(relative_error: f64, seconds: f64) -> f64 {
 /// the work-precision table of `a_n` for the default sampler.
 pub fn kernel(options: &KernelBenchOptions) -> String {
     let potential = Potential::InversePower { n: options.n };
-    let defaults = OffsetProposal::default();
+    let study = &options.study;
+    let defaults = study.proposal;
     let variants = [
         Variant {
             name: "uniform offsets +-30 T, even strata, plain MC",
@@ -434,11 +454,12 @@ pub fn kernel(options: &KernelBenchOptions) -> String {
                 options.randomizations,
                 options.points,
             ),
+            study,
         );
         let base = *baseline.get_or_insert(run);
         out.push_str(&comparison_row(variant.name, &run, &base));
     }
-    let engine = EngineSettings::new(Method::Dprkn12, 1e-12, MAX_STEPS);
+    let engine = study.engine;
     let target = Target::dilute(0.0);
     let probe = plan_for(
         &variants[3],
@@ -448,7 +469,7 @@ pub fn kernel(options: &KernelBenchOptions) -> String {
     );
     let started = Instant::now();
     let fraction =
-        crate::kernel::pilot_same_side_fraction(&probe, &potential, &engine, &target, 1024)
+        ternary::kernel::pilot_same_side_fraction(&probe, &potential, &engine, &target, 1024)
             .unwrap_or(0.15);
     let pilot_seconds = started.elapsed().as_secs_f64();
     let piloted = Variant {
@@ -463,7 +484,7 @@ pub fn kernel(options: &KernelBenchOptions) -> String {
         options.randomizations,
         options.points,
     );
-    let mut run = run_sampler(&potential, &piloted_plan);
+    let mut run = run_sampler(&potential, &piloted_plan, study);
     run.seconds += pilot_seconds;
     let name = format!(
         "{} (same side {fraction:.3}, pilot {pilot_seconds:.2} s included)",
@@ -490,6 +511,7 @@ pub fn kernel(options: &KernelBenchOptions) -> String {
                 options.randomizations,
                 1 << power,
             ),
+            study,
         );
         let [alpha, beta, sigma] = run.shape;
         let _ = writeln!(
@@ -508,17 +530,17 @@ pub fn kernel(options: &KernelBenchOptions) -> String {
             run.chi2_per_dof,
         );
     }
-    out.push_str(&skipping(&potential, &piloted_plan));
+    out.push_str(&skipping(&potential, &piloted_plan, study));
     out
 }
 
 /// Wall time of the default sampler's scenes with and without free-flight
 /// skipping (same points), and the largest difference of outgoing velocities.
-fn skipping(potential: &Potential, plan: &SamplingPlan) -> String {
+fn skipping(potential: &Potential, plan: &SamplingPlan, study: &StudySettings) -> String {
     let timed = |free_flight: bool| {
         let engine = EngineSettings {
             free_flight,
-            ..EngineSettings::new(Method::Dprkn12, 1e-12, MAX_STEPS)
+            ..study.engine
         };
         let started = Instant::now();
         let records = plan.integrate_all(potential, &engine, |_| ());
@@ -581,10 +603,10 @@ struct MdRun {
 /// (`n = 6`, `l0 = 1 um`, `eps = 1 eV`) to the final time, cluster stepping
 /// against whole-ring stepping at the same tolerances, in one process.
 pub fn md(options: &MdBenchOptions) -> Result<String, String> {
-    use crate::physics::clusters::ClusterRing;
-    use crate::physics::potential::InverseIntegerPower;
-    use crate::physics::ring::{Reach, RingForces, RingState, evolve, thermal_start};
-    use crate::physics::units::{Mass, PhysicalGas};
+    use ternary::physics::clusters::ClusterRing;
+    use ternary::physics::potential::InverseIntegerPower;
+    use ternary::physics::ring::{Reach, RingForces, RingState, evolve, thermal_start};
+    use ternary::physics::units::{Mass, PhysicalGas};
 
     let gas = PhysicalGas {
         l0_um: 1.0,

@@ -7,7 +7,7 @@ use std::process::ExitCode;
 use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand};
 
-use ternary::bench::{self, KernelBenchOptions, MdBenchOptions, WorkPrecisionOptions};
+use crate::bench::{self, KernelBenchOptions, MdBenchOptions, StudySettings, WorkPrecisionOptions};
 use ternary::config::{MAX_EXPONENT, MAX_GAS_DENSITY, MAX_RING_ENCOUNTERS, Study};
 use ternary::export::{self, ExportOptions};
 use ternary::physics::units::{Mass, PhysicalGas, ring_density_per_um};
@@ -462,11 +462,17 @@ fn dispatch(cli: Cli) -> Result<ExitCode> {
                     seed,
                 },
         } => {
+            let study = cli
+                .config
+                .exists()
+                .then(|| Study::load(&cli.config))
+                .transpose()?;
             let options = KernelBenchOptions {
                 n,
                 randomizations,
                 points,
                 seed,
+                study: StudySettings::of(study.as_ref()),
             };
             emit(&bench::kernel(&options));
             Ok(ExitCode::SUCCESS)

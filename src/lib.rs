@@ -5,7 +5,8 @@
 //! * [`binning`]: velocity bins around `u'`, shared by physics and kernel.
 //! * [`stats`]: estimates over replicates (standard errors, ratios,
 //!   jackknife, chi-square).
-//! * [`integrate`]: embedded Runge-Kutta(-Nystrom) steps for tiny systems.
+//! * [`integrate`]: embedded Runge-Kutta(-Nystrom) steps for tiny systems and
+//!   the adaptive step driver.
 //! * [`kernel`]: the collision kernel and its moments from integrated scenes.
 //! * [`evolve`]: the evolution of `h(u, t)` under the kernel.
 //! * [`analysis`]: molecular dynamics against the Boltzmann evolution.
@@ -16,10 +17,11 @@
 //!   stages that write and read them and for the report.
 //! * [`config`]: `pipeline.toml`, parsed strictly.
 //! * [`report`]: what `ternary run` prints and `ternary show` displays.
-//! * [`bench`]: work-precision benchmarks.
+//! * [`export`]: citable dataset bundles; [`slurm`]: sharded runs on a cluster.
+//!
+//! The benchmarks (`ternary bench`) belong to the command line, not the library.
 
 pub mod analysis;
-pub mod bench;
 pub mod binning;
 pub mod config;
 pub mod contract;

@@ -1,5 +1,6 @@
 //! The `ternary` command line: parses arguments and calls the library.
 
+mod bench;
 mod cli;
 
 fn main() -> std::process::ExitCode {

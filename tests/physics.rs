@@ -2,9 +2,9 @@
 //! conservation laws, the integrable n = 2 case, mirror symmetry, agreement of
 //! independent integrators, and stress scenes.
 
-use ternary::bench::thermal_scenes;
 use ternary::physics::potential::Potential;
 use ternary::physics::scan::LaunchPair;
+use ternary::physics::scan::thermal_scenes;
 use ternary::physics::scene::{Collision, EngineSettings, FreeLine, Method, Outcome, collide};
 
 fn engine(method: Method, tolerance: f64) -> EngineSettings {

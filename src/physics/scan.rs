@@ -6,6 +6,10 @@
 //! `t = arrival_offset`. The launch delay of the published setup (entry at
 //! `x = -sign(u) L/2`) follows as `offset + L/(2|u2|) - L/(2|u3|)`.
 
+use rand::rngs::StdRng;
+use rand::{RngExt, SeedableRng};
+
+use super::launch::thermal_launch_speed;
 use super::potential::Potential;
 use super::scene::{Collision, EngineSettings, FreeLine, collide};
 
@@ -143,3 +147,23 @@ pub fn refine_peak(
 /// The tightest tolerance used for error estimates: below it roundoff of the
 /// gaps (relative 1e-16) dominates the local error.
 pub const TIGHTEST_TOLERANCE: f64 = 1e-15;
+/// Thermal scenes at `u' = 0`: launch speeds from the exact inverse CDF, random
+/// directions, arrival offsets uniform within `+-1.5 T` (`T = 1/|u2| + 1/|u3|`),
+/// where over 99% of the thermalization rate comes from (numerics.md).
+pub fn thermal_scenes(scenes: usize, seed: u64) -> Vec<[FreeLine; 3]> {
+    let mut rng = StdRng::seed_from_u64(seed);
+    (0..scenes)
+        .map(|_| {
+            let mut velocity = || {
+                let speed = thermal_launch_speed(rng.random::<f64>());
+                if rng.random::<bool>() { speed } else { -speed }
+            };
+            let pair = LaunchPair {
+                u2: velocity(),
+                u3: velocity(),
+            };
+            let offset = (2.0 * rng.random::<f64>() - 1.0) * 1.5 * pair.collision_time();
+            pair.lines(offset)
+        })
+        .collect()
+}
