@@ -37,7 +37,7 @@ use crate::pipeline::Stage;
 use crate::pipeline::executor::{self, Freshness, tool_version};
 use crate::pipeline::key::sha256_hex;
 use crate::pipeline::store::{Depth, Store};
-use crate::pipeline::table::read_parquet_footer;
+use crate::pipeline::table::{is_table_file, read_parquet_footer};
 
 /// The stage whose tables hold every integrated scene: large, and left out
 /// of a bundle unless asked for.
@@ -198,7 +198,7 @@ fn selected_entries(
             let path = if single {
                 format!("{stage}/{instance}.parquet")
             } else {
-                format!("{stage}/{instance}/{table}.parquet")
+                format!("{stage}/{instance}/{}", file.name)
             };
             entries.push(Entry {
                 stage: stage.clone(),
@@ -249,17 +249,23 @@ fn write_bundle(study: &Study, entries: &[Entry], dir: &Path) -> Result<()> {
             );
         }
         fs::write(&target, &bytes)?;
-        resources.push(resource(entry, &target, bytes.len() as u64)?);
+        resources.push(if is_table_file(&entry.path) {
+            resource(entry, &target, bytes.len() as u64)?
+        } else {
+            figure_resource(entry, bytes.len() as u64)
+        });
     }
     let publication = &study.config.publication;
     fs::write(dir.join("CITATION.cff"), citation_cff(publication))?;
     write_json(&dir.join(".zenodo.json"), &zenodo(publication))?;
     fs::copy(&study.file, dir.join("pipeline.toml"))
         .with_context(|| format!("copying {}", study.file.display()))?;
-    fs::write(
-        dir.join("README.md"),
-        bundle_readme(publication, &resources),
-    )?;
+    let tables: Vec<Value> = resources
+        .iter()
+        .filter(|r| r["type"] == "table")
+        .cloned()
+        .collect();
+    fs::write(dir.join("README.md"), bundle_readme(publication, &tables))?;
     for (path, format, mediatype, description) in DOCUMENTS {
         resources.push(document_resource(
             dir,
@@ -363,6 +369,31 @@ fn check_unique_names(resources: &[Value]) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// The descriptor of a figure (or another non-tabular file) of an artifact.
+fn figure_resource(entry: &Entry, bytes: u64) -> Value {
+    let (format, mediatype) = match entry.path.rsplit_once('.').map(|(_, e)| e) {
+        Some("svg") => ("svg", "image/svg+xml"),
+        Some("png") => ("png", "image/png"),
+        Some(other) => (other, "application/octet-stream"),
+        None => ("", "application/octet-stream"),
+    };
+    json!({
+        "name": resource_name(entry),
+        "path": entry.path,
+        "format": format,
+        "mediatype": mediatype,
+        "bytes": bytes,
+        "hash": format!("sha256:{}", entry.sha256),
+        "description": format!("figure `{}` of `{}[{}]`", entry.table, entry.stage, entry.instance),
+        "ternary": {
+            "stage": entry.stage,
+            "stage_version": entry.version,
+            "instance": entry.instance,
+            "key": entry.key,
+        },
+    })
 }
 
 /// Table Schema type of an Arrow column type.

@@ -27,6 +27,7 @@ pub mod config;
 pub mod contract;
 pub mod evolve;
 pub mod export;
+pub mod figures;
 pub mod integrate;
 pub mod kernel;
 pub mod linalg;

@@ -13,11 +13,11 @@ use anyhow::{Context, Result, bail};
 use polars::prelude::{DataFrame, ParquetReader, SerReader};
 
 use crate::contract::{self, Col, Pair, TableSpec};
-use crate::pipeline::Stage;
 use crate::pipeline::executor::{self, InstanceReport};
 use crate::pipeline::shards;
-use crate::pipeline::store::{Depth, Store, table_files};
-use crate::pipeline::table::read_parquet;
+use crate::pipeline::store::{Depth, Store, listing_problem};
+use crate::pipeline::table::{is_table_file, read_parquet};
+use crate::pipeline::{InstanceId, Stage};
 
 /// Significant digits of a value printed without an error to round it to.
 const BARE_DIGITS: i32 = 6;
@@ -562,16 +562,27 @@ pub fn dag(stages: &[Box<dyn Stage>]) -> String {
 /// of the study, that it holds exactly the tables the stage writes): the
 /// report and the number of damaged artifacts.
 pub fn verify(store: &Store, stages: &[Box<dyn Stage>]) -> Result<(String, usize)> {
-    let outputs: BTreeMap<String, Vec<String>> = stages
+    let outputs: BTreeMap<InstanceId, Vec<String>> = stages
         .iter()
-        .map(|stage| (stage.id().stage, table_files(stage.tables())))
+        .map(|stage| (stage.id(), executor::output_files(stage.as_ref())))
         .collect();
     let mut out = String::new();
     let mut damaged = 0;
     let artifacts = store.artifacts()?;
     for (stage, key) in &artifacts {
-        let expected = outputs.get(stage).map(Vec::as_slice);
-        match store.inspect(stage, key, expected, Depth::Contents) {
+        let inspected = store
+            .inspect(stage, key, None, Depth::Contents)
+            .and_then(|manifest| {
+                let id = InstanceId::new(stage, &manifest.instance);
+                match outputs
+                    .get(&id)
+                    .and_then(|files| listing_problem(&manifest, files))
+                {
+                    Some(problem) => Err(vec![problem]),
+                    None => Ok(manifest),
+                }
+            });
+        match inspected {
             Ok(_) => writeln!(out, "ok       {stage}/{key}")?,
             Err(problems) => {
                 damaged += 1;
@@ -720,7 +731,16 @@ pub fn show(store: Option<&Store>, target: &str, rows: usize) -> Result<String> 
     let value: serde_json::Value = serde_json::from_str(&manifest)?;
     for file in value["files"].as_array().into_iter().flatten() {
         let name = file["name"].as_str().unwrap_or_default();
-        out.push_str(&show_file(&dir.join(name), rows)?);
+        if is_table_file(name) {
+            out.push_str(&show_file(&dir.join(name), rows)?);
+        } else {
+            writeln!(
+                out,
+                "== {} ({} bytes)",
+                dir.join(name).display(),
+                file["bytes"]
+            )?;
+        }
     }
     Ok(out)
 }

@@ -135,7 +135,10 @@ fn a_bundle_passes_tools_that_are_not_ours() {
         serde_json::from_str(&fs::read_to_string(bundle.join("datapackage.json")).unwrap())
             .unwrap();
     let resources = descriptor["resources"].as_array().unwrap();
-    assert_eq!(resources.len(), 10, "6 tables and 4 documents");
+    let count = |format: &str| resources.iter().filter(|r| r["format"] == format).count();
+    assert_eq!(count("parquet"), 9, "6 result tables and 3 figure tables");
+    assert_eq!((count("svg"), count("png")), (6, 6), "3 figures at 2 sizes");
+    assert_eq!(resources.len(), 9 + 12 + 4, "and 4 documents");
     for resource in resources.iter().filter(|r| r["type"] == "table") {
         let path = resource["path"].as_str().unwrap();
         let (rows, column, sum) = shown_rows_and_sum(&config, &bundle.join(path));

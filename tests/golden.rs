@@ -1,7 +1,7 @@
 //! Byte identity of every stage's output across code changes: a reduced study
 //! that runs every stage (scan, collisions and the sweep's own, kernel,
 //! moments, fit, sweep, convergence, evolve, md for an inverse power law, the
-//! n = 2 ring and Lennard-Jones, compare, gases, table) is computed and the
+//! n = 2 ring and Lennard-Jones, compare, gases, table, figures) is computed and the
 //! SHA-256 of each output file is compared with `tests/golden/reduced-study.txt`.
 //!
 //! A refactoring must leave the file unchanged. A change meant to move bytes
@@ -18,122 +18,9 @@ use std::path::{Path, PathBuf};
 
 mod common;
 
-use common::{files_under, ternary, workspace, write_config};
+use common::{REDUCED_STUDY, files_under, ternary, workspace, write_config};
 
 const GOLDEN: &str = "tests/golden/reduced-study.txt";
-
-const STUDY: &str = r#"
-[potentials]
-inverse_power = [2, 6]
-lennard_jones = [0.1]
-
-[scan]
-offset_min = -3.0
-offset_max = 3.0
-points = 9
-
-[[scan.launch]]
-name = "symmetric"
-u2 = 1.0
-u3 = -1.0
-
-[[scan.launch]]
-name = "asymmetric"
-u2 = 1.1
-u3 = -0.9
-
-[collisions]
-randomizations = 4
-points = 256
-pilot_points = 64
-
-[kernel]
-u_prime = [0.0, 0.5]
-density = [0.0, 1e-3]
-
-[sweep]
-points = 5
-balance_separations = [0.02, 0.05]
-
-[convergence]
-enabled = true
-inverse_power = 6
-densities = [1e-3]
-offset_bounds = [3, 30]
-tolerances = [1e-10]
-bin_widths = [2e-4, 1e-3]
-
-[evolve]
-enabled = true
-potential = "ipp-6"
-times = [0.1, 1.0]
-early_times = [1e-3]
-velocity_range = 2.0
-grid_step = 0.1
-gas = "ring6"
-times_ns = [100.0]
-
-[md]
-enabled = true
-runs = 4
-samples = 3
-
-[[md.system]]
-name = "ring6"
-gas = "ring6"
-final_time_ns = 100.0
-
-[[md.system]]
-name = "sutherland"
-gas = "sutherland"
-final_time_ns = 5.0
-runs = 2
-
-[[md.system]]
-name = "lj"
-gas = "lj"
-final_time_ns = 5.0
-runs = 2
-
-[[gas]]
-name = "ring6"
-potential = "ipp-6"
-l0_um = 1.0
-eps_ev = 1.0
-kt_ev = 0.1
-mass_electron = 1.0
-ring_particles = 21
-ring_radius_um = 1600.0
-
-[[gas]]
-name = "sutherland"
-potential = "ipp-2"
-l0_um = 1.0
-eps_ev = 1.0
-kt_ev = 0.1
-mass_electron = 1.0
-ring_particles = 11
-ring_radius_um = 200.0
-
-[[gas]]
-name = "lj"
-potential = "lj-0.1"
-l0_um = 1.0
-eps_ev = 1.0
-kt_ev = 0.1
-mass_electron = 1.0
-ring_particles = 11
-ring_radius_um = 400.0
-
-[[gas]]
-name = "hot"
-potential = "ipp-6"
-l0_um = 1.0
-eps_ev = 1.0
-kt_ev = 0.8
-mass_electron = 1.0
-density_per_um = 5e-4
-"#;
 
 /// The CPU features that decide vectorized floating-point paths.
 fn cpu_features() -> String {
@@ -183,7 +70,7 @@ fn output_hashes(store: &Path) -> BTreeMap<String, String> {
 #[test]
 fn every_stage_keeps_its_bytes() {
     let dir = workspace("golden");
-    let config = write_config(&dir, STUDY);
+    let config = write_config(&dir, REDUCED_STUDY);
     let run = ternary(&config, &["run", "--quiet"]);
     assert!(
         run.status.success(),
@@ -195,7 +82,7 @@ fn every_stage_keeps_its_bytes() {
         .keys()
         .map(|name| name.split(' ').next().unwrap())
         .collect();
-    assert_eq!(stages.len(), 12, "every stage runs: {stages:?}");
+    assert_eq!(stages.len(), 13, "every stage runs: {stages:?}");
     let mut text = format!("# cpu: {}\n", cpu_features());
     for (name, sha) in &hashes {
         text.push_str(&format!("{name} {sha}\n"));

@@ -3,7 +3,7 @@
 //!
 //! One module per section (`[store]`, `[potentials]`, `[engine]`, `[scan]`,
 //! `[collisions]`, `[kernel]`, `[sweep]`, `[convergence]`, `[evolve]`,
-//! `[md]`, `[[gas]]`, `[publication]`), each owning its schema with defaults, the check of
+//! `[md]`, `[[gas]]`, `[figures]`, `[publication]`), each owning its schema with defaults, the check of
 //! every documented range, and the parameters of the stages it configures.
 //! Unknown keys, wrong types and out-of-range values are rejected with a
 //! [`ConfigError`] naming the key path and, where the document shows it, the
@@ -20,6 +20,7 @@ mod collisions;
 mod convergence;
 mod engine;
 mod evolve;
+mod figures;
 mod gas;
 mod kernel;
 mod md;
@@ -44,6 +45,7 @@ pub use collisions::{
 pub use convergence::{ConvergenceConfig, ConvergenceParams};
 pub use engine::EngineConfig;
 pub use evolve::{EvolveConfig, EvolveParams, MAX_EVOLVE_HALF_NODES, PhysicalTimes};
+pub use figures::FiguresConfig;
 pub use gas::{GasConfig, GasParams, MAX_GAS_DENSITY, MAX_RING_PARTICLES};
 pub use kernel::{DEFAULT_KICK_FLOOR, FitParams, KernelConfig, KernelParams, MAX_BINS};
 pub use md::{
@@ -125,6 +127,9 @@ pub struct Config {
     /// Gases in physical units whose thermalization rates are tabulated.
     #[serde(default)]
     pub gas: Vec<GasConfig>,
+    /// The figures.
+    #[serde(default)]
+    pub figures: FiguresConfig,
     /// How an exported dataset describes and credits itself.
     #[serde(default)]
     pub publication: PublicationConfig,

@@ -1344,3 +1344,40 @@ pub mod table {
         ]
     }
 }
+
+/// The `figures` stage: one instance per figure.
+pub mod figures {
+    use super::*;
+
+    /// The stage, as named in instance ids and the store.
+    pub const STAGE: &str = "figures";
+
+    /// `points.parquet`: one row per plotted point. Units of `x` and `y` are
+    /// per panel, in the file's `ternary.axes` metadata (the figure's layout).
+    pub mod points {
+        use super::*;
+
+        /// Panel the point is drawn in.
+        pub const PANEL: Col<String> = Col::text("panel", "panel of the figure, top to bottom");
+        /// Series (a legend entry).
+        pub const SERIES: Col<String> = Col::text("series", "series: one legend entry");
+        /// Horizontal coordinate.
+        pub const X: Col<f64> = Col::f64(
+            "x",
+            "axis",
+            "horizontal coordinate (unit: the panel's x axis)",
+        );
+        /// Vertical coordinate.
+        pub const Y: Col<f64> = Col::f64(
+            "y",
+            "axis",
+            "vertical coordinate (unit: the panel's y axis)",
+        );
+        /// Its standard error (0 where the series has none).
+        pub const Y_ERROR: Col<f64> = Col::f64(
+            "y_error",
+            "axis",
+            "standard error of y (0 for lines without errors: fits, closed forms)",
+        );
+    }
+}

@@ -20,7 +20,7 @@ use super::store::{
     Depth, FileRecord, InstanceRef, Manifest, Staging, Store, StoreError, StoreLock,
     content_hashes, table_files,
 };
-use super::table::{PROVENANCE_KEYS, TableError, read_parquet_bytes};
+use super::table::{PROVENANCE_KEYS, TableError, is_table_file, read_parquet_bytes};
 use super::{Input, InstanceId, Progress, Stage, StageError, Table};
 
 /// A run could not proceed.
@@ -209,13 +209,33 @@ fn checked(store: &Store, stage: &dyn Stage, key: &str) -> Result<Manifest, Opti
         return Err(None);
     }
     store
-        .inspect(
-            &id.stage,
-            key,
-            Some(&table_files(stage.tables())),
-            Depth::Hashes,
-        )
+        .inspect(&id.stage, key, Some(&output_files(stage)), Depth::Hashes)
         .map_err(Some)
+}
+
+/// Whether a stage `did` (wrote or drew) exactly the names it declares.
+fn as_declared(
+    did: &str,
+    mut written: Vec<&str>,
+    mut declared: Vec<&str>,
+) -> Result<(), StageError> {
+    written.sort_unstable();
+    declared.sort_unstable();
+    if written == declared {
+        return Ok(());
+    }
+    Err(StageError::Input(format!(
+        "{did} [{}] but declares [{}]",
+        written.join(", "),
+        declared.join(", ")
+    )))
+}
+
+/// Every file name an artifact of `stage` holds: its tables' and its other files.
+pub fn output_files(stage: &dyn Stage) -> Vec<String> {
+    let mut files = table_files(stage.tables());
+    files.extend(stage.files());
+    files
 }
 
 /// Write access of a run: the writers' lock (shared among runs, exclusive of
@@ -404,7 +424,7 @@ fn load_inputs(
             let manifest = &resolved[&input];
             let dir = store.artifact_dir(&input.stage, &manifest.key);
             let mut tables = BTreeMap::new();
-            for file in &manifest.files {
+            for file in manifest.files.iter().filter(|f| is_table_file(&f.name)) {
                 let bytes = read_checked(&id, &dir, file)?;
                 let (batch, _) =
                     read_parquet_bytes(&file.name, bytes).map_err(|source| ExecError::Input {
@@ -498,10 +518,33 @@ impl Job<'_> {
                 self.stage.run(&loaded, progress)
             })?
         };
+        let files = self.rendered(&tables)?;
+        for (name, bytes) in &files {
+            let content = sha256_hex(bytes);
+            staging.write_file(name, bytes, 0, content)?;
+        }
         let manifest = self.write(&mut staging, &id, entry, &tables, started)?;
         let manifest = staging.commit(manifest, replace)?;
         self.store.write_ref(&id.stage, &id.instance, entry)?;
         Ok((manifest, started.elapsed().as_secs_f64()))
+    }
+
+    /// The stage's files drawn from `tables`, checked against the declared names.
+    fn rendered(&self, tables: &[Table]) -> Result<Vec<(String, Vec<u8>)>, ExecError> {
+        let id = self.stage.id();
+        let files = self
+            .stage
+            .render(tables)
+            .map_err(|source| ExecError::Stage {
+                id: id.clone(),
+                source,
+            })?;
+        let written: Vec<&str> = files.iter().map(|(name, _)| name.as_str()).collect();
+        let declared = self.stage.files();
+        let declared: Vec<&str> = declared.iter().map(String::as_str).collect();
+        as_declared("drew files", written, declared)
+            .map_err(|source| ExecError::Stage { id, source })?;
+        Ok(files)
     }
 
     /// A shard task: computes and commits shard `index` of `entry` when it is
@@ -588,20 +631,9 @@ impl Job<'_> {
         if let Some(bar) = progress.bar {
             bar.finish_and_clear();
         }
-        let mut written: Vec<&str> = tables.iter().map(|t| t.name.as_str()).collect();
-        let mut declared = declared.to_vec();
-        written.sort_unstable();
-        declared.sort_unstable();
-        if written != declared {
-            return Err(ExecError::Stage {
-                id,
-                source: StageError::Input(format!(
-                    "wrote tables [{}] but declares [{}]",
-                    written.join(", "),
-                    declared.join(", ")
-                )),
-            });
-        }
+        let written: Vec<&str> = tables.iter().map(|t| t.name.as_str()).collect();
+        as_declared("wrote tables", written, declared.to_vec())
+            .map_err(|source| ExecError::Stage { id, source })?;
         Ok(tables)
     }
 

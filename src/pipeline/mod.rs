@@ -101,6 +101,11 @@ pub trait Stage: Sync {
     fn params(&self) -> Value;
     /// Names of the tables it writes (`<name>.parquet`), always all of them.
     fn tables(&self) -> &'static [&'static str];
+    /// Names of the other files it writes (figures: `<name>.svg`, `<name>.png`),
+    /// always all of them; none by default.
+    fn files(&self) -> Vec<String> {
+        Vec::new()
+    }
     /// Upstream instances whose tables this stage reads.
     fn inputs(&self) -> Vec<InstanceId>;
     /// Amount of work, in the units the stage reports through [`Progress`].
@@ -108,6 +113,12 @@ pub trait Stage: Sync {
     /// Computes the output tables. Must be deterministic: the same parameters and
     /// inputs give the same tables whatever the thread count.
     fn run(&self, inputs: &[Input], progress: &Progress) -> Result<Vec<Table>, StageError>;
+
+    /// The files ([`Stage::files`]) drawn from the tables `run` returned, as
+    /// `(name, bytes)`; deterministic like the tables.
+    fn render(&self, _tables: &[Table]) -> Result<Vec<(String, Vec<u8>)>, StageError> {
+        Ok(Vec::new())
+    }
 
     /// Independent units of work (randomizations, runs) the stage can be
     /// split into for sharded runs; 0 (the default) when it cannot be split.

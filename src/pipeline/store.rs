@@ -722,18 +722,26 @@ fn manifest_problems(
     if names.windows(2).any(|pair| pair[0] == pair[1]) {
         problems.push("the manifest lists a file twice".to_string());
     }
-    if let Some(outputs) = outputs {
-        let mut expected: Vec<&str> = outputs.iter().map(String::as_str).collect();
-        expected.sort_unstable();
-        if names != expected {
-            problems.push(format!(
-                "the manifest lists [{}] but the stage writes [{}]",
-                names.join(", "),
-                expected.join(", ")
-            ));
-        }
+    if let Some(problem) = outputs.and_then(|outputs| listing_problem(manifest, outputs)) {
+        problems.push(problem);
     }
     problems
+}
+
+/// Whether `manifest` lists exactly the files `outputs` (the files its stage
+/// instance writes), and if not, how they differ.
+pub fn listing_problem(manifest: &Manifest, outputs: &[String]) -> Option<String> {
+    let mut names: Vec<&str> = manifest.files.iter().map(|f| f.name.as_str()).collect();
+    names.sort_unstable();
+    let mut expected: Vec<&str> = outputs.iter().map(String::as_str).collect();
+    expected.sort_unstable();
+    (names != expected).then(|| {
+        format!(
+            "the manifest lists [{}] but the stage writes [{}]",
+            names.join(", "),
+            expected.join(", ")
+        )
+    })
 }
 
 /// Problems of one listed file, checked to `depth`.

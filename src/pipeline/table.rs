@@ -199,14 +199,12 @@ impl Table {
             .map(|(k, v)| KeyValue::new(k, v))
             .collect();
         let schema = Arc::new(self.batch.schema().as_ref().clone().with_metadata(metadata));
-        let batch = self
-            .batch
-            .clone()
-            .with_schema(schema.clone())
-            .map_err(|source| TableError::Arrow {
+        let batch = RecordBatch::try_new(schema.clone(), self.batch.columns().to_vec()).map_err(
+            |source| TableError::Arrow {
                 name: self.name.clone(),
                 source,
-            })?;
+            },
+        )?;
         let properties = WriterProperties::builder()
             .set_compression(Compression::ZSTD(ZstdLevel::try_new(3)?))
             .set_max_row_group_row_count(Some(ROW_GROUP_ROWS))
@@ -394,8 +392,18 @@ impl Table {
     }
 }
 
-/// The content hash ([`Table::content_sha256`]) of the Parquet file `name`
-/// (`<table>.parquet`) with these bytes.
+/// The content hash of an output file `name` with these bytes: for a table
+/// (`<table>.parquet`) [`Table::content_sha256`], for any other file (a
+/// figure) the SHA-256 of its bytes.
 pub fn content_sha256_of_file(name: &str, bytes: Vec<u8>) -> Result<String, TableError> {
-    Table::from_parquet(name, bytes)?.content_sha256()
+    if is_table_file(name) {
+        Table::from_parquet(name, bytes)?.content_sha256()
+    } else {
+        Ok(crate::pipeline::key::sha256_hex(&bytes))
+    }
+}
+
+/// `true` for a table's file name (`<table>.parquet`), `false` for other files.
+pub fn is_table_file(name: &str) -> bool {
+    name.ends_with(".parquet")
 }

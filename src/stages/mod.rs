@@ -5,6 +5,7 @@ pub mod collisions;
 pub mod compare;
 pub mod convergence;
 pub mod evolve;
+pub mod figures;
 pub mod fit;
 pub mod gases;
 pub mod kernel;
@@ -109,5 +110,9 @@ pub fn plan(study: &Study) -> Vec<Box<dyn Stage>> {
         .map(|&p| study.kernel_params(p, 0.0, 0.0))
         .collect();
     stages.push(Box::new(table::TableStage::new(rows)));
+    if study.config.figures.enabled {
+        let figures = figures::figure_stages(study, &stages);
+        stages.extend(figures.into_iter().map(|f| Box::new(f) as Box<dyn Stage>));
+    }
     stages
 }

@@ -1,0 +1,331 @@
+//! The figures `ternary` draws: which artifacts each reads, how polars turns
+//! their tables into the figure table, and how it is laid out.
+
+use polars::prelude::{
+    ChunkCompareEq, ChunkCompareIneq, DataFrame, Float64Chunked, NamedFrom, Series,
+};
+use serde::Serialize;
+
+use super::frames::{frame, log_groups, series, stack};
+use super::{Axis, Layout, Mark, Panel, Style};
+use crate::contract;
+use crate::pipeline::{Input, StageError};
+
+/// Kernel axis label.
+const G_AXIS: &str = "G(u' → u) [ρ² l v_th / v_th]";
+/// Velocity change axis label.
+const DU_AXIS: &str = "u − u' [v_th]";
+
+/// A figure of the study, with the series labels its inputs get (in input order).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum Figure {
+    /// `G(0 -> u)` of every potential on log axes (paper: the kernel for every n).
+    KernelsEveryN {
+        /// Legend label of each kernel input.
+        labels: Vec<String>,
+    },
+    /// `G(0 -> u)` of one potential with its fitted shape `alpha x^-beta exp(-x^2/2 sigma^2)`.
+    KernelFit {
+        /// The potential's id (the figure's name).
+        id: String,
+        /// Its legend label.
+        label: String,
+    },
+    /// Self drift and variance rates against `u'`, and the Fokker-Planck drift.
+    Rates {
+        /// The potential's id.
+        id: String,
+        /// Its legend label.
+        label: String,
+    },
+    /// MD against Boltzmann on one ring: `h(u, t_f)` by both estimators.
+    MdBoltzmann {
+        /// The ring (a row label of the comparison table).
+        ring: String,
+    },
+    /// `a_n(X)`: the self variance rate against the truncation `X`, with the
+    /// paper's `X = 0.04` marked.
+    Truncation {
+        /// The potential's id.
+        id: String,
+        /// Its legend label.
+        label: String,
+    },
+}
+
+/// Names of every figure kind, for documentation and tests.
+pub const FIGURES: [&str; 5] = [
+    "kernels",
+    "kernel_fit",
+    "rates",
+    "md_boltzmann",
+    "truncation",
+];
+
+fn failed(error: impl std::fmt::Display) -> StageError {
+    StageError::Input(format!("figure: {error}"))
+}
+
+impl Figure {
+    /// The figure's name: its instance and file stem.
+    pub fn name(&self) -> String {
+        match self {
+            Figure::KernelsEveryN { .. } => "kernels".into(),
+            Figure::KernelFit { id, .. } => format!("kernel_fit_{id}"),
+            Figure::Rates { id, .. } => format!("rates_{id}"),
+            Figure::MdBoltzmann { ring } => format!("md_boltzmann_{ring}"),
+            Figure::Truncation { id, .. } => format!("truncation_{id}"),
+        }
+    }
+
+    /// What the figure shows (its table's description).
+    pub fn description(&self) -> &'static str {
+        match self {
+            Figure::KernelsEveryN { .. } => {
+                "G(0 -> u) of every potential (u' = 0, dilute) against u - u' > 0, log axes, +- standard error; bins grouped 20 per decade, groups with relative error above 0.5 left out"
+            }
+            Figure::KernelFit { .. } => {
+                "G(0 -> u) against u - u' > 0 with the fitted shape alpha x^-beta exp(-x^2 / 2 sigma^2)"
+            }
+            Figure::Rates { .. } => {
+                "self variance rate D2 (a) and drift D1 with the Fokker-Planck drift (D2' - u D2)/2 (b) against u'"
+            }
+            Figure::MdBoltzmann { .. } => {
+                "h(u, t_f) of a ring: the Boltzmann master equation against MD, tagged particles (a) and the published estimator (b)"
+            }
+            Figure::Truncation { .. } => {
+                "self variance rate a_n(X) of the kernel truncated at |u - u'| <= X, with the paper's X = 0.04"
+            }
+        }
+    }
+
+    /// How the figure is drawn.
+    pub fn layout(&self) -> Layout {
+        let linear = |label| Axis { label, log: false };
+        let log = |label| Axis { label, log: true };
+        let panel = |name, x, y, styles: Vec<(&'static str, Style)>| Panel {
+            name,
+            x,
+            y,
+            marks: Vec::new(),
+            styles,
+        };
+        let panels = match self {
+            Figure::KernelsEveryN { .. } => vec![panel(
+                "kernels",
+                log(DU_AXIS),
+                log(G_AXIS),
+                vec![("", Style::Band)],
+            )],
+            Figure::KernelFit { .. } => vec![panel(
+                "kernel",
+                log(DU_AXIS),
+                log(G_AXIS),
+                vec![("fit", Style::Line), ("Monte Carlo", Style::Markers)],
+            )],
+            Figure::Rates { .. } => vec![
+                panel(
+                    "variance",
+                    linear("u' [v_th]"),
+                    linear("D2 [ρ² l v_th]"),
+                    vec![("", Style::Band)],
+                ),
+                panel(
+                    "drift",
+                    linear("u' [v_th]"),
+                    linear("D1 [ρ² l v_th]"),
+                    vec![("Fokker", Style::Band), ("", Style::Markers)],
+                ),
+            ],
+            Figure::MdBoltzmann { .. } => ["tagged", "published"]
+                .into_iter()
+                .map(|name| {
+                    panel(
+                        name,
+                        linear(DU_AXIS),
+                        linear("h(u, t_f) [1 / v_th]"),
+                        vec![("Boltzmann", Style::Band)],
+                    )
+                })
+                .collect(),
+            Figure::Truncation { .. } => vec![Panel {
+                marks: vec![Mark {
+                    x: 0.04,
+                    label: "X = 0.04 (paper)",
+                }],
+                ..panel(
+                    "a_n",
+                    log("X [v_th]"),
+                    linear("a_n(X) [ρ² l v_th]"),
+                    vec![("", Style::Band)],
+                )
+            }],
+        };
+        Layout { panels }
+    }
+
+    /// The figure's long table, built with polars from its inputs' tables.
+    pub fn frame(&self, inputs: &[Input]) -> Result<DataFrame, StageError> {
+        match self {
+            Figure::KernelsEveryN { labels } => {
+                let parts = labels
+                    .iter()
+                    .zip(inputs)
+                    .map(|(label, input)| {
+                        positive_kernel(input, "kernels", label)
+                            .and_then(|groups| resolved(&groups))
+                    })
+                    .collect::<Result<Vec<_>, _>>()?;
+                stack(parts)
+            }
+            Figure::KernelFit { .. } => {
+                let measured = positive_kernel(&inputs[0], "kernel", "Monte Carlo")?;
+                let fitted = fitted_shape(&measured, &inputs[1])?;
+                stack(vec![measured, fitted])
+            }
+            Figure::Rates { .. } => rates(&inputs[0]),
+            Figure::MdBoltzmann { ring } => md_boltzmann(&inputs[0], ring),
+            Figure::Truncation { label, .. } => truncation(&inputs[0], label),
+        }
+    }
+}
+
+/// Kernel groups per decade of `u - u'` on log axes.
+const GROUPS_PER_DECADE: f64 = 20.0;
+
+/// `G` at `du > 0` of a kernel artifact as a series, averaged over
+/// log-spaced groups of bins.
+fn positive_kernel(input: &Input, panel: &str, label: &str) -> Result<DataFrame, StageError> {
+    use contract::kernel::{DU, G, TABLE};
+    let all = frame(TABLE.of(input)?)?;
+    let long = series(
+        &all,
+        panel,
+        label,
+        (DU.name, G.value.name, Some(G.stderr.name)),
+    )?;
+    log_groups(&long, GROUPS_PER_DECADE)
+}
+
+/// Largest relative error of a group drawn among the kernels of every `n`:
+/// beyond it the tails' bands would hide the curves.
+const RESOLVED: f64 = 0.5;
+
+/// The groups of a kernel series whose relative error is below [`RESOLVED`].
+fn resolved(groups: &DataFrame) -> Result<DataFrame, StageError> {
+    use contract::figures::points::{Y, Y_ERROR};
+    let column = |name: &str| -> Result<Float64Chunked, StageError> {
+        Ok(groups
+            .column(name)
+            .map_err(failed)?
+            .f64()
+            .map_err(failed)?
+            .clone())
+    };
+    let mask = column(Y_ERROR.name)?.lt(&(column(Y.name)? * RESOLVED));
+    groups.filter(&mask).map_err(failed)
+}
+
+/// The fit's mean shape `alpha x^-beta exp(-x^2 / 2 sigma^2)` on the kernel's
+/// `x` within the fit range.
+fn fitted_shape(kernel: &DataFrame, fit: &Input) -> Result<DataFrame, StageError> {
+    use contract::figures::points::X;
+    use contract::fit::{ALPHA, BETA, RANGE_MAX, RANGE_MIN, SIGMA, TABLE};
+    let table = frame(TABLE.of(fit)?)?;
+    let first = |name: &str| -> Result<f64, StageError> {
+        let column = table.column(name).map_err(failed)?.f64().map_err(failed)?;
+        column.get(0).ok_or_else(|| failed("empty fit table"))
+    };
+    let (alpha, beta, sigma) = (
+        first(ALPHA.value.name)?,
+        first(BETA.value.name)?,
+        first(SIGMA.value.name)?,
+    );
+    let (low, high) = (first(RANGE_MIN.name)?, first(RANGE_MAX.name)?);
+    let xs: Vec<f64> = kernel
+        .column(X.name)
+        .map_err(failed)?
+        .f64()
+        .map_err(failed)?
+        .iter()
+        .flatten()
+        .filter(|x| (low..=high).contains(x))
+        .collect();
+    let ys: Vec<f64> = xs
+        .iter()
+        .map(|x| alpha * x.powf(-beta) * (-x * x / (2.0 * sigma * sigma)).exp())
+        .collect();
+    let rows = xs.len();
+    let line = DataFrame::new(
+        rows,
+        vec![
+            Series::new("x".into(), xs).into(),
+            Series::new("y".into(), ys).into(),
+        ],
+    )
+    .map_err(failed)?;
+    series(&line, "kernel", "fit", ("x", "y", None))
+}
+
+fn rates(input: &Input) -> Result<DataFrame, StageError> {
+    use contract::sweep::rates::{FOKKER_PLANCK_DRIFT, SELF_DRIFT, SELF_VARIANCE, TABLE, U_PRIME};
+    let table = frame(TABLE.of(input)?)?;
+    let pair = |pair: &contract::Pair| (U_PRIME.name, pair.value.name, Some(pair.stderr.name));
+    stack(vec![
+        series(&table, "variance", "D2 (Monte Carlo)", pair(&SELF_VARIANCE))?,
+        series(&table, "drift", "D1 (Monte Carlo)", pair(&SELF_DRIFT))?,
+        series(
+            &table,
+            "drift",
+            "Fokker-Planck (D2' − u D2)/2",
+            pair(&FOKKER_PLANCK_DRIFT),
+        )?,
+    ])
+}
+
+fn md_boltzmann(input: &Input, ring: &str) -> Result<DataFrame, StageError> {
+    use contract::compare::comparison::{DU, H_BOLTZMANN, H_PUBLISHED, H_TAGGED, RING, TABLE};
+    let all = frame(TABLE.of(input)?)?;
+    let mask = all
+        .column(RING.name)
+        .map_err(failed)?
+        .str()
+        .map_err(failed)?
+        .equal(ring);
+    let rows = all.filter(&mask).map_err(failed)?;
+    let pair = |pair: &contract::Pair| (DU.name, pair.value.name, Some(pair.stderr.name));
+    stack(vec![
+        series(&rows, "tagged", "Boltzmann", pair(&H_BOLTZMANN))?,
+        series(&rows, "tagged", "MD, tagged particles", pair(&H_TAGGED))?,
+        series(&rows, "published", "Boltzmann", pair(&H_BOLTZMANN))?,
+        series(
+            &rows,
+            "published",
+            "MD, published estimator",
+            pair(&H_PUBLISHED),
+        )?,
+    ])
+}
+
+fn truncation(input: &Input, label: &str) -> Result<DataFrame, StageError> {
+    use contract::moments::{SELF_VARIANCE, TABLE, TRUNCATION};
+    let all = frame(TABLE.of(input)?)?;
+    let mask = all
+        .column(TRUNCATION.name)
+        .map_err(failed)?
+        .f64()
+        .map_err(failed)?
+        .lt(f64::INFINITY);
+    let finite = all.filter(&mask).map_err(failed)?;
+    series(
+        &finite,
+        "a_n",
+        label,
+        (
+            TRUNCATION.name,
+            SELF_VARIANCE.value.name,
+            Some(SELF_VARIANCE.stderr.name),
+        ),
+    )
+}

@@ -1,0 +1,81 @@
+//! Figures: each figure is a long table (one row per plotted point: panel,
+//! series, `x`, `y` and the error of `y`) that polars builds from the input
+//! artifacts' tables, and a [`Layout`] (axes with units, log scales, marks)
+//! that says how to draw it. [`render`] draws any figure as SVG and PNG at a
+//! single journal column (8.6 cm wide, 8 pt text) and at a screen size, with
+//! the DejaVu Sans font shipped in the binary: no system font is needed.
+//!
+//! Owns the drawing; the numbers come from the figure table only, so a figure
+//! shows exactly what its table holds.
+
+mod draw;
+pub mod frames;
+
+pub mod catalogue;
+
+pub use catalogue::{FIGURES, Figure};
+pub use draw::{PALETTE, Size, render};
+pub use frames::{FigureRows, Point};
+
+use serde::Serialize;
+
+/// How a series is drawn.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub enum Style {
+    /// A line with a shaded band of +- the error.
+    Band,
+    /// Markers with error bars.
+    Markers,
+    /// A line without errors (a fit, a closed form).
+    Line,
+}
+
+/// An axis: label with its unit, and its scale.
+#[derive(Clone, Debug, Serialize)]
+pub struct Axis {
+    /// Label, unit in brackets.
+    pub label: &'static str,
+    /// Logarithmic scale.
+    pub log: bool,
+}
+
+/// A vertical line with a label (e.g. the paper's truncation).
+#[derive(Clone, Debug, Serialize)]
+pub struct Mark {
+    /// Where.
+    pub x: f64,
+    /// What it marks.
+    pub label: &'static str,
+}
+
+/// One panel: its axes, marks and how each series is drawn.
+#[derive(Clone, Debug, Serialize)]
+pub struct Panel {
+    /// Name in the figure table's `panel` column, and the panel's tag (`(a)`).
+    pub name: &'static str,
+    /// Horizontal axis.
+    pub x: Axis,
+    /// Vertical axis.
+    pub y: Axis,
+    /// Vertical marks.
+    pub marks: Vec<Mark>,
+    /// Style of a series by the start of its name (unlisted: markers).
+    pub styles: Vec<(&'static str, Style)>,
+}
+
+impl Panel {
+    /// How the series `name` is drawn.
+    pub fn style_of(&self, name: &str) -> Style {
+        self.styles
+            .iter()
+            .find(|(pattern, _)| name.starts_with(pattern))
+            .map_or(Style::Markers, |(_, style)| *style)
+    }
+}
+
+/// A figure's drawing instructions: its panels, stacked.
+#[derive(Clone, Debug, Serialize)]
+pub struct Layout {
+    /// Panels, top to bottom.
+    pub panels: Vec<Panel>,
+}

@@ -1,0 +1,166 @@
+//! `figures`: one instance per figure. Its table (`points.parquet`) is built
+//! with polars from the tables of the artifacts it draws; its files are the
+//! figure drawn from that table as SVG and PNG, one journal column wide and at
+//! a screen size ([`crate::figures`]).
+
+use serde_json::{Value, json};
+
+use crate::config::Study;
+use crate::contract::{self, TableSpec};
+use crate::figures::{Figure, FigureRows, Size, frames, render};
+use crate::physics::potential::Potential;
+use crate::pipeline::{Input, InstanceId, Progress, Stage, StageError, Table};
+
+use super::kernel::target_instance;
+
+/// The figure table's name (`points.parquet`).
+const POINTS: &str = "points";
+
+/// Metadata key of the figure's layout (panels, axis labels with units, log
+/// scales, marks) in `points.parquet`.
+const AXES: &str = "ternary.axes";
+
+/// The `figures` stage for one figure.
+pub struct FiguresStage {
+    figure: Figure,
+    inputs: Vec<InstanceId>,
+}
+
+impl FiguresStage {
+    /// The stage drawing `figure` from `inputs` (in the figure's input order).
+    pub fn new(figure: Figure, inputs: Vec<InstanceId>) -> FiguresStage {
+        FiguresStage { figure, inputs }
+    }
+
+    fn spec(&self) -> TableSpec {
+        TableSpec {
+            stage: contract::figures::STAGE,
+            name: POINTS,
+            description: self.figure.description(),
+        }
+    }
+}
+
+/// A potential's legend label: `n = 6`, `LJ θ = 0.1`.
+fn label(potential: &Potential) -> String {
+    match potential {
+        Potential::InversePower { n } => format!("n = {n}"),
+        Potential::LennardJones { theta } => format!("LJ θ = {theta}"),
+    }
+}
+
+/// The figures of a study whose inputs `plan` computes: kernels of every
+/// potential with kicks, and for `n = 6` (or the first such potential) the
+/// kernel with its fit, the rates against `u'` and `a_n(X)`; MD against
+/// Boltzmann for the compared ring.
+pub fn figure_stages(study: &Study, plan: &[Box<dyn Stage>]) -> Vec<FiguresStage> {
+    let present = |id: &InstanceId| plan.iter().any(|stage| stage.id() == *id);
+    let kicked: Vec<Potential> = study
+        .potentials()
+        .into_iter()
+        .filter(|p| !p.is_integrable())
+        .collect();
+    let target = |stage: &str, p: &Potential| {
+        InstanceId::new(stage, &target_instance(&study.kernel_params(*p, 0.0, 0.0)))
+    };
+    let mut figures = Vec::new();
+    if !kicked.is_empty() {
+        figures.push(FiguresStage::new(
+            Figure::KernelsEveryN {
+                labels: kicked.iter().map(label).collect(),
+            },
+            kicked
+                .iter()
+                .map(|p| target(contract::kernel::STAGE, p))
+                .collect(),
+        ));
+    }
+    let main = kicked
+        .iter()
+        .find(|p| **p == Potential::InversePower { n: 6.0 })
+        .or(kicked.first());
+    if let Some(p) = main {
+        let (id, label) = (p.id(), label(p));
+        figures.push(FiguresStage::new(
+            Figure::KernelFit {
+                id: id.clone(),
+                label: label.clone(),
+            },
+            vec![
+                target(contract::kernel::STAGE, p),
+                target(contract::fit::STAGE, p),
+            ],
+        ));
+        figures.push(FiguresStage::new(
+            Figure::Truncation {
+                id: id.clone(),
+                label: label.clone(),
+            },
+            vec![target(contract::moments::STAGE, p)],
+        ));
+        let sweep = InstanceId::new(contract::sweep::STAGE, &id);
+        if present(&sweep) {
+            figures.push(FiguresStage::new(Figure::Rates { id, label }, vec![sweep]));
+        }
+    }
+    let compare = InstanceId::new(contract::compare::STAGE, "study");
+    if let (true, Some(ring)) = (present(&compare), study.md_params().first()) {
+        figures.push(FiguresStage::new(
+            Figure::MdBoltzmann {
+                ring: ring.name.clone(),
+            },
+            vec![compare],
+        ));
+    }
+    figures
+}
+
+impl Stage for FiguresStage {
+    fn id(&self) -> InstanceId {
+        InstanceId::new(contract::figures::STAGE, &self.figure.name())
+    }
+
+    fn version(&self) -> u32 {
+        1
+    }
+
+    fn params(&self) -> Value {
+        json!({ "figure": self.figure, "layout": self.figure.layout() })
+    }
+
+    fn tables(&self) -> &'static [&'static str] {
+        &[POINTS]
+    }
+
+    fn files(&self) -> Vec<String> {
+        let name = self.figure.name();
+        [Size::COLUMN_SVG.suffix, Size::SCREEN.suffix]
+            .iter()
+            .flat_map(|suffix| [format!("{name}{suffix}.svg"), format!("{name}{suffix}.png")])
+            .collect()
+    }
+
+    fn inputs(&self) -> Vec<InstanceId> {
+        self.inputs.clone()
+    }
+
+    fn work_units(&self) -> u64 {
+        1
+    }
+
+    fn run(&self, inputs: &[Input], progress: &Progress) -> Result<Vec<Table>, StageError> {
+        let frame = self.figure.frame(inputs)?;
+        let points = frames::points(&frame)?;
+        progress.advance(1);
+        let layout = serde_json::to_string(&self.figure.layout())
+            .map_err(|error| StageError::Input(format!("figure layout: {error}")))?;
+        let table = FigureRows::table(&points, &self.spec())?.with_metadata(AXES, layout);
+        Ok(vec![table])
+    }
+
+    fn render(&self, tables: &[Table]) -> Result<Vec<(String, Vec<u8>)>, StageError> {
+        let points = FigureRows::read(&tables[0])?;
+        render(&self.figure.name(), &self.figure.layout(), &points)
+            .map_err(|error| StageError::Input(format!("drawing {}: {error}", self.figure.name())))
+    }
+}

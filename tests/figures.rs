@@ -1,0 +1,403 @@
+//! Figures: every figure table holds exactly the numbers of the artifacts it
+//! draws (recomputed here from those artifacts' own tables), every PNG decodes
+//! at its configured size with every series' colour on it, and every SVG
+//! parses as XML with one legend entry per series.
+
+use std::collections::BTreeSet;
+use std::fs;
+use std::path::{Path, PathBuf};
+
+use arrow::array::RecordBatch;
+use serde_json::Value;
+use ternary::contract::{self, Pair};
+use ternary::figures::{PALETTE, Size};
+use ternary::pipeline::table::read_parquet;
+
+mod common;
+
+use common::{REDUCED_STUDY, run_counts, small_study, stdout, ternary, workspace, write_config};
+
+/// One stored artifact: its directory and manifest.
+struct Artifact {
+    dir: PathBuf,
+    manifest: Value,
+}
+
+impl Artifact {
+    fn table(&self, name: &str) -> RecordBatch {
+        read_parquet(&self.dir.join(format!("{name}.parquet")))
+            .unwrap()
+            .0
+    }
+
+    /// The `k`-th input artifact.
+    fn input(&self, store: &Path, k: usize) -> Artifact {
+        let input = &self.manifest["inputs"][k];
+        artifact(
+            &store
+                .join("artifacts")
+                .join(input["stage"].as_str().unwrap())
+                .join(input["key"].as_str().unwrap()),
+        )
+    }
+
+    fn kind(&self) -> &str {
+        self.manifest["params"]["figure"]["kind"].as_str().unwrap()
+    }
+
+    fn name(&self) -> &str {
+        self.manifest["instance"].as_str().unwrap()
+    }
+
+    fn panels(&self) -> u32 {
+        self.manifest["params"]["layout"]["panels"]
+            .as_array()
+            .unwrap()
+            .len() as u32
+    }
+}
+
+fn artifact(dir: &Path) -> Artifact {
+    let manifest =
+        serde_json::from_str(&fs::read_to_string(dir.join("manifest.json")).unwrap()).unwrap();
+    Artifact {
+        dir: dir.to_path_buf(),
+        manifest,
+    }
+}
+
+fn figures(store: &Path) -> Vec<Artifact> {
+    let mut dirs: Vec<PathBuf> = fs::read_dir(store.join("artifacts/figures"))
+        .unwrap()
+        .map(|entry| entry.unwrap().path())
+        .collect();
+    dirs.sort();
+    dirs.iter().map(|dir| artifact(dir)).collect()
+}
+
+/// A plotted row: panel, series, x, y, error of y.
+type Row = (String, String, f64, f64, f64);
+
+fn points(figure: &Artifact) -> Vec<Row> {
+    use contract::figures::points::{PANEL, SERIES, X, Y, Y_ERROR};
+    let batch = figure.table("points");
+    let (panels, series) = (PANEL.read(&batch).unwrap(), SERIES.read(&batch).unwrap());
+    let (x, y, e) = (
+        X.read(&batch).unwrap(),
+        Y.read(&batch).unwrap(),
+        Y_ERROR.read(&batch).unwrap(),
+    );
+    (0..batch.num_rows())
+        .map(|k| (panels[k].clone(), series[k].clone(), x[k], y[k], e[k]))
+        .collect()
+}
+
+/// The rows of one series: `x` from a column, `y` and its error from a pair.
+fn rows(panel: &str, series: &str, x: &[f64], y: &[ternary::stats::Estimate]) -> Vec<Row> {
+    x.iter()
+        .zip(y)
+        .map(|(x, y)| (panel.into(), series.into(), *x, y.mean, y.stderr))
+        .collect()
+}
+
+fn pair_rows(batch: &RecordBatch, panel: &str, series: &str, x: &[f64], pair: &Pair) -> Vec<Row> {
+    rows(panel, series, x, &pair.read(batch).unwrap())
+}
+
+/// A kernel bin: `du`, `G` and its standard error.
+type Bin = (f64, f64, f64);
+
+/// `G(0 -> u)` at `du > 0` averaged over groups of 20 bins per decade of
+/// `du`, in order: mean `du`, mean `G`, and `sqrt(sum stderr^2) / count`.
+fn grouped_kernel(kernel: &Artifact, panel: &str, series: &str) -> Vec<Row> {
+    use contract::kernel::{DU, G};
+    let batch = kernel.table("kernel");
+    let (du, g) = (DU.read(&batch).unwrap(), G.read(&batch).unwrap());
+    let mut groups: Vec<(f64, Vec<Bin>)> = Vec::new();
+    for (du, g) in du.iter().zip(&g).filter(|(du, _)| **du > 0.0) {
+        let group = (du.log10() * 20.0).floor();
+        match groups.iter_mut().find(|(key, _)| *key == group) {
+            Some((_, members)) => members.push((*du, g.mean, g.stderr)),
+            None => groups.push((group, vec![(*du, g.mean, g.stderr)])),
+        }
+    }
+    groups
+        .iter()
+        .map(|(_, members)| {
+            let n = members.len() as f64;
+            let mean = |f: fn(&Bin) -> f64| members.iter().map(f).sum::<f64>() / n;
+            let error = members.iter().map(|m| m.2 * m.2).sum::<f64>().sqrt() / n;
+            (
+                panel.into(),
+                series.into(),
+                mean(|m| m.0),
+                mean(|m| m.1),
+                error,
+            )
+        })
+        .collect()
+}
+
+/// The rows a figure must hold, from its input artifacts' tables.
+fn expected(store: &Path, figure: &Artifact) -> Vec<Row> {
+    let params = &figure.manifest["params"]["figure"];
+    match figure.kind() {
+        "kernels_every_n" => params["labels"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .enumerate()
+            .flat_map(|(k, label)| {
+                let groups =
+                    grouped_kernel(&figure.input(store, k), "kernels", label.as_str().unwrap());
+                groups.into_iter().filter(|row| row.4 < 0.5 * row.3)
+            })
+            .collect(),
+        "kernel_fit" => {
+            use contract::fit::{ALPHA, BETA, RANGE_MAX, RANGE_MIN, SIGMA};
+            let measured = grouped_kernel(&figure.input(store, 0), "kernel", "Monte Carlo");
+            let fit = figure.input(store, 1).table("fit");
+            let first = |col: contract::Col<f64>| col.read(&fit).unwrap()[0];
+            let (alpha, beta, sigma) = (first(ALPHA.value), first(BETA.value), first(SIGMA.value));
+            let range = first(RANGE_MIN)..=first(RANGE_MAX);
+            let line: Vec<Row> = measured
+                .iter()
+                .filter(|row| range.contains(&row.2))
+                .map(|row| {
+                    let x = row.2;
+                    let y = alpha * x.powf(-beta) * (-x * x / (2.0 * sigma * sigma)).exp();
+                    ("kernel".into(), "fit".into(), x, y, 0.0)
+                })
+                .collect();
+            [measured, line].concat()
+        }
+        "rates" => {
+            use contract::sweep::rates::{FOKKER_PLANCK_DRIFT, SELF_DRIFT, SELF_VARIANCE, U_PRIME};
+            let sweep = figure.input(store, 0).table("rates");
+            let u = U_PRIME.read(&sweep).unwrap();
+            [
+                pair_rows(&sweep, "variance", "D2 (Monte Carlo)", &u, &SELF_VARIANCE),
+                pair_rows(&sweep, "drift", "D1 (Monte Carlo)", &u, &SELF_DRIFT),
+                pair_rows(
+                    &sweep,
+                    "drift",
+                    "Fokker-Planck (D2' − u D2)/2",
+                    &u,
+                    &FOKKER_PLANCK_DRIFT,
+                ),
+            ]
+            .concat()
+        }
+        "truncation" => {
+            use contract::moments::{SELF_VARIANCE, TRUNCATION};
+            let moments = figure.input(store, 0).table("moments");
+            let x = TRUNCATION.read(&moments).unwrap();
+            let label = params["label"].as_str().unwrap();
+            rows("a_n", label, &x, &SELF_VARIANCE.read(&moments).unwrap())
+                .into_iter()
+                .filter(|row| row.2.is_finite())
+                .collect()
+        }
+        "md_boltzmann" => {
+            use contract::compare::comparison::{DU, H_BOLTZMANN, H_PUBLISHED, H_TAGGED, RING};
+            let compare = figure.input(store, 0).table("comparison");
+            let ring = params["ring"].as_str().unwrap();
+            let mine: Vec<bool> = RING
+                .read(&compare)
+                .unwrap()
+                .iter()
+                .map(|r| r == ring)
+                .collect();
+            let pick = |series: &str, panel: &str, pair: &Pair| -> Vec<Row> {
+                let du = DU.read(&compare).unwrap();
+                pair_rows(&compare, panel, series, &du, pair)
+                    .into_iter()
+                    .zip(&mine)
+                    .filter(|(_, mine)| **mine)
+                    .map(|(row, _)| row)
+                    .collect()
+            };
+            [
+                pick("Boltzmann", "tagged", &H_BOLTZMANN),
+                pick("MD, tagged particles", "tagged", &H_TAGGED),
+                pick("Boltzmann", "published", &H_BOLTZMANN),
+                pick("MD, published estimator", "published", &H_PUBLISHED),
+            ]
+            .concat()
+        }
+        other => panic!("figure kind `{other}` has no check here"),
+    }
+}
+
+/// Equal as numbers: exactly, or for group means (summed in another order
+/// by polars) to a few ulps.
+fn same(a: f64, b: f64) -> bool {
+    a == b || (a - b).abs() <= 1e-13 * a.abs().max(b.abs())
+}
+
+/// The reduced study computed in a workspace of its own, `name`.
+fn reduced_study(name: &str) -> PathBuf {
+    let dir = workspace(name);
+    let config = write_config(&dir, REDUCED_STUDY);
+    let output = ternary(&config, &["run", "--quiet"]);
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    dir.join("data")
+}
+
+#[test]
+fn every_figure_table_holds_its_sources_numbers() {
+    let store = reduced_study("figures-tables");
+    let all = figures(&store);
+    let kinds: BTreeSet<&str> = all.iter().map(Artifact::kind).collect();
+    assert_eq!(kinds.len(), ternary::figures::FIGURES.len(), "{kinds:?}");
+    for figure in &all {
+        let (got, want) = (points(figure), expected(&store, figure));
+        assert_eq!(got.len(), want.len(), "{}: rows", figure.name());
+        assert!(!got.is_empty(), "{}", figure.name());
+        for (g, w) in got.iter().zip(&want) {
+            let close =
+                g.0 == w.0 && g.1 == w.1 && same(g.2, w.2) && same(g.3, w.3) && same(g.4, w.4);
+            assert!(close, "{}: {g:?} != {w:?}", figure.name());
+        }
+    }
+}
+
+/// The series of each panel of a figure, in legend order.
+fn series_per_panel(figure: &Artifact) -> Vec<Vec<String>> {
+    let rows = points(figure);
+    let mut panels: Vec<(String, Vec<String>)> = Vec::new();
+    for (panel, series, ..) in rows {
+        match panels.iter_mut().find(|(name, _)| *name == panel) {
+            Some((_, names)) if names.contains(&series) => {}
+            Some((_, names)) => names.push(series),
+            None => panels.push((panel, vec![series])),
+        }
+    }
+    panels.into_iter().map(|(_, names)| names).collect()
+}
+
+#[test]
+fn every_png_decodes_at_its_size_with_every_series_drawn() {
+    let store = reduced_study("figures-png");
+    for figure in figures(&store) {
+        let colours = series_per_panel(&figure)
+            .iter()
+            .map(Vec::len)
+            .max()
+            .unwrap();
+        for size in [Size::COLUMN_PNG, Size::SCREEN] {
+            let file = figure
+                .dir
+                .join(format!("{}{}.png", figure.name(), size.suffix));
+            let decoder =
+                png::Decoder::new(std::io::BufReader::new(fs::File::open(&file).unwrap()));
+            let mut reader = decoder.read_info().unwrap();
+            let mut pixels = vec![0; reader.output_buffer_size()];
+            let frame = reader.next_frame(&mut pixels).unwrap();
+            let what = file.display();
+            assert_eq!(
+                (frame.width, frame.height),
+                (size.width, size.panel_height * figure.panels()),
+                "{what}"
+            );
+            assert_eq!(frame.color_type, png::ColorType::Rgb, "{what}");
+            let rgb: Vec<[u8; 3]> = pixels.chunks(3).map(|p| [p[0], p[1], p[2]]).collect();
+            let inked = rgb.iter().filter(|p| **p != [255, 255, 255]).count();
+            assert!(
+                inked * 100 > rgb.len(),
+                "{what}: blank ({inked} pixels inked)"
+            );
+            for colour in &PALETTE[..colours] {
+                let drawn = rgb
+                    .iter()
+                    .filter(|p| **p == [colour.0, colour.1, colour.2])
+                    .count();
+                assert!(
+                    drawn > 100,
+                    "{what}: series colour {colour:?} drawn on {drawn} pixels"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn every_svg_parses_with_one_legend_entry_per_series() {
+    let store = reduced_study("figures-svg");
+    for figure in figures(&store) {
+        let panels = series_per_panel(&figure);
+        for size in [Size::COLUMN_SVG, Size::SCREEN] {
+            let file = figure
+                .dir
+                .join(format!("{}{}.svg", figure.name(), size.suffix));
+            let text = fs::read_to_string(&file).unwrap();
+            let document = roxmltree::Document::parse(&text).unwrap();
+            let root = document.root_element();
+            let what = file.display();
+            assert_eq!(root.tag_name().name(), "svg", "{what}");
+            let height = (size.panel_height * figure.panels()).to_string();
+            assert_eq!(
+                root.attribute("width"),
+                Some(size.width.to_string().as_str()),
+                "{what}"
+            );
+            assert_eq!(root.attribute("height"), Some(height.as_str()), "{what}");
+            let labels: Vec<String> = root
+                .descendants()
+                .filter(|node| node.has_tag_name("text"))
+                .filter_map(|node| node.text().map(|t| t.trim().to_string()))
+                .collect();
+            for names in &panels {
+                for name in names {
+                    let entries = labels.iter().filter(|label| *label == name).count();
+                    let panels_with_it = panels.iter().filter(|p| p.contains(name)).count();
+                    assert_eq!(
+                        entries, panels_with_it,
+                        "{what}: legend entries of `{name}`"
+                    );
+                }
+            }
+            for (k, colour) in PALETTE[..panels.iter().map(Vec::len).max().unwrap()]
+                .iter()
+                .enumerate()
+            {
+                let hex = format!("#{:02X}{:02X}{:02X}", colour.0, colour.1, colour.2);
+                assert!(text.contains(&hex), "{what}: series {k} ({hex}) not drawn");
+            }
+        }
+    }
+}
+
+#[test]
+fn a_new_potential_redraws_only_the_figures_that_show_it() {
+    let dir = workspace("figures-redraw");
+    let config = write_config(&dir, &small_study("data"));
+    let (computed, _) = run_counts(&config, &[]);
+    assert!(computed > 0);
+    let with_n8 = small_study("data").replace("inverse_power = [6]", "inverse_power = [6, 8]");
+    write_config(&dir, &with_n8);
+    let status = stdout(&ternary(&config, &["status"]));
+    let line = |id: &str| {
+        status
+            .lines()
+            .find(|line| line.starts_with(id))
+            .unwrap_or_else(|| panic!("{id} in {status}"))
+            .to_string()
+    };
+    assert!(line("figures[kernels] ").contains("stale"), "{status}");
+    assert!(
+        line("figures[kernel_fit_ipp-6] ").contains("fresh"),
+        "{status}"
+    );
+    assert!(
+        line("figures[truncation_ipp-6] ").contains("fresh"),
+        "{status}"
+    );
+    run_counts(&config, &[]);
+    let (computed, _) = run_counts(&config, &[]);
+    assert_eq!(computed, 0, "a second run recomputes nothing");
+}
