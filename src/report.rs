@@ -181,6 +181,49 @@ pub fn summary(store: &Store, reports: &[InstanceReport]) -> Result<String> {
     out.push_str(&md_table(store, reports)?);
     out.push_str(&compare_table(store, reports)?);
     out.push_str(&scan_table(store, reports)?);
+    out.push_str(&paper_table(store, reports)?);
+    Ok(out)
+}
+
+/// The `paper` stage's output: published numbers against ours.
+fn paper_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
+    use contract::paper::*;
+    let mut out = String::new();
+    let Some((_, frame)) = table_frames(store, reports, &TABLE)?.into_iter().next() else {
+        return Ok(out);
+    };
+    writeln!(
+        out,
+        "\nthe paper (Phys. Rev. E 110, 014114): published against ours under its definition (+- standard errors; published: +- as printed, else rounding); converged: ours under our definition where it differs"
+    )?;
+    writeln!(
+        out,
+        "{:<4} {:<26} {:<28} {:>9} {:>7}  {:<28} {:<14} quantity [source]",
+        "", "published", "ours", "ours/pub", "z", "converged", "unit"
+    )?;
+    for row in 0..frame.height() {
+        writeln!(
+            out,
+            "{:<4} {:<26} {:<28} {:>9} {:>7.2}  {:<28} {:<14} {} [{}]",
+            row + 1,
+            estimate(&frame, row, PUBLISHED, "-")?,
+            estimate(&frame, row, OURS, "-")?,
+            format!("{:.4}", 1.0 + number(&frame, row, RELATIVE_DIFFERENCE)?),
+            number(&frame, row, Z)?,
+            estimate(&frame, row, OURS_CONVERGED, "same")?,
+            text(&frame, row, UNIT)?,
+            text(&frame, row, QUANTITY)?,
+            text(&frame, row, SOURCE)?,
+        )?;
+    }
+    for row in 0..frame.height() {
+        writeln!(
+            out,
+            "{:<4} {}",
+            format!("{}.", row + 1),
+            text(&frame, row, NOTE)?
+        )?;
+    }
     Ok(out)
 }
 
@@ -288,7 +331,7 @@ fn gases_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
     for row in 0..frame.height() {
         writeln!(
             out,
-            "{:<22} {:<8} {:>9.3} {:>11.3e} {:<26} {:<26} {:<24}",
+            "{:<22} {:<8} {:>9.3e} {:>11.3e} {:<26} {:<26} {:<24}",
             text(&frame, row, GAS)?,
             text(&frame, row, POTENTIAL)?,
             number(&frame, row, KT)?,

@@ -56,9 +56,9 @@ fn python_check(script: &str, artifact: &Path) {
 
 /// Every instance of the default DAG: per potential scan, collisions, the
 /// sweep's own collisions, sweep, and kernel, moments and fit at (u' = 0,
-/// dilute), plus the table, and the figures of the kicked potential (kernels,
+/// dilute), plus the table, the paper table, and the figures of the kicked potential (kernels,
 /// kernel with fit, rates, truncation).
-const INSTANCES: usize = 19;
+const INSTANCES: usize = 20;
 
 fn stage_dirs(store: &Path, stage: &str) -> Vec<PathBuf> {
     let mut dirs: Vec<PathBuf> = fs::read_dir(store.join("artifacts").join(stage))
@@ -81,6 +81,7 @@ fn all_artifact_dirs(store: &Path) -> Vec<PathBuf> {
         "fit",
         "sweep",
         "table",
+        "paper",
         "figures",
     ]
     .iter()

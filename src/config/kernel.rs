@@ -27,7 +27,13 @@ pub struct KernelConfig {
     pub kick_floor: f64,
     /// Range of `|u - u'|` of the shape fit, `[min, max]`.
     pub fit_range: [f64; 2],
+    /// Truncation half-widths `X` (`v_th`) added to the `moments` grid, e.g.
+    /// the paper's `X = 0.04` (its Table I).
+    pub truncations: Vec<f64>,
 }
+
+/// The paper's truncation: its kernel moments (Table I) count `|u - u'| <= 0.04` only.
+pub const PAPER_TRUNCATION: f64 = 0.04;
 
 impl Default for KernelConfig {
     fn default() -> Self {
@@ -39,6 +45,7 @@ impl Default for KernelConfig {
             launch_length: 90.0,
             kick_floor: DEFAULT_KICK_FLOOR,
             fit_range: [2e-4, 0.05],
+            truncations: vec![PAPER_TRUNCATION],
         }
     }
 }
@@ -136,6 +143,24 @@ impl KernelConfig {
             "kernel.launch_length",
             format!("L = {} must be > 0", kernel.launch_length),
         )?;
+        check(
+            kernel.truncations.len() <= MAX_LIST,
+            "kernel.truncations",
+            format!(
+                "lists {} truncations: give at most {MAX_LIST}",
+                kernel.truncations.len()
+            ),
+        )?;
+        for (k, &x) in kernel.truncations.iter().enumerate() {
+            check(
+                x.is_finite() && x > 0.0 && x <= 0.5 * kernel.window,
+                format!("kernel.truncations[{k}]"),
+                format!(
+                    "X = {x} must be in (0, kernel.window / 2 = {}]",
+                    0.5 * kernel.window
+                ),
+            )?;
+        }
         check(
             kernel.kick_floor >= 0.0 && kernel.kick_floor < 0.5 * kernel.bin_width,
             "kernel.kick_floor",

@@ -47,7 +47,9 @@ pub use engine::EngineConfig;
 pub use evolve::{EvolveConfig, EvolveParams, MAX_EVOLVE_HALF_NODES, PhysicalTimes};
 pub use figures::FiguresConfig;
 pub use gas::{GasConfig, GasParams, MAX_GAS_DENSITY, MAX_RING_PARTICLES};
-pub use kernel::{DEFAULT_KICK_FLOOR, FitParams, KernelConfig, KernelParams, MAX_BINS};
+pub use kernel::{
+    DEFAULT_KICK_FLOOR, FitParams, KernelConfig, KernelParams, MAX_BINS, PAPER_TRUNCATION,
+};
 pub use md::{
     MAX_MD_RUNS, MAX_MD_SAMPLES, MAX_NEIGHBOURS, MAX_RING_ENCOUNTERS, MdConfig, MdParams,
     MdSystemConfig,

@@ -35,7 +35,7 @@ impl Default for SweepConfig {
             u_prime_min: -3.0,
             u_prime_max: 3.0,
             points: 25,
-            balance_separations: vec![0.01, 0.02, 0.05],
+            balance_separations: vec![0.01, 0.02, 0.04, 0.05],
             balance_bin_width: 0.005,
             launch_spread: 2.0,
         }

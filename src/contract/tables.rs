@@ -1242,6 +1242,59 @@ pub mod gases {
     );
 }
 
+/// The `paper` stage: `paper.parquet`, one row per published number.
+pub mod paper {
+    use super::*;
+
+    /// The stage, as named in instance ids and the store.
+    pub const STAGE: &str = "paper";
+
+    /// The table.
+    pub const TABLE: TableSpec = TableSpec {
+        stage: STAGE,
+        name: "paper",
+        description: "published numbers of Phys. Rev. E 110, 014114 (2024) against ours under the paper's definition",
+    };
+    /// What the number is.
+    pub const QUANTITY: Col<String> = Col::text("quantity", "the published quantity");
+    /// Where the paper gives it.
+    pub const SOURCE: Col<String> = Col::text("source", "where the paper gives it");
+    /// Unit of the published value and ours.
+    pub const UNIT: Col<String> = Col::text("unit", "unit of the value columns of this row");
+    /// The published value.
+    pub const PUBLISHED: Pair = pair!(
+        "published",
+        "see unit",
+        "the published value",
+        "its uncertainty: as printed, else half a unit of its last printed digit"
+    );
+    /// Ours under the paper's definition.
+    pub const OURS: Pair = pair!(
+        "ours",
+        "see unit",
+        "ours under the paper's definition",
+        "standard error"
+    );
+    /// `ours / published - 1`.
+    pub const RELATIVE_DIFFERENCE: Col<f64> =
+        Col::f64("relative_difference", "1", "ours / published - 1");
+    /// z-score of the difference.
+    pub const Z: Col<f64> = Col::f64(
+        "z",
+        "1",
+        "(ours - published) / sqrt(ours_stderr^2 + published_stderr^2)",
+    );
+    /// Ours under our (converged) definition, where it differs.
+    pub const OURS_CONVERGED: Pair = pair!(
+        "ours_converged",
+        "see unit",
+        "ours under our definition where it differs from the paper's (NaN: the same)",
+        "standard error"
+    );
+    /// Where the definitions differ, and how to read the row.
+    pub const NOTE: Col<String> = Col::text("note", "where the definitions differ");
+}
+
 /// The `table` stage: `table.parquet`, one row per potential.
 pub mod table {
     pub use super::POTENTIAL;

@@ -275,9 +275,16 @@ impl CompareStage {
     }
 }
 
+impl CompareStage {
+    /// The one compare instance of a study.
+    pub fn instance() -> InstanceId {
+        InstanceId::new(contract::compare::STAGE, "study")
+    }
+}
+
 impl Stage for CompareStage {
     fn id(&self) -> InstanceId {
-        InstanceId::new(contract::compare::STAGE, "study")
+        CompareStage::instance()
     }
 
     fn version(&self) -> u32 {

@@ -11,6 +11,7 @@ use crate::figures::{Figure, FigureRows, Size, frames, render};
 use crate::physics::potential::Potential;
 use crate::pipeline::{Input, InstanceId, Progress, Stage, StageError, Table};
 
+use super::compare::CompareStage;
 use super::kernel::target_instance;
 
 /// The figure table's name (`points.parquet`).
@@ -103,7 +104,7 @@ pub fn figure_stages(study: &Study, plan: &[Box<dyn Stage>]) -> Vec<FiguresStage
             figures.push(FiguresStage::new(Figure::Rates { id, label }, vec![sweep]));
         }
     }
-    let compare = InstanceId::new(contract::compare::STAGE, "study");
+    let compare = CompareStage::instance();
     if let (true, Some(ring)) = (present(&compare), study.md_params().first()) {
         figures.push(FiguresStage::new(
             Figure::MdBoltzmann {

@@ -11,6 +11,7 @@ pub mod gases;
 pub mod kernel;
 pub mod md;
 pub mod moments;
+pub mod paper;
 pub mod scan;
 pub mod sweep;
 pub mod table;
@@ -22,6 +23,7 @@ use crate::pipeline::Stage;
 pub fn plan(study: &Study) -> Vec<Box<dyn Stage>> {
     let mut stages: Vec<Box<dyn Stage>> = Vec::new();
     let potentials = study.potentials();
+    let truncations = &study.config.kernel.truncations;
     for &potential in &potentials {
         stages.push(Box::new(scan::ScanStage::new(study.scan_params(potential))));
         stages.push(Box::new(collisions::CollisionsStage::new(
@@ -30,7 +32,10 @@ pub fn plan(study: &Study) -> Vec<Box<dyn Stage>> {
         for (u_prime, density) in study.kernel_targets() {
             let params = study.kernel_params(potential, u_prime, density);
             stages.push(Box::new(kernel::KernelStage::new(params)));
-            stages.push(Box::new(moments::MomentsStage::new(params)));
+            stages.push(Box::new(moments::MomentsStage::new(
+                params,
+                truncations.clone(),
+            )));
             stages.push(Box::new(fit::FitStage::new(study.fit_params(params))));
         }
         let sweep = study.sweep_params(potential);
@@ -59,7 +64,10 @@ pub fn plan(study: &Study) -> Vec<Box<dyn Stage>> {
         let dense = study.kernel_params(gas.potential, 0.0, gas.scaled_density());
         let id = moments::MomentsStage::instance(&dense);
         if !stages.iter().any(|stage| stage.id() == id) {
-            stages.push(Box::new(moments::MomentsStage::new(dense)));
+            stages.push(Box::new(moments::MomentsStage::new(
+                dense,
+                truncations.clone(),
+            )));
         }
     }
     if !gases.is_empty() {
@@ -110,6 +118,9 @@ pub fn plan(study: &Study) -> Vec<Box<dyn Stage>> {
         .map(|&p| study.kernel_params(p, 0.0, 0.0))
         .collect();
     stages.push(Box::new(table::TableStage::new(rows)));
+    if let Some(paper) = paper::paper_stage(study, &stages) {
+        stages.push(Box::new(paper));
+    }
     if study.config.figures.enabled {
         let figures = figures::figure_stages(study, &stages);
         stages.extend(figures.into_iter().map(|f| Box::new(f) as Box<dyn Stage>));

@@ -6,6 +6,7 @@
 //! `a_n` is the self variance rate at `u' = 0`, dilute limit, `X` = half the window.
 
 use arrow::array::RecordBatch;
+use serde::Serialize;
 use serde_json::Value;
 
 use super::collisions::CollisionsStage;
@@ -24,12 +25,23 @@ const TRUNCATION_DECADES: u32 = 3;
 /// The `moments` stage for one potential, `u'` and density.
 pub struct MomentsStage {
     params: KernelParams,
+    /// Truncations added to the grid (`kernel.truncations`).
+    extra: Vec<f64>,
+}
+
+/// The key of a moments instance: the kernel's parameters and the added truncations.
+#[derive(Serialize)]
+struct MomentsKey<'a> {
+    #[serde(flatten)]
+    kernel: &'a KernelParams,
+    truncations: &'a [f64],
 }
 
 impl MomentsStage {
-    /// A moments stage with resolved parameters.
-    pub fn new(params: KernelParams) -> MomentsStage {
-        MomentsStage { params }
+    /// A moments stage with resolved parameters and the truncations `extra`
+    /// added to its grid.
+    pub fn new(params: KernelParams, extra: Vec<f64>) -> MomentsStage {
+        MomentsStage { params, extra }
     }
 
     /// Instance id for kernel parameters.
@@ -37,13 +49,17 @@ impl MomentsStage {
         InstanceId::new(contract::moments::STAGE, &target_instance(params))
     }
 
-    /// Log-spaced `X` from `10^-3` of the half window to the half window, then infinity.
+    /// Log-spaced `X` from `10^-3` of the half window to the half window and
+    /// the added truncations, ascending, then infinity.
     fn truncations(&self) -> Vec<f64> {
         let edge = 0.5 * self.params.window;
         let count = TRUNCATIONS_PER_DECADE * TRUNCATION_DECADES;
         let mut grid: Vec<f64> = (0..=count)
             .map(|k| edge * 10f64.powf(-f64::from(count - k) / f64::from(TRUNCATIONS_PER_DECADE)))
+            .chain(self.extra.iter().copied())
             .collect();
+        grid.sort_by(f64::total_cmp);
+        grid.dedup();
         grid.push(f64::INFINITY);
         grid
     }
@@ -69,11 +85,15 @@ impl Stage for MomentsStage {
     }
 
     fn version(&self) -> u32 {
-        2
+        3
     }
 
     fn params(&self) -> Value {
-        serde_json::to_value(self.params).unwrap_or(Value::Null)
+        let key = MomentsKey {
+            kernel: &self.params,
+            truncations: &self.extra,
+        };
+        serde_json::to_value(key).unwrap_or(Value::Null)
     }
 
     fn tables(&self) -> &'static [&'static str] {

@@ -61,7 +61,7 @@ pub fn run_counts(config: &Path, args: &[&str]) -> (usize, usize) {
 }
 
 /// A study of one potential (`ipp-6`) small enough to run in a fraction of a
-/// second: scan, collisions, kernel, moments, fit, table and three figures
+/// second: scan, collisions, kernel, moments, fit, table, paper and three figures
 /// (kernels, kernel with fit, truncation).
 pub fn small_study(store: &str) -> String {
     format!(
@@ -94,7 +94,7 @@ enabled = false
 }
 
 /// Stage instances of [`small_study`].
-pub const SMALL_STUDY_INSTANCES: usize = 9;
+pub const SMALL_STUDY_INSTANCES: usize = 10;
 
 /// Every file under `dir`, recursively, as paths relative to `dir`.
 pub fn files_under(dir: &Path) -> Vec<PathBuf> {
@@ -166,12 +166,12 @@ pub fn flip_byte(path: &Path) {
 
 /// A reduced study that runs every stage (scan, collisions and the sweep's
 /// own, kernel, moments, fit, sweep, convergence, evolve, md for an inverse
-/// power law, the n = 2 ring and Lennard-Jones, compare, gases, table,
+/// power law, the n = 2 ring and Lennard-Jones, compare, gases, table, paper,
 /// figures) in about a second.
 pub const REDUCED_STUDY: &str = r#"
 [potentials]
 inverse_power = [2, 6]
-lennard_jones = [0.1]
+lennard_jones = [0.1, 0.1052]
 
 [scan]
 offset_min = -3.0
@@ -199,7 +199,7 @@ density = [0.0, 1e-3]
 
 [sweep]
 points = 5
-balance_separations = [0.02, 0.05]
+balance_separations = [0.02, 0.04]
 
 [convergence]
 enabled = true
@@ -270,6 +270,15 @@ kt_ev = 0.1
 mass_electron = 1.0
 ring_particles = 11
 ring_radius_um = 400.0
+
+[[gas]]
+name = "N2_10K"
+potential = "lj-0.1052"
+l0_um = 3.698e-4
+eps_ev = 8.19077526e-3
+kt_ev = 8.61669557352e-4
+mass_amu = 28.0134
+density_per_um = 0.1
 
 [[gas]]
 name = "hot"

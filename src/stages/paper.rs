@@ -1,0 +1,394 @@
+//! `paper`: the published numbers of Phys. Rev. E 110, 014114 (2024) next to
+//! ours under the paper's definition, with the relative difference and the
+//! z-score, and ours under our own definition where the two differ. One row per
+//! published number whose inputs the study computes.
+//!
+//! Definitions: the paper's kernel moments count `|u - u'| <= 0.04 v_th` only
+//! (its Table I; `kernel.truncations`), while our `a_n` takes the whole window
+//! (`X = window / 2`), where the self variance rate has converged; `Gamma =
+//! a_n rho^2 l v_th` follows whichever `a_n` is used.
+
+use serde::Serialize;
+use serde_json::Value;
+
+use super::compare::CompareStage;
+use super::moments::{MomentsStage, self_variance_at};
+use crate::config::{KernelParams, PAPER_TRUNCATION, Study};
+use crate::contract::{self, Rows};
+use crate::physics::potential::Potential;
+use crate::pipeline::{Input, InstanceId, Progress, Stage, StageError, Table};
+use crate::stats::Estimate;
+
+/// A number as the paper prints it.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct Published {
+    /// What it is.
+    pub quantity: &'static str,
+    /// Where the paper gives it.
+    pub source: &'static str,
+    /// Unit.
+    pub unit: &'static str,
+    /// Value.
+    pub value: f64,
+    /// Uncertainty: as printed, else half a unit of the last printed digit.
+    pub uncertainty: f64,
+    /// Whether the paper prints the uncertainty.
+    pub printed_uncertainty: bool,
+}
+
+/// `a_6`, Table I.
+pub const A_6: Published = Published {
+    quantity: "a_6: self variance rate, n = 6, u' = 0, dilute",
+    source: "Table I",
+    unit: "rho^2 l v_th",
+    value: 2.58e-4,
+    uncertainty: 0.005e-4,
+    printed_uncertainty: false,
+};
+
+/// The Lennard-Jones rate at `kT = 0.1 eps`.
+pub const A_LJ: Published = Published {
+    quantity: "a: self variance rate, Lennard-Jones theta = kT/eps = 0.1, u' = 0, dilute",
+    source: "Lennard-Jones section (16% above n = 6)",
+    unit: "rho^2 l v_th",
+    value: 3.00e-4,
+    uncertainty: 0.005e-4,
+    printed_uncertainty: false,
+};
+
+/// The detailed-balance ratio at `u' = -3`.
+pub const BALANCE: Published = Published {
+    quantity: "G(-3.00 -> -2.96) / G(-2.96 -> -3.00), n = 6",
+    source: "detailed-balance check",
+    unit: "1",
+    value: 1.12,
+    uncertainty: 0.04,
+    printed_uncertainty: true,
+};
+
+/// The MD rings' final time in units of `1 / Gamma`.
+pub const RING_TIME: Published = Published {
+    quantity: "Gamma t_f of the MD rings, n = 6",
+    source: "MD section: t_f = 1.6e-4 / Gamma",
+    unit: "1",
+    value: 1.6e-4,
+    uncertainty: 0.05e-4,
+    printed_uncertainty: false,
+};
+
+/// The nitrogen example's thermalization time.
+pub const NITROGEN: Published = Published {
+    quantity: "1/Gamma of 1D N2, one molecule per 10 um at 10 K",
+    source: "N2 example: about 10 s to thermalize",
+    unit: "s",
+    value: 10.0,
+    uncertainty: 5.0,
+    printed_uncertainty: false,
+};
+
+/// The gas of the nitrogen example in a study (`[[gas]]` name).
+pub const NITROGEN_GAS: &str = "N2_10K";
+
+/// How ours is computed for one published number.
+#[derive(Clone, Debug, Serialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum Check {
+    /// A self variance rate at `X = 0.04` (converged: the window edge).
+    Rate {
+        /// The published number.
+        published: Published,
+        /// The `u' = 0`, dilute moments.
+        moments: KernelParams,
+    },
+    /// The detailed-balance ratio `G(a -> b) / G(b -> a)` of a sweep.
+    Balance {
+        /// The published number.
+        published: Published,
+        /// The sweep instance.
+        sweep: String,
+        /// `a`, `v_th`.
+        a: f64,
+        /// `b`, `v_th`.
+        b: f64,
+    },
+    /// `Gamma t_f = a_n rho^2 l v_th t_f` of the compared rings.
+    RingTime {
+        /// The published number.
+        published: Published,
+        /// The rings' `u' = 0`, dilute moments.
+        moments: KernelParams,
+    },
+    /// `1 / Gamma` of a gas, in seconds.
+    GasTime {
+        /// The published number.
+        published: Published,
+        /// The gas's name.
+        gas: String,
+        /// Its `u' = 0`, dilute moments.
+        moments: KernelParams,
+    },
+}
+
+/// One row of the table.
+struct PaperRow {
+    published: Published,
+    ours: Estimate,
+    converged: Estimate,
+    note: String,
+}
+
+/// An estimate that does not exist under our definition (the same as the paper's).
+const SAME: Estimate = Estimate {
+    mean: f64::NAN,
+    stderr: f64::NAN,
+};
+
+/// The `paper` stage.
+pub struct PaperStage {
+    checks: Vec<Check>,
+}
+
+/// The paper's `n = 6` and Lennard-Jones `theta = 0.1` potentials.
+const IPP_6: Potential = Potential::InversePower { n: 6.0 };
+const LJ_0_1: Potential = Potential::LennardJones { theta: 0.1 };
+
+/// The paper's detailed-balance pair `(a, b)`.
+const BALANCE_PAIR: (f64, f64) = (-3.0, -2.96);
+
+/// The `paper` stage of a study: every published number whose inputs `plan`
+/// computes (none: no stage).
+pub fn paper_stage(study: &Study, plan: &[Box<dyn Stage>]) -> Option<PaperStage> {
+    let present = |id: &InstanceId| plan.iter().any(|stage| stage.id() == *id);
+    let dilute = |p: Potential| study.kernel_params(p, 0.0, 0.0);
+    let has = |p: Potential| present(&MomentsStage::instance(&dilute(p)));
+    let mut checks = Vec::new();
+    for (published, potential) in [(A_6, IPP_6), (A_LJ, LJ_0_1)] {
+        if has(potential) {
+            checks.push(Check::Rate {
+                published,
+                moments: dilute(potential),
+            });
+        }
+    }
+    if let Some(sweep) = study.sweep_params(IPP_6) {
+        let (a, b) = BALANCE_PAIR;
+        let width = sweep.balance_bin_width;
+        let offers = sweep.u_prime_min == a
+            && sweep
+                .balance_separations
+                .iter()
+                .any(|s| ((s / width).round() * width - (b - a)).abs() < 1e-9);
+        if offers {
+            checks.push(Check::Balance {
+                published: BALANCE,
+                sweep: IPP_6.id(),
+                a,
+                b,
+            });
+        }
+    }
+    let compared = study.md_params().first().map(|ring| ring.potential);
+    if present(&CompareStage::instance()) && compared == Some(IPP_6) {
+        checks.push(Check::RingTime {
+            published: RING_TIME,
+            moments: dilute(IPP_6),
+        });
+    }
+    if let Some(gas) = study.gases().into_iter().find(|g| g.name == NITROGEN_GAS) {
+        checks.push(Check::GasTime {
+            published: NITROGEN,
+            gas: gas.name,
+            moments: dilute(gas.potential),
+        });
+    }
+    (!checks.is_empty()).then_some(PaperStage { checks })
+}
+
+/// `a_n` at the paper's truncation and at the window edge (ours).
+fn rates(inputs: &[Input], params: &KernelParams) -> Result<(Estimate, Estimate), StageError> {
+    let moments = contract::moments::TABLE.find(inputs, &MomentsStage::instance(params))?;
+    Ok((
+        self_variance_at(moments, PAPER_TRUNCATION)?,
+        self_variance_at(moments, 0.5 * params.window)?,
+    ))
+}
+
+fn scaled(estimate: Estimate, factor: f64) -> Estimate {
+    Estimate {
+        mean: estimate.mean * factor,
+        stderr: estimate.stderr * factor.abs(),
+    }
+}
+
+fn missing(what: String) -> StageError {
+    StageError::Input(what)
+}
+
+impl Check {
+    fn published(&self) -> Published {
+        match self {
+            Check::Rate { published, .. }
+            | Check::Balance { published, .. }
+            | Check::RingTime { published, .. }
+            | Check::GasTime { published, .. } => *published,
+        }
+    }
+
+    /// The instances it reads.
+    fn inputs(&self) -> Vec<InstanceId> {
+        match self {
+            Check::Rate { moments, .. } => vec![MomentsStage::instance(moments)],
+            Check::Balance { sweep, .. } => vec![InstanceId::new(contract::sweep::STAGE, sweep)],
+            Check::RingTime { moments, .. } => {
+                vec![MomentsStage::instance(moments), CompareStage::instance()]
+            }
+            Check::GasTime { moments, .. } => vec![
+                MomentsStage::instance(moments),
+                InstanceId::new(contract::gases::STAGE, "study"),
+            ],
+        }
+    }
+
+    fn row(&self, inputs: &[Input]) -> Result<PaperRow, StageError> {
+        let published = self.published();
+        let truncated = "ours counts |u - u'| <= 0.04 like the paper; converged: the whole window (X = 0.1), our a_n";
+        let (ours, converged, note) = match self {
+            Check::Rate { moments, .. } => {
+                let (paper, window) = rates(inputs, moments)?;
+                (paper, window, truncated.to_string())
+            }
+            Check::Balance { sweep, a, b, .. } => {
+                use contract::sweep::detailed_balance::{A, B, EXPECTED_RATIO, RATIO, TABLE};
+                let id = InstanceId::new(contract::sweep::STAGE, sweep);
+                let table = TABLE.find(inputs, &id)?;
+                let close = |x: f64, y: f64| (x - y).abs() < 1e-9;
+                let row = A
+                    .read(table)?
+                    .iter()
+                    .zip(B.read(table)?)
+                    .position(|(x, y)| close(*x, *a) && close(y, *b))
+                    .ok_or_else(|| {
+                        missing(format!(
+                            "{id} has no pair ({a}, {b}): add b - a to sweep.balance_separations"
+                        ))
+                    })?;
+                let expected = EXPECTED_RATIO.read(table)?[row];
+                let note = format!("f0(b)/f0(a) = {expected:.4} (detailed balance)");
+                (RATIO.read(table)?[row], SAME, note)
+            }
+            Check::RingTime { moments, .. } => {
+                use contract::compare::finite_size::{SCALED_TIME, TABLE};
+                let (paper, window) = rates(inputs, moments)?;
+                let times = SCALED_TIME.read(TABLE.find(inputs, &CompareStage::instance())?)?;
+                let time = times[0];
+                if times.iter().any(|t| (t / time - 1.0).abs() > 1e-9) {
+                    return Err(missing(format!(
+                        "the compared rings end at different rho^2 l v_th t_f ({times:?}): the paper's rings share one"
+                    )));
+                }
+                let note =
+                    format!("rho^2 l v_th t_f = {time:.5} for every compared ring; {truncated}");
+                (scaled(paper, time), scaled(window, time), note)
+            }
+            Check::GasTime { gas, moments, .. } => {
+                use contract::gases::{A_N, GAMMA, GAS, TABLE};
+                let table =
+                    TABLE.find(inputs, &InstanceId::new(contract::gases::STAGE, "study"))?;
+                let row = GAS
+                    .read(table)?
+                    .iter()
+                    .position(|name| name == gas)
+                    .ok_or_else(|| missing(format!("no gas `{gas}` in the gases table")))?;
+                // Gamma / a_n = rho^2 l v_th (1/ns), exact.
+                let rate_unit = GAMMA.value.read(table)?[row] / A_N.value.read(table)?[row];
+                let (paper, window) = rates(inputs, moments)?;
+                let seconds = |a: Estimate| {
+                    let time = 1e-9 / (a.mean * rate_unit);
+                    Estimate {
+                        mean: time,
+                        stderr: time * a.stderr / a.mean,
+                    }
+                };
+                let note = format!(
+                    "gas `{gas}` of the study (its comment cites the Lennard-Jones table); the paper says 'about', read as one significant digit; {truncated}"
+                );
+                (seconds(paper), seconds(window), note)
+            }
+        };
+        let note = if published.printed_uncertainty {
+            note
+        } else {
+            format!("published uncertainty: rounding of the printed digits; {note}")
+        };
+        Ok(PaperRow {
+            published,
+            ours,
+            converged,
+            note,
+        })
+    }
+}
+
+impl Stage for PaperStage {
+    fn id(&self) -> InstanceId {
+        InstanceId::new(contract::paper::STAGE, "study")
+    }
+
+    fn version(&self) -> u32 {
+        1
+    }
+
+    fn params(&self) -> Value {
+        serde_json::to_value(&self.checks).unwrap_or(Value::Null)
+    }
+
+    fn tables(&self) -> &'static [&'static str] {
+        &[contract::paper::TABLE.name]
+    }
+
+    fn inputs(&self) -> Vec<InstanceId> {
+        let mut ids: Vec<InstanceId> = Vec::new();
+        for id in self.checks.iter().flat_map(Check::inputs) {
+            if !ids.contains(&id) {
+                ids.push(id);
+            }
+        }
+        ids
+    }
+
+    fn work_units(&self) -> u64 {
+        1
+    }
+
+    fn run(&self, inputs: &[Input], progress: &Progress) -> Result<Vec<Table>, StageError> {
+        use contract::paper::*;
+        let rows = self
+            .checks
+            .iter()
+            .map(|check| check.row(inputs))
+            .collect::<Result<Vec<_>, _>>()?;
+        progress.advance(1);
+        let table = Rows::new(&rows)
+            .with(QUANTITY, |r| r.published.quantity.to_string())
+            .with(SOURCE, |r| r.published.source.to_string())
+            .with(UNIT, |r| r.published.unit.to_string())
+            .estimate(PUBLISHED, |r| Estimate {
+                mean: r.published.value,
+                stderr: r.published.uncertainty,
+            })
+            .estimate(OURS, |r| r.ours)
+            .with(RELATIVE_DIFFERENCE, |r| {
+                r.ours.mean / r.published.value - 1.0
+            })
+            .with(Z, |r| z_score(r.ours, r.published))
+            .estimate(OURS_CONVERGED, |r| r.converged)
+            .with(NOTE, |r| r.note.clone())
+            .table(&TABLE)?;
+        Ok(vec![table])
+    }
+}
+
+/// `(ours - published) / sqrt(ours_stderr^2 + published_uncertainty^2)`.
+fn z_score(ours: Estimate, published: Published) -> f64 {
+    (ours.mean - published.value) / ours.stderr.hypot(published.uncertainty)
+}
