@@ -136,9 +136,9 @@ fn a_bundle_passes_tools_that_are_not_ours() {
             .unwrap();
     let resources = descriptor["resources"].as_array().unwrap();
     let count = |format: &str| resources.iter().filter(|r| r["format"] == format).count();
-    assert_eq!(count("parquet"), 10, "7 result tables and 3 figure tables");
-    assert_eq!((count("svg"), count("png")), (6, 6), "3 figures at 2 sizes");
-    assert_eq!(resources.len(), 10 + 12 + 4, "and 4 documents");
+    assert_eq!(count("parquet"), 11, "7 result tables and 4 figure tables");
+    assert_eq!((count("svg"), count("png")), (8, 8), "4 figures at 2 sizes");
+    assert_eq!(resources.len(), 11 + 16 + 4, "and 4 documents");
     for resource in resources.iter().filter(|r| r["type"] == "table") {
         let path = resource["path"].as_str().unwrap();
         let (rows, column, sum) = shown_rows_and_sum(&config, &bundle.join(path));

@@ -225,8 +225,134 @@ fn expected(store: &Path, figure: &Artifact) -> Vec<Row> {
             ]
             .concat()
         }
+        "kicks" => {
+            use contract::scan::LAUNCH;
+            use contract::scan::curve::{LAUNCH_DELAY, U1_FINAL, U1_FINAL_ERROR};
+            let curve = figure.input(store, 0).table("curve");
+            let launches = LAUNCH.read(&curve).unwrap();
+            let (delay, kick, bound) = (
+                LAUNCH_DELAY.read(&curve).unwrap(),
+                U1_FINAL.read(&curve).unwrap(),
+                U1_FINAL_ERROR.read(&curve).unwrap(),
+            );
+            in_order(&launches)
+                .iter()
+                .flat_map(|launch| {
+                    (0..launches.len())
+                        .filter(|&k| launches[k] == *launch)
+                        .map(|k| ("kick".into(), launch.clone(), delay[k], kick[k], bound[k]))
+                        .collect::<Vec<Row>>()
+                })
+                .collect()
+        }
+        "collapse" => {
+            use contract::compare::comparison::{DU, H_BOLTZMANN, H_TAGGED, RING};
+            let compare = figure.input(store, 0).table("comparison");
+            let names = RING.read(&compare).unwrap();
+            let du = DU.read(&compare).unwrap();
+            let of = |ring: &str, series: &str, pair: &Pair| -> Vec<Row> {
+                pair_rows(&compare, "collapse", series, &du, pair)
+                    .into_iter()
+                    .zip(&names)
+                    .filter(|(_, name)| *name == ring)
+                    .map(|(row, _)| row)
+                    .collect()
+            };
+            let rings: Vec<&str> = params["rings"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|r| r.as_str().unwrap())
+                .collect();
+            let mut rows = of(rings[0], "Boltzmann", &H_BOLTZMANN);
+            for ring in &rings {
+                rows.extend(of(ring, ring, &H_TAGGED));
+            }
+            rows
+        }
+        "evolution" => {
+            use contract::evolve::{TIME_GAMMA, early_summary, evolution};
+            let input = figure.input(store, 0);
+            let h = input.table("evolution");
+            let (time, u) = (TIME_GAMMA.read(&h).unwrap(), evolution::U.read(&h).unwrap());
+            let tagged = evolution::H_TAGGED.read(&h).unwrap();
+            let f0 = evolution::EQUILIBRIUM_TAGGED.read(&h).unwrap();
+            let times: Vec<f64> = params["times"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|t| t.as_f64().unwrap())
+                .collect();
+            let mut rows: Vec<Row> = Vec::new();
+            for t in &times {
+                let label = format!("t = {t} / Γ");
+                rows.extend((0..u.len()).filter(|&k| time[k] == *t).map(|k| {
+                    (
+                        "h".into(),
+                        label.clone(),
+                        u[k],
+                        tagged[k].mean,
+                        tagged[k].stderr,
+                    )
+                }));
+            }
+            rows.extend(
+                (0..u.len())
+                    .filter(|&k| time[k] == times[0])
+                    .map(|k| ("h".into(), "f0".into(), u[k], f0[k], 0.0)),
+            );
+            let early = input.table("early_summary");
+            let t = TIME_GAMMA.read(&early).unwrap();
+            rows.extend(pair_rows(
+                &early,
+                "variance",
+                "master equation",
+                &t,
+                &early_summary::VARIANCE,
+            ));
+            rows.extend(pair_rows(
+                &early,
+                "variance",
+                "t κ₂",
+                &t,
+                &early_summary::VARIANCE_CLOSED_FORM,
+            ));
+            rows
+        }
+        "finite_size" => {
+            use contract::compare::finite_size::{DENSITY, PARTICLES, RATIO, THERMAL_RATIO};
+            let rings = figure.input(store, 0).table("finite_size");
+            let particles = PARTICLES.read(&rings).unwrap();
+            let density = DENSITY.read(&rings).unwrap();
+            let mut rows = Vec::new();
+            for (panel, pair) in [("tagged", RATIO), ("thermal", THERMAL_RATIO)] {
+                let all = pair_rows(&rings, panel, "", &density, &pair);
+                for n in in_order(&particles) {
+                    rows.extend(
+                        all.iter()
+                            .zip(&particles)
+                            .filter(|(_, p)| **p == n)
+                            .map(|(row, _)| {
+                                (row.0.clone(), format!("N = {n}"), row.2, row.3, row.4)
+                            }),
+                    );
+                }
+            }
+            rows
+        }
         other => panic!("figure kind `{other}` has no check here"),
     }
+}
+
+/// The distinct values of `values` in order of first appearance.
+fn in_order<T: PartialEq + Clone>(values: &[T]) -> Vec<T> {
+    let mut distinct: Vec<T> = Vec::new();
+    for value in values {
+        if !distinct.contains(value) {
+            distinct.push(value.clone());
+        }
+    }
+    distinct
 }
 
 /// Equal as numbers: exactly, or for group means (summed in another order

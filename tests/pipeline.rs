@@ -57,8 +57,8 @@ fn python_check(script: &str, artifact: &Path) {
 /// Every instance of the default DAG: per potential scan, collisions, the
 /// sweep's own collisions, sweep, and kernel, moments and fit at (u' = 0,
 /// dilute), plus the table, the paper table, and the figures of the kicked potential (kernels,
-/// kernel with fit, rates, truncation).
-const INSTANCES: usize = 20;
+/// kernel with fit, rates, truncation, kicks).
+const INSTANCES: usize = 21;
 
 fn stage_dirs(store: &Path, stage: &str) -> Vec<PathBuf> {
     let mut dirs: Vec<PathBuf> = fs::read_dir(store.join("artifacts").join(stage))
@@ -118,9 +118,9 @@ fn changing_one_potentials_scan_setting_reruns_only_that_instance() {
     );
     let output = ternary(&path, &["run"]);
     let text = stdout(&output);
-    // The changed scan, and the table that reads it; nothing else.
+    // The changed scan, the table and the kicks figure that read it; nothing else.
     assert!(
-        text.contains(&format!("run: 2 computed, {} fresh", INSTANCES - 2)),
+        text.contains(&format!("run: 3 computed, {} fresh", INSTANCES - 3)),
         "{text}"
     );
     let computed = |prefix: &str| {
@@ -128,13 +128,14 @@ fn changing_one_potentials_scan_setting_reruns_only_that_instance() {
             .any(|l| l.starts_with(prefix) && l.contains("computed"))
     };
     assert!(
-        computed("scan[ipp-6]") && computed("table[study]"),
+        computed("scan[ipp-6]") && computed("table[study]") && computed("figures[kicks_ipp-6]"),
         "{text}"
     );
-    // The old ipp-6 scan and the old table are no longer referenced: gc removes exactly them.
+    // The old ipp-6 scan, table and kicks figure are no longer referenced: gc
+    // removes exactly them.
     assert_eq!(artifact_dirs(&dir.join("data")).len(), 3);
     let gc = stdout(&ternary(&path, &["gc"]));
-    assert!(gc.contains("removed 2 artifacts"), "{gc}");
+    assert!(gc.contains("removed 3 artifacts"), "{gc}");
     assert_eq!(artifact_dirs(&dir.join("data")).len(), 2);
     assert_eq!(run_counts(&path, &[]), (0, INSTANCES));
 }

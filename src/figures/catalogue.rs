@@ -6,7 +6,7 @@ use polars::prelude::{
 };
 use serde::Serialize;
 
-use super::frames::{frame, log_groups, series, stack};
+use super::frames::{frame, log_groups, series, series_by, stack};
 use super::{Axis, Layout, Mark, Panel, Style};
 use crate::contract;
 use crate::pipeline::{Input, StageError};
@@ -52,15 +52,42 @@ pub enum Figure {
         /// Its legend label.
         label: String,
     },
+    /// The special particle's final velocity against the launch delay, one
+    /// curve per scanned launch pair (mono-energetic collisions).
+    Kicks {
+        /// The potential's id.
+        id: String,
+    },
+    /// The scaling collapse: tagged `h(u, t_f)` of rings with one `N` at
+    /// different `rho` and `T` (the same `rho^2 l v_th t_f`), with Boltzmann.
+    Collapse {
+        /// The rings (rows of the comparison table), the first also gives Boltzmann.
+        rings: Vec<String>,
+    },
+    /// The tagged particle's `h(u, t)` approaching `f0` (a) and the early
+    /// variance growing as `t kappa_2` (b).
+    Evolution {
+        /// The evolved kernel's instance (`ipp-6_u0_rho0`).
+        instance: String,
+        /// Times drawn in panel (a), `1/Gamma`.
+        times: Vec<f64>,
+    },
+    /// MD over Boltzmann window variances against `rho l`, one series per `N`:
+    /// tagged (a) and thermal (b) estimators.
+    FiniteSize,
 }
 
 /// Names of every figure kind, for documentation and tests.
-pub const FIGURES: [&str; 5] = [
+pub const FIGURES: [&str; 9] = [
     "kernels",
     "kernel_fit",
     "rates",
     "md_boltzmann",
     "truncation",
+    "kicks",
+    "collapse",
+    "evolution",
+    "finite_size",
 ];
 
 fn failed(error: impl std::fmt::Display) -> StageError {
@@ -76,6 +103,10 @@ impl Figure {
             Figure::Rates { id, .. } => format!("rates_{id}"),
             Figure::MdBoltzmann { ring } => format!("md_boltzmann_{ring}"),
             Figure::Truncation { id, .. } => format!("truncation_{id}"),
+            Figure::Kicks { id } => format!("kicks_{id}"),
+            Figure::Collapse { .. } => "collapse".into(),
+            Figure::Evolution { instance, .. } => format!("evolution_{instance}"),
+            Figure::FiniteSize => "finite_size".into(),
         }
     }
 
@@ -96,6 +127,18 @@ impl Figure {
             }
             Figure::Truncation { .. } => {
                 "self variance rate a_n(X) of the kernel truncated at |u - u'| <= X, with the paper's X = 0.04"
+            }
+            Figure::Kicks { .. } => {
+                "final velocity u1f of the special particle (u1 = 0) against the launch delay, per scanned launch pair, +- error bound"
+            }
+            Figure::Collapse { .. } => {
+                "tagged h(u, t_f) of rings with one N at different rho and T and the same rho^2 l v_th t_f (the rho^2 T^(1/2 - 1/n) collapse), with the Boltzmann h"
+            }
+            Figure::Evolution { .. } => {
+                "tagged particle's h(u, t) relaxing to f0 (a, log scale) and the early variance of h with its closed form t kappa_2 (b)"
+            }
+            Figure::FiniteSize => {
+                "MD / Boltzmann window variance at t_f against rho l, one series per N: tagged (a) and thermal (b) estimators"
             }
         }
     }
@@ -161,6 +204,36 @@ impl Figure {
                     vec![("", Style::Band)],
                 )
             }],
+            Figure::Kicks { .. } => vec![panel(
+                "kick",
+                linear("launch delay Δt [l / v_th]"),
+                linear("u1f [v_th]"),
+                vec![("", Style::Line)],
+            )],
+            Figure::Collapse { .. } => vec![panel(
+                "collapse",
+                linear(DU_AXIS),
+                linear("h(u, t_f) [1 / v_th]"),
+                vec![("Boltzmann", Style::Band)],
+            )],
+            Figure::Evolution { .. } => vec![
+                panel(
+                    "h",
+                    linear("u [v_th]"),
+                    log("h(u, t) [1 / v_th]"),
+                    vec![("", Style::Line)],
+                ),
+                panel(
+                    "variance",
+                    log("t [1 / Γ]"),
+                    log("variance of h [v_th²]"),
+                    vec![("t κ₂", Style::Line)],
+                ),
+            ],
+            Figure::FiniteSize => ["tagged", "thermal"]
+                .into_iter()
+                .map(|name| panel(name, linear("ρ l"), linear("MD / Boltzmann"), Vec::new()))
+                .collect(),
         };
         Layout { panels }
     }
@@ -187,6 +260,10 @@ impl Figure {
             Figure::Rates { .. } => rates(&inputs[0]),
             Figure::MdBoltzmann { ring } => md_boltzmann(&inputs[0], ring),
             Figure::Truncation { label, .. } => truncation(&inputs[0], label),
+            Figure::Kicks { .. } => kicks(&inputs[0]),
+            Figure::Collapse { rings } => collapse(&inputs[0], rings),
+            Figure::Evolution { times, .. } => evolution(&inputs[0], times),
+            Figure::FiniteSize => finite_size(&inputs[0]),
         }
     }
 }
@@ -286,14 +363,7 @@ fn rates(input: &Input) -> Result<DataFrame, StageError> {
 
 fn md_boltzmann(input: &Input, ring: &str) -> Result<DataFrame, StageError> {
     use contract::compare::comparison::{DU, H_BOLTZMANN, H_PUBLISHED, H_TAGGED, RING, TABLE};
-    let all = frame(TABLE.of(input)?)?;
-    let mask = all
-        .column(RING.name)
-        .map_err(failed)?
-        .str()
-        .map_err(failed)?
-        .equal(ring);
-    let rows = all.filter(&mask).map_err(failed)?;
+    let rows = rows_where(&frame(TABLE.of(input)?)?, RING.name, ring)?;
     let pair = |pair: &contract::Pair| (DU.name, pair.value.name, Some(pair.stderr.name));
     stack(vec![
         series(&rows, "tagged", "Boltzmann", pair(&H_BOLTZMANN))?,
@@ -328,4 +398,103 @@ fn truncation(input: &Input, label: &str) -> Result<DataFrame, StageError> {
             Some(SELF_VARIANCE.stderr.name),
         ),
     )
+}
+
+fn kicks(input: &Input) -> Result<DataFrame, StageError> {
+    use contract::scan::LAUNCH;
+    use contract::scan::curve::{LAUNCH_DELAY, TABLE, U1_FINAL, U1_FINAL_ERROR};
+    let curve = frame(TABLE.of(input)?)?;
+    let columns = (LAUNCH_DELAY.name, U1_FINAL.name, Some(U1_FINAL_ERROR.name));
+    stack(series_by(
+        &curve,
+        "kick",
+        LAUNCH.name,
+        |launch| launch.to_string(),
+        columns,
+    )?)
+}
+
+/// The rows of `all` whose text column `key` equals `value`.
+fn rows_where(all: &DataFrame, key: &str, value: &str) -> Result<DataFrame, StageError> {
+    let mask = all
+        .column(key)
+        .map_err(failed)?
+        .str()
+        .map_err(failed)?
+        .equal(value);
+    all.filter(&mask).map_err(failed)
+}
+
+fn collapse(input: &Input, rings: &[String]) -> Result<DataFrame, StageError> {
+    use contract::compare::comparison::{DU, H_BOLTZMANN, H_TAGGED, RING, TABLE};
+    let all = frame(TABLE.of(input)?)?;
+    let pair = |pair: &contract::Pair| (DU.name, pair.value.name, Some(pair.stderr.name));
+    let first = rings.first().ok_or_else(|| failed("no ring to collapse"))?;
+    let mut parts = vec![series(
+        &rows_where(&all, RING.name, first)?,
+        "collapse",
+        "Boltzmann",
+        pair(&H_BOLTZMANN),
+    )?];
+    for ring in rings {
+        let rows = rows_where(&all, RING.name, ring)?;
+        parts.push(series(&rows, "collapse", ring, pair(&H_TAGGED))?);
+    }
+    stack(parts)
+}
+
+fn evolution(input: &Input, times: &[f64]) -> Result<DataFrame, StageError> {
+    use contract::evolve::{TIME_GAMMA, early_summary, evolution};
+    let h = frame(evolution::TABLE.of(input)?)?;
+    let at = |t: f64| -> Result<DataFrame, StageError> {
+        let mask = h
+            .column(TIME_GAMMA.name)
+            .map_err(failed)?
+            .f64()
+            .map_err(failed)?
+            .equal(t);
+        h.filter(&mask).map_err(failed)
+    };
+    let tagged =
+        |pair: &contract::Pair| (evolution::U.name, pair.value.name, Some(pair.stderr.name));
+    let mut parts = Vec::new();
+    for &t in times {
+        let label = format!("t = {t} / Γ");
+        parts.push(series(&at(t)?, "h", &label, tagged(&evolution::H_TAGGED))?);
+    }
+    let first = times.first().ok_or_else(|| failed("no time to draw"))?;
+    let equilibrium = (evolution::U.name, evolution::EQUILIBRIUM_TAGGED.name, None);
+    parts.push(series(&at(*first)?, "h", "f0", equilibrium)?);
+    let early = frame(early_summary::TABLE.of(input)?)?;
+    let variance =
+        |pair: &contract::Pair| (TIME_GAMMA.name, pair.value.name, Some(pair.stderr.name));
+    parts.push(series(
+        &early,
+        "variance",
+        "master equation",
+        variance(&early_summary::VARIANCE),
+    )?);
+    parts.push(series(
+        &early,
+        "variance",
+        "t κ₂",
+        variance(&early_summary::VARIANCE_CLOSED_FORM),
+    )?);
+    stack(parts)
+}
+
+fn finite_size(input: &Input) -> Result<DataFrame, StageError> {
+    use contract::compare::finite_size::{DENSITY, PARTICLES, RATIO, TABLE, THERMAL_RATIO};
+    let rings = frame(TABLE.of(input)?)?;
+    let named = |n: &str| format!("N = {n}");
+    let pair = |pair: &contract::Pair| (DENSITY.name, pair.value.name, Some(pair.stderr.name));
+    let mut parts = series_by(&rings, "tagged", PARTICLES.name, named, pair(&RATIO))?;
+    parts.extend(series_by(
+        &rings,
+        "thermal",
+        PARTICLES.name,
+        named,
+        pair(&THERMAL_RATIO),
+    )?);
+    stack(parts)
 }

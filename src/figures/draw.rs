@@ -162,7 +162,10 @@ fn draw<DB: DrawingBackend>(
     root.present()
 }
 
-/// The range of `values` (with their errors where `with_errors`) padded by 4%
+/// Decades shown at most on a log axis, below its largest value.
+const LOG_DECADES: i32 = 5;
+
+/// The range of `values` (value, error) with their errors, padded by 4%
 /// of its span, or by a factor on a log axis (positive values only there).
 fn span(values: impl Iterator<Item = (f64, f64)>, log: bool) -> Range<f64> {
     let (mut low, mut high) = (f64::INFINITY, f64::NEG_INFINITY);
@@ -178,6 +181,8 @@ fn span(values: impl Iterator<Item = (f64, f64)>, log: bool) -> Range<f64> {
         return if log { 1e-3..1.0 } else { 0.0..1.0 };
     }
     if log {
+        // Tails far below the data's top carry no information on a figure.
+        let low = low.max(high / 10f64.powi(LOG_DECADES));
         let pad = (high / low).powf(0.04).max(1.05);
         low / pad..high * pad
     } else {
@@ -250,12 +255,19 @@ where
         .set_all_tick_mark_size((text * 0.35) as i32)
         .axis_style(BLACK.stroke_width(size.stroke))
         .draw()?;
+    // On a log axis, points below the shown decades are left out (not drawn
+    // along the axis).
+    let y_low = if panel.y.log {
+        chart.y_range().start
+    } else {
+        f64::NEG_INFINITY
+    };
     for (k, name) in series_names(points).iter().enumerate() {
         let series: Vec<&Point> = points
             .iter()
             .copied()
             .filter(|p| p.series == *name && p.x.is_finite() && p.y.is_finite())
-            .filter(|p| (!panel.x.log || p.x > 0.0) && (!panel.y.log || p.y > 0.0))
+            .filter(|p| (!panel.x.log || p.x > 0.0) && p.y >= y_low)
             .collect();
         draw_series(
             &mut chart,

@@ -6,8 +6,8 @@ use std::io::Cursor;
 
 use arrow::array::RecordBatch;
 use polars::prelude::{
-    ChunkAgg, ChunkCompareIneq, Column, DataFrame, IntoColumn, NamedFrom, ParquetReader, SerReader,
-    Series,
+    ChunkAgg, ChunkCompareIneq, Column, DataFrame, DataType, IntoColumn, NamedFrom, ParquetReader,
+    SerReader, Series,
 };
 
 use crate::contract::figures::points::{PANEL, SERIES, X, Y, Y_ERROR};
@@ -98,6 +98,35 @@ pub fn series(
         ],
     )
     .map_err(failed)
+}
+
+/// One series per value of the column `key` (in order of first appearance),
+/// each named by `label` of that value (as text), from the same columns.
+pub fn series_by(
+    frame: &DataFrame,
+    panel: &str,
+    key: &str,
+    label: impl Fn(&str) -> String,
+    columns: (&str, &str, Option<&str>),
+) -> Result<Vec<DataFrame>, StageError> {
+    let parts = frame.partition_by_stable([key], true).map_err(failed)?;
+    parts
+        .iter()
+        .map(|part| {
+            let value = part
+                .column(key)
+                .map_err(failed)?
+                .cast(&DataType::String)
+                .map_err(failed)?;
+            let value = value
+                .str()
+                .map_err(failed)?
+                .get(0)
+                .unwrap_or_default()
+                .to_string();
+            series(part, panel, &label(&value), columns)
+        })
+        .collect()
 }
 
 /// Series stacked in the given order (the legend's).

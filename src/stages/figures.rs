@@ -13,6 +13,7 @@ use crate::pipeline::{Input, InstanceId, Progress, Stage, StageError, Table};
 
 use super::compare::CompareStage;
 use super::kernel::target_instance;
+use super::scan::ScanStage;
 
 /// The figure table's name (`points.parquet`).
 const POINTS: &str = "points";
@@ -104,16 +105,63 @@ pub fn figure_stages(study: &Study, plan: &[Box<dyn Stage>]) -> Vec<FiguresStage
             figures.push(FiguresStage::new(Figure::Rates { id, label }, vec![sweep]));
         }
     }
+    if let Some(p) = main {
+        let scan = ScanStage::instance(p);
+        if present(&scan) {
+            figures.push(FiguresStage::new(Figure::Kicks { id: p.id() }, vec![scan]));
+        }
+    }
+    if let Some(evolve) = study.evolve_params() {
+        let instance = target_instance(&evolve.kernel);
+        let id = InstanceId::new(contract::evolve::STAGE, &instance);
+        if present(&id) && !evolve.times.is_empty() {
+            let times = spread(&evolve.times, EVOLUTION_CURVES);
+            figures.push(FiguresStage::new(
+                Figure::Evolution { instance, times },
+                vec![id],
+            ));
+        }
+    }
     let compare = CompareStage::instance();
-    if let (true, Some(ring)) = (present(&compare), study.md_params().first()) {
+    let rings = study.md_params();
+    if let (true, Some(first)) = (present(&compare), rings.first()) {
         figures.push(FiguresStage::new(
             Figure::MdBoltzmann {
-                ring: ring.name.clone(),
+                ring: first.name.clone(),
             },
-            vec![compare],
+            vec![compare.clone()],
         ));
+        let collapsing: Vec<String> = rings
+            .iter()
+            .filter(|r| r.potential == first.potential && r.u_prime == 0.0)
+            .filter(|r| r.particles == first.particles)
+            .map(|r| r.name.clone())
+            .collect();
+        if collapsing.len() > 1 {
+            figures.push(FiguresStage::new(
+                Figure::Collapse { rings: collapsing },
+                vec![compare.clone()],
+            ));
+        }
+        figures.push(FiguresStage::new(Figure::FiniteSize, vec![compare]));
     }
     figures
+}
+
+/// Curves of `h(u, t)` in the evolution figure, at most.
+const EVOLUTION_CURVES: usize = 5;
+
+/// At most `count` of `values`, spread evenly over them, first and last included.
+fn spread(values: &[f64], count: usize) -> Vec<f64> {
+    if values.len() <= count {
+        return values.to_vec();
+    }
+    let last = values.len() - 1;
+    let mut picked: Vec<f64> = (0..count)
+        .map(|k| values[(k * last + (count - 1) / 2) / (count - 1)])
+        .collect();
+    picked.dedup();
+    picked
 }
 
 impl Stage for FiguresStage {
@@ -122,7 +170,7 @@ impl Stage for FiguresStage {
     }
 
     fn version(&self) -> u32 {
-        1
+        2
     }
 
     fn params(&self) -> Value {

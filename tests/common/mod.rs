@@ -61,8 +61,8 @@ pub fn run_counts(config: &Path, args: &[&str]) -> (usize, usize) {
 }
 
 /// A study of one potential (`ipp-6`) small enough to run in a fraction of a
-/// second: scan, collisions, kernel, moments, fit, table, paper and three figures
-/// (kernels, kernel with fit, truncation).
+/// second: scan, collisions, kernel, moments, fit, table, paper and four figures
+/// (kernels, kernel with fit, truncation, kicks).
 pub fn small_study(store: &str) -> String {
     format!(
         r#"
@@ -94,7 +94,7 @@ enabled = false
 }
 
 /// Stage instances of [`small_study`].
-pub const SMALL_STUDY_INSTANCES: usize = 10;
+pub const SMALL_STUDY_INSTANCES: usize = 11;
 
 /// Every file under `dir`, recursively, as paths relative to `dir`.
 pub fn files_under(dir: &Path) -> Vec<PathBuf> {
@@ -230,6 +230,11 @@ gas = "ring6"
 final_time_ns = 100.0
 
 [[md.system]]
+name = "ring6_dense"
+gas = "ring6_dense"
+final_time_ns = 25.0
+
+[[md.system]]
 name = "sutherland"
 gas = "sutherland"
 final_time_ns = 5.0
@@ -250,6 +255,16 @@ kt_ev = 0.1
 mass_electron = 1.0
 ring_particles = 21
 ring_radius_um = 1600.0
+
+[[gas]]
+name = "ring6_dense"
+potential = "ipp-6"
+l0_um = 1.0
+eps_ev = 1.0
+kt_ev = 0.1
+mass_electron = 1.0
+ring_particles = 21
+ring_radius_um = 800.0
 
 [[gas]]
 name = "sutherland"
