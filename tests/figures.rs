@@ -110,9 +110,15 @@ type Bin = (f64, f64, f64);
 /// `G(0 -> u)` at `du > 0` averaged over groups of 20 bins per decade of
 /// `du`, in order: mean `du`, mean `G`, and `sqrt(sum stderr^2) / count`.
 fn grouped_kernel(kernel: &Artifact, panel: &str, series: &str) -> Vec<Row> {
+    grouped_side(kernel, panel, series, 1.0)
+}
+
+/// [`grouped_kernel`] of the bins at `sign du > 0`, against `|du|`.
+fn grouped_side(kernel: &Artifact, panel: &str, series: &str, sign: f64) -> Vec<Row> {
     use contract::kernel::{DU, G};
     let batch = kernel.table("kernel");
-    let (du, g) = (DU.read(&batch).unwrap(), G.read(&batch).unwrap());
+    let du: Vec<f64> = DU.read(&batch).unwrap().iter().map(|d| sign * d).collect();
+    let g = G.read(&batch).unwrap();
     let mut groups: Vec<(f64, Vec<Bin>)> = Vec::new();
     for (du, g) in du.iter().zip(&g).filter(|(du, _)| **du > 0.0) {
         let group = (du.log10() * 20.0).floor();
@@ -142,7 +148,7 @@ fn grouped_kernel(kernel: &Artifact, panel: &str, series: &str) -> Vec<Row> {
 fn expected(store: &Path, figure: &Artifact) -> Vec<Row> {
     let params = &figure.manifest["params"]["figure"];
     match figure.kind() {
-        "kernels_every_n" => params["labels"]
+        "kernels_every_n" | "kernels_lennard_jones" => params["labels"]
             .as_array()
             .unwrap()
             .iter()
@@ -337,6 +343,45 @@ fn expected(store: &Path, figure: &Artifact) -> Vec<Row> {
                             }),
                     );
                 }
+            }
+            rows
+        }
+        "kernels_at_u_prime" => params["u_primes"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .enumerate()
+            .flat_map(|(k, u)| {
+                let kernel = figure.input(store, k);
+                let u = u.as_f64().unwrap();
+                let above = grouped_side(&kernel, "kernels", &format!("u' = {u}, u > u'"), 1.0);
+                let below = grouped_side(&kernel, "kernels", &format!("u' = {u}, u < u'"), -1.0);
+                [above, below]
+                    .concat()
+                    .into_iter()
+                    .filter(|row| row.4 < 0.5 * row.3)
+            })
+            .collect(),
+        "md_times" => {
+            use contract::compare::comparison::{DU, H_BOLTZMANN, H_TAGGED, RING};
+            let compare = figure.input(store, 0).table("comparison");
+            let names = RING.read(&compare).unwrap();
+            let du = DU.read(&compare).unwrap();
+            let of = |ring: &str, series: &str, pair: &Pair| -> Vec<Row> {
+                pair_rows(&compare, "h", series, &du, pair)
+                    .into_iter()
+                    .zip(&names)
+                    .filter(|(_, name)| *name == ring)
+                    .map(|(row, _)| row)
+                    .collect()
+            };
+            let rings = params["rings"].as_array().unwrap();
+            let times = params["times_ns"].as_array().unwrap();
+            let mut rows = Vec::new();
+            for (ring, time) in rings.iter().zip(times) {
+                let (ring, time) = (ring.as_str().unwrap(), time.as_f64().unwrap());
+                rows.extend(of(ring, &format!("Boltzmann, {time} ns"), &H_BOLTZMANN));
+                rows.extend(of(ring, &format!("MD, {time} ns"), &H_TAGGED));
             }
             rows
         }

@@ -116,6 +116,15 @@ pub const MAX_MD_RUNS: u32 = 1 << 16;
 /// Largest interacting neighbours per side.
 pub const MAX_NEIGHBOURS: u32 = 64;
 
+impl MdParams {
+    /// The final time `t_f` in units of the ring's own `1 / (rho^2 l v_th)`:
+    /// rings at equal values are the same dilute physics (the scaling collapse).
+    pub fn scaled_final_time(&self) -> f64 {
+        let exponent = self.potential.length_exponent();
+        self.final_time_ns * self.gas.rate_per_ns(1.0, exponent)
+    }
+}
+
 /// Largest sample times per ring.
 pub const MAX_MD_SAMPLES: u32 = 1000;
 

@@ -1094,20 +1094,37 @@ pub mod compare {
         pub const BOLTZMANN: &str = "boltzmann";
         /// MD estimator ([`estimator`](super::super::estimator)).
         pub const ESTIMATOR: Col<String> = Col::text("estimator", "MD estimator");
-        /// Chi-square.
+        /// Chi-square with the reference's variance.
         pub const CHI2: Col<f64> = Col::f64(
             "chi2",
             "1",
-            "sum over bins of (difference / combined standard error)^2",
+            "sum over bins of difference^2 / (variance of the MD estimate if MD followed the reference + the reference's squared standard error)",
         );
         /// Degrees of freedom.
-        pub const DOF: Col<u32> =
-            Col::u32("dof", "1", "bins where the MD estimate has a nonzero error");
+        pub const DOF: Col<u32> = Col::u32("dof", "1", "bins with a nonzero variance");
         /// Reduced chi-square.
         pub const CHI2_PER_DOF: Col<f64> = Col::f64(
             "chi2_per_dof",
             "1",
-            "chi2 / dof: ~1 when the two agree within errors",
+            "chi2 / dof: ~1 when MD follows the reference",
+        );
+        /// p-value of `chi2` with `dof` degrees of freedom.
+        pub const P_VALUE: Col<f64> = Col::f64(
+            "p_value",
+            "1",
+            "probability of a chi2 at least this large if MD followed the reference",
+        );
+        /// Reduced chi-square with the MD runs' own spread (the published definition).
+        pub const SAMPLE_CHI2_PER_DOF: Col<f64> = Col::f64(
+            "sample_chi2_per_dof",
+            "1",
+            "chi2 / dof with the MD runs' own standard errors, over the bins where they are nonzero (the published estimator's definition)",
+        );
+        /// Its degrees of freedom.
+        pub const SAMPLE_DOF: Col<u32> = Col::u32(
+            "sample_dof",
+            "1",
+            "bins where the MD runs' standard error is nonzero",
         );
     }
 
@@ -1230,7 +1247,7 @@ pub mod gases {
     pub const GAMMA_AT_DENSITY: Pair = pair!(
         "gamma_at_density",
         "1/ns",
-        "Gamma with the literal algorithm's exp(-r |delay|) at this rho l",
+        "Gamma times the paper's launch rule's finite-density factor exp(-r |delay|) at this rho l (box L = kernel.launch_length): an artifact of that algorithm, which depends on L, not the gas's rate at rho l",
         "standard error"
     );
     /// `1 / Gamma`.

@@ -2,7 +2,8 @@
 //! their tables into the figure table, and how it is laid out.
 
 use polars::prelude::{
-    ChunkCompareEq, ChunkCompareIneq, DataFrame, Float64Chunked, NamedFrom, Series,
+    ChunkCompareEq, ChunkCompareIneq, DataFrame, Float64Chunked, IntoColumn, IntoSeries, NamedFrom,
+    Series,
 };
 use serde::Serialize;
 
@@ -20,8 +21,14 @@ const DU_AXIS: &str = "u − u' [v_th]";
 #[derive(Clone, Debug, PartialEq, Serialize)]
 #[serde(tag = "kind", rename_all = "snake_case")]
 pub enum Figure {
-    /// `G(0 -> u)` of every potential on log axes (paper: the kernel for every n).
+    /// `G(0 -> u)` of every inverse power law on log axes (paper: the kernel for every n).
     KernelsEveryN {
+        /// Legend label of each kernel input.
+        labels: Vec<String>,
+    },
+    /// `G(0 -> u)` of every Lennard-Jones `theta = kT/eps` in scaled units
+    /// (paper: scaling holds at low `T`, breaks at high `T`).
+    KernelsLennardJones {
         /// Legend label of each kernel input.
         labels: Vec<String>,
     },
@@ -75,11 +82,29 @@ pub enum Figure {
     /// MD over Boltzmann window variances against `rho l`, one series per `N`:
     /// tagged (a) and thermal (b) estimators.
     FiniteSize,
+    /// `G(u' -> u)` of one potential at each configured `u'` (dilute), both
+    /// sides of `u'` on log axes of `|u - u'|` (paper: `u' = 0, -0.25, -3`).
+    KernelsAtUPrime {
+        /// The potential's id.
+        id: String,
+        /// The `u'` of each kernel input.
+        u_primes: Vec<f64>,
+    },
+    /// `h(u, t)` of one ring at several final times: MD (tagged) and Boltzmann.
+    MdTimes {
+        /// The ring's name (the figure's).
+        ring: String,
+        /// The rings simulating it to each time (rows of the comparison table).
+        rings: Vec<String>,
+        /// Their final times, ns.
+        times_ns: Vec<f64>,
+    },
 }
 
 /// Names of every figure kind, for documentation and tests.
-pub const FIGURES: [&str; 9] = [
+pub const FIGURES: [&str; 12] = [
     "kernels",
+    "kernels_lj",
     "kernel_fit",
     "rates",
     "md_boltzmann",
@@ -88,6 +113,8 @@ pub const FIGURES: [&str; 9] = [
     "collapse",
     "evolution",
     "finite_size",
+    "md_times",
+    "kernels_u_prime",
 ];
 
 fn failed(error: impl std::fmt::Display) -> StageError {
@@ -99,6 +126,7 @@ impl Figure {
     pub fn name(&self) -> String {
         match self {
             Figure::KernelsEveryN { .. } => "kernels".into(),
+            Figure::KernelsLennardJones { .. } => "kernels_lj".into(),
             Figure::KernelFit { id, .. } => format!("kernel_fit_{id}"),
             Figure::Rates { id, .. } => format!("rates_{id}"),
             Figure::MdBoltzmann { ring } => format!("md_boltzmann_{ring}"),
@@ -107,6 +135,8 @@ impl Figure {
             Figure::Collapse { .. } => "collapse".into(),
             Figure::Evolution { instance, .. } => format!("evolution_{instance}"),
             Figure::FiniteSize => "finite_size".into(),
+            Figure::MdTimes { ring, .. } => format!("md_times_{ring}"),
+            Figure::KernelsAtUPrime { id, .. } => format!("kernels_u_prime_{id}"),
         }
     }
 
@@ -114,7 +144,10 @@ impl Figure {
     pub fn description(&self) -> &'static str {
         match self {
             Figure::KernelsEveryN { .. } => {
-                "G(0 -> u) of every potential (u' = 0, dilute) against u - u' > 0, log axes, +- standard error; bins grouped 20 per decade, groups with relative error above 0.5 left out"
+                "G(0 -> u) of every inverse power law (u' = 0, dilute) against u - u' > 0, log axes, +- standard error; bins grouped 20 per decade, groups with relative error above 0.5 left out"
+            }
+            Figure::KernelsLennardJones { .. } => {
+                "G(0 -> u) of every Lennard-Jones theta = kT/eps (u' = 0, dilute, units of l = l0 (eps/kT)^(1/6)) against u - u' > 0, log axes, +- standard error; bins grouped 20 per decade, groups with relative error above 0.5 left out"
             }
             Figure::KernelFit { .. } => {
                 "G(0 -> u) against u - u' > 0 with the fitted shape alpha x^-beta exp(-x^2 / 2 sigma^2)"
@@ -140,6 +173,12 @@ impl Figure {
             Figure::FiniteSize => {
                 "MD / Boltzmann window variance at t_f against rho l, one series per N: tagged (a) and thermal (b) estimators"
             }
+            Figure::MdTimes { .. } => {
+                "h(u, t) of one ring at several times: Boltzmann (band) and MD, tagged particles (markers)"
+            }
+            Figure::KernelsAtUPrime { .. } => {
+                "G(u' -> u) at each u' (dilute) against |u - u'| on both sides of u', log axes, +- standard error; bins grouped 20 per decade, groups with relative error above 0.5 left out"
+            }
         }
     }
 
@@ -155,7 +194,7 @@ impl Figure {
             styles,
         };
         let panels = match self {
-            Figure::KernelsEveryN { .. } => vec![panel(
+            Figure::KernelsEveryN { .. } | Figure::KernelsLennardJones { .. } => vec![panel(
                 "kernels",
                 log(DU_AXIS),
                 log(G_AXIS),
@@ -230,6 +269,18 @@ impl Figure {
                     vec![("t κ₂", Style::Line)],
                 ),
             ],
+            Figure::KernelsAtUPrime { .. } => vec![panel(
+                "kernels",
+                log("|u − u'| [v_th]"),
+                log(G_AXIS),
+                vec![("", Style::Band)],
+            )],
+            Figure::MdTimes { .. } => vec![panel(
+                "h",
+                linear(DU_AXIS),
+                linear("h(u, t) [1 / v_th]"),
+                vec![("Boltzmann", Style::Band)],
+            )],
             Figure::FiniteSize => ["tagged", "thermal"]
                 .into_iter()
                 .map(|name| panel(name, linear("ρ l"), linear("MD / Boltzmann"), Vec::new()))
@@ -241,7 +292,7 @@ impl Figure {
     /// The figure's long table, built with polars from its inputs' tables.
     pub fn frame(&self, inputs: &[Input]) -> Result<DataFrame, StageError> {
         match self {
-            Figure::KernelsEveryN { labels } => {
+            Figure::KernelsEveryN { labels } | Figure::KernelsLennardJones { labels } => {
                 let parts = labels
                     .iter()
                     .zip(inputs)
@@ -264,6 +315,16 @@ impl Figure {
             Figure::Collapse { rings } => collapse(&inputs[0], rings),
             Figure::Evolution { times, .. } => evolution(&inputs[0], times),
             Figure::FiniteSize => finite_size(&inputs[0]),
+            Figure::MdTimes {
+                rings, times_ns, ..
+            } => md_times(&inputs[0], rings, times_ns),
+            Figure::KernelsAtUPrime { u_primes, .. } => {
+                let mut parts = Vec::new();
+                for (input, u_prime) in inputs.iter().zip(u_primes) {
+                    parts.extend(kernel_sides(input, *u_prime)?);
+                }
+                stack(parts)
+            }
         }
     }
 }
@@ -283,6 +344,35 @@ fn positive_kernel(input: &Input, panel: &str, label: &str) -> Result<DataFrame,
         (DU.name, G.value.name, Some(G.stderr.name)),
     )?;
     log_groups(&long, GROUPS_PER_DECADE)
+}
+
+/// `G(u' -> u)` of a kernel artifact above and below `u'`, each averaged
+/// over log-spaced groups of `|u - u'|` and left with its resolved groups.
+fn kernel_sides(input: &Input, u_prime: f64) -> Result<Vec<DataFrame>, StageError> {
+    use contract::figures::points::X;
+    use contract::kernel::{DU, G, TABLE};
+    let all = frame(TABLE.of(input)?)?;
+    let columns = (DU.name, G.value.name, Some(G.stderr.name));
+    let above = series(&all, "kernels", &format!("u' = {u_prime}, u > u'"), columns)?;
+    let mut below = series(&all, "kernels", &format!("u' = {u_prime}, u < u'"), columns)?;
+    let distance = below
+        .column(X.name)
+        .map_err(failed)?
+        .f64()
+        .map_err(failed)?
+        * -1.0;
+    below
+        .with_column(
+            distance
+                .into_series()
+                .with_name(X.name.into())
+                .into_column(),
+        )
+        .map_err(failed)?;
+    [above, below]
+        .iter()
+        .map(|side| resolved(&log_groups(side, GROUPS_PER_DECADE)?))
+        .collect()
 }
 
 /// Largest relative error of a group drawn among the kernels of every `n`:
@@ -496,5 +586,28 @@ fn finite_size(input: &Input) -> Result<DataFrame, StageError> {
         named,
         pair(&THERMAL_RATIO),
     )?);
+    stack(parts)
+}
+
+fn md_times(input: &Input, rings: &[String], times_ns: &[f64]) -> Result<DataFrame, StageError> {
+    use contract::compare::comparison::{DU, H_BOLTZMANN, H_TAGGED, RING, TABLE};
+    let all = frame(TABLE.of(input)?)?;
+    let pair = |pair: &contract::Pair| (DU.name, pair.value.name, Some(pair.stderr.name));
+    let mut parts = Vec::new();
+    for (ring, time) in rings.iter().zip(times_ns) {
+        let rows = rows_where(&all, RING.name, ring)?;
+        parts.push(series(
+            &rows,
+            "h",
+            &format!("Boltzmann, {time} ns"),
+            pair(&H_BOLTZMANN),
+        )?);
+        parts.push(series(
+            &rows,
+            "h",
+            &format!("MD, {time} ns"),
+            pair(&H_TAGGED),
+        )?);
+    }
     stack(parts)
 }

@@ -21,8 +21,13 @@ use crate::binning::Bins;
 use crate::config::{KernelParams, MdParams};
 use crate::contract::{self, Rows};
 use crate::evolve::convolution;
+use crate::physics::md::{
+    published_reference_variance, tagged_expected_counts, tagged_reference_variance,
+};
 use crate::pipeline::{Input, InstanceId, Progress, Stage, StageError, Table};
-use crate::stats::{ChiSquare, Estimate, Replicated, chi_square};
+use crate::stats::{
+    ChiSquare, Estimate, MINIMUM_EXPECTED_COUNT, Replicated, chi_square, grouped_chi_square,
+};
 
 /// Resolved parameters of the `compare` stage.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -50,11 +55,13 @@ struct MdEstimates {
     tagged_variance: Estimate,
     /// Window variance of the thermal estimator (every lineage).
     thermal_variance: Estimate,
+    /// Tagged lineages of each run.
+    lineages: Vec<f64>,
 }
 
 fn read_md(input: &Input) -> Result<MdEstimates, StageError> {
     use contract::estimator::{TAGGED, THERMAL};
-    use contract::md::{h, summary};
+    use contract::md::{h, runs, summary};
     let batch = h::TABLE.of(input)?;
     let moments = summary::TABLE.of(input)?;
     let variances = summary::WINDOW_VARIANCE.read(moments)?;
@@ -67,6 +74,7 @@ fn read_md(input: &Input) -> Result<MdEstimates, StageError> {
         tagged: h::H_TAGGED.read(batch)?,
         tagged_variance: variance(TAGGED)?,
         thermal_variance: variance(THERMAL)?,
+        lineages: runs::LINEAGES.read(runs::TABLE.of(input)?)?,
     })
 }
 
@@ -84,12 +92,63 @@ fn ring_bins<'a>(system: &MdParams, ring: &'a MdEstimates) -> RingBins<'a> {
     }
 }
 
-/// One goodness-of-fit row.
+/// One goodness-of-fit row: chi-square with the reference's variance, and
+/// with the MD runs' own spread.
 struct Fit {
     ring: String,
     reference: String,
     estimator: String,
     chi: ChiSquare,
+    sample: ChiSquare,
+}
+
+/// A ring's estimator under the reference: the variance of each bin if MD
+/// followed the prediction, and the counts behind each bin (`physics::md`).
+struct Model {
+    variance: Vec<f64>,
+    expected: Vec<f64>,
+}
+
+impl Model {
+    /// Chi-square of `md` against `reference` over bins grouped to at least
+    /// [`MINIMUM_EXPECTED_COUNT`] expected counts.
+    fn chi_square(&self, md: &[Estimate], reference: &[Estimate]) -> ChiSquare {
+        grouped_chi_square(
+            md,
+            reference,
+            &self.variance,
+            &self.expected,
+            MINIMUM_EXPECTED_COUNT,
+        )
+    }
+}
+
+/// The models of a ring's tagged and published estimators if MD followed
+/// `predicted`.
+fn reference_models(system: &MdParams, ring: &MdEstimates, predicted: &[Estimate]) -> [Model; 2] {
+    let reference: Vec<f64> = predicted.iter().map(|e| e.mean).collect();
+    let bins = Bins::for_window(system.window, system.bin_width);
+    let runs = ring.lineages.len();
+    let published = published_reference_variance(
+        &bins,
+        system.u_prime,
+        system.particles as usize,
+        &reference,
+        runs,
+    );
+    // The published variance is the expected count per run over runs w^2.
+    let scale = (runs * runs) as f64 * bins.width * bins.width;
+    let expected = published.iter().map(|v| v * scale).collect();
+    [
+        Model {
+            variance: tagged_reference_variance(&reference, system.bin_width, &ring.lineages),
+            expected: tagged_expected_counts(&reference, system.bin_width, &ring.lineages),
+        },
+        Model {
+            variance: published,
+            expected,
+        },
+    ]
 }
 
 impl CompareStage {
@@ -123,16 +182,10 @@ impl CompareStage {
             .iter()
             .zip(rings)
             .map(|(system, ring)| {
-                let time = self.scaled_time(system);
+                let time = system.scaled_final_time();
                 boltzmann_on_bins(&rates, bins.width, time, ring_bins(system, ring))
             })
             .collect())
-    }
-
-    /// A ring's final time `t_f` in units of its own `1 / (rho^2 l v_th)`.
-    fn scaled_time(&self, system: &MdParams) -> f64 {
-        let exponent = self.params.kernel.potential.length_exponent();
-        system.final_time_ns * system.gas.rate_per_ns(1.0, exponent)
     }
 
     /// Per ring, per kernel replicate: the self kernel's window variance rate
@@ -167,7 +220,7 @@ impl CompareStage {
             .zip(boltzmann)
             .zip(thermal_rates)
             .map(|(((system, ring), predicted), rates)| {
-                let time = self.scaled_time(system);
+                let time = system.scaled_final_time();
                 let compared = finite_size(
                     ring.tagged_variance,
                     ring.thermal_variance,
@@ -235,31 +288,74 @@ impl CompareStage {
         use contract::compare::goodness::*;
         use contract::estimator::{PUBLISHED, TAGGED};
         let mut fits: Vec<Fit> = Vec::new();
-        let mut record = |ring: &str, reference: &str, estimator: &str, chi: ChiSquare| {
+        let mut record = |ring: &str, reference: &str, estimator: &str, chi, sample| {
             fits.push(Fit {
                 ring: ring.to_string(),
                 reference: reference.to_string(),
                 estimator: estimator.to_string(),
                 chi,
+                sample,
             });
         };
-        for ((system, ring), predicted) in self.params.systems.iter().zip(rings).zip(boltzmann) {
+        let systems = &self.params.systems;
+        let first_tagged = match (systems.first(), rings.first(), boltzmann.first()) {
+            (Some(system), Some(ring), Some(predicted)) => {
+                let [tagged, _] = reference_models(system, ring, predicted);
+                Some((system, ring, tagged))
+            }
+            _ => None,
+        };
+        for ((system, ring), predicted) in systems.iter().zip(rings).zip(boltzmann) {
             let name = system.name.as_str();
+            let [tagged, published] = reference_models(system, ring, predicted);
             record(
                 name,
                 BOLTZMANN,
                 PUBLISHED,
+                published.chi_square(&ring.published, predicted),
                 chi_square(&ring.published, predicted),
             );
-            record(name, BOLTZMANN, TAGGED, chi_square(&ring.tagged, predicted));
-            if let (Some(first), Some(reference)) = (rings.first(), self.params.systems.first())
+            record(
+                name,
+                BOLTZMANN,
+                TAGGED,
+                tagged.chi_square(&ring.tagged, predicted),
+                chi_square(&ring.tagged, predicted),
+            );
+            if let Some((reference, first, first_model)) = &first_tagged
                 && reference.name != system.name
                 && first.du == ring.du
+                && (system.scaled_final_time() / reference.scaled_final_time() - 1.0).abs() < 1e-9
             {
+                // Both rings' variances; the first ring's h taken as exact;
+                // the fewer expected counts of the two.
+                let both = Model {
+                    variance: tagged
+                        .variance
+                        .iter()
+                        .zip(&first_model.variance)
+                        .map(|(a, b)| a + b)
+                        .collect(),
+                    expected: tagged
+                        .expected
+                        .iter()
+                        .zip(&first_model.expected)
+                        .map(|(a, b)| a.min(*b))
+                        .collect(),
+                };
+                let exact: Vec<Estimate> = first
+                    .tagged
+                    .iter()
+                    .map(|e| Estimate {
+                        mean: e.mean,
+                        stderr: 0.0,
+                    })
+                    .collect();
                 record(
                     name,
                     &reference.name,
                     TAGGED,
+                    both.chi_square(&ring.tagged, &exact),
                     chi_square(&ring.tagged, &first.tagged),
                 );
             }
@@ -271,6 +367,9 @@ impl CompareStage {
             .with(CHI2, |f| f.chi.chi2)
             .with(DOF, |f| f.chi.dof as u32)
             .with(CHI2_PER_DOF, |f| f.chi.per_dof())
+            .with(P_VALUE, |f| f.chi.p_value())
+            .with(SAMPLE_CHI2_PER_DOF, |f| f.sample.per_dof())
+            .with(SAMPLE_DOF, |f| f.sample.dof as u32)
             .table(&TABLE)?)
     }
 }
@@ -288,7 +387,7 @@ impl Stage for CompareStage {
     }
 
     fn version(&self) -> u32 {
-        3
+        4
     }
 
     fn params(&self) -> Value {

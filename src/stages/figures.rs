@@ -5,7 +5,7 @@
 
 use serde_json::{Value, json};
 
-use crate::config::Study;
+use crate::config::{MdParams, Study};
 use crate::contract::{self, TableSpec};
 use crate::figures::{Figure, FigureRows, Size, frames, render};
 use crate::physics::potential::Potential;
@@ -52,7 +52,7 @@ fn label(potential: &Potential) -> String {
 }
 
 /// The figures of a study whose inputs `plan` computes: kernels of every
-/// potential with kicks, and for `n = 6` (or the first such potential) the
+/// inverse power law with kicks and of every Lennard-Jones potential, and for `n = 6` (or the first such potential) the
 /// kernel with its fit, the rates against `u'` and `a_n(X)`; MD against
 /// Boltzmann for the compared ring.
 pub fn figure_stages(study: &Study, plan: &[Box<dyn Stage>]) -> Vec<FiguresStage> {
@@ -66,15 +66,26 @@ pub fn figure_stages(study: &Study, plan: &[Box<dyn Stage>]) -> Vec<FiguresStage
         InstanceId::new(stage, &target_instance(&study.kernel_params(*p, 0.0, 0.0)))
     };
     let mut figures = Vec::new();
-    if !kicked.is_empty() {
+    let (lennard_jones, inverse_power): (Vec<Potential>, Vec<Potential>) = kicked
+        .iter()
+        .partition(|p| matches!(p, Potential::LennardJones { .. }));
+    let kernels = |potentials: &[Potential]| -> (Vec<String>, Vec<InstanceId>) {
+        let labels = potentials.iter().map(label).collect();
+        let inputs = potentials
+            .iter()
+            .map(|p| target(contract::kernel::STAGE, p))
+            .collect();
+        (labels, inputs)
+    };
+    if !inverse_power.is_empty() {
+        let (labels, inputs) = kernels(&inverse_power);
+        figures.push(FiguresStage::new(Figure::KernelsEveryN { labels }, inputs));
+    }
+    if !lennard_jones.is_empty() {
+        let (labels, inputs) = kernels(&lennard_jones);
         figures.push(FiguresStage::new(
-            Figure::KernelsEveryN {
-                labels: kicked.iter().map(label).collect(),
-            },
-            kicked
-                .iter()
-                .map(|p| target(contract::kernel::STAGE, p))
-                .collect(),
+            Figure::KernelsLennardJones { labels },
+            inputs,
         ));
     }
     let main = kicked
@@ -106,6 +117,28 @@ pub fn figure_stages(study: &Study, plan: &[Box<dyn Stage>]) -> Vec<FiguresStage
         }
     }
     if let Some(p) = main {
+        let u_primes: Vec<f64> = study
+            .kernel_targets()
+            .into_iter()
+            .filter(|(_, density)| *density == 0.0)
+            .map(|(u_prime, _)| u_prime)
+            .collect();
+        if u_primes.len() > 1 {
+            let inputs = u_primes
+                .iter()
+                .map(|&u| {
+                    let params = study.kernel_params(*p, u, 0.0);
+                    InstanceId::new(contract::kernel::STAGE, &target_instance(&params))
+                })
+                .collect();
+            figures.push(FiguresStage::new(
+                Figure::KernelsAtUPrime {
+                    id: p.id(),
+                    u_primes,
+                },
+                inputs,
+            ));
+        }
         let scan = ScanStage::instance(p);
         if present(&scan) {
             figures.push(FiguresStage::new(Figure::Kicks { id: p.id() }, vec![scan]));
@@ -131,10 +164,14 @@ pub fn figure_stages(study: &Study, plan: &[Box<dyn Stage>]) -> Vec<FiguresStage
             },
             vec![compare.clone()],
         ));
-        let collapsing: Vec<String> = rings
+        let compared: Vec<&MdParams> = rings
             .iter()
             .filter(|r| r.potential == first.potential && r.u_prime == 0.0)
+            .collect();
+        let collapsing: Vec<String> = compared
+            .iter()
             .filter(|r| r.particles == first.particles)
+            .filter(|r| (r.scaled_final_time() / first.scaled_final_time() - 1.0).abs() < 1e-9)
             .map(|r| r.name.clone())
             .collect();
         if collapsing.len() > 1 {
@@ -143,9 +180,36 @@ pub fn figure_stages(study: &Study, plan: &[Box<dyn Stage>]) -> Vec<FiguresStage
                 vec![compare.clone()],
             ));
         }
+        if let Some(figure) = md_times(&compared) {
+            figures.push(FiguresStage::new(figure, vec![compare.clone()]));
+        }
         figures.push(FiguresStage::new(Figure::FiniteSize, vec![compare]));
     }
     figures
+}
+
+/// `h(u, t)` at several times: the first compared ring simulated to more
+/// than one final time (same gas and ring), its rings in order of time.
+fn md_times(compared: &[&MdParams]) -> Option<Figure> {
+    let same_ring = |a: &MdParams, b: &MdParams| {
+        a.gas == b.gas && a.particles == b.particles && a.radius_um == b.radius_um
+    };
+    compared.iter().find_map(|ring| {
+        let mut group: Vec<&MdParams> = compared
+            .iter()
+            .copied()
+            .filter(|other| same_ring(ring, other))
+            .collect();
+        if group.len() < 2 {
+            return None;
+        }
+        group.sort_by(|a, b| a.final_time_ns.total_cmp(&b.final_time_ns));
+        Some(Figure::MdTimes {
+            ring: group.last().map(|r| r.name.clone()).unwrap_or_default(),
+            rings: group.iter().map(|r| r.name.clone()).collect(),
+            times_ns: group.iter().map(|r| r.final_time_ns).collect(),
+        })
+    })
 }
 
 /// Curves of `h(u, t)` in the evolution figure, at most.

@@ -44,7 +44,7 @@ impl Stage for GasesStage {
     }
 
     fn version(&self) -> u32 {
-        2
+        3
     }
 
     fn params(&self) -> Value {

@@ -230,6 +230,11 @@ gas = "ring6"
 final_time_ns = 100.0
 
 [[md.system]]
+name = "ring6_early"
+gas = "ring6"
+final_time_ns = 50.0
+
+[[md.system]]
 name = "ring6_dense"
 gas = "ring6_dense"
 final_time_ns = 25.0
