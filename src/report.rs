@@ -181,7 +181,57 @@ pub fn summary(store: &Store, reports: &[InstanceReport]) -> Result<String> {
     out.push_str(&md_table(store, reports)?);
     out.push_str(&compare_table(store, reports)?);
     out.push_str(&scan_table(store, reports)?);
+    out.push_str(&balance_table(store, reports)?);
     out.push_str(&paper_table(store, reports)?);
+    Ok(out)
+}
+
+/// The sweeps' joint detailed-balance tests.
+fn balance_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
+    use crate::kernel::equilibrium::DOMINATED_SHARE;
+    use contract::sweep::balance_tests::*;
+    let frames = table_frames(store, reports, &TABLE)?;
+    let mut out = String::new();
+    if frames.is_empty() {
+        return Ok(out);
+    }
+    writeln!(
+        out,
+        "\ndetailed balance, joint over the pairs of each separation (sum of relative imbalances, correlations from the randomizations; pairs whose error one randomization carries left out)"
+    )?;
+    writeln!(
+        out,
+        "{:<10} {:>10} {:>13} {:<26} {:>7}",
+        "potential", "b - a", "pairs counted", "joint imbalance", "z"
+    )?;
+    for (instance, frame) in frames {
+        for row in 0..frame.height() {
+            let share = number(&frame, row, JOINT_LARGEST_SHARE)?;
+            let z = number(&frame, row, JOINT_Z)?;
+            let verdict = if share <= DOMINATED_SHARE {
+                format!("{z:>7.2}")
+            } else if share.is_nan() {
+                "no evidence: no kicks or no pairs".to_string()
+            } else {
+                format!(
+                    "{z:>7.2}  no evidence: one randomization carries {:.0}% of the spread",
+                    100.0 * share
+                )
+            };
+            writeln!(
+                out,
+                "{:<10} {:>10.3} {:>13} {:<26} {verdict}",
+                instance,
+                number(&frame, row, SEPARATION)?,
+                format!(
+                    "{}/{}",
+                    count(&frame, row, COUNTED)?,
+                    count(&frame, row, PAIRS)?
+                ),
+                estimate(&frame, row, JOINT_IMBALANCE, "-")?,
+            )?;
+        }
+    }
     Ok(out)
 }
 

@@ -256,12 +256,16 @@ fn kernel_mirrors_under_velocity_reversal() {
         scale > 0.0 && worst_bin <= ENGINE_BOUND * scale,
         "{worst_bin} of {scale}"
     );
-    // The symmetry is not trivial: the kernel at +u' is skewed.
-    let (chi2, _, dof) = compare(&plus, &plus.iter().rev().copied().collect::<Vec<_>>());
-    assert!(
-        dof > 20 && chi2 > 2.0,
-        "G(0.5 -> 0.5 + x) vs G(0.5 -> 0.5 - x): chi2/dof {chi2}"
-    );
+    // The test has power: without the mirrored integration (the drawn set
+    // itself at -u'), the kernels differ by far more than the bound.
+    let mut unmirrored = kernel(&drawn, &dilute(-0.5), &bins, total);
+    unmirrored.reverse();
+    let apart = plus
+        .iter()
+        .zip(&unmirrored)
+        .map(|(a, b)| (a.mean - b.mean).abs())
+        .fold(0.0, f64::max);
+    assert!(apart > 1e3 * ENGINE_BOUND * scale, "{apart} of {scale}");
 }
 
 #[test]

@@ -514,6 +514,53 @@ pub mod sweep {
             "1",
             "(f0(a) G(a->b) - f0(b) G(b->a)) / its standard error (per-replicate differences)",
         );
+        /// Share of the imbalance's spread in one randomization.
+        pub const LARGEST_SHARE: Col<f64> = Col::f64(
+            "largest_share",
+            "1",
+            "share of the imbalance's spread over randomizations carried by the most deviant one; above 0.5 one scene makes the error and the pair is no evidence (left out of the joint test)",
+        );
+    }
+
+    /// `balance_tests.parquet`: one joint detailed-balance test per separation.
+    pub mod balance_tests {
+        use super::*;
+
+        /// The table.
+        pub const TABLE: TableSpec = TableSpec {
+            stage: STAGE,
+            name: "balance_tests",
+            description: "joint test of detailed balance over the pairs of each separation, with their correlations",
+        };
+        /// `b - a`.
+        pub const SEPARATION: Col<f64> = Col::f64("separation", "v_th", "b - a of the pairs");
+        /// Pairs of the separation.
+        pub const PAIRS: Col<u32> = Col::u32("pairs", "1", "pairs (a, b) on the u' grid");
+        /// Pairs counted in the joint test.
+        pub const COUNTED: Col<u32> = Col::u32(
+            "counted",
+            "1",
+            "pairs with a <= 0 (every scene enters with its mirror image, so a pair at a > 0 repeats its mirror's evidence) whose error is not carried by one randomization (largest_share <= 0.5)",
+        );
+        /// The joint statistic.
+        pub const JOINT_IMBALANCE: Pair = pair!(
+            "joint_imbalance",
+            "1",
+            "sum over counted pairs of (f0(a) G(a->b) - f0(b) G(b->a)) / mean flow, 0 under detailed balance",
+            "standard error from its spread over randomizations (pairs share scenes: their correlations are in it)"
+        );
+        /// Its z-score.
+        pub const JOINT_Z: Col<f64> = Col::f64(
+            "joint_z",
+            "1",
+            "joint_imbalance / its standard error: 0 +- 1 under detailed balance",
+        );
+        /// Share of the joint statistic's spread in one randomization.
+        pub const JOINT_LARGEST_SHARE: Col<f64> = Col::f64(
+            "joint_largest_share",
+            "1",
+            "share of joint_imbalance's spread carried by one randomization; above 0.5 one scene makes the error (z ~ +-1 by construction) and the test is no evidence",
+        );
     }
 }
 

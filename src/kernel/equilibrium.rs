@@ -86,7 +86,7 @@ pub fn fokker_planck_check(grid: &[f64], rates: &[SelfRates]) -> Vec<FokkerPlanc
 }
 
 /// Detailed balance of the self kernel between velocities `a` and `b`.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Balance {
     /// `G_self(a -> b)`.
     pub forward: Estimate,
@@ -99,6 +99,72 @@ pub struct Balance {
     /// `(f0(a) G(a -> b) - f0(b) G(b -> a)) / its standard error`,
     /// per-replicate differences.
     pub imbalance_z: f64,
+    /// Per replicate, the imbalance over the mean flow `(f0(a) G(a -> b) +
+    /// f0(b) G(b -> a)) / 2`: the pair's part of a joint test.
+    pub relative_imbalance: Vec<f64>,
+    /// Share of the imbalance's spread over replicates carried by its most
+    /// deviant replicate: ~`2 ln R / R` for Gaussian replicates, near 1 when
+    /// one heavy scene makes the error (and the z-score means nothing).
+    pub largest_share: f64,
+}
+
+/// Share of the spread above which one replicate carries a pair's error: no
+/// evidence for or against detailed balance.
+pub const DOMINATED_SHARE: f64 = 0.5;
+
+impl Balance {
+    /// Whether the pair's error is carried by one replicate (one scene).
+    pub fn dominated(&self) -> bool {
+        self.largest_share.is_nan() || self.largest_share > DOMINATED_SHARE
+    }
+}
+
+/// Joint test of detailed balance over `pairs` (the same replicates): per
+/// replicate the sum of the pairs' relative imbalances, whose spread over
+/// replicates carries every correlation between pairs that share scenes;
+/// its mean over its standard error is the joint z-score (0 +- 1 under
+/// detailed balance).
+pub fn joint_balance<'a>(pairs: impl Iterator<Item = &'a Balance>) -> JointBalance {
+    let mut sums: Vec<f64> = Vec::new();
+    for pair in pairs {
+        if sums.is_empty() {
+            sums = vec![0.0; pair.relative_imbalance.len()];
+        }
+        for (sum, value) in sums.iter_mut().zip(&pair.relative_imbalance) {
+            *sum += value;
+        }
+    }
+    if sums.len() < 2 {
+        return JointBalance {
+            imbalance: Estimate {
+                mean: f64::NAN,
+                stderr: f64::NAN,
+            },
+            largest_share: f64::NAN,
+        };
+    }
+    JointBalance {
+        imbalance: Estimate::from_replicates(&sums),
+        largest_share: largest_share(&sums),
+    }
+}
+
+/// A joint detailed-balance test.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct JointBalance {
+    /// Sum over pairs of the relative imbalances: mean and standard error over replicates.
+    pub imbalance: Estimate,
+    /// Share of its spread carried by one replicate (the pairs share scenes,
+    /// so one heavy scene can carry the sum though no single pair's error).
+    pub largest_share: f64,
+}
+
+/// Share of `sum (x - mean)^2` carried by the most deviant `x` (NaN when all agree).
+fn largest_share(values: &[f64]) -> f64 {
+    let mean = values.iter().sum::<f64>() / values.len().max(1) as f64;
+    let squares: Vec<f64> = values.iter().map(|x| (x - mean).powi(2)).collect();
+    let total: f64 = squares.iter().sum();
+    squares.iter().copied().fold(0.0, f64::max) / total
 }
 
 /// Detailed balance from the self kernel per replicate: `forward` =
@@ -110,20 +176,69 @@ pub fn detailed_balance(a: f64, b: f64, forward: &[f64], backward: &[f64]) -> Ba
         .zip(backward)
         .map(|(x, y)| thermal_density(a) * x - thermal_density(b) * y)
         .collect();
-    let [forward, backward, imbalance] =
-        [forward, backward, &imbalance].map(Estimate::from_replicates);
+    let share = largest_share(&imbalance);
+    let [forward, backward, total] = [forward, backward, &imbalance].map(Estimate::from_replicates);
+    let flow = 0.5 * (thermal_density(a) * forward.mean + thermal_density(b) * backward.mean);
     Balance {
         forward,
         backward,
         ratio: forward.ratio(backward),
         expected_ratio: thermal_density(b) / thermal_density(a),
-        imbalance_z: imbalance.z(),
+        imbalance_z: total.z(),
+        relative_imbalance: imbalance.iter().map(|x| x / flow).collect(),
+        largest_share: share,
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn pair(relative_imbalance: Vec<f64>) -> Balance {
+        let flat = Estimate {
+            mean: 1.0,
+            stderr: 0.0,
+        };
+        Balance {
+            forward: flat,
+            backward: flat,
+            ratio: flat,
+            expected_ratio: 1.0,
+            imbalance_z: 0.0,
+            largest_share: largest_share(&relative_imbalance),
+            relative_imbalance,
+        }
+    }
+
+    /// Two pairs whose imbalances move together in every replicate count as
+    /// one piece of evidence: the joint z equals each pair's own z (a sum
+    /// treating them as independent would claim sqrt(2) more).
+    #[test]
+    fn joint_test_carries_the_correlation_of_pairs() {
+        let replicates = vec![0.3, -0.1, 0.2, 0.4, -0.2, 0.1, 0.0, 0.5];
+        let single = joint_balance([pair(replicates.clone())].iter())
+            .imbalance
+            .z();
+        let both = joint_balance([pair(replicates.clone()), pair(replicates)].iter());
+        assert!(
+            (both.imbalance.z() - single).abs() < 1e-12,
+            "{} vs {single}",
+            both.imbalance.z()
+        );
+    }
+
+    /// One replicate carrying everything: share (R - 1)/R, and the pair is no
+    /// evidence; Gaussian-like replicates are.
+    #[test]
+    fn one_dominant_replicate_is_flagged() {
+        let mut lone = vec![0.0; 16];
+        lone[3] = 5.0;
+        let dominated = pair(lone);
+        assert!((dominated.largest_share - 15.0 / 16.0).abs() < 1e-12);
+        assert!(dominated.dominated());
+        let spread = pair(vec![0.3, -0.1, 0.2, 0.4, -0.2, 0.1, 0.0, 0.5, -0.3, 0.2]);
+        assert!(!spread.dominated(), "{}", spread.largest_share);
+    }
 
     /// Relative rounding of a central difference of O(1) rates on a 0.25 grid.
     const ROUNDING: f64 = 1e-13;

@@ -17,7 +17,8 @@ use crate::binning::Bins;
 use crate::config::SweepParams;
 use crate::contract::{self, Rows};
 use crate::kernel::equilibrium::{
-    Balance, FokkerPlanckPoint, SelfRates, detailed_balance, fokker_planck_check, self_rates,
+    Balance, FokkerPlanckPoint, JointBalance, SelfRates, detailed_balance, fokker_planck_check,
+    joint_balance, self_rates,
 };
 use crate::kernel::{Draws, Event, Target, self_bin};
 use crate::pipeline::{Input, InstanceId, Progress, Stage, StageError, Table};
@@ -74,12 +75,13 @@ impl SweepStage {
             .table(&TABLE)?)
     }
 
-    fn balance_table(
+    /// The detailed-balance pairs and their joint tests.
+    fn balance_tables(
         &self,
         events: &[Event],
         draws: &Draws,
         grid: &[f64],
-    ) -> Result<Table, StageError> {
+    ) -> Result<[Table; 2], StageError> {
         use contract::sweep::detailed_balance::*;
         let width = self.params.balance_bin_width;
         let largest = self
@@ -110,7 +112,7 @@ impl SweepStage {
                     })
             })
             .collect();
-        Ok(Rows::new(&rows)
+        let table = Rows::new(&rows)
             .with(A, |(a, ..)| *a)
             .with(B, |(_, b, _)| *b)
             .estimate(G_SELF_AB, |(.., balance)| balance.forward)
@@ -118,6 +120,45 @@ impl SweepStage {
             .estimate(RATIO, |(.., balance)| balance.ratio)
             .with(EXPECTED_RATIO, |(.., balance)| balance.expected_ratio)
             .with(IMBALANCE_Z, |(.., balance)| balance.imbalance_z)
+            .with(LARGEST_SHARE, |(.., balance)| balance.largest_share)
+            .table(&TABLE)?;
+        Ok([table, self.joint_tests(&rows)?])
+    }
+
+    /// One joint test per separation over its pairs that are evidence.
+    fn joint_tests(&self, rows: &[(f64, f64, Balance)]) -> Result<Table, StageError> {
+        use contract::sweep::balance_tests::*;
+        let width = self.params.balance_bin_width;
+        let tests: Vec<(f64, u32, u32, JointBalance)> = self
+            .params
+            .balance_separations
+            .iter()
+            .map(|&separation| {
+                let distance = (separation / width).round() * width;
+                let pairs: Vec<&Balance> = rows
+                    .iter()
+                    .filter(|(a, b, _)| ((b - a) - distance).abs() < 0.5 * width)
+                    .map(|(.., balance)| balance)
+                    .collect();
+                // Every scene enters with its mirror image, so a pair at a > 0
+                // repeats the evidence of its mirror at -a: one half counts.
+                let counted: Vec<&Balance> = rows
+                    .iter()
+                    .filter(|(a, b, _)| *a <= 0.0 && ((b - a) - distance).abs() < 0.5 * width)
+                    .map(|(.., balance)| balance)
+                    .filter(|p| !p.dominated())
+                    .collect();
+                let joint = joint_balance(counted.iter().copied());
+                (distance, pairs.len() as u32, counted.len() as u32, joint)
+            })
+            .collect();
+        Ok(Rows::new(&tests)
+            .with(SEPARATION, |(s, ..)| *s)
+            .with(PAIRS, |(_, pairs, ..)| *pairs)
+            .with(COUNTED, |(_, _, counted, _)| *counted)
+            .estimate(JOINT_IMBALANCE, |(.., joint)| joint.imbalance)
+            .with(JOINT_Z, |(.., joint)| joint.imbalance.z())
+            .with(JOINT_LARGEST_SHARE, |(.., joint)| joint.largest_share)
             .table(&TABLE)?)
     }
 }
@@ -128,7 +169,7 @@ impl Stage for SweepStage {
     }
 
     fn version(&self) -> u32 {
-        3
+        4
     }
 
     fn params(&self) -> Value {
@@ -139,6 +180,7 @@ impl Stage for SweepStage {
         &[
             contract::sweep::rates::TABLE.name,
             contract::sweep::detailed_balance::TABLE.name,
+            contract::sweep::balance_tests::TABLE.name,
         ]
     }
 
@@ -155,8 +197,8 @@ impl Stage for SweepStage {
         let grid = self.grid();
         let rates = self.rates(&events, &draws, &grid);
         progress.advance(1);
-        let balance = self.balance_table(&events, &draws, &grid)?;
+        let [balance, tests] = self.balance_tables(&events, &draws, &grid)?;
         progress.advance(1);
-        Ok(vec![self.rates_table(&grid, &rates)?, balance])
+        Ok(vec![self.rates_table(&grid, &rates)?, balance, tests])
     }
 }
