@@ -241,6 +241,10 @@ fn convolution_and_master_equation_agree_at_early_times() {
         })
         .collect();
     let fourier = jackknife(&[variance_of(&full)], &loo)[0];
+    // A check of the FFT, not of physics: for a translation-invariant kernel
+    // the variance is t kappa_2 identically, so this only confirms that the
+    // Fourier evolution (padding, periodic wrap) reproduces the cumulant; the
+    // physics check is the master equation below, an independent method.
     let closed = t * kernel_moments(&full, bins.width)[2];
     assert!(
         (fourier.mean - closed).abs() < 1e-9 * closed,

@@ -100,15 +100,19 @@ mod tests {
         }
     }
 
-    /// `v_th = sqrt(0.1 eV / m_e) = 1.3262e5 m/s`, `l = 10^(1/6) um`.
+    /// `v_th = sqrt(0.1 eV / m_e) = 1.3262e5 m/s` (worked by hand from CODATA
+    /// 2018: 1.602176634e-20 J / 9.1093837015e-31 kg), and the length unit is
+    /// where the pair energy `eps (l0 / r)^6` equals `kT`: a property of `l`,
+    /// not its formula again. At `r = l` the scaled potential `x^-n` is 1.
     #[test]
     fn published_gas_in_scaled_units() {
         let gas = published();
-        assert!((gas.thermal_speed_um_per_ns() / 132.62 - 1.0).abs() < 1e-4);
-        assert!((gas.length_unit_um(6.0) - 10f64.powf(1.0 / 6.0)).abs() < 1e-14);
-        assert!(
-            (gas.density_per_um - 160.0 / (2.0 * std::f64::consts::PI * 51200.0)).abs() < 1e-18
-        );
+        assert!((gas.thermal_speed_um_per_ns() / 132.620_5 - 1.0).abs() < 1e-5);
+        let l = gas.length_unit_um(6.0);
+        let pair_energy_ev = gas.eps_ev * (gas.l0_um / l).powi(6);
+        assert!((pair_energy_ev / gas.kt_ev - 1.0).abs() < 1e-14);
+        // The time unit is l / v_th, and rho l v_th is a rate per ns.
+        assert!((gas.time_unit_ns(6.0) * gas.thermal_speed_um_per_ns() / l - 1.0).abs() < 1e-14);
     }
 
     /// The published collapse (physics.md §7): `(rho, T, t_f)`,
