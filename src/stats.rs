@@ -149,6 +149,32 @@ impl<T: Sync> Replicated<T> {
         let loo: Vec<[f64; 1]> = self.leave_one_out.iter().map(|x| [f(x)]).collect();
         jackknife(&[f(&self.full)], &loo)[0]
     }
+
+    /// `f` of the members of `self` and `other` pairwise (the same replicate
+    /// sets), in parallel.
+    pub fn zip<U: Sync, V: Send>(
+        &self,
+        other: &Replicated<U>,
+        f: impl Fn(&T, &U) -> V + Sync,
+    ) -> Replicated<V> {
+        Replicated {
+            full: f(&self.full, &other.full),
+            leave_one_out: self
+                .leave_one_out
+                .par_iter()
+                .zip(&other.leave_one_out)
+                .map(|(a, b)| f(a, b))
+                .collect(),
+        }
+    }
+
+    /// The largest scalar `f` of the full and every leave-one-out member.
+    pub fn largest(&self, f: impl Fn(&T) -> f64) -> f64 {
+        self.leave_one_out
+            .iter()
+            .map(&f)
+            .fold(f(&self.full), f64::max)
+    }
 }
 
 impl<T: Entries> Replicated<T> {

@@ -275,3 +275,176 @@ fn convolution_and_master_equation_agree_at_early_times() {
     // The comparison has teeth: each error is a few percent at most.
     assert!(sigma < 0.05 * master.mean, "{sigma} vs {}", master.mean);
 }
+
+/// An operator with a planted spectrum on `grid`: `M = D^(1/2) S D^(-1/2)`,
+/// `S = sum_k lambda_k w_k w_k^T` with `w_k` orthonormal and orthogonal to the
+/// invariant directions `f0^(1/2) {1, u, u^2}` (which `S` annihilates), plus
+/// `asymmetry` times a fixed matrix that breaks detailed balance and every
+/// invariant. Returns the generator and the modes `w_k`.
+fn planted_operator(
+    grid: &VelocityGrid,
+    spectrum: impl Fn(usize) -> f64,
+    asymmetry: f64,
+) -> (Generator, Vec<Vec<f64>>) {
+    let root: Vec<f64> = grid.maxwellian().iter().map(|f| f.sqrt()).collect();
+    let n = root.len();
+    let mut basis: Vec<Vec<f64>> = Vec::new();
+    let invariants = invariants(grid).into_iter().map(|p| {
+        p.iter()
+            .zip(&root)
+            .map(|(x, r)| x * r)
+            .collect::<Vec<f64>>()
+    });
+    let units = (0..n).map(|i| {
+        (0..n)
+            .map(|j| if i == j { 1.0 } else { 0.0 })
+            .collect::<Vec<f64>>()
+    });
+    for mut q in invariants.chain(units) {
+        for _pass in 0..2 {
+            for b in &basis {
+                let dot: f64 = q.iter().zip(b).map(|(x, y)| x * y).sum();
+                q.iter_mut().zip(b).for_each(|(x, y)| *x -= dot * y);
+            }
+        }
+        let norm = q.iter().map(|x: &f64| x * x).sum::<f64>().sqrt();
+        if norm > 1e-6 {
+            basis.push(q.iter().map(|x| x / norm).collect());
+        }
+    }
+    let modes = basis.split_off(3);
+    let columns: Vec<Vec<f64>> = (0..n)
+        .map(|j| {
+            (0..n)
+                .map(|i| {
+                    let s: f64 = modes
+                        .iter()
+                        .enumerate()
+                        .map(|(k, w)| spectrum(k) * w[i] * w[j])
+                        .sum();
+                    s * root[i] / root[j] + asymmetry * ((i + 2 * j) as f64).sin()
+                })
+                .collect()
+        })
+        .collect();
+    (Generator::from_columns(&columns), modes)
+}
+
+/// Number, momentum and energy at the nodes: `1, u, u^2`.
+fn invariants(grid: &VelocityGrid) -> Vec<Vec<f64>> {
+    let u = grid.velocities();
+    vec![
+        vec![1.0; u.len()],
+        u.clone(),
+        u.iter().map(|x| x * x).collect(),
+    ]
+}
+
+/// A delta at `u = 0` (node masses).
+fn delta_at_zero(grid: &VelocityGrid) -> Vec<f64> {
+    let mut h0 = vec![0.0; grid.len()];
+    h0[grid.node_of(0.0).unwrap()] = 1.0;
+    h0
+}
+
+/// With every eigenvalue negative (the invariant modes' zero aside) the
+/// clipping changes nothing, exactly: `h - h_unclipped` and the clipped part
+/// are zero vectors.
+#[test]
+fn clipping_leaves_a_dissipative_operator_exactly_unchanged() {
+    let grid = VelocityGrid::covering(3.0, 0.5);
+    let (generator, _) = planted_operator(&grid, |k| -0.1 * (k + 1) as f64, 0.0);
+    let projected = Dissipative::project(&generator, &grid.maxwellian(), &invariants(&grid));
+    let h0 = delta_at_zero(&grid);
+    for change in projected.clipping_change(&h0, &[1.0, 10.0, 1e4]) {
+        assert!(change.iter().all(|&x| x == 0.0), "{change:?}");
+    }
+    assert!(projected.clipped_part(&h0).iter().all(|&x| x == 0.0));
+}
+
+/// One positive eigenvalue `lambda` planted in mode `w`: the clipping's change
+/// is the closed form `f0^(1/2) w c (1 - exp(lambda t))`, `c = w . f0^(-1/2) h0`,
+/// the clipped part is `f0^(1/2) w c`, and the unclipped evolution
+/// (`propagate` minus the change) grows that mode as `exp(lambda t)`: to
+/// rounding relative to the largest entry (the eigenvectors come from Jacobi
+/// rotations accurate to ~1e-15).
+#[test]
+fn a_planted_positive_eigenvalue_changes_h_by_its_closed_form() {
+    let grid = VelocityGrid::covering(3.0, 0.5);
+    let (lambda, planted) = (0.02, 4);
+    let spectrum = |k: usize| {
+        if k == planted {
+            lambda
+        } else {
+            -0.1 * (k + 1) as f64
+        }
+    };
+    let (generator, modes) = planted_operator(&grid, spectrum, 0.0);
+    let projected = Dissipative::project(&generator, &grid.maxwellian(), &invariants(&grid));
+    assert!((projected.largest_clipped - lambda).abs() < 1e-14);
+    let h0 = delta_at_zero(&grid);
+    let root: Vec<f64> = grid.maxwellian().iter().map(|f| f.sqrt()).collect();
+    let w = &modes[planted];
+    // The mode's coefficient `w . f0^(-1/2) h`.
+    let coefficient = |h: &[f64]| -> f64 {
+        w.iter()
+            .zip(h)
+            .zip(&root)
+            .map(|((w, h), r)| w * h / r)
+            .sum()
+    };
+    let c = coefficient(&h0);
+    let part: Vec<f64> = w.iter().zip(&root).map(|(w, r)| c * w * r).collect();
+    let close = |got: &[f64], want: &[f64]| {
+        let scale = want.iter().fold(0.0, |m: f64, x| m.max(x.abs()));
+        let error = got
+            .iter()
+            .zip(want)
+            .fold(0.0, |m: f64, (a, b)| m.max((a - b).abs()));
+        assert!(error <= 1e-12 * scale, "{error:e} of {scale:e}");
+    };
+    close(&projected.clipped_part(&h0), &part);
+    let times = [0.5, 10.0, 200.0];
+    let changes = projected.clipping_change(&h0, &times);
+    let states = projected.propagate(&h0, &times);
+    for ((change, state), t) in changes.iter().zip(&states).zip(times) {
+        let growth = 1.0 - (lambda * t).exp();
+        close(change, &part.iter().map(|p| p * growth).collect::<Vec<_>>());
+        let unclipped: Vec<f64> = state.iter().zip(change).map(|(h, d)| h - d).collect();
+        let mode = coefficient(&unclipped);
+        assert!(
+            (mode - c * (lambda * t).exp()).abs() <= 1e-12 * c.abs() * (lambda * t).exp(),
+            "t {t}: {mode} vs {}",
+            c * (lambda * t).exp()
+        );
+    }
+}
+
+/// An estimate that breaks detailed balance and every invariant, with
+/// several positive eigenvalues after the projection: the clipping changes
+/// `h` by O(1) but its number, momentum and second moment by rounding only
+/// (the clipped modes are orthogonal to the invariants).
+#[test]
+fn clipping_keeps_number_momentum_and_energy() {
+    let grid = VelocityGrid::covering(3.0, 0.25);
+    let spectrum = |k: usize| {
+        if k.is_multiple_of(3) {
+            0.01
+        } else {
+            -0.05 * (k + 1) as f64
+        }
+    };
+    let (generator, _) = planted_operator(&grid, spectrum, 0.003);
+    let projected = Dissipative::project(&generator, &grid.maxwellian(), &invariants(&grid));
+    let h0 = delta_at_zero(&grid);
+    for change in projected.clipping_change(&h0, &[10.0, 100.0, 1000.0]) {
+        let size: f64 = change.iter().map(|x| x.abs()).sum();
+        assert!(size > 0.1, "no change to test: {size}");
+        let moments = grid.moments(&change, 0.0, f64::INFINITY);
+        // Rounding: ~1e-16 per node of entries as large as `size`, times u^2 <= 9.
+        assert!(
+            moments.iter().all(|m| m.abs() <= 1e-13 * size),
+            "{moments:?} of a change {size}"
+        );
+    }
+}

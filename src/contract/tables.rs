@@ -865,6 +865,85 @@ pub mod evolve {
             JACKKNIFE
         );
     }
+
+    /// `projection.parquet`: one row per time, the `full` process.
+    pub mod projection {
+        use super::*;
+        pub use super::{TIME_GAMMA, TIME_NS, TIME_SCALED};
+
+        /// The table.
+        pub const TABLE: TableSpec = TableSpec {
+            stage: STAGE,
+            name: "projection",
+            description: "what projecting the full operator's estimate (symmetrization, clipping of positive eigenvalues) does to h_full, against h_full's statistical error",
+        };
+        /// L1 size of the clipping's change.
+        pub const CLIPPING_CHANGE: Pair = pair!(
+            "clipping_change",
+            "1",
+            "sum_i |h_i - h_unclipped_i|: h_unclipped propagates the same symmetrized, invariant-projected operator without clipping its positive eigenvalues (0 when none is positive)",
+            JACKKNIFE
+        );
+        /// Weight of `h` in the clipped modes.
+        pub const CLIPPED_WEIGHT: Pair = pair!(
+            "clipped_weight",
+            "1",
+            "sum_i |f0^(1/2) sum_(lambda_k > 0) c_k v_k|_i: the part of h kept frozen in the clipped modes at every time (the noiseless rates are <= 0), bounding the clipping's bias",
+            JACKKNIFE
+        );
+        /// Number of the change.
+        pub const CLIPPING_NUMBER: Pair = pair!(
+            "clipping_number",
+            "1",
+            "sum_i (h - h_unclipped)_i: 0 to rounding (clipped modes are orthogonal to the invariants)",
+            JACKKNIFE
+        );
+        /// Momentum of the change.
+        pub const CLIPPING_MOMENTUM: Pair = pair!(
+            "clipping_momentum",
+            "v_th",
+            "sum_i u_i (h - h_unclipped)_i: 0 to rounding",
+            JACKKNIFE
+        );
+        /// Second moment of the change.
+        pub const CLIPPING_SECOND_MOMENT: Pair = pair!(
+            "clipping_second_moment",
+            "v_th^2",
+            "sum_i u_i^2 (h - h_unclipped)_i: 0 to rounding",
+            JACKKNIFE
+        );
+        /// L1 size of the whole projection's change.
+        pub const PROJECTION_CHANGE: Pair = pair!(
+            "projection_change",
+            "1",
+            "sum_i |h_i - h_raw_i|: h_raw = exp(t M) h(0) of the raw estimate M (neither symmetrized nor clipped)",
+            JACKKNIFE
+        );
+        /// The statistical error of `h_full` in L1.
+        pub const H_ERROR_L1: Col<f64> = Col::f64(
+            "h_error_l1",
+            "1",
+            "sum_i of the jackknife standard errors of h_full's node masses: the L1 size of h's statistical error",
+        );
+        /// Clipping change against the error.
+        pub const CLIPPING_CHANGE_OVER_ERROR: Col<f64> = Col::f64(
+            "clipping_change_over_error",
+            "1",
+            "largest clipping_change of the full and every leave-one-out estimate over h_error_l1 (< 1: within the errors)",
+        );
+        /// Clipped weight against the error.
+        pub const CLIPPED_WEIGHT_OVER_ERROR: Col<f64> = Col::f64(
+            "clipped_weight_over_error",
+            "1",
+            "largest clipped_weight of the full and every leave-one-out estimate over h_error_l1",
+        );
+        /// Projection change against the error.
+        pub const PROJECTION_CHANGE_OVER_ERROR: Col<f64> = Col::f64(
+            "projection_change_over_error",
+            "1",
+            "largest projection_change of the full and every leave-one-out estimate over h_error_l1",
+        );
+    }
 }
 
 /// MD estimators: labels of `md`'s summary rows and of `compare`'s goodness rows.

@@ -9,6 +9,10 @@
 //! `S = D^(-1/2) M D^(1/2)`, project out the invariants, diagonalize, and set
 //! positive eigenvalues (noise) to zero. Then `exp(t M)` is exact for any `t`
 //! through the eigenvectors, and conserves the invariants exactly.
+//!
+//! What the clipping does to `h` is measured by [`Dissipative::clipping_change`]
+//! (against the same projection without clipping) and
+//! [`Dissipative::clipped_part`] (the weight `h` keeps in the clipped modes).
 
 use super::propagate::Generator;
 use crate::linalg::{SymmetricEigen, symmetric_eigen};
@@ -18,10 +22,16 @@ use crate::linalg::{SymmetricEigen, symmetric_eigen};
 pub struct Dissipative {
     /// `sqrt(f0)` at the nodes.
     root: Vec<f64>,
-    /// Eigen-decomposition of the symmetrized, projected `S`, eigenvalues <= 0.
+    /// Eigen-decomposition of the symmetrized, projected `S`, eigenvalues as
+    /// estimated (not clipped: [`Dissipative::propagate`] clips them).
     eigen: SymmetricEigen,
     /// Largest eigenvalue set to zero (noise), `rho^2 l v_th`; 0 if none.
     pub largest_clipped: f64,
+    /// Eigenvalues up to this are zero within the rounding of the
+    /// diagonalization: `1e-12 max_k |lambda_k|` (Jacobi's eigenvalues carry
+    /// errors ~ `n eps` of the largest, ~4e-14 at 161 nodes). The invariant
+    /// modes, exactly 0 in exact arithmetic, stay below it.
+    rounding: f64,
     /// `||S - S^T||_F / ||S + S^T||_F` of the estimate: its detailed-balance violation.
     pub asymmetry: f64,
 }
@@ -75,43 +85,72 @@ impl Dissipative {
             }
         };
         project(&mut sym);
-        let mut eigen = symmetric_eigen(&sym, n);
+        let eigen = symmetric_eigen(&sym, n);
         let largest_clipped = eigen.values.iter().copied().fold(0.0, f64::max);
-        eigen.values.iter_mut().for_each(|l| *l = l.min(0.0));
+        let radius = eigen.values.iter().fold(0.0, |r: f64, l| r.max(l.abs()));
         Dissipative {
             root,
             eigen,
             largest_clipped,
+            rounding: 1e-12 * radius,
             asymmetry: (odd / even).sqrt(),
         }
     }
 
-    /// `exp(t M) h0` at every time of `times`.
+    /// `exp(t M) h0` at every time of `times`, with the positive eigenvalues
+    /// set to zero: `h(t) = D^(1/2) sum_k c_k exp(min(lambda_k, 0) t) v_k`,
+    /// `c_k = v_k . D^(-1/2) h0` (`v_k`, `lambda_k`: eigenvectors and
+    /// eigenvalues of the projected `S`).
     pub fn propagate(&self, h0: &[f64], times: &[f64]) -> Vec<Vec<f64>> {
-        let g0: Vec<f64> = h0.iter().zip(&self.root).map(|(h, r)| h / r).collect();
-        let coefficients: Vec<f64> = self
-            .eigen
-            .vectors
+        times
             .iter()
-            .map(|v| v.iter().zip(&g0).map(|(a, b)| a * b).sum())
-            .collect();
+            .map(|&t| self.superpose(h0, |lambda| (lambda.min(0.0) * t).exp()))
+            .collect()
+    }
+
+    /// `h(t) - h_unclipped(t)` at every time of `times`, where `h_unclipped`
+    /// propagates the same symmetrized, invariant-projected operator without
+    /// clipping: `D^(1/2) sum_{lambda_k > r} c_k (1 - exp(lambda_k t)) v_k`,
+    /// `r` the rounding of the eigenvalues (the invariant modes' eigenvalues,
+    /// 0 to rounding, count as 0). Exactly zero when no eigenvalue exceeds
+    /// `r`; a clipped mode, orthogonal to the invariant directions
+    /// `D^(1/2) p(u)`, changes none of the moments `sum_i p(u_i) h_i`.
+    pub fn clipping_change(&self, h0: &[f64], times: &[f64]) -> Vec<Vec<f64>> {
         times
             .iter()
             .map(|&t| {
-                let mut g = vec![0.0; g0.len()];
-                for ((v, c), l) in self
-                    .eigen
-                    .vectors
-                    .iter()
-                    .zip(&coefficients)
-                    .zip(&self.eigen.values)
-                {
-                    let weight = c * (l * t).exp();
-                    g.iter_mut().zip(v).for_each(|(x, y)| *x += weight * y);
-                }
-                g.iter().zip(&self.root).map(|(x, r)| x * r).collect()
+                self.superpose(h0, |lambda| {
+                    if lambda > self.rounding {
+                        -(lambda * t).exp_m1()
+                    } else {
+                        0.0
+                    }
+                })
             })
             .collect()
+    }
+
+    /// The part of `h0` in the clipped modes, `D^(1/2) sum_{lambda_k > r} c_k v_k`:
+    /// [`Dissipative::propagate`] keeps it unchanged at every time, where the
+    /// operator without noise would let it decay (its rates are <= 0), so
+    /// its L1 norm bounds what clipping adds to `h(t)` when one mode is clipped.
+    pub fn clipped_part(&self, h0: &[f64]) -> Vec<f64> {
+        self.superpose(h0, |lambda| if lambda > self.rounding { 1.0 } else { 0.0 })
+    }
+
+    /// `D^(1/2) sum_k c_k gain(lambda_k) v_k` with `c_k = v_k . D^(-1/2) h0`.
+    fn superpose(&self, h0: &[f64], gain: impl Fn(f64) -> f64) -> Vec<f64> {
+        let g0: Vec<f64> = h0.iter().zip(&self.root).map(|(h, r)| h / r).collect();
+        let mut g = vec![0.0; g0.len()];
+        for (v, &lambda) in self.eigen.vectors.iter().zip(&self.eigen.values) {
+            let factor = gain(lambda);
+            if factor == 0.0 {
+                continue;
+            }
+            let weight = factor * v.iter().zip(&g0).map(|(a, b)| a * b).sum::<f64>();
+            g.iter_mut().zip(v).for_each(|(x, y)| *x += weight * y);
+        }
+        g.iter().zip(&self.root).map(|(x, r)| x * r).collect()
     }
 }
 

@@ -11,7 +11,9 @@
 //!   is projected onto detailed balance and dissipation, which removes the
 //!   growing noise modes of the raw estimate, see `evolve::spectral`), for the
 //!   special particle alone (`tagged`: a Markov generator, relaxes to `f0`),
-//!   and for the Fokker-Planck equation of the tagged drift and variance rates.
+//!   and for the Fokker-Planck equation of the tagged drift and variance rates;
+//! * what the projection of the full operator does to `h_full`, against its
+//!   statistical error (`projection`).
 //!
 //! Times are given in `1/Gamma` (`Gamma` = the special particle's variance
 //! rate at `u'`, from the same events: `a_n` at `u' = 0`) or in ns for a gas;
@@ -183,7 +185,7 @@ impl EvolveStage {
         let pick = |part: fn(&Generators) -> &Generator| -> Vec<Generator> {
             generators.iter().map(|g| part(g).clone()).collect()
         };
-        let full = replicate_means(&pick(|g| &g.full));
+        let raw = replicate_means(&pick(|g| &g.full));
         let tagged = replicate_means(&pick(|g| &g.tagged));
         let diffusion = tagged.map(|m| {
             let (drift, variance) = column_rates(m, &grid);
@@ -196,10 +198,21 @@ impl EvolveStage {
             velocities.clone(),
             velocities.iter().map(|u| u * u).collect(),
         ];
-        let full = full.map(|m| Dissipative::project(m, &maxwellian, &invariants));
+        let full = raw.map(|m| Dissipative::project(m, &maxwellian, &invariants));
         let mut h0 = vec![0.0; grid.len()];
         h0[start] = 1.0;
         let times: Vec<f64> = schedule.iter().map(|m| m.scaled).collect();
+        let full_states = full.map(|m| m.propagate(&h0, &times));
+        let effect = ProjectionEffect {
+            clipping: full.map(|m| m.clipping_change(&h0, &times)),
+            clipped: full.map(|m| m.clipped_part(&h0)),
+            projection: full_states.zip(&raw.map(|m| m.propagate(&h0, &times)), |h, raw| {
+                h.iter()
+                    .zip(raw)
+                    .map(|(a, b)| a.iter().zip(b).map(|(x, y)| x - y).collect())
+                    .collect()
+            }),
+        };
         let diagnostics = |d: &Replicated<Dissipative>| {
             [d.scalar(|d| d.largest_clipped), d.scalar(|d| d.asymmetry)]
         };
@@ -207,7 +220,7 @@ impl EvolveStage {
         let processes = [
             Process {
                 name: FULL,
-                states: full.map(|m| m.propagate(&h0, &times)),
+                states: full_states,
                 equilibrium: grid.conserving_equilibrium(p.kernel.u_prime),
                 diagnostics: Some(diagnostics(&full)),
             },
@@ -228,6 +241,7 @@ impl EvolveStage {
         Ok(vec![
             self.state_table(&grid, schedule, &processes)?,
             self.summary_table(&grid, schedule, &processes)?,
+            projection_table(&grid, schedule, &processes[0].states, &effect)?,
         ])
     }
 
@@ -359,6 +373,90 @@ struct ProcessMoments {
     asymmetry: Estimate,
 }
 
+/// What projecting the full operator's estimate does to `h_full`, for the
+/// full and every leave-one-out estimate (node masses).
+struct ProjectionEffect {
+    /// `h(t) - h_unclipped(t)` per time (`Dissipative::clipping_change`).
+    clipping: Replicated<Vec<Vec<f64>>>,
+    /// The part of `h` frozen in the clipped modes (`Dissipative::clipped_part`).
+    clipped: Replicated<Vec<f64>>,
+    /// `h(t) - exp(t M) h(0)` per time, `M` the raw estimate.
+    projection: Replicated<Vec<Vec<f64>>>,
+}
+
+/// `sum_i |x_i|`.
+fn l1(x: &[f64]) -> f64 {
+    x.iter().map(|v| v.abs()).sum()
+}
+
+/// The `projection` table: per time the L1 sizes of the clipping's change of
+/// `h_full`, of the weight frozen in the clipped modes and of the whole
+/// projection's change, with jackknife errors; the moments of the clipping's
+/// change (0 to rounding); and each size's largest value over the full and
+/// leave-one-out estimates against `sum_i sigma_i`, the L1 size of `h_full`'s
+/// statistical error (jackknife `sigma_i` of node `i`'s mass). A ratio below 1
+/// means the projection moves `h` by less than its error in every replicate.
+fn projection_table(
+    grid: &VelocityGrid,
+    schedule: &[Moment],
+    states: &Replicated<Vec<Vec<f64>>>,
+    effect: &ProjectionEffect,
+) -> Result<Table, StageError> {
+    use contract::evolve::projection::*;
+    let rows: Vec<ProjectionRow> = schedule
+        .iter()
+        .enumerate()
+        .map(|(k, &at)| {
+            let error: f64 = states.states(k).iter().map(|e| e.stderr).sum();
+            let moment = |p: usize| {
+                effect
+                    .clipping
+                    .estimate(k, |d| grid.moments(d, 0.0, f64::INFINITY)[p])
+            };
+            ProjectionRow {
+                at,
+                clipping: effect.clipping.estimate(k, l1),
+                clipped: effect.clipped.scalar(|part| l1(part)),
+                moments: [0, 1, 2].map(moment),
+                projection: effect.projection.estimate(k, l1),
+                error,
+                over_error: [
+                    effect.clipping.largest(|d| l1(&d[k])),
+                    effect.clipped.largest(|part| l1(part)),
+                    effect.projection.largest(|d| l1(&d[k])),
+                ]
+                .map(|change| change / error),
+            }
+        })
+        .collect();
+    Ok(with_times(Rows::new(&rows), |r| r.at)
+        .estimate(CLIPPING_CHANGE, |r| r.clipping)
+        .estimate(CLIPPED_WEIGHT, |r| r.clipped)
+        .estimate(CLIPPING_NUMBER, |r| r.moments[0])
+        .estimate(CLIPPING_MOMENTUM, |r| r.moments[1])
+        .estimate(CLIPPING_SECOND_MOMENT, |r| r.moments[2])
+        .estimate(PROJECTION_CHANGE, |r| r.projection)
+        .with(H_ERROR_L1, |r| r.error)
+        .with(CLIPPING_CHANGE_OVER_ERROR, |r| r.over_error[0])
+        .with(CLIPPED_WEIGHT_OVER_ERROR, |r| r.over_error[1])
+        .with(PROJECTION_CHANGE_OVER_ERROR, |r| r.over_error[2])
+        .table(&TABLE)?)
+}
+
+/// One row of the `projection` table.
+struct ProjectionRow {
+    at: Moment,
+    clipping: Estimate,
+    clipped: Estimate,
+    /// Number, momentum and second moment of the clipping's change.
+    moments: [Estimate; 3],
+    projection: Estimate,
+    /// `sum_i sigma_i` of `h_full`.
+    error: f64,
+    /// Largest clipping change, clipped weight and projection change over `error`.
+    over_error: [f64; 3],
+}
+
 /// Adds the three time columns of every evolve table.
 fn with_times<'r, R>(rows: Rows<'r, R>, at: impl Fn(&R) -> Moment) -> Rows<'r, R> {
     use contract::evolve::*;
@@ -386,7 +484,7 @@ impl Stage for EvolveStage {
     }
 
     fn version(&self) -> u32 {
-        1
+        2
     }
 
     fn params(&self) -> Value {
@@ -400,6 +498,7 @@ impl Stage for EvolveStage {
             early_summary::TABLE.name,
             evolution::TABLE.name,
             evolution_summary::TABLE.name,
+            projection::TABLE.name,
         ]
     }
 
