@@ -107,6 +107,24 @@ fn pair_rows(batch: &RecordBatch, panel: &str, series: &str, x: &[f64], pair: &P
 /// A kernel bin: `du`, `G` and its standard error.
 type Bin = (f64, f64, f64);
 
+/// The rows of one ring of a comparison table as a series against `du`.
+fn ring_rows(
+    compare: &RecordBatch,
+    ring: &str,
+    panel: &str,
+    series: &str,
+    pair: &Pair,
+) -> Vec<Row> {
+    use contract::compare::comparison::{DU, RING};
+    let names = RING.read(compare).unwrap();
+    pair_rows(compare, panel, series, &DU.read(compare).unwrap(), pair)
+        .into_iter()
+        .zip(&names)
+        .filter(|(_, name)| *name == ring)
+        .map(|(row, _)| row)
+        .collect()
+}
+
 /// `G(0 -> u)` at `du > 0` averaged over groups of 20 bins per decade of
 /// `du`, in order: mean `du`, mean `G`, and `sqrt(sum stderr^2) / count`.
 fn grouped_kernel(kernel: &Artifact, panel: &str, series: &str) -> Vec<Row> {
@@ -205,23 +223,11 @@ fn expected(store: &Path, figure: &Artifact) -> Vec<Row> {
                 .collect()
         }
         "md_boltzmann" => {
-            use contract::compare::comparison::{DU, H_BOLTZMANN, H_PUBLISHED, H_TAGGED, RING};
+            use contract::compare::comparison::{H_BOLTZMANN, H_PUBLISHED, H_TAGGED};
             let compare = figure.input(store, 0).table("comparison");
             let ring = params["ring"].as_str().unwrap();
-            let mine: Vec<bool> = RING
-                .read(&compare)
-                .unwrap()
-                .iter()
-                .map(|r| r == ring)
-                .collect();
-            let pick = |series: &str, panel: &str, pair: &Pair| -> Vec<Row> {
-                let du = DU.read(&compare).unwrap();
-                pair_rows(&compare, panel, series, &du, pair)
-                    .into_iter()
-                    .zip(&mine)
-                    .filter(|(_, mine)| **mine)
-                    .map(|(row, _)| row)
-                    .collect()
+            let pick = |series: &str, panel: &str, pair: &Pair| {
+                ring_rows(&compare, ring, panel, series, pair)
             };
             [
                 pick("Boltzmann", "tagged", &H_BOLTZMANN),
@@ -252,17 +258,10 @@ fn expected(store: &Path, figure: &Artifact) -> Vec<Row> {
                 .collect()
         }
         "collapse" => {
-            use contract::compare::comparison::{DU, H_BOLTZMANN, H_TAGGED, RING};
+            use contract::compare::comparison::{H_BOLTZMANN, H_TAGGED};
             let compare = figure.input(store, 0).table("comparison");
-            let names = RING.read(&compare).unwrap();
-            let du = DU.read(&compare).unwrap();
-            let of = |ring: &str, series: &str, pair: &Pair| -> Vec<Row> {
-                pair_rows(&compare, "collapse", series, &du, pair)
-                    .into_iter()
-                    .zip(&names)
-                    .filter(|(_, name)| *name == ring)
-                    .map(|(row, _)| row)
-                    .collect()
+            let of = |ring: &str, series: &str, pair: &Pair| {
+                ring_rows(&compare, ring, "collapse", series, pair)
             };
             let rings: Vec<&str> = params["rings"]
                 .as_array()
@@ -363,17 +362,10 @@ fn expected(store: &Path, figure: &Artifact) -> Vec<Row> {
             })
             .collect(),
         "md_times" => {
-            use contract::compare::comparison::{DU, H_BOLTZMANN, H_TAGGED, RING};
+            use contract::compare::comparison::{H_BOLTZMANN, H_TAGGED};
             let compare = figure.input(store, 0).table("comparison");
-            let names = RING.read(&compare).unwrap();
-            let du = DU.read(&compare).unwrap();
-            let of = |ring: &str, series: &str, pair: &Pair| -> Vec<Row> {
-                pair_rows(&compare, "h", series, &du, pair)
-                    .into_iter()
-                    .zip(&names)
-                    .filter(|(_, name)| *name == ring)
-                    .map(|(row, _)| row)
-                    .collect()
+            let of = |ring: &str, series: &str, pair: &Pair| {
+                ring_rows(&compare, ring, "h", series, pair)
             };
             let rings = params["rings"].as_array().unwrap();
             let times = params["times_ns"].as_array().unwrap();

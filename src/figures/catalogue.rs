@@ -7,7 +7,7 @@ use polars::prelude::{
 };
 use serde::Serialize;
 
-use super::frames::{frame, log_groups, series, series_by, stack};
+use super::frames::{failed, frame, log_groups, series, series_by, stack};
 use super::{Axis, Layout, Mark, Panel, Style};
 use crate::contract;
 use crate::pipeline::{Input, StageError};
@@ -116,10 +116,6 @@ pub const FIGURES: [&str; 12] = [
     "md_times",
     "kernels_u_prime",
 ];
-
-fn failed(error: impl std::fmt::Display) -> StageError {
-    StageError::Input(format!("figure: {error}"))
-}
 
 impl Figure {
     /// The figure's name: its instance and file stem.

@@ -53,7 +53,8 @@ impl Point {
     }
 }
 
-fn failed(error: impl std::fmt::Display) -> StageError {
+/// A polars failure while building a figure table.
+pub(super) fn failed(error: impl std::fmt::Display) -> StageError {
     StageError::Input(format!("figure table: {error}"))
 }
 

@@ -220,10 +220,6 @@ fn scaled(estimate: Estimate, factor: f64) -> Estimate {
     }
 }
 
-fn missing(what: String) -> StageError {
-    StageError::Input(what)
-}
-
 impl Check {
     fn published(&self) -> Published {
         match self {
@@ -268,7 +264,7 @@ impl Check {
                     .zip(B.read(table)?)
                     .position(|(x, y)| close(*x, *a) && close(y, *b))
                     .ok_or_else(|| {
-                        missing(format!(
+                        StageError::Input(format!(
                             "{id} has no pair ({a}, {b}): add b - a to sweep.balance_separations"
                         ))
                     })?;
@@ -282,7 +278,7 @@ impl Check {
                 let times = SCALED_TIME.read(TABLE.find(inputs, &CompareStage::instance())?)?;
                 let time = *times
                     .first()
-                    .ok_or_else(|| missing("no compared ring".to_string()))?;
+                    .ok_or_else(|| StageError::Input("no compared ring".to_string()))?;
                 let sharing = times
                     .iter()
                     .filter(|t| (*t / time - 1.0).abs() <= 1e-9)
@@ -301,7 +297,9 @@ impl Check {
                     .read(table)?
                     .iter()
                     .position(|name| name == gas)
-                    .ok_or_else(|| missing(format!("no gas `{gas}` in the gases table")))?;
+                    .ok_or_else(|| {
+                        StageError::Input(format!("no gas `{gas}` in the gases table"))
+                    })?;
                 // Gamma / a_n = rho^2 l v_th (1/ns), exact.
                 let rate_unit = GAMMA.value.read(table)?[row] / A_N.value.read(table)?[row];
                 let (paper, window) = rates(inputs, moments)?;
