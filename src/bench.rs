@@ -9,14 +9,18 @@ use std::time::Instant;
 
 use rand::SeedableRng;
 use rand::rngs::StdRng;
+use rayon::prelude::*;
 
 use ternary::binning::Bins;
 use ternary::config::{KernelConfig, Study};
 use ternary::kernel::fit::{FIT_GROUPS, Shape, fit_kernel};
 use ternary::kernel::{Draws, Event, Histogram, Target, histograms, moments};
+use ternary::physics::offset_quadrature::{OffsetIntegral, OffsetRule};
 use ternary::physics::potential::Potential;
-use ternary::physics::sampling::{LaunchProposal, OffsetProposal, SamplingPlan, SceneRecord};
-use ternary::physics::scan::{TIGHTEST_TOLERANCE, thermal_scenes};
+use ternary::physics::sampling::{
+    LaunchProposal, OffsetIntegration, OffsetProposal, SamplingPlan, SceneRecord,
+};
+use ternary::physics::scan::{LaunchPair, TIGHTEST_TOLERANCE, thermal_scenes};
 use ternary::physics::scene::{Collision, EngineSettings, FreeLine, Method, collide};
 use ternary::stats::Estimate;
 
@@ -237,6 +241,8 @@ pub struct StudySettings {
     pub bin_width: f64,
     /// Range of `|u - u'|` of the shape fit.
     pub fit_range: [f64; 2],
+    /// Offset rule of the quadrature sampler.
+    pub quadrature: OffsetRule,
 }
 
 impl StudySettings {
@@ -256,6 +262,7 @@ impl StudySettings {
             window: kernel.window,
             bin_width: kernel.bin_width,
             fit_range: kernel.fit_range,
+            quadrature: study.map_or_else(OffsetRule::default, |s| s.config.collisions.quadrature),
         }
     }
 }
@@ -266,6 +273,7 @@ struct Variant {
     proposal: OffsetProposal,
     same_side_fraction: f64,
     quasi_random: bool,
+    offsets: OffsetIntegration,
 }
 
 /// Precision and cost of one sampler run.
@@ -303,6 +311,7 @@ fn plan_for(variant: &Variant, seed: u64, randomizations: u32, points: u32) -> S
         proposal: variant.proposal,
         quasi_random: variant.quasi_random,
         launch: LaunchProposal::THERMAL,
+        offsets: variant.offsets,
     };
     plan.allocate(points, variant.same_side_fraction);
     plan
@@ -351,6 +360,7 @@ fn run_sampler(potential: &Potential, plan: &SamplingPlan, study: &StudySettings
     let started = Instant::now();
     let records = plan.integrate_all(potential, &study.engine, |_| ());
     let events: Vec<Event> = records.iter().map(Event::from_record).collect();
+    let scenes = events.len() as u64;
     let draws = Draws::count(&events);
     let target = Target::dilute(0.0);
     let sums = moments(&events, &target, &[0.1], &draws);
@@ -362,7 +372,7 @@ fn run_sampler(potential: &Potential, plan: &SamplingPlan, study: &StudySettings
     let (shape, chi2_per_dof) = shape_errors(&replicates, &bins, study);
     KernelRun {
         seconds,
-        scenes: plan.total(),
+        scenes,
         a_n,
         near_bins: median_relative_error(&replicates, &bins, 1e-4, 2e-3),
         far_bins: median_relative_error(&replicates, &bins, 1e-2, 5e-2),
@@ -409,24 +419,28 @@ pub fn kernel(options: &KernelBenchOptions) -> String {
             proposal: uniform_offsets(),
             same_side_fraction: 0.5,
             quasi_random: false,
+            offsets: OffsetIntegration::Sampled,
         },
         Variant {
             name: "+ mixture offset proposal",
             proposal: defaults,
             same_side_fraction: 0.5,
             quasi_random: false,
+            offsets: OffsetIntegration::Sampled,
         },
         Variant {
             name: "+ strata 85/15 (opposite/same side)",
             proposal: defaults,
             same_side_fraction: 0.15,
             quasi_random: false,
+            offsets: OffsetIntegration::Sampled,
         },
         Variant {
             name: "+ scrambled Sobol' points",
             proposal: defaults,
             same_side_fraction: 0.15,
             quasi_random: true,
+            offsets: OffsetIntegration::Sampled,
         },
     ];
     let mut out = String::new();
@@ -477,6 +491,7 @@ pub fn kernel(options: &KernelBenchOptions) -> String {
         proposal: defaults,
         same_side_fraction: fraction,
         quasi_random: true,
+        offsets: OffsetIntegration::Sampled,
     };
     let piloted_plan = plan_for(
         &piloted,
@@ -490,7 +505,20 @@ pub fn kernel(options: &KernelBenchOptions) -> String {
         "{} (same side {fraction:.3}, pilot {pilot_seconds:.2} s included)",
         piloted.name
     );
-    out.push_str(&comparison_row(&name, &run, &baseline.unwrap_or(run)));
+    let base = baseline.unwrap_or(run);
+    out.push_str(&comparison_row(&name, &run, &base));
+    let quadrature = Variant {
+        name: "offset quadrature, 2-D Sobol' launch pairs",
+        offsets: OffsetIntegration::Quadrature(study.quadrature),
+        ..piloted
+    };
+    let pairs = (options.points / QUADRATURE_SCENES_PER_PAIR).max(16);
+    let run = run_quadrature(&potential, &quadrature, options, pairs);
+    let name = format!(
+        "{} ({pairs} pairs per randomization, pilot {:.2} s included)",
+        quadrature.name, run.pilot_seconds
+    );
+    out.push_str(&comparison_row(&name, &run.run, &base));
     let _ = writeln!(
         out,
         "\nWork-precision of a_n with the default sampler ({} randomizations):\n",
@@ -516,21 +544,181 @@ pub fn kernel(options: &KernelBenchOptions) -> String {
         let [alpha, beta, sigma] = run.shape;
         let _ = writeln!(
             out,
-            "| {} | {} | {:.2} | {:.8e} +- {:.1e} | {:.2e} | {:.2e} | {:.2e} | {:.2e} | {:.2e} | {:.1} |",
-            1u32 << power,
-            run.scenes,
-            run.seconds,
-            run.a_n.mean,
-            run.a_n.stderr,
-            run.a_n.stderr / run.a_n.mean,
-            run.near_bins,
-            alpha,
-            beta,
-            sigma,
+            "{} {alpha:.2e} | {beta:.2e} | {sigma:.2e} | {:.1} |",
+            precision_cells(1 << power, &run),
             run.chi2_per_dof,
         );
     }
+    out.push_str(&quadrature_work_precision(&potential, &quadrature, options));
+    out.push_str(&inner_rule_convergence(&potential, study, options.seed));
     out.push_str(&skipping(&potential, &piloted_plan, study));
+    out
+}
+
+/// The leading cells of a work-precision row: points per randomization,
+/// scenes, seconds, `a_n` with its absolute and relative error, near-bin error.
+fn precision_cells(points: u32, run: &KernelRun) -> String {
+    format!(
+        "| {points} | {} | {:.2} | {:.8e} +- {:.1e} | {:.2e} | {:.2e} |",
+        run.scenes,
+        run.seconds,
+        run.a_n.mean,
+        run.a_n.stderr,
+        run.a_n.stderr / run.a_n.mean,
+        run.near_bins,
+    )
+}
+
+/// Scenes a launch pair costs, roughly, when sizing quadrature runs against
+/// sampled ones of the same budget.
+const QUADRATURE_SCENES_PER_PAIR: u32 = 64;
+
+/// A quadrature run and the time its pilot took (included in `run.seconds`).
+struct QuadratureRun {
+    run: KernelRun,
+    pilot_seconds: f64,
+}
+
+/// The quadrature sampler with `pairs` launch pairs per randomization, the
+/// strata split by its own pilot (timed with the run).
+fn run_quadrature(
+    potential: &Potential,
+    variant: &Variant,
+    options: &KernelBenchOptions,
+    pairs: u32,
+) -> QuadratureRun {
+    let started = Instant::now();
+    let probe = plan_for(variant, options.seed, options.randomizations, pairs);
+    let fraction = ternary::kernel::pilot_same_side_fraction(
+        &probe,
+        potential,
+        &options.study.engine,
+        &Target::dilute(0.0),
+        1024,
+    )
+    .unwrap_or(variant.same_side_fraction);
+    let pilot_seconds = started.elapsed().as_secs_f64();
+    let split = Variant {
+        same_side_fraction: fraction,
+        ..*variant
+    };
+    let plan = plan_for(&split, options.seed, options.randomizations, pairs);
+    let mut run = run_sampler(potential, &plan, &options.study);
+    run.seconds += pilot_seconds;
+    QuadratureRun { run, pilot_seconds }
+}
+
+/// Work-precision of `a_n` and the near bins with the quadrature sampler: error
+/// against launch pairs and wall time.
+fn quadrature_work_precision(
+    potential: &Potential,
+    quadrature: &Variant,
+    options: &KernelBenchOptions,
+) -> String {
+    let mut out = format!(
+        "\nWork-precision of a_n with the offset quadrature ({} randomizations; seconds include the pilot):\n\n",
+        options.randomizations
+    );
+    out.push_str("| pairs per randomization | scenes | seconds | a_n | relative standard error | near-bin rel. error | far-bin rel. error |\n|---|---|---|---|---|---|---|\n");
+    let shifted = KernelBenchOptions {
+        seed: options.seed + 1,
+        ..*options
+    };
+    for power in [6, 8, 10] {
+        let QuadratureRun { run, .. } = run_quadrature(potential, quadrature, &shifted, 1 << power);
+        let _ = writeln!(
+            out,
+            "{} {:.2e} |",
+            precision_cells(1 << power, &run),
+            run.far_bins
+        );
+    }
+    out
+}
+
+/// The inner rule's error against its nodes: for thermal launch pairs, the
+/// relative error of `int kick^2 dtau` after each halving, against the rule
+/// with three more halvings, and the bound the refinement reports.
+fn inner_rule_convergence(potential: &Potential, study: &StudySettings, seed: u64) -> String {
+    const PAIRS: u32 = 64;
+    const HALVINGS: u32 = 4;
+    let plan = SamplingPlan {
+        seed,
+        randomizations: 1,
+        opposite_points: PAIRS,
+        same_side_points: PAIRS,
+        proposal: study.proposal,
+        quasi_random: false,
+        launch: LaunchProposal::THERMAL,
+        offsets: OffsetIntegration::Sampled,
+    };
+    let launches: Vec<LaunchPair> = plan
+        .integrate_all(potential, &study.engine, |_| ())
+        .iter()
+        .map(|r| LaunchPair {
+            u2: r.scene.u2,
+            u3: r.scene.u3,
+        })
+        .collect();
+    let fixed = |halvings: u32| OffsetRule {
+        max_halvings: halvings,
+        tolerance: 0.0,
+        ..study.quadrature
+    };
+    let integrals = |rule: OffsetRule| -> Vec<OffsetIntegral> {
+        launches
+            .par_iter()
+            .map(|&launch| rule.integrate(potential, &study.engine, launch))
+            .collect()
+    };
+    let reference = integrals(fixed(HALVINGS + 3));
+    let mut out = format!(
+        "\nInner rule (tau = T sinh(s), step {} halved, |s| <= {:.2}): relative error of int kick^2 dtau against {} halvings, {} thermal pairs per stratum:\n\n",
+        study.quadrature.coarse_step,
+        study.quadrature.half_range,
+        HALVINGS + 3,
+        PAIRS
+    );
+    out.push_str("| halvings | nodes per pair | median rel. error | largest rel. error | smallest bound / error (>= 1: bounds hold) |\n|---|---|---|---|---|\n");
+    for halvings in 1..=HALVINGS {
+        let results = integrals(fixed(halvings));
+        let mut errors: Vec<f64> = results
+            .iter()
+            .zip(&reference)
+            .filter(|(_, r)| r.self_variance > 0.0)
+            .map(|(a, r)| (a.self_variance - r.self_variance).abs() / r.self_variance)
+            .collect();
+        // Differences at the integration's own precision (1e-12) say nothing of the rule.
+        let covered = results
+            .iter()
+            .zip(&reference)
+            .filter(|(a, r)| (a.self_variance - r.self_variance).abs() > 1e-12 * r.self_variance)
+            .map(|(a, r)| a.error / (a.self_variance - r.self_variance).abs())
+            .fold(f64::INFINITY, f64::min);
+        errors.sort_by(f64::total_cmp);
+        let _ = writeln!(
+            out,
+            "| {halvings} | {} | {:.1e} | {:.1e} | {:.1e} |",
+            results[0].nodes.len(),
+            errors[errors.len() / 2],
+            errors[errors.len() - 1],
+            covered,
+        );
+    }
+    let adaptive = integrals(study.quadrature);
+    let nodes =
+        adaptive.iter().map(|r| r.nodes.len()).sum::<usize>() as f64 / adaptive.len() as f64;
+    let worst = adaptive
+        .iter()
+        .zip(&reference)
+        .filter(|(_, r)| r.self_variance > 0.0)
+        .map(|(a, r)| (a.self_variance - r.self_variance).abs() / r.self_variance)
+        .fold(0.0, f64::max);
+    let _ = writeln!(
+        out,
+        "| adaptive (tolerance {:.0e}, at most {}) | {nodes:.1} (mean) | | {worst:.1e} | |",
+        study.quadrature.tolerance, study.quadrature.max_halvings
+    );
     out
 }
 

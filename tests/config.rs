@@ -279,6 +279,7 @@ u3 = -1.0
 points = 11
 
 [collisions]
+method = "sampled"
 randomizations = 4
 points = 256
 same_side_fraction = 0.15
@@ -293,6 +294,12 @@ tail_weight = 0.45
 tail_width = 1.0
 uniform_weight = 0.05
 uniform_range = 40.0
+
+[collisions.quadrature]
+coarse_step = 0.5
+half_range = 4.0
+max_halvings = 3
+tolerance = 1e-3
 
 [collisions.points_per_potential]
 "lj-0.1" = 512
@@ -543,6 +550,31 @@ fn collisions_section_rejects_bad_values() {
             "uniform_range = 40.0",
             "uniform_range = inf",
             "collisions.proposal.uniform_range",
+        ),
+        (
+            "method = \"sampled\"",
+            "method = \"gauss\"",
+            "collisions.method",
+        ),
+        (
+            "coarse_step = 0.5",
+            "coarse_step = 0.0",
+            "collisions.quadrature.coarse_step",
+        ),
+        (
+            "half_range = 4.0",
+            "half_range = 20.0",
+            "collisions.quadrature.half_range",
+        ),
+        (
+            "max_halvings = 3",
+            "max_halvings = 9",
+            "collisions.quadrature.max_halvings",
+        ),
+        (
+            "tolerance = 1e-3",
+            "tolerance = -1.0",
+            "collisions.quadrature.tolerance",
         ),
         (
             "\"lj-0.1\" = 512",

@@ -14,7 +14,7 @@ use ternary::evolve::propagate::Generator;
 use ternary::evolve::spectral::Dissipative;
 use ternary::kernel::{Draws, Event, Target, contributions, histograms, moments};
 use ternary::physics::potential::Potential;
-use ternary::physics::sampling::{LaunchProposal, OffsetProposal, SamplingPlan};
+use ternary::physics::sampling::{LaunchProposal, OffsetIntegration, OffsetProposal, SamplingPlan};
 use ternary::physics::scene::{EngineSettings, Method};
 use ternary::stats::{Entries, Estimate, jackknife};
 
@@ -31,6 +31,7 @@ fn events(seed: u64, randomizations: u32, spread: f64) -> Vec<Event> {
         proposal: OffsetProposal::default(),
         quasi_random: true,
         launch: LaunchProposal { shift: 0.0, spread },
+        offsets: OffsetIntegration::Sampled,
     };
     let engine = EngineSettings::new(Method::Dprkn12, 1e-12, 100_000);
     plan.integrate_all(&Potential::InversePower { n: 6.0 }, &engine, |_| ())

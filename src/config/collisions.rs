@@ -5,20 +5,24 @@ use std::collections::BTreeMap;
 use serde::{Deserialize, Serialize};
 
 use super::check::{Invalid, check, potential_named};
+use crate::physics::offset_quadrature::OffsetRule;
 use crate::physics::potential::Potential;
-use crate::physics::sampling::{LaunchProposal, OffsetProposal, SamplingPlan};
+use crate::physics::sampling::{LaunchProposal, OffsetIntegration, OffsetProposal, SamplingPlan};
 use crate::physics::scene::EngineSettings;
 
 /// `[collisions]`: how kernel scenes are sampled (numerics.md "Sampling scenes").
 #[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct CollisionsConfig {
+    /// How the arrival offset of each launch pair is integrated.
+    pub method: OffsetMethod,
     /// Seed of every randomization.
     pub seed: u64,
     /// Independent randomizations (replicates); standard errors come from their spread.
     pub randomizations: u32,
-    /// Scenes per randomization (both strata together); each stratum's share is
-    /// rounded to the nearest power of two.
+    /// Points per randomization (both strata together); each stratum's share is
+    /// rounded to the nearest power of two. A point is one scene when offsets
+    /// are sampled, one launch pair (~50-160 scenes) with `method = "quadrature"`.
     pub points: u32,
     /// Fraction of the scenes drawn in the same-side stratum when no pilot runs.
     pub same_side_fraction: f64,
@@ -30,8 +34,10 @@ pub struct CollisionsConfig {
     pub launch_shift: f64,
     /// Side components of the launch proposal at `launch_shift +- launch_spread` (0: none).
     pub launch_spread: f64,
-    /// Mixture proposal of the arrival offset (`[collisions.proposal]`).
+    /// Mixture proposal of the arrival offset (`[collisions.proposal]`, sampled offsets).
     pub proposal: OffsetProposal,
+    /// The nested offset rule (`[collisions.quadrature]`, `method = "quadrature"`).
+    pub quadrature: OffsetRule,
     /// Per-potential replacements of `points`, keyed by potential id
     /// (`[collisions.points_per_potential]`, e.g. `"lj-0.1" = 8192`).
     pub points_per_potential: BTreeMap<String, u32>,
@@ -40,6 +46,7 @@ pub struct CollisionsConfig {
 impl Default for CollisionsConfig {
     fn default() -> Self {
         CollisionsConfig {
+            method: OffsetMethod::Sampled,
             seed: 1,
             randomizations: 16,
             points: 4096,
@@ -49,9 +56,22 @@ impl Default for CollisionsConfig {
             launch_shift: 0.0,
             launch_spread: 0.0,
             proposal: OffsetProposal::default(),
+            quadrature: OffsetRule::default(),
             points_per_potential: BTreeMap::new(),
         }
     }
+}
+
+/// `collisions.method`: how each launch pair's arrival offset is integrated.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum OffsetMethod {
+    /// One offset per scene from the mixture proposal (three-dimensional
+    /// randomized quasi-Monte Carlo).
+    Sampled,
+    /// The nested trapezoid rule on `tau = T sinh(s)` per launch pair, the
+    /// launch pairs by two-dimensional randomized quasi-Monte Carlo.
+    Quadrature,
 }
 
 /// Resolved parameters of a `collisions` instance.
@@ -87,12 +107,16 @@ pub const MAX_SCENES: u64 = 1 << 25;
 /// instance's total against [`MAX_SCENES`].
 fn check_scenes(sampling: &CollisionsConfig, points: u32, key: &str) -> Result<(), Invalid> {
     check(points >= 2, key, "must be at least 2")?;
-    let total = u64::from(sampling.randomizations) * u64::from(points);
+    let per_point = match sampling.method {
+        OffsetMethod::Sampled => 1,
+        OffsetMethod::Quadrature => sampling.quadrature.max_nodes(),
+    };
+    let total = u64::from(sampling.randomizations) * u64::from(points) * per_point;
     check(
         total <= MAX_SCENES,
         key,
         format!(
-            "{points} scenes x {} randomizations = {total} exceeds {MAX_SCENES} (~4 GB of events in memory): use fewer points",
+            "{points} points x {per_point} scenes x {} randomizations = {total} exceeds {MAX_SCENES} (~4 GB of events in memory): use fewer points",
             sampling.randomizations
         ),
     )
@@ -120,6 +144,7 @@ impl CollisionsConfig {
                 sampling.randomizations
             ),
         )?;
+        self.validate_quadrature()?;
         check_scenes(sampling, sampling.points, "collisions.points")?;
         check(
             sampling.pilot_points == 0 || (16..=MAX_PILOT_POINTS).contains(&sampling.pilot_points),
@@ -183,6 +208,53 @@ impl CollisionsConfig {
         Ok(())
     }
 
+    /// Checks `[collisions.quadrature]`.
+    fn validate_quadrature(&self) -> Result<(), Invalid> {
+        let rule = &self.quadrature;
+        check(
+            rule.coarse_step.is_finite() && rule.coarse_step > 0.0 && rule.coarse_step <= 2.0,
+            "collisions.quadrature.coarse_step",
+            format!(
+                "{} is outside (0, 2] (a step in s, tau = T sinh(s))",
+                rule.coarse_step
+            ),
+        )?;
+        check(
+            rule.half_range.is_finite()
+                && rule.half_range >= rule.coarse_step
+                && rule.half_range <= 12.0,
+            "collisions.quadrature.half_range",
+            format!(
+                "{} is outside [coarse_step, 12] (offsets reach T sinh(half_range))",
+                rule.half_range
+            ),
+        )?;
+        check(
+            rule.max_halvings <= 8,
+            "collisions.quadrature.max_halvings",
+            format!(
+                "{} exceeds 8 (256x the coarse nodes per launch pair)",
+                rule.max_halvings
+            ),
+        )?;
+        check(
+            rule.tolerance.is_finite() && rule.tolerance >= 0.0,
+            "collisions.quadrature.tolerance",
+            format!(
+                "{} must be a finite relative tolerance >= 0",
+                rule.tolerance
+            ),
+        )
+    }
+
+    /// How the plan integrates offsets.
+    fn offsets(&self) -> OffsetIntegration {
+        match self.method {
+            OffsetMethod::Sampled => OffsetIntegration::Sampled,
+            OffsetMethod::Quadrature => OffsetIntegration::Quadrature(self.quadrature),
+        }
+    }
+
     /// The launch-speed proposal of the kernel's scenes.
     pub fn launch(&self) -> LaunchProposal {
         LaunchProposal {
@@ -201,6 +273,7 @@ impl CollisionsConfig {
             proposal: self.proposal,
             quasi_random: self.quasi_random,
             launch: self.launch(),
+            offsets: self.offsets(),
         };
         let points = self
             .points_per_potential

@@ -178,6 +178,18 @@ pub mod collisions {
     );
     /// Sobol' point index.
     pub const POINT: Col<u32> = Col::u32("point", "1", "index of the scrambled Sobol' point");
+    /// Node of the offset rule.
+    pub const NODE: Col<u32> = Col::u32(
+        "node",
+        "1",
+        "node of the arrival-offset rule within the point's launch pair (0 when the offset is sampled)",
+    );
+    /// Error bound of the pair's offset rule.
+    pub const QUADRATURE_ERROR: Col<f64> = Col::f64(
+        "quadrature_error",
+        "v_th^2 l/v_th",
+        "bound on the error of the launch pair's offset rule on int self_kick^2 d(arrival_offset) (0 when the offset is sampled)",
+    );
     /// Launch velocity of the first arrival.
     pub const U2: Col<f64> = Col::f64(
         "u2",
@@ -190,7 +202,7 @@ pub mod collisions {
     pub const PROPOSAL_DENSITY: Col<f64> = Col::f64(
         "proposal_density",
         "1/(v_th^2 l/v_th)",
-        "joint sampling density of (|u2|, |u3|, arrival_offset) within the stratum",
+        "joint sampling density of (|u2|, |u3|, arrival_offset) within the stratum; for a quadrature node, the launch pair's density over the node's weight",
     );
     /// Slowest outgoing velocity.
     pub const OUT_SLOW: Col<f64> = Col::f64(

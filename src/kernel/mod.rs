@@ -17,7 +17,7 @@ use rayon::prelude::*;
 use crate::binning::Bins;
 use crate::physics::launch::{launch_rate, thermal_density};
 use crate::physics::potential::Potential;
-use crate::physics::sampling::{SamplingPlan, SceneRecord, Stratum};
+use crate::physics::sampling::{OffsetIntegration, SamplingPlan, SceneRecord, Stratum};
 use crate::physics::scene::EngineSettings;
 
 /// One integrated scene as the kernel needs it (special particle's frame).
@@ -27,6 +27,9 @@ pub struct Event {
     pub stratum: Stratum,
     /// Randomization (replicate) it belongs to.
     pub randomization: u32,
+    /// Node of the offset rule within its launch pair (0 for sampled offsets:
+    /// every event with node 0 is one drawn point).
+    pub node: u32,
     /// Launch velocity of the first arrival.
     pub u2: f64,
     /// Launch velocity of the second arrival.
@@ -79,6 +82,7 @@ impl Event {
         Event {
             stratum: record.scene.stratum,
             randomization: record.randomization,
+            node: record.node,
             u2: record.scene.u2,
             u3: record.scene.u3,
             offset: record.scene.offset,
@@ -290,7 +294,8 @@ impl Histogram {
     }
 }
 
-/// Points drawn per replicate and stratum (failed scenes included).
+/// Points drawn per replicate and stratum (failed scenes included; a launch
+/// pair integrated over the offset is one point, however many nodes).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Draws {
     counts: Vec<[u64; 3]>,
@@ -305,7 +310,7 @@ impl Draws {
             .max()
             .unwrap_or(0);
         let mut counts = vec![[0u64; 3]; replicates];
-        for event in events {
+        for event in events.iter().filter(|e| e.node == 0) {
             counts[event.randomization as usize][event.stratum.index() as usize] += 1;
         }
         Draws { counts }
@@ -411,11 +416,14 @@ const PILOT_SEED_MASK: u64 = 0x5049_4c4f_545f_5345;
 
 /// Same-side fraction of the Neyman allocation for `a_n` (numerics.md):
 /// `N_s ~ sigma_s / sqrt(c_s)`, with `sigma_s` the standard deviation of one
-/// scene's contribution `sum w k^2` to the self variance rate at `target` and
-/// `c_s` its mean cost in force evaluations, both from `pilot_points` plain
-/// Monte Carlo scenes per stratum (a separate seed: the main points are not
-/// reused). Clamped to [0.02, 0.5] so that neither stratum starves; `None`
-/// when neither stratum contributes (the integrable n = 2).
+/// point's contribution `sum w k^2` to the self variance rate at `target` (a
+/// sampled scene, or a launch pair's offset integral) and `c_s` its mean cost
+/// in force evaluations, both from plain Monte Carlo points of a separate seed
+/// (the main points are not reused): `pilot_points` per stratum when offsets
+/// are sampled, `pilot_points / PILOT_NODES` launch pairs (at least 16) when
+/// each pair is integrated by quadrature, about the same number of scenes.
+/// Clamped to [0.02, 0.5] so that neither stratum starves; `None` when neither
+/// stratum contributes (the integrable n = 2).
 pub fn pilot_same_side_fraction(
     plan: &SamplingPlan,
     potential: &Potential,
@@ -423,40 +431,39 @@ pub fn pilot_same_side_fraction(
     target: &Target,
     pilot_points: u32,
 ) -> Option<f64> {
+    let points = match plan.offsets {
+        OffsetIntegration::Sampled => pilot_points,
+        OffsetIntegration::Quadrature(_) => (pilot_points / PILOT_NODES).max(16),
+    };
     let pilot = SamplingPlan {
         seed: plan.seed ^ PILOT_SEED_MASK,
         randomizations: 1,
-        opposite_points: pilot_points,
-        same_side_points: pilot_points,
+        opposite_points: points,
+        same_side_points: points,
         quasi_random: false,
         ..*plan
     };
     let records = pilot.integrate_all(potential, engine, |_| ());
     let merit = |stratum: Stratum| {
-        let scenes: Vec<&SceneRecord> = records
-            .iter()
-            .filter(|r| r.scene.stratum == stratum)
-            .collect();
-        let values: Vec<f64> = scenes
-            .iter()
-            .map(|r| {
-                contributions(&Event::from_record(r), target)
-                    .map(|c| c.weight * c.self_kick().powi(2))
-                    .sum()
-            })
-            .collect();
-        let count = values.len() as f64;
+        let mut values = vec![0.0; points as usize];
+        let mut costs = vec![0.0; points as usize];
+        for record in records.iter().filter(|r| r.scene.stratum == stratum) {
+            let point = record.point as usize;
+            values[point] += contributions(&Event::from_record(record), target)
+                .map(|c| c.weight * c.self_kick().powi(2))
+                .sum::<f64>();
+            costs[point] += f64::from(record.collision.evaluations);
+        }
+        let count = f64::from(points);
         let mean = values.iter().sum::<f64>() / count;
         let deviation =
             (values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (count - 1.0)).sqrt();
-        let cost = scenes
-            .iter()
-            .map(|r| f64::from(r.collision.evaluations))
-            .sum::<f64>()
-            / count;
-        deviation / cost.sqrt()
+        deviation / (costs.iter().sum::<f64>() / count).sqrt()
     };
     let (opposite, same) = (merit(Stratum::Opposite), merit(Stratum::SameSide));
     let fraction = same / (opposite + same);
     fraction.is_finite().then(|| fraction.clamp(0.02, 0.5))
 }
+
+/// Assumed nodes per launch pair when sizing a quadrature pilot.
+const PILOT_NODES: u32 = 64;

@@ -4,6 +4,7 @@
 pub mod clusters;
 pub mod launch;
 pub mod md;
+pub mod offset_quadrature;
 pub mod potential;
 pub mod quasi_random;
 pub mod ring;

@@ -25,6 +25,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use super::launch::{shifted_launch_speed, shifted_speed_density, thermal_launch_speed};
+use super::offset_quadrature::OffsetRule;
 use super::potential::Potential;
 use super::quasi_random::{ScrambledSobol, standard_normal_quantile};
 use super::scan::LaunchPair;
@@ -202,6 +203,28 @@ impl LaunchProposal {
     }
 }
 
+/// The launch pair in `stratum` at the unit-square point `[x_first, x_second]`,
+/// with its proposal density of `(|u2|, |u3|)` under `launch`.
+pub fn sample_launch(
+    [x_first, x_second]: [f64; 2],
+    stratum: Stratum,
+    launch: &LaunchProposal,
+) -> (LaunchPair, f64) {
+    let third_sign = if stratum == Stratum::Opposite {
+        -1.0
+    } else {
+        1.0
+    };
+    let first = launch.speed(x_first, 1.0);
+    let second = launch.speed(x_second, third_sign);
+    let pair = LaunchPair {
+        u2: first,
+        u3: third_sign * second,
+    };
+    let density = launch.density(first, 1.0) * launch.density(second, third_sign);
+    (pair, density)
+}
+
 /// The scene in `stratum` at the unit-cube point `coordinates`, with launch
 /// speeds from `launch` (the weights make any `u'` exact).
 pub fn sample_scene(
@@ -211,24 +234,15 @@ pub fn sample_scene(
     launch: &LaunchProposal,
 ) -> SampledScene {
     let [x_offset, x_first, x_second] = coordinates;
-    let third_sign = if stratum == Stratum::Opposite {
-        -1.0
-    } else {
-        1.0
-    };
-    let first = launch.speed(x_first, 1.0);
-    let second = launch.speed(x_second, third_sign);
-    let u3 = third_sign * second;
-    let collision_time = 1.0 / first + 1.0 / second;
+    let (pair, density) = sample_launch([x_first, x_second], stratum, launch);
+    let collision_time = pair.collision_time();
     let offset = proposal.offset(x_offset, collision_time);
     SampledScene {
         stratum,
-        u2: first,
-        u3,
+        u2: pair.u2,
+        u3: pair.u3,
         offset,
-        proposal_density: launch.density(first, 1.0)
-            * launch.density(second, third_sign)
-            * proposal.density(offset, collision_time),
+        proposal_density: density * proposal.density(offset, collision_time),
     }
 }
 
@@ -279,6 +293,31 @@ pub struct SamplingPlan {
     pub quasi_random: bool,
     /// Launch-speed proposal.
     pub launch: LaunchProposal,
+    /// How the arrival offset of each launch pair is integrated (absent from
+    /// the serialized plan when sampled, so keys of sampled plans stay as
+    /// they were).
+    #[serde(default, skip_serializing_if = "OffsetIntegration::is_sampled")]
+    pub offsets: OffsetIntegration,
+}
+
+/// How the arrival-offset dimension of the kernel integral is done.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum OffsetIntegration {
+    /// One offset per launch pair from the plan's mixture proposal: every
+    /// point of the three-dimensional point set is one scene.
+    #[default]
+    Sampled,
+    /// Every launch pair (a two-dimensional point set) integrated over the
+    /// offset by the nested rule: one scene per node.
+    Quadrature(OffsetRule),
+}
+
+impl OffsetIntegration {
+    /// `true` for [`OffsetIntegration::Sampled`].
+    pub fn is_sampled(&self) -> bool {
+        matches!(self, OffsetIntegration::Sampled)
+    }
 }
 
 /// A contiguous range of points of one randomization and stratum: the unit
@@ -300,14 +339,22 @@ pub struct SceneRecord {
     pub randomization: u32,
     /// Point index.
     pub point: u32,
+    /// Node of the offset rule within the point's launch pair (0 for sampled offsets).
+    pub node: u32,
+    /// Error bound of the launch pair's offset rule on `int kick^2 dtau`,
+    /// `v_th^2 l / v_th` (0 for sampled offsets, whose error is statistical).
+    pub quadrature_error: f64,
     /// The sampled scene.
     pub scene: SampledScene,
     /// Its integration.
     pub collision: Collision,
 }
 
-/// Points per chunk of work.
-const CHUNK_POINTS: u32 = 512;
+/// Scenes per chunk of work (about: quadrature points are cut by pairs).
+const CHUNK_SCENES: u32 = 512;
+
+/// Launch pairs per chunk when each is integrated by quadrature (~50-160 scenes each).
+const CHUNK_PAIRS: u32 = 8;
 
 /// The power of two nearest to `count` (at least 2) in the logarithm: scrambled
 /// Sobol' points converge fastest as complete nets of `2^m` points.
@@ -344,11 +391,15 @@ impl SamplingPlan {
         for randomization in 0..self.randomizations {
             for stratum in Stratum::IMPORTANCE {
                 let total = self.points(stratum);
-                for start in (0..total).step_by(CHUNK_POINTS as usize) {
+                let size = match self.offsets {
+                    OffsetIntegration::Sampled => CHUNK_SCENES,
+                    OffsetIntegration::Quadrature(_) => CHUNK_PAIRS,
+                };
+                for start in (0..total).step_by(size as usize) {
                     chunks.push(Chunk {
                         randomization,
                         stratum,
-                        points: start..(start + CHUNK_POINTS).min(total),
+                        points: start..(start + size).min(total),
                     });
                 }
             }
@@ -412,23 +463,75 @@ impl SamplingPlan {
         potential: &Potential,
         engine: &EngineSettings,
     ) -> Vec<SceneRecord> {
-        chunk
-            .points
-            .clone()
-            .map(|point| {
-                let coordinates = self.coordinates(chunk.randomization, chunk.stratum, point);
-                let scene = sample_scene(coordinates, chunk.stratum, &self.proposal, &self.launch);
-                let launch = LaunchPair {
-                    u2: scene.u2,
-                    u3: scene.u3,
-                };
-                let collision = collide(potential, engine, launch.lines(scene.offset));
-                SceneRecord {
-                    randomization: chunk.randomization,
-                    point,
-                    scene,
-                    collision,
-                }
+        match &self.offsets {
+            OffsetIntegration::Sampled => chunk
+                .points
+                .clone()
+                .map(|point| self.sampled_record(chunk, point, potential, engine))
+                .collect(),
+            OffsetIntegration::Quadrature(rule) => chunk
+                .points
+                .clone()
+                .flat_map(|point| self.quadrature_records(chunk, point, rule, potential, engine))
+                .collect(),
+        }
+    }
+
+    /// The one scene of a sampled point.
+    fn sampled_record(
+        &self,
+        chunk: &Chunk,
+        point: u32,
+        potential: &Potential,
+        engine: &EngineSettings,
+    ) -> SceneRecord {
+        let coordinates = self.coordinates(chunk.randomization, chunk.stratum, point);
+        let scene = sample_scene(coordinates, chunk.stratum, &self.proposal, &self.launch);
+        let launch = LaunchPair {
+            u2: scene.u2,
+            u3: scene.u3,
+        };
+        SceneRecord {
+            randomization: chunk.randomization,
+            point,
+            node: 0,
+            quadrature_error: 0.0,
+            scene,
+            collision: collide(potential, engine, launch.lines(scene.offset)),
+        }
+    }
+
+    /// The scenes at the offset rule's nodes of a point's launch pair. Each
+    /// node's proposal density is the pair's over its weight, so that summing
+    /// a pair's nodes gives the pair's offset integral over its density.
+    fn quadrature_records(
+        &self,
+        chunk: &Chunk,
+        point: u32,
+        rule: &OffsetRule,
+        potential: &Potential,
+        engine: &EngineSettings,
+    ) -> Vec<SceneRecord> {
+        let [_, x_first, x_second] = self.coordinates(chunk.randomization, chunk.stratum, point);
+        let (launch, density) = sample_launch([x_first, x_second], chunk.stratum, &self.launch);
+        let integral = rule.integrate(potential, engine, launch);
+        integral
+            .nodes
+            .iter()
+            .zip(0..)
+            .map(|(node, index)| SceneRecord {
+                randomization: chunk.randomization,
+                point,
+                node: index,
+                quadrature_error: integral.error,
+                scene: SampledScene {
+                    stratum: chunk.stratum,
+                    u2: launch.u2,
+                    u3: launch.u3,
+                    offset: node.offset,
+                    proposal_density: density / node.weight,
+                },
+                collision: node.collision,
             })
             .collect()
     }

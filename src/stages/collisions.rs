@@ -58,7 +58,7 @@ impl Stage for CollisionsStage {
     }
 
     fn version(&self) -> u32 {
-        2
+        3
     }
 
     fn params(&self) -> Value {
@@ -132,6 +132,8 @@ pub fn events_table(rows: &[SceneRecord]) -> Result<Table, StageError> {
         .with(RANDOMIZATION, |r| r.randomization)
         .with(STRATUM, |r| r.scene.stratum.index())
         .with(POINT, |r| r.point)
+        .with(NODE, |r| r.node)
+        .with(QUADRATURE_ERROR, |r| r.quadrature_error)
         .with(U2, |r| r.scene.u2)
         .with(U3, |r| r.scene.u3)
         .with(ARRIVAL_OFFSET, |r| r.scene.offset)
@@ -152,6 +154,7 @@ pub fn read_events(input: &Input) -> Result<Vec<Event>, StageError> {
     let batch = TABLE.of(input)?;
     let randomization = RANDOMIZATION.read(batch)?;
     let stratum = STRATUM.read(batch)?;
+    let node = NODE.read(batch)?;
     let (u2, u3) = (U2.read(batch)?, U3.read(batch)?);
     let offset = ARRIVAL_OFFSET.read(batch)?;
     let density = PROPOSAL_DENSITY.read(batch)?;
@@ -170,6 +173,7 @@ pub fn read_events(input: &Input) -> Result<Vec<Event>, StageError> {
             Ok(Event {
                 stratum,
                 randomization: randomization[k],
+                node: node[k],
                 u2: u2[k],
                 u3: u3[k],
                 offset: offset[k],

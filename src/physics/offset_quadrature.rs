@@ -1,0 +1,253 @@
+//! The arrival-offset integral of one launch pair by quadrature.
+//!
+//! For fixed launch velocities `(u2, u3)` (special frame) the outcome of a
+//! scene is a smooth function of the arrival offset `tau`, and every velocity
+//! change decays as a power of `|tau|` (about `|tau|^-(n+1)` for an inverse
+//! power law). The map `tau = T sinh(s)`, with the collision time
+//! `T = 1/|u2| + 1/|u3|`, turns those power-law tails into exponential decay
+//! in `s`, where the trapezoid rule converges exponentially fast. Halving the
+//! step reuses every node, so each pair is refined until its self variance
+//! integral `int kick^2 dtau` (the `a_n` integrand, `v_th^2 l / v_th`)
+//! changes by less than a tolerance. This is the inner integral of the
+//! kernel's `int du2 du3 dtau` (`sampling`).
+
+use super::potential::Potential;
+use super::scan::LaunchPair;
+use super::scene::{Collision, EngineSettings, collide};
+
+/// Nested trapezoid rule on `tau = T sinh(s)`, `|s| <= half_range`.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct OffsetRule {
+    /// Step in `s` of the coarsest rule.
+    pub coarse_step: f64,
+    /// Largest `|s|`: offsets reach `T sinh(half_range)`.
+    pub half_range: f64,
+    /// Most halvings of `coarse_step`.
+    pub max_halvings: u32,
+    /// Relative agreement of two successive rules that ends the refinement
+    /// (after two halvings at least: the coarsest rule is too rough to judge).
+    pub tolerance: f64,
+}
+
+impl Default for OffsetRule {
+    /// Offsets to `~27 T` (the self variance integral beyond holds a fraction
+    /// `~27^-(2n+1)` of it, 1e-13 for n = 4, and kicks there are below 1e-9
+    /// v_th), 17 coarse nodes, then 33, 65 and at most 129; a pair stops when
+    /// two rules agree to 1e-3, which leaves the finer one's error near 1e-8
+    /// (docs/benchmarks.md, "Offset quadrature").
+    fn default() -> Self {
+        OffsetRule {
+            coarse_step: 0.5,
+            half_range: 4.0,
+            max_halvings: 3,
+            tolerance: 1e-3,
+        }
+    }
+}
+
+/// One node of the rule: an integrated scene and its share of `dtau`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct OffsetNode {
+    /// Arrival offset `tau`, `l / v_th`.
+    pub offset: f64,
+    /// Quadrature weight, `l / v_th` (step x `dtau/ds`).
+    pub weight: f64,
+    /// The integrated scene.
+    pub collision: Collision,
+}
+
+/// The nodes of one launch pair and what the refinement measured.
+#[derive(Clone, Debug, PartialEq)]
+pub struct OffsetIntegral {
+    /// Nodes in ascending offset, weighted for the finest rule reached.
+    pub nodes: Vec<OffsetNode>,
+    /// `int kick^2 dtau` of the special particle by the finest rule
+    /// (failed scenes count as zero), `v_th^2 l / v_th`.
+    pub self_variance: f64,
+    /// Bound on the error of `self_variance`, `v_th^2 l / v_th`: the last
+    /// change, which bounds the coarser rule's error and so, the rule
+    /// converging exponentially (each error about the square of the one
+    /// before), the finer one's with a wide margin.
+    pub error: f64,
+    /// Halvings made.
+    pub halvings: u32,
+}
+
+/// Velocity changes below this (`v_th`) are the engine's error floor
+/// (`kernel::DEFAULT_KICK_FLOOR`): an integral made only of them is zero.
+const KICK_FLOOR: f64 = 1e-10;
+
+impl OffsetRule {
+    /// Most nodes (scenes) one launch pair can take.
+    pub fn max_nodes(&self) -> u64 {
+        let coarse_intervals = 2 * (self.half_range / self.coarse_step).floor() as u64;
+        (coarse_intervals << self.max_halvings) + 1
+    }
+
+    /// Integrates the scenes of `launch` at the rule's nodes, halving the step
+    /// until two successive rules agree to `tolerance` (or `max_halvings`).
+    pub fn integrate(
+        &self,
+        potential: &Potential,
+        engine: &EngineSettings,
+        launch: LaunchPair,
+    ) -> OffsetIntegral {
+        let time = launch.collision_time();
+        let scene = |s: f64| {
+            let offset = time * s.sinh();
+            let collision = collide(potential, engine, launch.lines(offset));
+            (s, collision)
+        };
+        let coarse = (self.half_range / self.coarse_step).floor() as i64;
+        let mut scenes: Vec<(f64, Collision)> = (-coarse..=coarse)
+            .map(|k| scene(k as f64 * self.coarse_step))
+            .collect();
+        let mut step = self.coarse_step;
+        let mut integral = self.sum(&scenes, step, time);
+        let mut error = f64::INFINITY;
+        let mut halvings = 0;
+        // An integrand of only sub-floor kicks is converged at any step.
+        let floor = KICK_FLOOR * KICK_FLOOR * time;
+        while halvings < self.max_halvings
+            && (halvings < 2 || error > self.tolerance * integral + floor)
+        {
+            let midpoints: Vec<(f64, Collision)> = scenes[1..]
+                .iter()
+                .map(|&(s, _)| scene(s - 0.5 * step))
+                .collect();
+            scenes = interleave(scenes, midpoints);
+            step *= 0.5;
+            let refined = self.sum(&scenes, step, time);
+            error = (refined - integral).abs();
+            integral = refined;
+            halvings += 1;
+        }
+        OffsetIntegral {
+            nodes: scenes
+                .into_iter()
+                .map(|(s, collision)| OffsetNode {
+                    offset: time * s.sinh(),
+                    weight: step * time * s.cosh(),
+                    collision,
+                })
+                .collect(),
+            self_variance: integral,
+            error,
+            halvings,
+        }
+    }
+
+    /// Trapezoid sum of `kick^2 dtau/ds` over `scenes` with step `step`.
+    fn sum(&self, scenes: &[(f64, Collision)], step: f64, time: f64) -> f64 {
+        step * scenes
+            .iter()
+            .map(|(s, collision)| time * s.cosh() * squared_self_kick(collision))
+            .sum::<f64>()
+    }
+}
+
+/// `kick^2` of the special particle (zero for failed scenes and below the floor).
+fn squared_self_kick(collision: &Collision) -> f64 {
+    if collision.outcome.is_failure() {
+        return 0.0;
+    }
+    let kick = collision.self_kick(0.0);
+    if kick.abs() <= KICK_FLOOR {
+        0.0
+    } else {
+        kick * kick
+    }
+}
+
+/// `a0 b0 a1 b1 ... b_{n-1} a_n`: the midpoints `inner` (one fewer than
+/// `outer`) between the old nodes, in ascending order.
+fn interleave<T>(outer: Vec<T>, inner: Vec<T>) -> Vec<T> {
+    let mut merged = Vec::with_capacity(outer.len() + inner.len());
+    let mut inner = inner.into_iter();
+    for node in outer {
+        merged.push(node);
+        merged.extend(inner.next());
+    }
+    merged
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::physics::scene::Method;
+
+    fn engine() -> EngineSettings {
+        EngineSettings::new(Method::Dprkn12, 1e-12, 100_000)
+    }
+
+    /// Nodes ascend and the weights are the finest rule's: they sum to the
+    /// trapezoid rule of `int dtau = 2 T sinh(S)` over the range.
+    #[test]
+    fn nodes_cover_the_range_in_order() {
+        let launch = LaunchPair { u2: 1.1, u3: -0.9 };
+        let rule = OffsetRule {
+            max_halvings: 2,
+            tolerance: 0.0,
+            ..OffsetRule::default()
+        };
+        let integral = rule.integrate(&Potential::InversePower { n: 6.0 }, &engine(), launch);
+        assert_eq!(integral.halvings, 2);
+        let offsets: Vec<f64> = integral.nodes.iter().map(|n| n.offset).collect();
+        assert!(offsets.windows(2).all(|w| w[0] < w[1]));
+        let coarse = (rule.half_range / rule.coarse_step).floor() as usize;
+        assert_eq!(offsets.len(), 4 * 2 * coarse + 1);
+        let time = launch.collision_time();
+        let last = coarse as f64 * rule.coarse_step;
+        let step = rule.coarse_step / 4.0;
+        let exact = 2.0 * time * last.sinh();
+        let total: f64 = integral.nodes.iter().map(|n| n.weight).sum();
+        // Trapezoid with both end nodes at full weight: its error on cosh,
+        // (h^2 / 12) (f'(S) - f'(-S)), plus the end nodes' second halves.
+        let expected = exact * (1.0 + step * step / 12.0) + step * time * last.cosh();
+        assert!(
+            (total - expected).abs() < 1e-5 * exact,
+            "{total} vs {expected}"
+        );
+    }
+
+    /// The integrable n = 2: every kick is zero, the refinement stops as soon
+    /// as it may (two halvings).
+    #[test]
+    fn integrable_pairs_stop_after_two_halvings() {
+        let integral = OffsetRule::default().integrate(
+            &Potential::InversePower { n: 2.0 },
+            &engine(),
+            LaunchPair { u2: 0.7, u3: -1.3 },
+        );
+        assert_eq!(integral.self_variance, 0.0);
+        assert_eq!(integral.halvings, 2);
+    }
+
+    /// The error bound holds: a much finer rule (3 more halvings) lies within
+    /// the bound of the default rule's result, for a symmetric, an asymmetric
+    /// and a same-side pair.
+    #[test]
+    fn the_error_bound_covers_a_finer_rule() {
+        let potential = Potential::InversePower { n: 6.0 };
+        for (u2, u3) in [(1.0, -1.0), (2.4, -0.3), (0.4, 1.7)] {
+            let launch = LaunchPair { u2, u3 };
+            let rule = OffsetRule::default();
+            let fine = OffsetRule {
+                max_halvings: 6,
+                tolerance: 0.0,
+                ..rule
+            }
+            .integrate(&potential, &engine(), launch);
+            let integral = rule.integrate(&potential, &engine(), launch);
+            assert!(integral.self_variance > 0.0);
+            assert!(
+                (integral.self_variance - fine.self_variance).abs() <= integral.error,
+                "({u2}, {u3}): {} vs {} (bound {})",
+                integral.self_variance,
+                fine.self_variance,
+                integral.error
+            );
+        }
+    }
+}
