@@ -297,7 +297,7 @@ uniform_range = 40.0
 
 [collisions.quadrature]
 coarse_step = 0.5
-half_range = 4.0
+half_range = 3.3
 max_halvings = 3
 tolerance = 1e-3
 
@@ -562,7 +562,7 @@ fn collisions_section_rejects_bad_values() {
             "collisions.quadrature.coarse_step",
         ),
         (
-            "half_range = 4.0",
+            "half_range = 3.3",
             "half_range = 20.0",
             "collisions.quadrature.half_range",
         ),

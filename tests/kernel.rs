@@ -570,8 +570,9 @@ fn offset_quadrature_error_bars_are_calibrated() {
 }
 
 /// The quadrature's own error is far below the statistical one: a rule with
-/// two more halvings and no early stop changes `a_n` by less than 1% of its
-/// standard error, and every launch pair's reported bound covers its change.
+/// two more halvings, no early stop and offsets reaching 2.7x farther changes
+/// `a_n` by less than 1% of its standard error, and every launch pair's
+/// reported bound covers its change.
 #[test]
 fn offset_quadrature_error_is_far_below_the_statistical_error() {
     let potential = Potential::InversePower { n: 6.0 };
@@ -579,6 +580,7 @@ fn offset_quadrature_error_is_far_below_the_statistical_error() {
     let tight = OffsetRule {
         max_halvings: rule.max_halvings + 2,
         tolerance: 0.0,
+        half_range: rule.half_range + 1.0,
         ..rule
     };
     let default = draw(potential, &quadrature_plan(41, 4, rule));

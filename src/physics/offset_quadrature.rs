@@ -31,15 +31,16 @@ pub struct OffsetRule {
 }
 
 impl Default for OffsetRule {
-    /// Offsets to `~27 T` (the self variance integral beyond holds a fraction
-    /// `~27^-(2n+1)` of it, 1e-13 for n = 4, and kicks there are below 1e-9
-    /// v_th), 17 coarse nodes, then 33, 65 and at most 129; a pair stops when
-    /// two rules agree to 1e-3, which leaves the finer one's error near 1e-8
-    /// (docs/benchmarks.md, "Offset quadrature").
+    /// Offsets to `T sinh(3.3) = 13.5 T` (the self variance integral beyond
+    /// holds a fraction `~13.5^-(2n+1)` of it, 1e-10 for n = 4, and kicks
+    /// there are below 1e-7 v_th, far inside the centre bin), 13 coarse
+    /// nodes, then 25, 49 and at most 97; a pair stops when two rules agree to
+    /// 1e-3, which leaves the finer one's error near 1e-8 (docs/benchmarks.md,
+    /// "Offset quadrature").
     fn default() -> Self {
         OffsetRule {
             coarse_step: 0.5,
-            half_range: 4.0,
+            half_range: 3.3,
             max_halvings: 3,
             tolerance: 1e-3,
         }
@@ -68,7 +69,8 @@ pub struct OffsetIntegral {
     /// Bound on the error of `self_variance`, `v_th^2 l / v_th`: the last
     /// change, which bounds the coarser rule's error and so, the rule
     /// converging exponentially (each error about the square of the one
-    /// before), the finer one's with a wide margin.
+    /// before), the finer one's with a wide margin; plus the tails beyond the
+    /// range ([`tail_estimate`]).
     pub error: f64,
     /// Halvings made.
     pub halvings: u32,
@@ -123,6 +125,20 @@ impl OffsetRule {
             integral = refined;
             halvings += 1;
         }
+        let integrand =
+            |(s, collision): &(f64, Collision)| time * s.cosh() * squared_self_kick(collision);
+        let ends = scenes.len().saturating_sub(2);
+        let tails = tail_estimate(
+            integrand(&scenes[1]),
+            integrand(&scenes[0]),
+            step,
+            self.half_range,
+        ) + tail_estimate(
+            integrand(&scenes[ends]),
+            integrand(&scenes[ends + 1]),
+            step,
+            self.half_range,
+        );
         OffsetIntegral {
             nodes: scenes
                 .into_iter()
@@ -133,7 +149,7 @@ impl OffsetRule {
                 })
                 .collect(),
             self_variance: integral,
-            error,
+            error: error + tails,
             halvings,
         }
     }
@@ -144,6 +160,23 @@ impl OffsetRule {
             .iter()
             .map(|(s, collision)| time * s.cosh() * squared_self_kick(collision))
             .sum::<f64>()
+    }
+}
+
+/// The integral beyond the last node, from the integrand `kick^2 dtau/ds` at
+/// the last node (`outer`) and the one before (`inner`), `step` apart in `s`:
+/// in `s` the tails of a power law decay exponentially, so the geometric
+/// continuation `step outer r / (1 - r)`, `r = outer / inner`. An end that
+/// does not decay is charged as if flat over another `half_range`.
+fn tail_estimate(inner: f64, outer: f64, step: f64, half_range: f64) -> f64 {
+    if outer == 0.0 {
+        return 0.0;
+    }
+    let ratio = outer / inner;
+    if ratio < 1.0 {
+        step * outer * ratio / (1.0 - ratio)
+    } else {
+        half_range * outer
     }
 }
 
