@@ -39,9 +39,9 @@ use crate::pipeline::key::sha256_hex;
 use crate::pipeline::store::{Depth, Store};
 use crate::pipeline::table::{is_table_file, read_parquet_footer};
 
-/// The stage whose tables hold every integrated scene: large, and left out
-/// of a bundle unless asked for.
-const EVENTS_STAGE: &str = "collisions";
+/// The stages whose tables hold every launch pair and integrated scene:
+/// large, and left out of a bundle unless asked for.
+const SCENE_STAGES: [&str; 2] = ["launches", "collisions"];
 
 /// Data Package v2 profile.
 const DATAPACKAGE_SCHEMA: &str = "https://datapackage.org/profiles/2.0/datapackage.json";
@@ -62,7 +62,7 @@ pub struct ExportOptions {
     /// Only instances of these potentials (by id, e.g. `ipp-6`), plus the
     /// study-wide ones (all when empty).
     pub potentials: Vec<String>,
-    /// Include the scene tables of the `collisions` stage.
+    /// Include the scene tables of the `launches` and `collisions` stages.
     pub include_events: bool,
 }
 
@@ -171,7 +171,7 @@ fn selected_entries(
     }
     let selected = |stage: &str, instance: &str| {
         (options.stages.is_empty() || options.stages.iter().any(|s| s == stage))
-            && (options.include_events || stage != EVENTS_STAGE)
+            && (options.include_events || !SCENE_STAGES.contains(&stage))
             && (options.potentials.is_empty()
                 || potential_of(instance).is_none_or(|p| options.potentials.contains(&p)))
     };

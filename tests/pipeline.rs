@@ -54,11 +54,12 @@ fn python_check(script: &str, artifact: &Path) {
     assert!(output.status.success(), "{}", stderr(&output));
 }
 
-/// Every instance of the default DAG: per potential scan, collisions, the
-/// sweep's own collisions, sweep, and kernel, moments and fit at (u' = 0,
-/// dilute), plus the table, the paper table, and the figures of the kicked potential (kernels,
-/// kernel with fit, rates, truncation, kicks).
-const INSTANCES: usize = 21;
+/// Every instance of the default DAG: per potential scan, launches and
+/// collisions, the sweep's own launches and collisions, sweep, and kernel,
+/// moments and fit at (u' = 0, dilute), plus the table, the paper table, and
+/// the figures of the kicked potential (kernels, kernel with fit, rates,
+/// truncation, kicks).
+const INSTANCES: usize = 25;
 
 fn stage_dirs(store: &Path, stage: &str) -> Vec<PathBuf> {
     let mut dirs: Vec<PathBuf> = fs::read_dir(store.join("artifacts").join(stage))
@@ -75,6 +76,7 @@ fn artifact_dirs(store: &Path) -> Vec<PathBuf> {
 fn all_artifact_dirs(store: &Path) -> Vec<PathBuf> {
     [
         "scan",
+        "launches",
         "collisions",
         "kernel",
         "moments",
@@ -373,7 +375,8 @@ fn convergence_study_shows_defaults_converged() {
         &config(7, extra).replace("points = 64", "points = 512"),
     );
     let (computed, _) = run_counts(&path, &[]);
-    // The default DAG, one re-integration at another tolerance, the study.
+    // The default DAG, one re-integration at another tolerance (of the same
+    // launches), the study.
     assert_eq!(computed, INSTANCES + 2);
     let study = stage_dirs(&dir.join("data"), "convergence");
     let file = fs::File::open(study[0].join("convergence.parquet")).unwrap();

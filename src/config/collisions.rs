@@ -87,9 +87,33 @@ pub struct CollisionsParams {
     pub points: u32,
     /// Pilot scenes per stratum for the Neyman allocation (0: keep the fraction).
     pub pilot_points: u32,
-    /// Engine of the pilot: the study's, also for re-integrations at other
-    /// tolerances, so that they get the same split and the same points.
-    pub pilot_engine: EngineSettings,
+}
+
+/// Resolved parameters of a `launches` instance: everything that decides the
+/// launch points, and nothing of the engine that integrates them (the pilot
+/// runs with its own fixed engine), so re-integrations share one launch set.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct LaunchesParams {
+    /// The potential (the pilot's strata split depends on it).
+    pub potential: Potential,
+    /// What to draw (strata split by `same_side_fraction` unless a pilot decides).
+    pub sampling: SamplingPlan,
+    /// Points per randomization, both strata.
+    pub points: u32,
+    /// Pilot points per stratum for the Neyman allocation (0: keep the fraction).
+    pub pilot_points: u32,
+}
+
+impl CollisionsParams {
+    /// The parameters of the launch points these collisions integrate.
+    pub fn launches(&self) -> LaunchesParams {
+        LaunchesParams {
+            potential: self.potential,
+            sampling: self.sampling,
+            points: self.points,
+            pilot_points: self.pilot_points,
+        }
+    }
 }
 
 /// Largest number of randomizations (replicates) of a collisions instance.
@@ -287,7 +311,6 @@ impl CollisionsConfig {
             sampling: plan,
             points,
             pilot_points: self.pilot_points,
-            pilot_engine: engine,
         }
     }
 }

@@ -40,8 +40,8 @@ use crate::physics::scene::EngineSettings;
 
 pub use check::MAX_LIST;
 pub use collisions::{
-    CollisionsConfig, CollisionsParams, MAX_PILOT_POINTS, MAX_RANDOMIZATIONS, MAX_SCENES,
-    OffsetMethod,
+    CollisionsConfig, CollisionsParams, LaunchesParams, MAX_PILOT_POINTS, MAX_RANDOMIZATIONS,
+    MAX_SCENES, OffsetMethod,
 };
 pub use convergence::{ConvergenceConfig, ConvergenceParams};
 pub use engine::EngineConfig;

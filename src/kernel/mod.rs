@@ -18,7 +18,7 @@ use crate::binning::Bins;
 use crate::physics::launch::{launch_rate, thermal_density};
 use crate::physics::potential::Potential;
 use crate::physics::sampling::{OffsetIntegration, SamplingPlan, SceneRecord, Stratum};
-use crate::physics::scene::EngineSettings;
+use crate::physics::scene::{EngineSettings, Method};
 
 /// One integrated scene as the kernel needs it (special particle's frame).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -410,6 +410,15 @@ pub fn moments(
         }
     })
 }
+
+/// Engine of every pilot, fixed so that a study's engine settings do not
+/// change its launch points (the pilot only estimates spreads and costs).
+pub const PILOT_ENGINE: EngineSettings = EngineSettings {
+    method: Method::Dprkn12,
+    tolerance: 1e-10,
+    max_steps: 100_000,
+    free_flight: true,
+};
 
 /// Pilot scenes are drawn from a seed derived from the main one by this mask.
 const PILOT_SEED_MASK: u64 = 0x5049_4c4f_545f_5345;

@@ -320,16 +320,22 @@ impl OffsetIntegration {
     }
 }
 
-/// A contiguous range of points of one randomization and stratum: the unit
-/// of parallel work (results do not depend on how chunks are scheduled).
-#[derive(Clone, Debug, PartialEq)]
-pub struct Chunk {
+/// One sampled launch pair with its place in the point set: what the
+/// `launches` stage draws and the `collisions` stage integrates.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LaunchPoint {
     /// Randomization.
     pub randomization: u32,
     /// Stratum.
     pub stratum: Stratum,
-    /// Point indices.
-    pub points: std::ops::Range<u32>,
+    /// Point index within the randomization and stratum.
+    pub point: u32,
+    /// The launch velocities, `v_th`, special frame.
+    pub launch: LaunchPair,
+    /// Proposal density of `(|u2|, |u3|)` within the stratum, `1 / v_th^2`.
+    pub density: f64,
+    /// The point's third coordinate in `(0, 1)`: the offset's, when offsets are sampled.
+    pub offset_coordinate: f64,
 }
 
 /// One integrated scene with its place in the point set.
@@ -350,11 +356,11 @@ pub struct SceneRecord {
     pub collision: Collision,
 }
 
-/// Scenes per chunk of work (about: quadrature points are cut by pairs).
-const CHUNK_SCENES: u32 = 512;
+/// Launch points per chunk of parallel work when each is one scene.
+const CHUNK_SCENES: usize = 512;
 
-/// Launch pairs per chunk when each is integrated by quadrature (~50-160 scenes each).
-const CHUNK_PAIRS: u32 = 8;
+/// Launch points per chunk when each is integrated by quadrature (~25-97 scenes each).
+const CHUNK_PAIRS: usize = 8;
 
 /// The power of two nearest to `count` (at least 2) in the logarithm: scrambled
 /// Sobol' points converge fastest as complete nets of `2^m` points.
@@ -385,28 +391,6 @@ impl SamplingPlan {
         u64::from(self.randomizations) * u64::from(self.opposite_points + self.same_side_points)
     }
 
-    /// All chunks in their fixed order (randomization, stratum, point).
-    pub fn chunks(&self) -> Vec<Chunk> {
-        let mut chunks = Vec::new();
-        for randomization in 0..self.randomizations {
-            for stratum in Stratum::IMPORTANCE {
-                let total = self.points(stratum);
-                let size = match self.offsets {
-                    OffsetIntegration::Sampled => CHUNK_SCENES,
-                    OffsetIntegration::Quadrature(_) => CHUNK_PAIRS,
-                };
-                for start in (0..total).step_by(size as usize) {
-                    chunks.push(Chunk {
-                        randomization,
-                        stratum,
-                        points: start..(start + size).min(total),
-                    });
-                }
-            }
-        }
-        chunks
-    }
-
     /// Unit-cube point `index` of one randomization and stratum. Each
     /// (randomization, stratum) has its own Owen-scrambled Sobol' set; plain Monte
     /// Carlo takes the first point of a separately scrambled set per index, which
@@ -420,120 +404,117 @@ impl SamplingPlan {
         }
     }
 
-    /// Samples and integrates every scene, chunks in parallel, in the fixed chunk
-    /// order (the records do not depend on the thread count). `done` hears the
-    /// size of every finished chunk (progress).
+    /// The launch points of the randomizations in `randomizations`, in table
+    /// order (randomization, stratum, point).
+    pub fn launch_points(&self, randomizations: std::ops::Range<u32>) -> Vec<LaunchPoint> {
+        let mut points = Vec::new();
+        for randomization in randomizations {
+            for stratum in Stratum::IMPORTANCE {
+                points.extend((0..self.points(stratum)).map(|point| {
+                    let [offset_coordinate, x_first, x_second] =
+                        self.coordinates(randomization, stratum, point);
+                    let (launch, density) =
+                        sample_launch([x_first, x_second], stratum, &self.launch);
+                    LaunchPoint {
+                        randomization,
+                        stratum,
+                        point,
+                        launch,
+                        density,
+                        offset_coordinate,
+                    }
+                }));
+            }
+        }
+        points
+    }
+
+    /// Samples and integrates every scene (see [`SamplingPlan::integrate_launches`]).
     pub fn integrate_all(
         &self,
         potential: &Potential,
         engine: &EngineSettings,
         done: impl Fn(usize) + Sync,
     ) -> Vec<SceneRecord> {
-        self.integrate_randomizations(potential, engine, 0..self.randomizations, done)
+        let launches = self.launch_points(0..self.randomizations);
+        self.integrate_launches(&launches, potential, engine, done)
     }
 
-    /// [`SamplingPlan::integrate_all`] for the randomizations in
-    /// `randomizations` only: the same records, a contiguous part of the whole
-    /// set (records are ordered by randomization first).
-    pub fn integrate_randomizations(
+    /// Integrates the scenes of `launches` in chunks in parallel, records in
+    /// launch order (the same bytes for any thread count or split of the
+    /// launches). `done` hears the launch points of every finished chunk.
+    pub fn integrate_launches(
         &self,
+        launches: &[LaunchPoint],
         potential: &Potential,
         engine: &EngineSettings,
-        randomizations: std::ops::Range<u32>,
         done: impl Fn(usize) + Sync,
     ) -> Vec<SceneRecord> {
-        self.chunks()
-            .into_iter()
-            .filter(|chunk| randomizations.contains(&chunk.randomization))
-            .collect::<Vec<_>>()
-            .par_iter()
+        let size = match self.offsets {
+            OffsetIntegration::Sampled => CHUNK_SCENES,
+            OffsetIntegration::Quadrature(_) => CHUNK_PAIRS,
+        };
+        launches
+            .par_chunks(size)
             .map(|chunk| {
-                let records = self.integrate(chunk, potential, engine);
-                done(records.len());
+                let records: Vec<SceneRecord> = chunk
+                    .iter()
+                    .flat_map(|launch| self.integrate(launch, potential, engine))
+                    .collect();
+                done(chunk.len());
                 records
             })
             .collect::<Vec<_>>()
             .concat()
     }
 
-    /// Samples and integrates the scenes of one chunk.
+    /// The scenes of one launch point: one at its sampled offset, or one per
+    /// node of the offset rule. A node's proposal density is the pair's over
+    /// its weight, so that summing a pair's nodes gives its offset integral
+    /// over its density.
     pub fn integrate(
         &self,
-        chunk: &Chunk,
+        point: &LaunchPoint,
         potential: &Potential,
         engine: &EngineSettings,
     ) -> Vec<SceneRecord> {
-        match &self.offsets {
-            OffsetIntegration::Sampled => chunk
-                .points
-                .clone()
-                .map(|point| self.sampled_record(chunk, point, potential, engine))
-                .collect(),
-            OffsetIntegration::Quadrature(rule) => chunk
-                .points
-                .clone()
-                .flat_map(|point| self.quadrature_records(chunk, point, rule, potential, engine))
-                .collect(),
-        }
-    }
-
-    /// The one scene of a sampled point.
-    fn sampled_record(
-        &self,
-        chunk: &Chunk,
-        point: u32,
-        potential: &Potential,
-        engine: &EngineSettings,
-    ) -> SceneRecord {
-        let coordinates = self.coordinates(chunk.randomization, chunk.stratum, point);
-        let scene = sample_scene(coordinates, chunk.stratum, &self.proposal, &self.launch);
-        let launch = LaunchPair {
-            u2: scene.u2,
-            u3: scene.u3,
+        let scene = |offset: f64, density: f64| SampledScene {
+            stratum: point.stratum,
+            u2: point.launch.u2,
+            u3: point.launch.u3,
+            offset,
+            proposal_density: density,
         };
-        SceneRecord {
-            randomization: chunk.randomization,
-            point,
-            node: 0,
-            quadrature_error: 0.0,
-            scene,
-            collision: collide(potential, engine, launch.lines(scene.offset)),
+        match &self.offsets {
+            OffsetIntegration::Sampled => {
+                let time = point.launch.collision_time();
+                let offset = self.proposal.offset(point.offset_coordinate, time);
+                vec![SceneRecord {
+                    randomization: point.randomization,
+                    point: point.point,
+                    node: 0,
+                    quadrature_error: 0.0,
+                    scene: scene(offset, point.density * self.proposal.density(offset, time)),
+                    collision: collide(potential, engine, point.launch.lines(offset)),
+                }]
+            }
+            OffsetIntegration::Quadrature(rule) => {
+                let integral = rule.integrate(potential, engine, point.launch);
+                integral
+                    .nodes
+                    .iter()
+                    .zip(0..)
+                    .map(|(node, index)| SceneRecord {
+                        randomization: point.randomization,
+                        point: point.point,
+                        node: index,
+                        quadrature_error: integral.error,
+                        scene: scene(node.offset, point.density / node.weight),
+                        collision: node.collision,
+                    })
+                    .collect()
+            }
         }
-    }
-
-    /// The scenes at the offset rule's nodes of a point's launch pair. Each
-    /// node's proposal density is the pair's over its weight, so that summing
-    /// a pair's nodes gives the pair's offset integral over its density.
-    fn quadrature_records(
-        &self,
-        chunk: &Chunk,
-        point: u32,
-        rule: &OffsetRule,
-        potential: &Potential,
-        engine: &EngineSettings,
-    ) -> Vec<SceneRecord> {
-        let [_, x_first, x_second] = self.coordinates(chunk.randomization, chunk.stratum, point);
-        let (launch, density) = sample_launch([x_first, x_second], chunk.stratum, &self.launch);
-        let integral = rule.integrate(potential, engine, launch);
-        integral
-            .nodes
-            .iter()
-            .zip(0..)
-            .map(|(node, index)| SceneRecord {
-                randomization: chunk.randomization,
-                point,
-                node: index,
-                quadrature_error: integral.error,
-                scene: SampledScene {
-                    stratum: chunk.stratum,
-                    u2: launch.u2,
-                    u3: launch.u3,
-                    offset: node.offset,
-                    proposal_density: density / node.weight,
-                },
-                collision: node.collision,
-            })
-            .collect()
     }
 }
 

@@ -287,7 +287,7 @@ pub fn run(
         let id = stage.id();
         let shardable = stage.shard_units() > 0;
         let selected = (options.only.is_empty() || options.only.contains(&id.stage))
-            && (sharding.task.is_none() || shardable);
+            && (sharding.task.is_none() || shardable || stage.shard_prerequisite());
         let Some(inputs) = input_records(stage.as_ref(), &resolved) else {
             if selected && sharding.task.is_none() {
                 return Err(ExecError::Plan(format!(
@@ -333,7 +333,7 @@ pub fn run(
                     resolved: &resolved,
                     options,
                 };
-                match sharding.task {
+                match sharding.task.filter(|_| shardable) {
                     Some(index) => Action::Shard {
                         index,
                         seconds: job.shard(&entry, index)?,

@@ -120,6 +120,13 @@ pub trait Stage: Sync {
         Ok(Vec::new())
     }
 
+    /// `true` for a cheap stage that shardable stages read: a shard task
+    /// computes it too when it is missing (tasks that race write the same
+    /// bytes; the store keeps one copy).
+    fn shard_prerequisite(&self) -> bool {
+        false
+    }
+
     /// Independent units of work (randomizations, runs) the stage can be
     /// split into for sharded runs; 0 (the default) when it cannot be split.
     fn shard_units(&self) -> u32 {

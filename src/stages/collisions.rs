@@ -1,12 +1,13 @@
-//! `collisions`: importance-sampled, stratified, randomized quasi-Monte Carlo
-//! three-body scenes of one potential, integrated by the engine (physics.md
-//! §3). For inverse power laws the events do not depend on `rho`, `T` or `u'`:
-//! the `kernel` and `moments` stages reweight them.
+//! `collisions`: the three-body scenes of one potential's launch pairs (the
+//! `launches` stage), integrated by the engine at a sampled arrival offset or
+//! at every node of the offset rule (physics.md §3). For inverse power laws
+//! the events do not depend on `rho`, `T` or `u'`: the `kernel` and `moments`
+//! stages reweight them.
 //!
-//! Work is split into chunks of consecutive points of one randomization and
-//! stratum ([`SamplingPlan::chunks`](crate::physics::sampling::SamplingPlan));
+//! Work is split into chunks of consecutive launch points
+//! ([`SamplingPlan::integrate_launches`](crate::physics::sampling::SamplingPlan));
 //! chunks run in parallel and are written in order, so the bytes do not depend
-//! on the thread count.
+//! on the thread count or on the shard split.
 
 use std::ops::Range;
 
@@ -14,26 +15,27 @@ use serde_json::Value;
 
 use crate::config::CollisionsParams;
 use crate::contract::{self, Rows};
-use crate::kernel::{Event, Target, pilot_same_side_fraction};
+use crate::kernel::Event;
 use crate::physics::sampling::{SceneRecord, Stratum};
 use crate::pipeline::{Input, InstanceId, Progress, Stage, StageError, Table};
+use crate::stages::launches::{LaunchesStage, read_launches};
 
 /// The `collisions` stage for one potential.
 pub struct CollisionsStage {
     params: CollisionsParams,
     instance: String,
+    launches: String,
 }
 
 impl CollisionsStage {
-    /// The collisions of a potential, named by the potential.
-    pub fn new(params: CollisionsParams) -> CollisionsStage {
-        let instance = params.potential.id();
-        CollisionsStage { params, instance }
-    }
-
-    /// A variant (e.g. another tolerance) under its own instance name.
-    pub fn variant(params: CollisionsParams, instance: String) -> CollisionsStage {
-        CollisionsStage { params, instance }
+    /// The collisions named `instance` (a potential id, or a variant's name,
+    /// e.g. another tolerance) of the launch set named `launches`.
+    pub fn new(params: CollisionsParams, instance: String, launches: String) -> CollisionsStage {
+        CollisionsStage {
+            params,
+            instance,
+            launches,
+        }
     }
 
     /// Instance id of the collisions named `name` (a potential id, or a variant's name).
@@ -58,7 +60,7 @@ impl Stage for CollisionsStage {
     }
 
     fn version(&self) -> u32 {
-        3
+        4
     }
 
     fn params(&self) -> Value {
@@ -70,10 +72,10 @@ impl Stage for CollisionsStage {
     }
 
     fn inputs(&self) -> Vec<InstanceId> {
-        Vec::new()
+        vec![LaunchesStage::instance(&self.launches)]
     }
 
-    /// The configured split's total; the pilot may change it (see `run`).
+    /// The configured split's total; the launches' pilot may change it.
     fn work_units(&self) -> u64 {
         self.params.sampling.total()
     }
@@ -89,39 +91,19 @@ impl Stage for CollisionsStage {
 
     fn run_shard(
         &self,
-        _inputs: &[Input],
+        inputs: &[Input],
         randomizations: Range<u32>,
         progress: &Progress,
     ) -> Result<Vec<Table>, StageError> {
-        let mut plan = self.params.sampling;
-        if self.params.pilot_points > 0 {
-            let target = Target::dilute(0.0);
-            // Without any contribution (n = 2) the configured split stays.
-            if let Some(fraction) = pilot_same_side_fraction(
-                &plan,
-                &self.params.potential,
-                &self.params.pilot_engine,
-                &target,
-                self.params.pilot_points,
-            ) {
-                plan.allocate(self.params.points, fraction);
-            }
-        }
-        let per_randomization = plan.total() / u64::from(plan.randomizations.max(1));
-        progress.set_total(per_randomization * u64::from(randomizations.len() as u32));
-        let rows = plan.integrate_randomizations(
+        let launches = read_launches(&inputs[0], randomizations)?;
+        progress.set_total(launches.len() as u64);
+        let rows = self.params.sampling.integrate_launches(
+            &launches,
             &self.params.potential,
             &self.params.engine,
-            randomizations,
             |count| progress.advance(count as u64),
         );
-        let allocation = format!(
-            "opposite {} same-side {} per randomization",
-            plan.opposite_points, plan.same_side_points
-        );
-        Ok(vec![
-            events_table(&rows)?.with_metadata("ternary.strata_allocation", allocation),
-        ])
+        Ok(vec![events_table(&rows)?])
     }
 }
 

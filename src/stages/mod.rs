@@ -9,6 +9,7 @@ pub mod figures;
 pub mod fit;
 pub mod gases;
 pub mod kernel;
+pub mod launches;
 pub mod md;
 pub mod moments;
 pub mod paper;
@@ -16,8 +17,34 @@ pub mod scan;
 pub mod sweep;
 pub mod table;
 
-use crate::config::Study;
+use crate::config::{CollisionsParams, Study};
 use crate::pipeline::Stage;
+
+/// Registers the collisions named `name` after the launch set they
+/// integrate: an already registered set with the same parameters (e.g. the
+/// main set, for a re-integration at another tolerance), else a new one
+/// named like them.
+fn push_collisions(stages: &mut Vec<Box<dyn Stage>>, params: CollisionsParams, name: String) {
+    let launches = params.launches();
+    let existing = stages.iter().find_map(|stage| {
+        let id = stage.id();
+        (id.stage == crate::contract::launches::STAGE
+            && stage.params() == serde_json::to_value(&launches).unwrap_or_default())
+        .then(|| id.instance.clone())
+    });
+    let launches_name = existing.unwrap_or_else(|| {
+        stages.push(Box::new(launches::LaunchesStage::new(
+            launches,
+            name.clone(),
+        )));
+        name.clone()
+    });
+    stages.push(Box::new(collisions::CollisionsStage::new(
+        params,
+        name,
+        launches_name,
+    )));
+}
 
 /// Every stage instance of a study, in topological order.
 pub fn plan(study: &Study) -> Vec<Box<dyn Stage>> {
@@ -26,9 +53,11 @@ pub fn plan(study: &Study) -> Vec<Box<dyn Stage>> {
     let truncations = &study.config.kernel.truncations;
     for &potential in &potentials {
         stages.push(Box::new(scan::ScanStage::new(study.scan_params(potential))));
-        stages.push(Box::new(collisions::CollisionsStage::new(
+        push_collisions(
+            &mut stages,
             study.collisions_params(potential),
-        )));
+            potential.id(),
+        );
         for (u_prime, density) in study.kernel_targets() {
             let params = study.kernel_params(potential, u_prime, density);
             stages.push(Box::new(kernel::KernelStage::new(params)));
@@ -50,7 +79,7 @@ pub fn plan(study: &Study) -> Vec<Box<dyn Stage>> {
             sweep.is_some() || evolve.is_some() || compared,
             study.wide_collisions(potential),
         ) {
-            stages.push(Box::new(collisions::CollisionsStage::variant(wide, name)));
+            push_collisions(&mut stages, wide, name);
         }
         if let Some(params) = sweep {
             stages.push(Box::new(sweep::SweepStage::new(params)));
@@ -87,9 +116,7 @@ pub fn plan(study: &Study) -> Vec<Box<dyn Stage>> {
                 &variant.potential.id(),
                 variant.engine.tolerance,
             );
-            stages.push(Box::new(collisions::CollisionsStage::variant(
-                variant, name,
-            )));
+            push_collisions(&mut stages, variant, name);
         }
         stages.push(Box::new(convergence::ConvergenceStage::new(params)));
     }

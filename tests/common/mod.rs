@@ -94,7 +94,7 @@ enabled = false
 }
 
 /// Stage instances of [`small_study`].
-pub const SMALL_STUDY_INSTANCES: usize = 11;
+pub const SMALL_STUDY_INSTANCES: usize = 12;
 
 /// Every file under `dir`, recursively, as paths relative to `dir`.
 pub fn files_under(dir: &Path) -> Vec<PathBuf> {
