@@ -54,6 +54,28 @@ impl Estimate {
         }
     }
 
+    /// The ratio of the means of two quantities measured on the same
+    /// replicates (`numerator[k]`, `denominator[k]` from replicate `k`), with
+    /// their correlation kept: `r = mean(a) / mean(b)`, its standard error
+    /// that of the mean of the linearized residuals `(a_k - r b_k) / mean(b)`
+    /// (first order, the delta method on the replicates). Equal to the
+    /// independent [`Estimate::ratio`] only when the two are uncorrelated;
+    /// `a_k = c b_k` gives `c` exactly, without error.
+    pub fn paired_ratio(numerator: &[f64], denominator: &[f64]) -> Estimate {
+        let a = Estimate::from_replicates(numerator).mean;
+        let b = Estimate::from_replicates(denominator).mean;
+        let mean = a / b;
+        let residuals: Vec<f64> = numerator
+            .iter()
+            .zip(denominator)
+            .map(|(x, y)| (x - mean * y) / b)
+            .collect();
+        Estimate {
+            mean,
+            stderr: Estimate::from_replicates(&residuals).stderr,
+        }
+    }
+
     /// `mean / stderr`: how many standard errors the mean lies from zero
     /// (NaN when both vanish, infinite for a nonzero mean without spread).
     pub fn z(self) -> f64 {
@@ -396,6 +418,28 @@ mod tests {
 
     /// Rounding of sums of a handful of O(1) numbers.
     const ROUNDING: f64 = 1e-14;
+
+    /// Proportional replicates have an exact ratio; for a numerator that is
+    /// the denominator plus a term uncorrelated with it, the error is that
+    /// term's alone (worked by hand: residuals `d_k / mean(b)`).
+    #[test]
+    fn paired_ratio_keeps_the_replicates_correlation() {
+        let b = [1.0, 2.0, 3.0, 4.0];
+        let exact = Estimate::paired_ratio(&b.map(|x| 2.5 * x), &b);
+        assert!((exact.mean - 2.5).abs() <= ROUNDING && exact.stderr <= ROUNDING);
+        // d sums to zero and is orthogonal to b: mean(a) = mean(b), r = 1.
+        let d = [0.1, -0.1, -0.1, 0.1];
+        let a: Vec<f64> = b.iter().zip(d).map(|(x, e)| x + e).collect();
+        let paired = Estimate::paired_ratio(&a, &b);
+        let by_hand = Estimate::from_replicates(&d.map(|e| e / 2.5)).stderr;
+        assert!((paired.mean - 1.0).abs() <= ROUNDING, "{paired:?}");
+        assert!(
+            (paired.stderr - by_hand).abs() <= ROUNDING,
+            "{paired:?} vs {by_hand}"
+        );
+        let independent = Estimate::from_replicates(&a).ratio(Estimate::from_replicates(&b));
+        assert!(paired.stderr < 0.2 * independent.stderr, "{independent:?}");
+    }
 
     /// For even `dof = 2m`, `Q(m, x) = exp(-x) sum_{j<m} x^j / j!` exactly:
     /// the p-value against that closed form on both sides of `x = a + 1`

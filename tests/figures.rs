@@ -128,18 +128,25 @@ fn ring_rows(
 /// `G(0 -> u)` at `du > 0` averaged over groups of 20 bins per decade of
 /// `du`, in order: mean `du`, mean `G`, and `sqrt(sum stderr^2) / count`.
 fn grouped_kernel(kernel: &Artifact, panel: &str, series: &str) -> Vec<Row> {
-    grouped_side(kernel, panel, series, 1.0)
+    grouped_side(kernel, panel, series, 1.0, 20.0)
 }
 
-/// [`grouped_kernel`] of the bins at `sign du > 0`, against `|du|`.
-fn grouped_side(kernel: &Artifact, panel: &str, series: &str, sign: f64) -> Vec<Row> {
+/// [`grouped_kernel`] of the bins at `sign du > 0`, against `|du|`, in
+/// groups of `per_decade` per decade.
+fn grouped_side(
+    kernel: &Artifact,
+    panel: &str,
+    series: &str,
+    sign: f64,
+    per_decade: f64,
+) -> Vec<Row> {
     use contract::kernel::{DU, G};
     let batch = kernel.table("kernel");
     let du: Vec<f64> = DU.read(&batch).unwrap().iter().map(|d| sign * d).collect();
     let g = G.read(&batch).unwrap();
     let mut groups: Vec<(f64, Vec<Bin>)> = Vec::new();
     for (du, g) in du.iter().zip(&g).filter(|(du, _)| **du > 0.0) {
-        let group = (du.log10() * 20.0).floor();
+        let group = (du.log10() * per_decade).floor();
         match groups.iter_mut().find(|(key, _)| *key == group) {
             Some((_, members)) => members.push((*du, g.mean, g.stderr)),
             None => groups.push((group, vec![(*du, g.mean, g.stderr)])),
@@ -263,12 +270,7 @@ fn expected(store: &Path, figure: &Artifact) -> Vec<Row> {
             let of = |ring: &str, series: &str, pair: &Pair| {
                 ring_rows(&compare, ring, "collapse", series, pair)
             };
-            let rings: Vec<&str> = params["rings"]
-                .as_array()
-                .unwrap()
-                .iter()
-                .map(|r| r.as_str().unwrap())
-                .collect();
+            let rings = texts(&params["rings"]);
             let mut rows = of(rings[0], "Boltzmann", &H_BOLTZMANN);
             for ring in &rings {
                 rows.extend(of(ring, ring, &H_TAGGED));
@@ -353,14 +355,49 @@ fn expected(store: &Path, figure: &Artifact) -> Vec<Row> {
             .flat_map(|(k, u)| {
                 let kernel = figure.input(store, k);
                 let u = u.as_f64().unwrap();
-                let above = grouped_side(&kernel, "kernels", &format!("u' = {u}, u > u'"), 1.0);
-                let below = grouped_side(&kernel, "kernels", &format!("u' = {u}, u < u'"), -1.0);
+                let side = |name: &str, sign| grouped_side(&kernel, "kernels", name, sign, 20.0);
+                let above = side(&format!("u' = {u}, u > u'"), 1.0);
+                let below = side(&format!("u' = {u}, u < u'"), -1.0);
                 [above, below]
                     .concat()
                     .into_iter()
                     .filter(|row| row.4 < 0.5 * row.3)
             })
             .collect(),
+        "kernels_at_density" => {
+            // Groups whose relative error is below 0.5, as drawn.
+            let resolved = |rows: Vec<Row>| -> Vec<Row> {
+                rows.into_iter().filter(|row| row.4 < 0.5 * row.3).collect()
+            };
+            let labels = texts(&params["labels"]);
+            let kernels: Vec<Artifact> =
+                (0..labels.len()).map(|k| figure.input(store, k)).collect();
+            let mut rows: Vec<Row> = labels
+                .iter()
+                .zip(&kernels)
+                .flat_map(|(label, kernel)| resolved(grouped_kernel(kernel, "kernels", label)))
+                .collect();
+            // Panel (b): 5 groups per decade, each kernel over the dilute one
+            // (the first), errors combined as if independent.
+            let coarse = |kernel: &Artifact, label: &str| {
+                resolved(grouped_side(kernel, "ratio", label, 1.0, 5.0))
+            };
+            let dilute = coarse(&kernels[0], labels[0]);
+            for (k, (label, kernel)) in labels.iter().zip(&kernels).enumerate() {
+                for row in coarse(kernel, label) {
+                    if let Some(d) = dilute.iter().find(|d| d.2 == row.2) {
+                        let ratio = row.3 / d.3;
+                        let error = if k == 0 {
+                            0.0
+                        } else {
+                            ratio.abs() * (row.4 / row.3).hypot(d.4 / d.3)
+                        };
+                        rows.push(("ratio".into(), label.to_string(), row.2, ratio, error));
+                    }
+                }
+            }
+            rows
+        }
         "md_times" => {
             use contract::compare::comparison::{H_BOLTZMANN, H_TAGGED};
             let compare = figure.input(store, 0).table("comparison");
@@ -379,6 +416,16 @@ fn expected(store: &Path, figure: &Artifact) -> Vec<Row> {
         }
         other => panic!("figure kind `{other}` has no check here"),
     }
+}
+
+/// A JSON array of strings.
+fn texts(array: &Value) -> Vec<&str> {
+    array
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|text| text.as_str().unwrap())
+        .collect()
 }
 
 /// The distinct values of `values` in order of first appearance.
@@ -429,6 +476,33 @@ fn every_figure_table_holds_its_sources_numbers() {
     }
 }
 
+/// The colours a figure's panels must show: one per series, or one per
+/// pair of series named alike after their last `", "` in a paired panel.
+fn colours_per_panel(figure: &Artifact) -> Vec<Vec<[u8; 3]>> {
+    let layout = &figure.manifest["params"]["layout"]["panels"];
+    series_per_panel(figure)
+        .iter()
+        .enumerate()
+        .map(|(k, names)| {
+            let paired = layout[k]["paired"].as_bool().unwrap_or(false);
+            let mut keys: Vec<&str> = Vec::new();
+            for name in names {
+                let key = match name.rsplit_once(", ") {
+                    Some((_, pair)) if paired => pair,
+                    _ => name,
+                };
+                if !keys.contains(&key) {
+                    keys.push(key);
+                }
+            }
+            PALETTE[..keys.len()]
+                .iter()
+                .map(|c| [c.0, c.1, c.2])
+                .collect()
+        })
+        .collect()
+}
+
 /// The series of each panel of a figure, in legend order.
 fn series_per_panel(figure: &Artifact) -> Vec<Vec<String>> {
     let rows = points(figure);
@@ -447,11 +521,7 @@ fn series_per_panel(figure: &Artifact) -> Vec<Vec<String>> {
 fn every_png_decodes_at_its_size_with_every_series_drawn() {
     let store = reduced_study("figures-png");
     for figure in figures(&store) {
-        let colours = series_per_panel(&figure)
-            .iter()
-            .map(Vec::len)
-            .max()
-            .unwrap();
+        let colours: BTreeSet<[u8; 3]> = colours_per_panel(&figure).into_iter().flatten().collect();
         for size in [Size::COLUMN_PNG, Size::SCREEN] {
             let file = figure
                 .dir
@@ -474,11 +544,8 @@ fn every_png_decodes_at_its_size_with_every_series_drawn() {
                 inked * 100 > rgb.len(),
                 "{what}: blank ({inked} pixels inked)"
             );
-            for colour in &PALETTE[..colours] {
-                let drawn = rgb
-                    .iter()
-                    .filter(|p| **p == [colour.0, colour.1, colour.2])
-                    .count();
+            for colour in &colours {
+                let drawn = rgb.iter().filter(|p| *p == colour).count();
                 assert!(
                     drawn > 100,
                     "{what}: series colour {colour:?} drawn on {drawn} pixels"
@@ -524,11 +591,10 @@ fn every_svg_parses_with_one_legend_entry_per_series() {
                     );
                 }
             }
-            for (k, colour) in PALETTE[..panels.iter().map(Vec::len).max().unwrap()]
-                .iter()
-                .enumerate()
-            {
-                let hex = format!("#{:02X}{:02X}{:02X}", colour.0, colour.1, colour.2);
+            let colours: BTreeSet<[u8; 3]> =
+                colours_per_panel(&figure).into_iter().flatten().collect();
+            for (k, colour) in colours.iter().enumerate() {
+                let hex = format!("#{:02X}{:02X}{:02X}", colour[0], colour[1], colour[2]);
                 assert!(text.contains(&hex), "{what}: series {k} ({hex}) not drawn");
             }
         }

@@ -1,7 +1,8 @@
 //! The paper table: every row's relative difference and z-score recomputed
 //! here from its published value and ours, and ours read back from the
 //! artifacts it comes from (moments at the paper's truncation, the sweep's
-//! detailed-balance pair, the compared rings' final time, the N2 gas).
+//! detailed-balance pair, the compared rings' final time, the scaling ratio
+//! from the gases table and from MD, the N2 gas).
 
 use std::fs;
 use std::path::{Path, PathBuf};
@@ -27,6 +28,21 @@ fn table(store: &Path, stage: &str, instance: &str, name: &str) -> RecordBatch {
     read_parquet(&dir.join(format!("{name}.parquet")))
         .unwrap()
         .0
+}
+
+/// The `[[md.system]]` parameters of a ring, from its md artifact.
+fn md_params(store: &Path, ring: &str) -> serde_json::Value {
+    let reference: serde_json::Value = serde_json::from_str(
+        &fs::read_to_string(store.join(format!("refs/md/{ring}.json"))).unwrap(),
+    )
+    .unwrap();
+    let manifest = store
+        .join("artifacts/md")
+        .join(reference["key"].as_str().unwrap())
+        .join("manifest.json");
+    let manifest: serde_json::Value =
+        serde_json::from_str(&fs::read_to_string(manifest).unwrap()).unwrap();
+    manifest["params"].clone()
 }
 
 /// The self variance rate (mean, stderr) of a moments table at truncation `x`.
@@ -70,7 +86,9 @@ fn paper_rows_recompute_from_their_sources() {
     let converged = OURS_CONVERGED.read(&paper).unwrap();
     let relative = RELATIVE_DIFFERENCE.read(&paper).unwrap();
     let z = Z.read(&paper).unwrap();
-    assert_eq!(quantities.len(), 5, "{quantities:?}");
+    assert_eq!(quantities.len(), 7, "{quantities:?}");
+    // The scaling rows compare with an exact prediction, 8^(1/2 - 1/6) = 2.
+    let exact = |q: &str| q.starts_with("Gamma(2 rho, 800 meV)");
     for k in 0..quantities.len() {
         let (p, o) = (published[k], ours[k]);
         let expected_z = (o.mean - p.mean) / (o.stderr * o.stderr + p.stderr * p.stderr).sqrt();
@@ -85,9 +103,14 @@ fn paper_rows_recompute_from_their_sources() {
             "{}",
             quantities[k]
         );
+        let published_error = if exact(&quantities[k]) {
+            p.mean == 2.0 && p.stderr == 0.0
+        } else {
+            p.stderr > 0.0
+        };
         assert!(
-            o.stderr > 0.0 && p.stderr > 0.0,
-            "{}: errors on both sides",
+            o.stderr > 0.0 && published_error,
+            "{}: errors on both sides (none for an exact prediction)",
             quantities[k]
         );
     }
@@ -132,6 +155,52 @@ fn paper_rows_recompute_from_their_sources() {
         let (a, a_error) = rate_at(&table(&store, "moments", "ipp-6_u0_rho0", "moments"), 0.04);
         let k = row("Gamma t_f");
         assert!(close(ours[k].mean, a * time) && close(ours[k].stderr, a_error * time));
+    }
+    // Gamma(2 rho, 8 T) / Gamma(2 rho, T): ring6_dense_hot over ring6_dense.
+    let (cold, hot) = ("ring6_dense", "ring6_dense_hot");
+    {
+        use contract::gases::{GAMMA, GAMMA_AT_DENSITY, GAS};
+        let gases = table(&store, "gases", "study", "gases");
+        let names = GAS.read(&gases).unwrap();
+        let of = |column: &contract::Pair, gas: &str| {
+            column.read(&gases).unwrap()[names.iter().position(|n| n == gas).unwrap()]
+        };
+        let (dense_cold, dense_hot) = (of(&GAMMA_AT_DENSITY, cold), of(&GAMMA_AT_DENSITY, hot));
+        let k = row("Gamma(2 rho, 800 meV) / Gamma(2 rho, 100 meV), n = 6, kernels");
+        // The gases table rounds a_n times rho^2 l v_th once more than the paper stage.
+        assert!(
+            (ours[k].mean / (dense_hot.mean / dense_cold.mean) - 1.0).abs() < 1e-12,
+            "{:?} against the gases table's {dense_hot:?} / {dense_cold:?}",
+            ours[k]
+        );
+        // Both rates come from one set of scenes: positively correlated, so
+        // the paired error lies below the independent propagation.
+        let independent = dense_hot.mean / dense_cold.mean
+            * (dense_hot.stderr / dense_hot.mean).hypot(dense_cold.stderr / dense_cold.mean);
+        assert!(
+            ours[k].stderr < independent,
+            "{:?} vs {independent}",
+            ours[k]
+        );
+        // Dilute: the same a_6 in both, so exactly the scaling, 8^(1/3).
+        let dilute = of(&GAMMA, hot).mean / of(&GAMMA, cold).mean;
+        assert!(close(converged[k].mean, dilute) && converged[k].stderr == 0.0);
+        assert!((dilute - 2.0).abs() < 1e-12, "{dilute}");
+    }
+    {
+        use contract::compare::finite_size::{MD_VARIANCE, RING};
+        let rings = table(&store, "compare", "study", "finite_size");
+        let names = RING.read(&rings).unwrap();
+        let variance = |ring: &str| {
+            MD_VARIANCE.read(&rings).unwrap()[names.iter().position(|n| n == ring).unwrap()]
+        };
+        let time = |ring: &str| md_params(&store, ring)["final_time_ns"].as_f64().unwrap();
+        let (v_cold, v_hot) = (variance(cold), variance(hot));
+        let ratio = (v_hot.mean / time(hot)) / (v_cold.mean / time(cold));
+        let error = ratio * (v_hot.stderr / v_hot.mean).hypot(v_cold.stderr / v_cold.mean);
+        let k = row("Gamma(2 rho, 800 meV) / Gamma(2 rho, 100 meV), n = 6, MD");
+        assert!(close(ours[k].mean, ratio) && close(ours[k].stderr, error));
+        assert!(converged[k].mean.is_nan(), "one definition");
     }
     // 1/Gamma of N2 in seconds, Gamma = a(0.04) rho^2 l v_th from the gas's own units.
     {

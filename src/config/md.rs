@@ -117,6 +117,11 @@ pub const MAX_MD_RUNS: u32 = 1 << 16;
 pub const MAX_NEIGHBOURS: u32 = 64;
 
 impl MdParams {
+    /// `rho l` of the ring's gas (as the `gases` stage computes it).
+    pub fn scaled_density(&self) -> f64 {
+        self.gas.scaled_density(self.potential.length_exponent())
+    }
+
     /// The final time `t_f` in units of the ring's own `1 / (rho^2 l v_th)`:
     /// rings at equal values are the same dilute physics (the scaling collapse).
     pub fn scaled_final_time(&self) -> f64 {

@@ -311,6 +311,34 @@ impl Study {
         self.md.clone()
     }
 
+    /// The rings `compare` sets against the Boltzmann evolution: those of the
+    /// first ring's potential at `u' = 0`, in file order.
+    pub fn compared_rings(&self) -> Vec<MdParams> {
+        let Some(first) = self.md.first() else {
+            return Vec::new();
+        };
+        self.md
+            .iter()
+            .filter(|r| r.potential == first.potential && r.u_prime == 0.0)
+            .cloned()
+            .collect()
+    }
+
+    /// The compared rings sharing the first ring's `N` and `rho^2 l v_th t_f`
+    /// (different `rho` and `T`, the same dilute physics: the `rho^2
+    /// T^(1/2 - 1/n)` collapse), the first ring first.
+    pub fn collapse_rings(&self) -> Vec<MdParams> {
+        let compared = self.compared_rings();
+        let Some(first) = compared.first().cloned() else {
+            return Vec::new();
+        };
+        compared
+            .into_iter()
+            .filter(|r| r.particles == first.particles)
+            .filter(|r| (r.scaled_final_time() / first.scaled_final_time() - 1.0).abs() < 1e-9)
+            .collect()
+    }
+
     /// Resolved parameters of the evolve stage, if enabled.
     pub fn evolve_params(&self) -> Option<EvolveParams> {
         self.evolve.clone()

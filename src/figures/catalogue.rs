@@ -2,15 +2,15 @@
 //! their tables into the figure table, and how it is laid out.
 
 use polars::prelude::{
-    ChunkCompareEq, ChunkCompareIneq, DataFrame, Float64Chunked, IntoColumn, IntoSeries, NamedFrom,
-    Series,
+    ChunkCompareEq, ChunkCompareIneq, DataFrame, Float64Chunked, IntoColumn, IntoSeries,
 };
 use serde::Serialize;
 
-use super::frames::{failed, frame, log_groups, series, series_by, stack};
+use super::frames::{failed, frame, log_groups, numbers, series, series_by, series_of, stack};
 use super::{Axis, Layout, Mark, Panel, Style};
 use crate::contract;
 use crate::pipeline::{Input, StageError};
+use crate::stats::Estimate;
 
 /// Kernel axis label.
 const G_AXIS: &str = "G(u' → u) [ρ² l v_th / v_th]";
@@ -90,6 +90,16 @@ pub enum Figure {
         /// The `u'` of each kernel input.
         u_primes: Vec<f64>,
     },
+    /// `G(0 -> u)` of one potential in the dilute limit and at finite `rho l`
+    /// with the literal algorithm's `exp(-r |delay|)` (the paper's launch
+    /// rule: an artifact of its observation region `L`, not the gas's
+    /// density dependence), and each against the dilute one.
+    KernelsAtDensity {
+        /// The potential's id.
+        id: String,
+        /// Legend label of each kernel input, the dilute one ([`DILUTE`]) first.
+        labels: Vec<String>,
+    },
     /// `h(u, t)` of one ring at several final times: MD (tagged) and Boltzmann.
     MdTimes {
         /// The ring's name (the figure's).
@@ -101,8 +111,11 @@ pub enum Figure {
     },
 }
 
+/// Legend label of the dilute kernel in [`Figure::KernelsAtDensity`].
+pub const DILUTE: &str = "dilute";
+
 /// Names of every figure kind, for documentation and tests.
-pub const FIGURES: [&str; 12] = [
+pub const FIGURES: [&str; 13] = [
     "kernels",
     "kernels_lj",
     "kernel_fit",
@@ -115,6 +128,7 @@ pub const FIGURES: [&str; 12] = [
     "finite_size",
     "md_times",
     "kernels_u_prime",
+    "kernels_density",
 ];
 
 impl Figure {
@@ -133,6 +147,7 @@ impl Figure {
             Figure::FiniteSize => "finite_size".into(),
             Figure::MdTimes { ring, .. } => format!("md_times_{ring}"),
             Figure::KernelsAtUPrime { id, .. } => format!("kernels_u_prime_{id}"),
+            Figure::KernelsAtDensity { id, .. } => format!("kernels_density_{id}"),
         }
     }
 
@@ -172,6 +187,9 @@ impl Figure {
             Figure::MdTimes { .. } => {
                 "h(u, t) of one ring at several times: Boltzmann (band) and MD, tagged particles (markers)"
             }
+            Figure::KernelsAtDensity { .. } => {
+                "G(0 -> u) in the dilute limit and at finite rho l with the paper's launch rule (exp(-r |delay|) in an observation region of length L: an artifact of that algorithm, not the gas's density dependence) against u - u' > 0, log axes, +- standard error (a); each against the dilute kernel (b), errors combined as if independent (the kernels share their scenes: an upper bound); bins grouped 20 per decade, groups with relative error above 0.5 left out"
+            }
             Figure::KernelsAtUPrime { .. } => {
                 "G(u' -> u) at each u' (dilute) against |u - u'| on both sides of u', log axes, +- standard error; bins grouped 20 per decade, groups with relative error above 0.5 left out"
             }
@@ -188,6 +206,7 @@ impl Figure {
             y,
             marks: Vec::new(),
             styles,
+            paired: false,
         };
         let panels = match self {
             Figure::KernelsEveryN { .. } | Figure::KernelsLennardJones { .. } => vec![panel(
@@ -265,18 +284,35 @@ impl Figure {
                     vec![("t κ₂", Style::Line)],
                 ),
             ],
+            Figure::KernelsAtDensity { .. } => vec![
+                panel(
+                    "kernels",
+                    log(DU_AXIS),
+                    log(G_AXIS),
+                    vec![("", Style::Band)],
+                ),
+                panel(
+                    "ratio",
+                    log(DU_AXIS),
+                    linear("G(ρl) / G(dilute)"),
+                    vec![(DILUTE, Style::Line)],
+                ),
+            ],
             Figure::KernelsAtUPrime { .. } => vec![panel(
                 "kernels",
                 log("|u − u'| [v_th]"),
                 log(G_AXIS),
                 vec![("", Style::Band)],
             )],
-            Figure::MdTimes { .. } => vec![panel(
-                "h",
-                linear(DU_AXIS),
-                linear("h(u, t) [1 / v_th]"),
-                vec![("Boltzmann", Style::Band)],
-            )],
+            Figure::MdTimes { .. } => vec![Panel {
+                paired: true,
+                ..panel(
+                    "h",
+                    linear(DU_AXIS),
+                    linear("h(u, t) [1 / v_th]"),
+                    vec![("Boltzmann", Style::Band)],
+                )
+            }],
             Figure::FiniteSize => ["tagged", "thermal"]
                 .into_iter()
                 .map(|name| panel(name, linear("ρ l"), linear("MD / Boltzmann"), Vec::new()))
@@ -293,14 +329,15 @@ impl Figure {
                     .iter()
                     .zip(inputs)
                     .map(|(label, input)| {
-                        positive_kernel(input, "kernels", label)
+                        positive_kernel(input, "kernels", label, GROUPS_PER_DECADE)
                             .and_then(|groups| resolved(&groups))
                     })
                     .collect::<Result<Vec<_>, _>>()?;
                 stack(parts)
             }
             Figure::KernelFit { .. } => {
-                let measured = positive_kernel(&inputs[0], "kernel", "Monte Carlo")?;
+                let measured =
+                    positive_kernel(&inputs[0], "kernel", "Monte Carlo", GROUPS_PER_DECADE)?;
                 let fitted = fitted_shape(&measured, &inputs[1])?;
                 stack(vec![measured, fitted])
             }
@@ -314,6 +351,7 @@ impl Figure {
             Figure::MdTimes {
                 rings, times_ns, ..
             } => md_times(&inputs[0], rings, times_ns),
+            Figure::KernelsAtDensity { labels, .. } => kernels_at_density(inputs, labels),
             Figure::KernelsAtUPrime { u_primes, .. } => {
                 let mut parts = Vec::new();
                 for (input, u_prime) in inputs.iter().zip(u_primes) {
@@ -330,7 +368,12 @@ const GROUPS_PER_DECADE: f64 = 20.0;
 
 /// `G` at `du > 0` of a kernel artifact as a series, averaged over
 /// log-spaced groups of bins.
-fn positive_kernel(input: &Input, panel: &str, label: &str) -> Result<DataFrame, StageError> {
+fn positive_kernel(
+    input: &Input,
+    panel: &str,
+    label: &str,
+    per_decade: f64,
+) -> Result<DataFrame, StageError> {
     use contract::kernel::{DU, G, TABLE};
     let all = frame(TABLE.of(input)?)?;
     let long = series(
@@ -339,7 +382,62 @@ fn positive_kernel(input: &Input, panel: &str, label: &str) -> Result<DataFrame,
         label,
         (DU.name, G.value.name, Some(G.stderr.name)),
     )?;
-    log_groups(&long, GROUPS_PER_DECADE)
+    log_groups(&long, per_decade)
+}
+
+/// Kernel groups per decade of the ratios to the dilute kernel: the ratio
+/// changes slowly, and coarser groups resolve it better.
+const RATIO_GROUPS_PER_DECADE: f64 = 5.0;
+
+/// Panel (a): each kernel's resolved groups; panel (b): each over the
+/// dilute kernel (the first input) on coarser groups both resolve, the
+/// dilute one as the line at 1.
+fn kernels_at_density(inputs: &[Input], labels: &[String]) -> Result<DataFrame, StageError> {
+    use contract::figures::points::{X, Y, Y_ERROR};
+    let grouped = |panel: &str, per_decade: f64| {
+        labels
+            .iter()
+            .zip(inputs)
+            .map(|(label, input)| {
+                positive_kernel(input, panel, label, per_decade)
+                    .and_then(|groups| resolved(&groups))
+            })
+            .collect::<Result<Vec<_>, _>>()
+    };
+    let groups = grouped("kernels", GROUPS_PER_DECADE)?;
+    let coarse = grouped("ratio", RATIO_GROUPS_PER_DECADE)?;
+    let dilute = coarse.first().ok_or_else(|| failed("no dilute kernel"))?;
+    let columns = |frame: &DataFrame| -> Result<[Vec<f64>; 3], StageError> {
+        Ok([
+            numbers(frame, X.name)?,
+            numbers(frame, Y.name)?,
+            numbers(frame, Y_ERROR.name)?,
+        ])
+    };
+    let [x0, y0, e0] = columns(dilute)?;
+    let mut ratios = Vec::new();
+    for (label, dense) in labels.iter().zip(&coarse) {
+        let [x, y, e] = columns(dense)?;
+        let (mut xs, mut ys, mut errors) = (Vec::new(), Vec::new(), Vec::new());
+        for k in 0..x.len() {
+            // Both kernels share their bins, hence their groups' mean x.
+            if let Some(j) = x0.iter().position(|&shared| shared == x[k]) {
+                let ratio = Estimate {
+                    mean: y[k],
+                    stderr: e[k],
+                }
+                .ratio(Estimate {
+                    mean: y0[j],
+                    stderr: e0[j],
+                });
+                xs.push(x[k]);
+                ys.push(ratio.mean);
+                errors.push(if label == DILUTE { 0.0 } else { ratio.stderr });
+            }
+        }
+        ratios.push(series_of("ratio", label, xs, ys, Some(errors))?);
+    }
+    stack(groups.into_iter().chain(ratios).collect())
 }
 
 /// `G(u' -> u)` of a kernel artifact above and below `u'`, each averaged
@@ -419,16 +517,7 @@ fn fitted_shape(kernel: &DataFrame, fit: &Input) -> Result<DataFrame, StageError
         .iter()
         .map(|x| alpha * x.powf(-beta) * (-x * x / (2.0 * sigma * sigma)).exp())
         .collect();
-    let rows = xs.len();
-    let line = DataFrame::new(
-        rows,
-        vec![
-            Series::new("x".into(), xs).into(),
-            Series::new("y".into(), ys).into(),
-        ],
-    )
-    .map_err(failed)?;
-    series(&line, "kernel", "fit", ("x", "y", None))
+    series_of("kernel", "fit", xs, ys, None)
 }
 
 fn rates(input: &Input) -> Result<DataFrame, StageError> {

@@ -262,7 +262,8 @@ where
     } else {
         f64::NEG_INFINITY
     };
-    for (k, name) in series_names(points).iter().enumerate() {
+    let names = series_names(points);
+    for (name, colour) in names.iter().zip(series_colours(panel, &names)) {
         let series: Vec<&Point> = points
             .iter()
             .copied()
@@ -273,7 +274,7 @@ where
             &mut chart,
             panel.style_of(name),
             &series,
-            colour(k),
+            colour,
             size,
             panel.y.log,
         )?;
@@ -288,9 +289,27 @@ where
     Ok(())
 }
 
-/// Colour of the `k`-th series.
-fn colour(k: usize) -> RGBColor {
-    PALETTE[k % PALETTE.len()]
+/// The colour of each series of `panel`: the `k`-th series gets the `k`-th
+/// colour, or with [`Panel::paired`] the `k`-th pair (series named alike up
+/// to their last `", "`) does.
+pub fn series_colours(panel: &Panel, names: &[&str]) -> Vec<RGBColor> {
+    let mut pairs: Vec<&str> = Vec::new();
+    names
+        .iter()
+        .enumerate()
+        .map(|(k, name)| {
+            let index = if panel.paired {
+                let pair = name.rsplit_once(", ").map_or(*name, |(_, pair)| pair);
+                if !pairs.contains(&pair) {
+                    pairs.push(pair);
+                }
+                pairs.iter().position(|p| *p == pair).unwrap_or(k)
+            } else {
+                k
+            };
+            PALETTE[index % PALETTE.len()]
+        })
+        .collect()
 }
 
 /// Colour of vertical marks.
@@ -319,13 +338,14 @@ struct Entry {
 
 /// The legend entries of a panel: its series, then its marks.
 fn entries(panel: &Panel, points: &[&Point]) -> Vec<Entry> {
-    let mut entries: Vec<Entry> = series_names(points)
+    let names = series_names(points);
+    let mut entries: Vec<Entry> = names
         .iter()
-        .enumerate()
-        .map(|(k, name)| Entry {
+        .zip(series_colours(panel, &names))
+        .map(|(name, colour)| Entry {
             text: name.to_string(),
             style: panel.style_of(name),
-            colour: colour(k),
+            colour,
         })
         .collect();
     entries.extend(panel.marks.iter().map(|mark| Entry {

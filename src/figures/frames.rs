@@ -101,6 +101,28 @@ pub fn series(
     .map_err(failed)
 }
 
+/// The long form of one series from its values (`errors` `None`: 0).
+pub fn series_of(
+    panel: &str,
+    name: &str,
+    x: Vec<f64>,
+    y: Vec<f64>,
+    errors: Option<Vec<f64>>,
+) -> Result<DataFrame, StageError> {
+    let rows = x.len();
+    let errors = errors.unwrap_or_else(|| vec![0.0; rows]);
+    let values = DataFrame::new(
+        rows,
+        vec![
+            Series::new(X.name.into(), x).into_column(),
+            Series::new(Y.name.into(), y).into_column(),
+            Series::new(Y_ERROR.name.into(), errors).into_column(),
+        ],
+    )
+    .map_err(failed)?;
+    series(&values, panel, name, (X.name, Y.name, Some(Y_ERROR.name)))
+}
+
 /// One series per value of the column `key` (in order of first appearance),
 /// each named by `label` of that value (as text), from the same columns.
 pub fn series_by(

@@ -13,8 +13,8 @@ pub mod frames;
 
 pub mod catalogue;
 
-pub use catalogue::{FIGURES, Figure};
-pub use draw::{PALETTE, Size, render};
+pub use catalogue::{DILUTE, FIGURES, Figure};
+pub use draw::{PALETTE, Size, render, series_colours};
 pub use frames::{FigureRows, Point};
 
 use serde::Serialize;
@@ -61,6 +61,10 @@ pub struct Panel {
     pub marks: Vec<Mark>,
     /// Style of a series by the start of its name (unlisted: markers).
     pub styles: Vec<(&'static str, Style)>,
+    /// Series named alike after their last `", "` (`Boltzmann, 960 ns`, `MD,
+    /// 960 ns`) share a colour, told apart by their styles.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub paired: bool,
 }
 
 impl Panel {

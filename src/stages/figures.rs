@@ -7,7 +7,7 @@ use serde_json::{Value, json};
 
 use crate::config::{MdParams, Study};
 use crate::contract::{self, TableSpec};
-use crate::figures::{Figure, FigureRows, Size, frames, render};
+use crate::figures::{DILUTE, Figure, FigureRows, Size, frames, render};
 use crate::physics::potential::Potential;
 use crate::pipeline::{Input, InstanceId, Progress, Stage, StageError, Table};
 
@@ -155,6 +155,9 @@ pub fn figure_stages(study: &Study, plan: &[Box<dyn Stage>]) -> Vec<FiguresStage
             ));
         }
     }
+    if let Some(figure) = kernels_at_density(study) {
+        figures.push(figure);
+    }
     let compare = CompareStage::instance();
     let rings = study.md_params();
     if let (true, Some(first)) = (present(&compare), rings.first()) {
@@ -164,16 +167,9 @@ pub fn figure_stages(study: &Study, plan: &[Box<dyn Stage>]) -> Vec<FiguresStage
             },
             vec![compare.clone()],
         ));
-        let compared: Vec<&MdParams> = rings
-            .iter()
-            .filter(|r| r.potential == first.potential && r.u_prime == 0.0)
-            .collect();
-        let collapsing: Vec<String> = compared
-            .iter()
-            .filter(|r| r.particles == first.particles)
-            .filter(|r| (r.scaled_final_time() / first.scaled_final_time() - 1.0).abs() < 1e-9)
-            .map(|r| r.name.clone())
-            .collect();
+        let compared = study.compared_rings();
+        let compared: Vec<&MdParams> = compared.iter().collect();
+        let collapsing: Vec<String> = study.collapse_rings().into_iter().map(|r| r.name).collect();
         if collapsing.len() > 1 {
             figures.push(FiguresStage::new(
                 Figure::Collapse { rings: collapsing },
@@ -186,6 +182,49 @@ pub fn figure_stages(study: &Study, plan: &[Box<dyn Stage>]) -> Vec<FiguresStage
         figures.push(FiguresStage::new(Figure::FiniteSize, vec![compare]));
     }
     figures
+}
+
+/// `G(0 -> u)` of the collapse rings' potential in the dilute limit and at
+/// each of those rings' own `rho l` (the kernel instances `plan` adds for
+/// them), when the potential kicks.
+fn kernels_at_density(study: &Study) -> Option<FiguresStage> {
+    let rings = study.collapse_rings();
+    let potential = rings.first()?.potential;
+    if potential.is_integrable() {
+        return None;
+    }
+    let instance = |density: f64| {
+        let params = study.kernel_params(potential, 0.0, density);
+        InstanceId::new(contract::kernel::STAGE, &target_instance(&params))
+    };
+    // Densities relative to the first ring's, as the paper names its rings:
+    // (rho, 100 meV), (2 rho, 100 meV), (2 rho, 800 meV).
+    let rho = rings.first()?.gas.density_per_um;
+    let mut labels = vec![DILUTE.to_string()];
+    let mut inputs = vec![instance(0.0)];
+    for ring in &rings {
+        let id = instance(ring.scaled_density());
+        if !inputs.contains(&id) {
+            let factor = (ring.gas.density_per_um / rho * 1e6).round() / 1e6;
+            let density = if factor == 1.0 {
+                "ρ".to_string()
+            } else {
+                format!("{factor}ρ")
+            };
+            let kt_mev = (ring.gas.kt_ev * 1e6).round() / 1e3;
+            labels.push(format!("{density}, {kt_mev} meV"));
+            inputs.push(id);
+        }
+    }
+    (inputs.len() > 1).then(|| {
+        FiguresStage::new(
+            Figure::KernelsAtDensity {
+                id: potential.id(),
+                labels,
+            },
+            inputs,
+        )
+    })
 }
 
 /// `h(u, t)` at several times: the first compared ring simulated to more
@@ -234,7 +273,7 @@ impl Stage for FiguresStage {
     }
 
     fn version(&self) -> u32 {
-        2
+        3
     }
 
     fn params(&self) -> Value {

@@ -99,6 +99,15 @@ pub fn plan(study: &Study) -> Vec<Box<dyn Stage>> {
             )));
         }
     }
+    // The kernel at each collapse ring's own rho l (figure kernels_density):
+    // the literal algorithm's finite-density factor, one instance per ring.
+    for ring in study.collapse_rings() {
+        let dense = study.kernel_params(ring.potential, 0.0, ring.scaled_density());
+        let stage = kernel::KernelStage::new(dense);
+        if !stages.iter().any(|other| other.id() == stage.id()) {
+            stages.push(Box::new(stage));
+        }
+    }
     if !gases.is_empty() {
         let rows = gases
             .into_iter()
@@ -126,11 +135,7 @@ pub fn plan(study: &Study) -> Vec<Box<dyn Stage>> {
     }
     if let Some(first) = rings.first() {
         let kernel = study.kernel_params(first.potential, 0.0, 0.0);
-        let systems = rings
-            .iter()
-            .filter(|r| r.potential == first.potential && r.u_prime == 0.0)
-            .cloned()
-            .collect();
+        let systems = study.compared_rings();
         let (thermal_collisions, _) = study.wide_collisions(first.potential);
         stages.push(Box::new(compare::CompareStage::new(
             compare::CompareParams {

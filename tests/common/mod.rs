@@ -240,6 +240,12 @@ gas = "ring6_dense"
 final_time_ns = 25.0
 
 [[md.system]]
+name = "ring6_dense_hot"
+gas = "ring6_dense_hot"
+final_time_ns = 12.5
+runs = 16
+
+[[md.system]]
 name = "sutherland"
 gas = "sutherland"
 final_time_ns = 5.0
@@ -267,6 +273,16 @@ potential = "ipp-6"
 l0_um = 1.0
 eps_ev = 1.0
 kt_ev = 0.1
+mass_electron = 1.0
+ring_particles = 21
+ring_radius_um = 800.0
+
+[[gas]]
+name = "ring6_dense_hot"
+potential = "ipp-6"
+l0_um = 1.0
+eps_ev = 1.0
+kt_ev = 0.8
 mass_electron = 1.0
 ring_particles = 21
 ring_radius_um = 800.0
