@@ -624,7 +624,7 @@ fn quadrature_work_precision(
         seed: options.seed + 1,
         ..*options
     };
-    for power in [6, 8, 10] {
+    for power in [6, 8, 10, 12] {
         let QuadratureRun { run, .. } = run_quadrature(potential, quadrature, &shifted, 1 << power);
         let _ = writeln!(
             out,

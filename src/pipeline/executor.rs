@@ -743,6 +743,12 @@ pub fn status(
                     .map(ToString::to_string)
                     .collect();
                 let reason = format!("waiting on {}", waiting.join(", "));
+                if stage.shard_units() > 0 && shards > 1 {
+                    // No shard of an instance whose key is not known yet
+                    // exists: every non-empty one is still to compute (its
+                    // task first computes the missing prerequisites).
+                    progress = Some(shard_progress_with(stage.as_ref(), shards, |_| false));
+                }
                 match previous {
                     Some(_) => Freshness::Stale(vec![reason]),
                     None => Freshness::Missing(reason),
@@ -788,10 +794,22 @@ fn shard_progress(
     whole: &InstanceRef,
     shards: u32,
 ) -> ShardProgress {
+    shard_progress_with(stage, shards, |units| {
+        shard_manifest(store, stage, whole, units).is_ok()
+    })
+}
+
+/// Which of the `shards` shards of `stage` are done, by `present` (empty
+/// shards count as done).
+fn shard_progress_with(
+    stage: &dyn Stage,
+    shards: u32,
+    present: impl Fn(&Range<u32>) -> bool,
+) -> ShardProgress {
     let mut progress = ShardProgress::default();
     for index in 0..shards {
         let units = shards::range(stage.shard_units(), shards, index);
-        if units.is_empty() || shard_manifest(store, stage, whole, &units).is_ok() {
+        if units.is_empty() || present(&units) {
             progress.done.push(index);
         } else {
             progress.missing.push(index);
