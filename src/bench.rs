@@ -5,6 +5,7 @@
 //! study's engine, offset proposal, bins and fit range from `--config`.
 
 use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use rand::SeedableRng;
@@ -13,6 +14,7 @@ use rayon::prelude::*;
 
 use ternary::binning::Bins;
 use ternary::config::{KernelConfig, Study};
+use ternary::figures::{Axis, Layout, Panel, Point, Style, render};
 use ternary::kernel::fit::{FIT_GROUPS, Shape, fit_kernel};
 use ternary::kernel::{Draws, Event, Histogram, Target, histograms, moments};
 use ternary::physics::offset_quadrature::{OffsetIntegral, OffsetRule};
@@ -23,6 +25,64 @@ use ternary::physics::sampling::{
 use ternary::physics::scan::{LaunchPair, TIGHTEST_TOLERANCE, thermal_scenes};
 use ternary::physics::scene::{Collision, EngineSettings, FreeLine, Method, collide};
 use ternary::stats::Estimate;
+
+/// A benchmark's work-precision figure: error against cost, drawn like the
+/// study's figures (SVG and PNG, one column and screen size).
+pub struct BenchFigure {
+    /// File stem, e.g. `work_precision_kernel`.
+    pub name: &'static str,
+    /// Axes and styles.
+    pub layout: Layout,
+    /// The measured points.
+    pub points: Vec<Point>,
+}
+
+impl BenchFigure {
+    /// Writes the figure's files into `dir` (created if missing); their paths.
+    pub fn write(&self, dir: &Path) -> Result<Vec<PathBuf>, String> {
+        std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+        render(self.name, &self.layout, &self.points)?
+            .into_iter()
+            .map(|(file, bytes)| {
+                let path = dir.join(file);
+                std::fs::write(&path, bytes).map_err(|e| format!("{}: {e}", path.display()))?;
+                Ok(path)
+            })
+            .collect()
+    }
+}
+
+/// A log-log work-precision panel: `y` against seconds.
+fn work_precision_panel(
+    name: &'static str,
+    x: &'static str,
+    y: &'static str,
+    style: Style,
+) -> Panel {
+    // Errors span up to ten decades (integrator tolerances 1e-5..1e-14).
+    Panel {
+        name,
+        x: Axis::log(x),
+        y: Axis {
+            decades: 12,
+            ..Axis::log(y)
+        },
+        marks: Vec::new(),
+        styles: vec![("", style)],
+        paired: false,
+    }
+}
+
+/// A point of `series` in `panel`; only positive errors can be drawn on log axes.
+fn work_precision_point(panel: &str, series: &str, x: f64, y: f64, y_error: f64) -> Option<Point> {
+    (x > 0.0 && y > 0.0).then(|| Point {
+        panel: panel.to_string(),
+        series: series.to_string(),
+        x,
+        y,
+        y_error,
+    })
+}
 
 /// What `ternary bench integrators` measures.
 #[derive(Clone, Copy, Debug)]
@@ -111,7 +171,7 @@ fn measure(
 
 /// Runs the sweep and returns a Markdown report with the equal-error speedups
 /// of the default method over the baseline.
-pub fn integrators(options: &WorkPrecisionOptions) -> String {
+pub fn integrators(options: &WorkPrecisionOptions) -> (String, BenchFigure) {
     let potential = Potential::InversePower { n: options.n };
     let scenes = thermal_scenes(options.scenes, options.seed);
     let reference_of = |method| {
@@ -165,7 +225,31 @@ pub fn integrators(options: &WorkPrecisionOptions) -> String {
     for challenger in [Method::Dprkn12, Method::Dop853] {
         out.push_str(&speedups(&measurements, challenger, Method::Dopri5));
     }
-    out
+    let figure = BenchFigure {
+        name: "work_precision_integrators",
+        layout: Layout {
+            panels: vec![work_precision_panel(
+                "median error",
+                "wall time per scene [us]",
+                "median velocity error [v_th]",
+                Style::Line,
+            )],
+        },
+        points: measurements
+            .iter()
+            .filter(|m| m.failures == 0)
+            .filter_map(|m| {
+                work_precision_point(
+                    "median error",
+                    m.method.name(),
+                    m.micros_per_scene,
+                    m.median_error,
+                    0.0,
+                )
+            })
+            .collect(),
+    };
+    (out, figure)
 }
 
 /// For each baseline tolerance: the cheapest challenger run whose max error is
@@ -409,7 +493,7 @@ fn merit(relative_error: f64, seconds: f64) -> f64 {
 
 /// Sampler comparison (each measure's gain as a ratio measured in this run) and
 /// the work-precision table of `a_n` for the default sampler.
-pub fn kernel(options: &KernelBenchOptions) -> String {
+pub fn kernel(options: &KernelBenchOptions) -> (String, BenchFigure) {
     let potential = Potential::InversePower { n: options.n };
     let study = &options.study;
     let defaults = study.proposal;
@@ -530,6 +614,7 @@ pub fn kernel(options: &KernelBenchOptions) -> String {
     );
     let _ = writeln!(out, "|---|---|---|---|---|---|---|---|---|---|");
     let default = &piloted;
+    let mut sampled_runs = Vec::new();
     for power in [10, 12, 14, 16] {
         let run = run_sampler(
             &potential,
@@ -548,11 +633,57 @@ pub fn kernel(options: &KernelBenchOptions) -> String {
             precision_cells(1 << power, &run),
             run.chi2_per_dof,
         );
+        sampled_runs.push(run);
     }
-    out.push_str(&quadrature_work_precision(&potential, &quadrature, options));
+    let (table, quadrature_runs) = quadrature_work_precision(&potential, &quadrature, options);
+    out.push_str(&table);
     out.push_str(&inner_rule_convergence(&potential, study, options.seed));
     out.push_str(&skipping(&potential, &piloted_plan, study));
-    out
+    let series = [
+        ("sampled offsets", &sampled_runs),
+        ("offset quadrature", &quadrature_runs),
+    ];
+    (out, kernel_figure(&series, options.randomizations))
+}
+
+/// A relative error a kernel run reports.
+type Measure = fn(&KernelRun) -> f64;
+
+/// Relative errors of `a_n` and of the near-`u'` bins against wall time, per
+/// sampler. A standard error from `R` randomizations is itself uncertain by
+/// `1 / sqrt(2 (R - 1))` of its value: the error bars.
+fn kernel_figure(series: &[(&str, &Vec<KernelRun>)], randomizations: u32) -> BenchFigure {
+    let spread = 1.0 / (2.0 * f64::from(randomizations - 1)).sqrt();
+    let measures: [(&str, Measure); 2] = [
+        ("a_n", |run| run.a_n.stderr / run.a_n.mean),
+        ("near bins", |run| run.near_bins),
+    ];
+    let points = measures
+        .iter()
+        .flat_map(|&(panel, measure)| {
+            series.iter().flat_map(move |&(name, runs)| {
+                runs.iter().filter_map(move |run| {
+                    let y = measure(run);
+                    work_precision_point(panel, name, run.seconds, y, y * spread)
+                })
+            })
+        })
+        .collect();
+    BenchFigure {
+        name: "work_precision_kernel",
+        layout: Layout {
+            panels: vec![
+                work_precision_panel("a_n", "wall time [s]", "rel. error of a_n", Style::Markers),
+                work_precision_panel(
+                    "near bins",
+                    "wall time [s]",
+                    "rel. error of G near u'",
+                    Style::Markers,
+                ),
+            ],
+        },
+        points,
+    }
 }
 
 /// The leading cells of a work-precision row: points per randomization,
@@ -614,7 +745,7 @@ fn quadrature_work_precision(
     potential: &Potential,
     quadrature: &Variant,
     options: &KernelBenchOptions,
-) -> String {
+) -> (String, Vec<KernelRun>) {
     let mut out = format!(
         "\nWork-precision of a_n with the offset quadrature ({} randomizations; seconds include the pilot):\n\n",
         options.randomizations
@@ -624,6 +755,7 @@ fn quadrature_work_precision(
         seed: options.seed + 1,
         ..*options
     };
+    let mut runs = Vec::new();
     for power in [6, 8, 10, 12] {
         let QuadratureRun { run, .. } = run_quadrature(potential, quadrature, &shifted, 1 << power);
         let _ = writeln!(
@@ -632,8 +764,9 @@ fn quadrature_work_precision(
             precision_cells(1 << power, &run),
             run.far_bins
         );
+        runs.push(run);
     }
-    out
+    (out, runs)
 }
 
 /// The inner rule's error against its nodes: for thermal launch pairs, the

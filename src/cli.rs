@@ -139,6 +139,9 @@ enum BenchCommand {
         /// Seed of the scene sample.
         #[arg(long, default_value_t = 1)]
         seed: u64,
+        /// Also draw the work-precision figure (SVG, PNG) into this directory.
+        #[arg(long, value_name = "DIR")]
+        figures: Option<PathBuf>,
     },
     /// Precision of a_n and of the kernel per CPU second: what each sampling measure gains.
     Kernel {
@@ -155,6 +158,9 @@ enum BenchCommand {
         /// Seed.
         #[arg(long, default_value_t = 1)]
         seed: u64,
+        /// Also draw the work-precision figure (SVG, PNG) into this directory.
+        #[arg(long, value_name = "DIR")]
+        figures: Option<PathBuf>,
     },
     /// Ring MD: cluster stepping against whole-ring stepping on one run of the published ring.
     Md {
@@ -245,6 +251,16 @@ pub fn main() -> ExitCode {
 
 /// Writes command output to stdout; a closed pipe (`ternary show ... | head`)
 /// ends the output quietly instead of panicking.
+/// Writes a benchmark's figure into `dir` when one was asked for, naming the files.
+fn write_bench_figure(figure: &bench::BenchFigure, dir: Option<&Path>) -> Result<()> {
+    if let Some(dir) = dir {
+        for path in figure.write(dir).map_err(anyhow::Error::msg)? {
+            eprintln!("wrote {}", path.display());
+        }
+    }
+    Ok(())
+}
+
 fn emit(text: &str) {
     use std::io::Write;
     let mut stdout = std::io::stdout().lock();
@@ -443,14 +459,22 @@ fn dispatch(cli: Cli) -> Result<ExitCode> {
             Ok(ExitCode::SUCCESS)
         }
         Command::Bench {
-            which: BenchCommand::Integrators { n, scenes, seed },
+            which:
+                BenchCommand::Integrators {
+                    n,
+                    scenes,
+                    seed,
+                    figures,
+                },
         } => {
             let options = WorkPrecisionOptions {
                 n,
                 scenes: scenes as usize,
                 seed,
             };
-            emit(&bench::integrators(&options));
+            let (report, figure) = bench::integrators(&options);
+            emit(&report);
+            write_bench_figure(&figure, figures.as_deref())?;
             Ok(ExitCode::SUCCESS)
         }
         Command::Bench {
@@ -460,6 +484,7 @@ fn dispatch(cli: Cli) -> Result<ExitCode> {
                     randomizations,
                     points,
                     seed,
+                    figures,
                 },
         } => {
             let study = cli
@@ -474,7 +499,9 @@ fn dispatch(cli: Cli) -> Result<ExitCode> {
                 seed,
                 study: StudySettings::of(study.as_ref()),
             };
-            emit(&bench::kernel(&options));
+            let (report, figure) = bench::kernel(&options);
+            emit(&report);
+            write_bench_figure(&figure, figures.as_deref())?;
             Ok(ExitCode::SUCCESS)
         }
         Command::Bench {

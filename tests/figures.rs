@@ -630,3 +630,61 @@ fn a_new_potential_redraws_only_the_figures_that_show_it() {
     let (computed, _) = run_counts(&config, &[]);
     assert_eq!(computed, 0, "a second run recomputes nothing");
 }
+
+/// `bench integrators --figures DIR` draws the work-precision curves it
+/// measured: both files at both sizes, the PNG at its size with each
+/// method's colour, the SVG with one legend entry per method, and every
+/// method's table row in the report (10 tolerances each).
+#[test]
+fn bench_draws_its_work_precision_figure() {
+    let dir = workspace("bench-figure");
+    let output = ternary(
+        &dir.join("absent.toml"),
+        &[
+            "bench",
+            "integrators",
+            "--scenes",
+            "20",
+            "--figures",
+            dir.to_str().unwrap(),
+        ],
+    );
+    assert!(output.status.success(), "{}", common::stderr(&output));
+    let report = stdout(&output);
+    let methods = ["dopri5", "dop853", "dprkn12"];
+    for method in methods {
+        let rows = report
+            .lines()
+            .filter(|l| l.starts_with(&format!("| {method} |")))
+            .count();
+        assert_eq!(rows, 10, "{method}: {report}");
+    }
+    let name = "work_precision_integrators";
+    let png = dir.join(format!("{name}.png"));
+    let decoder = png::Decoder::new(std::io::BufReader::new(fs::File::open(&png).unwrap()));
+    let mut reader = decoder.read_info().unwrap();
+    let mut pixels = vec![0; reader.output_buffer_size()];
+    let frame = reader.next_frame(&mut pixels).unwrap();
+    assert_eq!(
+        (frame.width, frame.height),
+        (Size::COLUMN_PNG.width, Size::COLUMN_PNG.panel_height)
+    );
+    for colour in &PALETTE[..methods.len()] {
+        let rgb = [colour.0, colour.1, colour.2];
+        let drawn = pixels.chunks(3).filter(|p| *p == rgb).count();
+        assert!(drawn > 100, "{colour:?} drawn on {drawn} pixels");
+    }
+    for suffix in ["", "_screen"] {
+        let text = fs::read_to_string(dir.join(format!("{name}{suffix}.svg"))).unwrap();
+        let document = roxmltree::Document::parse(&text).unwrap();
+        for method in methods {
+            let entries = document
+                .descendants()
+                .filter(|node| {
+                    node.has_tag_name("text") && node.text().map(str::trim) == Some(method)
+                })
+                .count();
+            assert_eq!(entries, 1, "{method}{suffix}");
+        }
+    }
+}

@@ -198,8 +198,8 @@ impl Figure {
 
     /// How the figure is drawn.
     pub fn layout(&self) -> Layout {
-        let linear = |label| Axis { label, log: false };
-        let log = |label| Axis { label, log: true };
+        let linear = Axis::linear;
+        let log = Axis::log;
         let panel = |name, x, y, styles: Vec<(&'static str, Style)>| Panel {
             name,
             x,

@@ -162,12 +162,10 @@ fn draw<DB: DrawingBackend>(
     root.present()
 }
 
-/// Decades shown at most on a log axis, below its largest value.
-const LOG_DECADES: i32 = 5;
-
 /// The range of `values` (value, error) with their errors, padded by 4%
-/// of its span, or by a factor on a log axis (positive values only there).
-fn span(values: impl Iterator<Item = (f64, f64)>, log: bool) -> Range<f64> {
+/// of its span, or by a factor on a log axis (positive values only there,
+/// at most `decades` below the largest).
+fn span(values: impl Iterator<Item = (f64, f64)>, log: bool, decades: u32) -> Range<f64> {
     let (mut low, mut high) = (f64::INFINITY, f64::NEG_INFINITY);
     for (value, error) in values {
         for v in [value - error, value, value + error] {
@@ -181,8 +179,7 @@ fn span(values: impl Iterator<Item = (f64, f64)>, log: bool) -> Range<f64> {
         return if log { 1e-3..1.0 } else { 0.0..1.0 };
     }
     if log {
-        // Tails far below the data's top carry no information on a figure.
-        let low = low.max(high / 10f64.powi(LOG_DECADES));
+        let low = low.max(high / 10f64.powi(decades as i32));
         let pad = (high / low).powf(0.04).max(1.05);
         low / pad..high * pad
     } else {
@@ -202,8 +199,16 @@ fn draw_panel<DB: DrawingBackend>(
     let strip = legend_height(area, &entries, size, tag)?;
     let (top, plot) = area.split_vertically(strip);
     draw_legend(&top, &entries, size, tag)?;
-    let x_range = span(points.iter().map(|p| (p.x, 0.0)), panel.x.log);
-    let y_range = span(points.iter().map(|p| (p.y, p.y_error)), panel.y.log);
+    let x_range = span(
+        points.iter().map(|p| (p.x, 0.0)),
+        panel.x.log,
+        panel.x.decades,
+    );
+    let y_range = span(
+        points.iter().map(|p| (p.y, p.y_error)),
+        panel.y.log,
+        panel.y.decades,
+    );
     match (panel.x.log, panel.y.log) {
         (false, false) => chart(&plot, panel, points, size, x_range, y_range),
         (true, false) => chart(&plot, panel, points, size, x_range.log_scale(), y_range),

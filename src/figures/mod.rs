@@ -30,6 +30,10 @@ pub enum Style {
     Line,
 }
 
+/// Decades a log axis shows by default, below its largest value: tails far
+/// below the data's top carry no information on a figure.
+pub const LOG_DECADES: u32 = 5;
+
 /// An axis: label with its unit, and its scale.
 #[derive(Clone, Debug, Serialize)]
 pub struct Axis {
@@ -37,6 +41,33 @@ pub struct Axis {
     pub label: &'static str,
     /// Logarithmic scale.
     pub log: bool,
+    /// Decades shown at most on a log axis (work-precision plots need more).
+    #[serde(skip_serializing_if = "is_default_decades")]
+    pub decades: u32,
+}
+
+impl Axis {
+    /// A linear axis.
+    pub fn linear(label: &'static str) -> Axis {
+        Axis {
+            label,
+            log: false,
+            decades: LOG_DECADES,
+        }
+    }
+
+    /// A log axis showing [`LOG_DECADES`] decades.
+    pub fn log(label: &'static str) -> Axis {
+        Axis {
+            label,
+            log: true,
+            decades: LOG_DECADES,
+        }
+    }
+}
+
+fn is_default_decades(decades: &u32) -> bool {
+    *decades == LOG_DECADES
 }
 
 /// A vertical line with a label (e.g. the paper's truncation).
