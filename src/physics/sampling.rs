@@ -225,27 +225,6 @@ pub fn sample_launch(
     (pair, density)
 }
 
-/// The scene in `stratum` at the unit-cube point `coordinates`, with launch
-/// speeds from `launch` (the weights make any `u'` exact).
-pub fn sample_scene(
-    coordinates: [f64; 3],
-    stratum: Stratum,
-    proposal: &OffsetProposal,
-    launch: &LaunchProposal,
-) -> SampledScene {
-    let [x_offset, x_first, x_second] = coordinates;
-    let (pair, density) = sample_launch([x_first, x_second], stratum, launch);
-    let collision_time = pair.collision_time();
-    let offset = proposal.offset(x_offset, collision_time);
-    SampledScene {
-        stratum,
-        u2: pair.u2,
-        u3: pair.u3,
-        offset,
-        proposal_density: density * proposal.density(offset, collision_time),
-    }
-}
-
 /// Scene of the literal algorithm (physics.md §3) at `u' = 0` and density
 /// `rho * l`: velocities of either sign from `P_launch(u) = |u| exp(-u^2/2) / 2`,
 /// launch delay `dt` from `r exp(-r dt)` with `r = rho l sqrt(2/pi)`, entry at
