@@ -298,8 +298,8 @@ fn speedups(measurements: &[Measurement], challenger: Method, baseline: Method) 
 /// What `ternary bench kernel` measures.
 #[derive(Clone, Copy, Debug)]
 pub struct KernelBenchOptions {
-    /// Exponent of the inverse power law.
-    pub n: f64,
+    /// The potential.
+    pub potential: Potential,
     /// Randomizations (replicates) per run.
     pub randomizations: u32,
     /// Scenes per randomization in the sampler comparison.
@@ -494,7 +494,7 @@ fn merit(relative_error: f64, seconds: f64) -> f64 {
 /// Sampler comparison (each measure's gain as a ratio measured in this run) and
 /// the work-precision table of `a_n` for the default sampler.
 pub fn kernel(options: &KernelBenchOptions) -> (String, BenchFigure) {
-    let potential = Potential::InversePower { n: options.n };
+    let potential = options.potential;
     let study = &options.study;
     let defaults = study.proposal;
     let variants = [
@@ -530,8 +530,11 @@ pub fn kernel(options: &KernelBenchOptions) -> (String, BenchFigure) {
     let mut out = String::new();
     let _ = writeln!(
         out,
-        "### Kernel sampler: n = {}, {} randomizations x ~{} scenes, seed {}\n",
-        options.n, options.randomizations, options.points, options.seed
+        "### Kernel sampler: {}, {} randomizations x ~{} scenes, seed {}\n",
+        options.potential.id(),
+        options.randomizations,
+        options.points,
+        options.seed
     );
     let _ = writeln!(
         out,

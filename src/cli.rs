@@ -8,8 +8,9 @@ use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand};
 
 use crate::bench::{self, KernelBenchOptions, MdBenchOptions, StudySettings, WorkPrecisionOptions};
-use ternary::config::{MAX_EXPONENT, MAX_GAS_DENSITY, MAX_RING_ENCOUNTERS, Study};
+use ternary::config::{MAX_EXPONENT, MAX_GAS_DENSITY, MAX_RING_ENCOUNTERS, Study, THETA_RANGE};
 use ternary::export::{self, ExportOptions};
+use ternary::physics::potential::Potential;
 use ternary::physics::units::{Mass, PhysicalGas, ring_density_per_um};
 use ternary::pipeline::executor::{self, Action, Freshness, RunOptions, Verbosity};
 use ternary::pipeline::shards::Sharding;
@@ -148,6 +149,9 @@ enum BenchCommand {
         /// Potential exponent n of U = x^-n, in (1, 100].
         #[arg(long, default_value_t = 6.0, value_parser = exponent)]
         n: f64,
+        /// Lennard-Jones at theta = kT/eps in [1e-3, 1e3] instead of the inverse power law.
+        #[arg(long, conflicts_with = "n", value_parser = theta)]
+        theta: Option<f64>,
         /// Randomizations (replicates), 2 to 256.
         #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(2..=256))]
         randomizations: u32,
@@ -196,6 +200,16 @@ fn positive(text: &str) -> Result<f64, String> {
 }
 
 /// An inverse-power exponent in (1, 100].
+fn theta(text: &str) -> Result<f64, String> {
+    let value: f64 = text.parse().map_err(|e| format!("{e}"))?;
+    let [low, high] = THETA_RANGE;
+    if (low..=high).contains(&value) {
+        Ok(value)
+    } else {
+        Err(format!("theta = {value} is outside [{low}, {high}]"))
+    }
+}
+
 fn exponent(text: &str) -> Result<f64, String> {
     let value: f64 = text.parse().map_err(|e| format!("{e}"))?;
     if value > 1.0 && value <= MAX_EXPONENT {
@@ -481,6 +495,7 @@ fn dispatch(cli: Cli) -> Result<ExitCode> {
             which:
                 BenchCommand::Kernel {
                     n,
+                    theta,
                     randomizations,
                     points,
                     seed,
@@ -493,7 +508,9 @@ fn dispatch(cli: Cli) -> Result<ExitCode> {
                 .then(|| Study::load(&cli.config))
                 .transpose()?;
             let options = KernelBenchOptions {
-                n,
+                potential: theta.map_or(Potential::InversePower { n }, |theta| {
+                    Potential::LennardJones { theta }
+                }),
                 randomizations,
                 points,
                 seed,

@@ -557,6 +557,11 @@ fn collisions_section_rejects_bad_values() {
             "collisions.method",
         ),
         (
+            "method = \"sampled\"",
+            "method = \"quadrature\"",
+            "collisions.method",
+        ),
+        (
             "coarse_step = 0.5",
             "coarse_step = 0.0",
             "collisions.quadrature.coarse_step",

@@ -169,6 +169,19 @@ impl CollisionsConfig {
             ),
         )?;
         self.validate_quadrature()?;
+        if let Some(potential) = potentials
+            .iter()
+            .find(|p| matches!(p, Potential::LennardJones { .. }))
+        {
+            check(
+                self.method == OffsetMethod::Sampled,
+                "collisions.method",
+                format!(
+                    "\"quadrature\" cannot integrate {}: bound and orbiting pairs make the kick a non-smooth function of the arrival offset, where the offset rule does not converge (docs/benchmarks.md, \"Offset quadrature\"); use \"sampled\"",
+                    potential.id()
+                ),
+            )?;
+        }
         check_scenes(sampling, sampling.points, "collisions.points")?;
         check(
             sampling.pilot_points == 0 || (16..=MAX_PILOT_POINTS).contains(&sampling.pilot_points),
