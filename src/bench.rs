@@ -17,7 +17,7 @@ use ternary::config::{KernelConfig, Study};
 use ternary::figures::{Axis, Layout, Panel, Point, Style, render};
 use ternary::kernel::fit::{FIT_GROUPS, Shape, fit_kernel};
 use ternary::kernel::{Draws, Event, Histogram, Target, histograms, moments};
-use ternary::physics::offset_quadrature::{OffsetIntegral, OffsetRule};
+use ternary::physics::offset_quadrature::{OffsetIntegral, OffsetRule, SCENES_PER_PAIR_ESTIMATE};
 use ternary::physics::potential::Potential;
 use ternary::physics::sampling::{
     LaunchProposal, OffsetIntegration, OffsetProposal, SamplingPlan, SceneRecord,
@@ -599,7 +599,7 @@ pub fn kernel(options: &KernelBenchOptions) -> (String, BenchFigure) {
         offsets: OffsetIntegration::Quadrature(study.quadrature),
         ..piloted
     };
-    let pairs = (options.points / QUADRATURE_SCENES_PER_PAIR).max(16);
+    let pairs = (options.points / SCENES_PER_PAIR_ESTIMATE).max(16);
     let run = run_quadrature(&potential, &quadrature, options, pairs);
     let name = format!(
         "{} ({pairs} pairs per randomization, pilot {:.2} s included)",
@@ -703,10 +703,6 @@ fn precision_cells(points: u32, run: &KernelRun) -> String {
     )
 }
 
-/// Scenes a launch pair costs, roughly, when sizing quadrature runs against
-/// sampled ones of the same budget.
-const QUADRATURE_SCENES_PER_PAIR: u32 = 64;
-
 /// A quadrature run and the time its pilot took (included in `run.seconds`).
 struct QuadratureRun {
     run: KernelRun,
@@ -789,12 +785,9 @@ fn inner_rule_convergence(potential: &Potential, study: &StudySettings, seed: u6
         offsets: OffsetIntegration::Sampled,
     };
     let launches: Vec<LaunchPair> = plan
-        .integrate_all(potential, &study.engine, |_| ())
+        .launch_points(0..1)
         .iter()
-        .map(|r| LaunchPair {
-            u2: r.scene.u2,
-            u3: r.scene.u3,
-        })
+        .map(|point| point.launch)
         .collect();
     let fixed = |halvings: u32| OffsetRule {
         max_halvings: halvings,

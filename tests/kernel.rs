@@ -583,7 +583,8 @@ fn offset_quadrature_error_is_far_below_the_statistical_error() {
         half_range: rule.half_range + 1.0,
         ..rule
     };
-    let default = draw(potential, &quadrature_plan(41, 4, rule));
+    let records = quadrature_plan(41, 4, rule).integrate_all(&potential, &engine(), |_| ());
+    let default: Vec<Event> = records.iter().map(Event::from_record).collect();
     let tighter = draw(potential, &quadrature_plan(41, 4, tight));
     let (a, b) = (
         self_variance(&default, &dilute(0.0), 0.1),
@@ -593,7 +594,6 @@ fn offset_quadrature_error_is_far_below_the_statistical_error() {
         (a.mean - b.mean).abs() < 0.01 * a.stderr,
         "default {a:?} vs tight {b:?}"
     );
-    let records = quadrature_plan(41, 4, rule).integrate_all(&potential, &engine(), |_| ());
     for record in records.iter().filter(|r| r.node == 0) {
         let launch = LaunchPair {
             u2: record.scene.u2,

@@ -16,6 +16,7 @@ use rayon::prelude::*;
 
 use crate::binning::Bins;
 use crate::physics::launch::{launch_rate, thermal_density};
+use crate::physics::offset_quadrature::SCENES_PER_PAIR_ESTIMATE;
 use crate::physics::potential::Potential;
 use crate::physics::sampling::{OffsetIntegration, SamplingPlan, SceneRecord, Stratum};
 use crate::physics::scene::{EngineSettings, Method};
@@ -429,7 +430,7 @@ const PILOT_SEED_MASK: u64 = 0x5049_4c4f_545f_5345;
 /// sampled scene, or a launch pair's offset integral) and `c_s` its mean cost
 /// in force evaluations, both from plain Monte Carlo points of a separate seed
 /// (the main points are not reused): `pilot_points` per stratum when offsets
-/// are sampled, `pilot_points / PILOT_NODES` launch pairs (at least 16) when
+/// are sampled, `pilot_points / SCENES_PER_PAIR_ESTIMATE` launch pairs (at least 16) when
 /// each pair is integrated by quadrature, about the same number of scenes.
 /// Clamped to [0.02, 0.5] so that neither stratum starves; `None` when neither
 /// stratum contributes (the integrable n = 2).
@@ -442,7 +443,7 @@ pub fn pilot_same_side_fraction(
 ) -> Option<f64> {
     let points = match plan.offsets {
         OffsetIntegration::Sampled => pilot_points,
-        OffsetIntegration::Quadrature(_) => (pilot_points / PILOT_NODES).max(16),
+        OffsetIntegration::Quadrature(_) => (pilot_points / SCENES_PER_PAIR_ESTIMATE).max(16),
     };
     let pilot = SamplingPlan {
         seed: plan.seed ^ PILOT_SEED_MASK,
@@ -473,6 +474,3 @@ pub fn pilot_same_side_fraction(
     let fraction = same / (opposite + same);
     fraction.is_finite().then(|| fraction.clamp(0.02, 0.5))
 }
-
-/// Assumed nodes per launch pair when sizing a quadrature pilot.
-const PILOT_NODES: u32 = 64;

@@ -32,11 +32,6 @@ impl LaunchesStage {
         InstanceId::new(contract::launches::STAGE, name)
     }
 
-    /// Its parameters.
-    pub fn params(&self) -> &LaunchesParams {
-        &self.params
-    }
-
     /// The plan with the strata split the pilot chooses (without any
     /// contribution, as for n = 2, the configured split stays).
     fn allocated_plan(&self) -> SamplingPlan {

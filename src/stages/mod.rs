@@ -26,11 +26,11 @@ use crate::pipeline::Stage;
 /// named like them.
 fn push_collisions(stages: &mut Vec<Box<dyn Stage>>, params: CollisionsParams, name: String) {
     let launches = params.launches();
+    let wanted = serde_json::to_value(&launches).unwrap_or_default();
     let existing = stages.iter().find_map(|stage| {
         let id = stage.id();
-        (id.stage == crate::contract::launches::STAGE
-            && stage.params() == serde_json::to_value(&launches).unwrap_or_default())
-        .then(|| id.instance.clone())
+        (id.stage == crate::contract::launches::STAGE && stage.params() == wanted)
+            .then(|| id.instance.clone())
     });
     let launches_name = existing.unwrap_or_else(|| {
         stages.push(Box::new(launches::LaunchesStage::new(
