@@ -447,7 +447,7 @@ fn run_sampler(potential: &Potential, plan: &SamplingPlan, study: &StudySettings
     let scenes = events.len() as u64;
     let draws = Draws::count(&events);
     let target = Target::dilute(0.0);
-    let sums = moments(&events, &target, &[0.1], &draws);
+    let sums = moments(&events, &target, &[f64::INFINITY], &draws);
     let a_n =
         Estimate::from_replicates(&sums.iter().map(|r| r[0].self_variance).collect::<Vec<_>>());
     let seconds = started.elapsed().as_secs_f64();
@@ -755,12 +755,13 @@ fn quadrature_work_precision(
         ..*options
     };
     let mut runs = Vec::new();
-    for power in [6, 8, 10, 12] {
-        let QuadratureRun { run, .. } = run_quadrature(potential, quadrature, &shifted, 1 << power);
+    // 12288: 8192 + 4096 pairs for a same-side share near 1/3 (each stratum a power of two).
+    for pairs in [64, 256, 1024, 4096, 8192, 12288] {
+        let QuadratureRun { run, .. } = run_quadrature(potential, quadrature, &shifted, pairs);
         let _ = writeln!(
             out,
             "{} {:.2e} |",
-            precision_cells(1 << power, &run),
+            precision_cells(pairs, &run),
             run.far_bins
         );
         runs.push(run);

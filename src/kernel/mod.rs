@@ -425,7 +425,9 @@ pub const PILOT_ENGINE: EngineSettings = EngineSettings {
 const PILOT_SEED_MASK: u64 = 0x5049_4c4f_545f_5345;
 
 /// Same-side fraction of the Neyman allocation for `a_n` (numerics.md):
-/// `N_s ~ sigma_s / sqrt(c_s)`, with `sigma_s` the standard deviation of one
+/// `N_s ~ sigma_s / sqrt(c_s)` for sampled offsets, `(sigma_s^2 / c_s)^(1/3)`
+/// for launch pairs integrated by quadrature (whose randomized quasi-Monte
+/// Carlo errors fall about as `N^-1`, not `N^-1/2`), with `sigma_s` the standard deviation of one
 /// point's contribution `sum w k^2` to the self variance rate at `target` (a
 /// sampled scene, or a launch pair's offset integral) and `c_s` its mean cost
 /// in force evaluations, both from plain Monte Carlo points of a separate seed
@@ -471,6 +473,14 @@ pub fn pilot_same_side_fraction(
         deviation / (costs.iter().sum::<f64>() / count).sqrt()
     };
     let (opposite, same) = (merit(Stratum::Opposite), merit(Stratum::SameSide));
+    // Errors falling as N^-p split a fixed cost as N_s ~ (sigma_s^2 / c_s)^(1 / (2p + 1)):
+    // Neyman's sigma_s / sqrt(c_s) for Monte Carlo (p = 1/2); launch pairs under the
+    // offset quadrature converge as N^-1.1 .. N^-1.75 (docs/benchmarks.md), p = 1 taken.
+    let exponent = match plan.offsets {
+        OffsetIntegration::Sampled => 1.0,
+        OffsetIntegration::Quadrature(_) => 2.0 / 3.0,
+    };
+    let (opposite, same) = (opposite.powf(exponent), same.powf(exponent));
     let fraction = same / (opposite + same);
     fraction.is_finite().then(|| fraction.clamp(0.02, 0.5))
 }
