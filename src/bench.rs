@@ -785,10 +785,10 @@ fn inner_rule_convergence(potential: &Potential, study: &StudySettings, seed: u6
         launch: LaunchProposal::THERMAL,
         offsets: OffsetIntegration::Sampled,
     };
-    let launches: Vec<LaunchPair> = plan
+    let launches: Vec<(LaunchPair, f64)> = plan
         .launch_points(0..1)
         .iter()
-        .map(|point| point.launch)
+        .map(|point| (point.launch, point.offset_coordinate))
         .collect();
     let fixed = |halvings: u32| OffsetRule {
         max_halvings: halvings,
@@ -798,7 +798,7 @@ fn inner_rule_convergence(potential: &Potential, study: &StudySettings, seed: u6
     let integrals = |rule: OffsetRule| -> Vec<OffsetIntegral> {
         launches
             .par_iter()
-            .map(|&launch| rule.integrate(potential, &study.engine, launch))
+            .map(|&(launch, shift)| rule.integrate(potential, &study.engine, launch, shift))
             .collect()
     };
     let reference = integrals(fixed(HALVINGS + 3));

@@ -355,7 +355,8 @@ pub struct LaunchPoint {
     pub launch: LaunchPair,
     /// Proposal density of `(|u2|, |u3|)` within the stratum, `1 / v_th^2`.
     pub density: f64,
-    /// The point's third coordinate in `(0, 1)`: the offset's, when offsets are sampled.
+    /// The point's third coordinate in `(0, 1)`: the offset's when offsets are
+    /// sampled, the node grid's move ([`OffsetRule::coarse_nodes`]) under the quadrature.
     pub offset_coordinate: f64,
 }
 
@@ -524,7 +525,8 @@ impl SamplingPlan {
                 }]
             }
             OffsetIntegration::Quadrature(rule) => {
-                let integral = rule.integrate(potential, engine, point.launch);
+                let integral =
+                    rule.integrate(potential, engine, point.launch, point.offset_coordinate);
                 integral
                     .nodes
                     .iter()
