@@ -11,6 +11,7 @@
 
 pub mod equilibrium;
 pub mod fit;
+pub mod segments;
 
 use rayon::prelude::*;
 
@@ -20,6 +21,7 @@ use crate::physics::offset_quadrature::SCENES_PER_PAIR_ESTIMATE;
 use crate::physics::potential::Potential;
 use crate::physics::sampling::{OffsetIntegration, SamplingPlan, SceneRecord, Stratum};
 use crate::physics::scene::{EngineSettings, Method};
+use segments::Segment;
 
 /// One integrated scene as the kernel needs it (special particle's frame).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -193,6 +195,13 @@ pub fn self_bin(
         k, bins.half_bins,
         "the centre bin also holds the incoming velocity"
     );
+    if integrates_offsets(events) {
+        // Segments between nodes reach many bins: weigh the whole kernel.
+        return node_histograms(events, target, bins, draws)
+            .into_iter()
+            .map(|h| h.self_part[k])
+            .collect();
+    }
     per_replicate(
         events,
         draws,
@@ -273,6 +282,34 @@ impl Histogram {
             .collect()
     }
 
+    /// The part that sorted rank `rank` feeds: `self_part` for the special
+    /// particle's rank `self_rank`, `bath_part` for the others.
+    fn part(&mut self, rank: usize, self_rank: usize) -> &mut [f64] {
+        if rank == self_rank {
+            &mut self.self_part
+        } else {
+            &mut self.bath_part
+        }
+    }
+
+    /// Adds -1 (times the weight) at every incoming velocity of a contribution.
+    fn add_incoming(&mut self, bins: &Bins, contribution: &Contribution) {
+        for (rank, incoming) in contribution.sorted_incoming().iter().enumerate() {
+            if let Some(k) = bins.index(*incoming) {
+                self.part(rank, contribution.self_rank)[k] -= contribution.weight;
+            }
+        }
+    }
+
+    /// Adds `share` of +1 (times the weight) at every outgoing velocity.
+    fn add_outgoing(&mut self, bins: &Bins, contribution: &Contribution, share: f64) {
+        for (rank, outgoing) in contribution.outgoing.iter().enumerate() {
+            if let Some(k) = bins.index(*outgoing) {
+                self.part(rank, contribution.self_rank)[k] += share * contribution.weight;
+            }
+        }
+    }
+
     /// Adds a contribution: -1 at every incoming, +1 at every outgoing velocity,
     /// the special particle's pair into `self_part`, the others into `bath_part`.
     pub fn add(&mut self, bins: &Bins, contribution: &Contribution, scale: f64) {
@@ -280,11 +317,7 @@ impl Histogram {
         let sorted_in = contribution.sorted_incoming();
         for (rank, (incoming, outgoing)) in sorted_in.iter().zip(contribution.outgoing).enumerate()
         {
-            let part = if rank == contribution.self_rank {
-                &mut self.self_part
-            } else {
-                &mut self.bath_part
-            };
+            let part = self.part(rank, contribution.self_rank);
             if let Some(k) = bins.index(*incoming) {
                 part[k] -= weight;
             }
@@ -328,8 +361,19 @@ impl Draws {
     }
 }
 
-/// The kernel on `bins` around `target.u_prime`, per replicate.
+/// `true` when `events` are quadrature nodes (launch pairs integrated over
+/// the offset): their pairs are runs of consecutive nodes.
+fn integrates_offsets(events: &[Event]) -> bool {
+    events.iter().any(|e| e.node > 0)
+}
+
+/// The kernel on `bins` around `target.u_prime`, per replicate. Quadrature
+/// nodes spread their outgoing measure between consecutive nodes of a pair
+/// ([`segments`]); sampled scenes are point masses.
 pub fn histograms(events: &[Event], target: &Target, bins: &Bins, draws: &Draws) -> Vec<Histogram> {
+    if integrates_offsets(events) {
+        return node_histograms(events, target, bins, draws);
+    }
     per_replicate(
         events,
         draws,
@@ -340,6 +384,129 @@ pub fn histograms(events: &[Event], target: &Target, bins: &Bins, draws: &Draws)
             }
         },
     )
+}
+
+/// A node whose outgoing measure is not yet all placed: its contributions
+/// (weights scaled to the replicate) and whether its first half still waits.
+struct OpenNode {
+    event: Event,
+    contributions: Vec<Contribution>,
+    first_half_open: bool,
+}
+
+impl OpenNode {
+    /// `true` when `event` is the next node of the same launch pair.
+    fn is_followed_by(&self, event: &Event, contributions: usize) -> bool {
+        self.event.node + 1 == event.node
+            && self.event.stratum == event.stratum
+            && (self.event.u2, self.event.u3) == (event.u2, event.u3)
+            && self.contributions.len() == contributions
+    }
+}
+
+/// A replicate's histogram while its quadrature nodes are folded in.
+struct NodeFold<'a> {
+    bins: &'a Bins,
+    histogram: Histogram,
+    open: Option<OpenNode>,
+}
+
+impl<'a> NodeFold<'a> {
+    fn new(bins: &'a Bins) -> Self {
+        NodeFold {
+            bins,
+            histogram: Histogram::new(bins),
+            open: None,
+        }
+    }
+
+    /// Folds in the next node: its incoming velocities at once; its outgoing
+    /// ones along the segment from the previous node of the same launch pair,
+    /// or (a pair's first node, or after a failed scene) as point masses.
+    fn add(&mut self, event: &Event, contributions: Vec<Contribution>) {
+        for contribution in &contributions {
+            self.histogram.add_incoming(self.bins, contribution);
+        }
+        let joined = match self.open.take() {
+            Some(previous) if previous.is_followed_by(event, contributions.len()) => {
+                self.join(previous, &contributions);
+                true
+            }
+            Some(previous) => {
+                self.close(previous);
+                false
+            }
+            None => false,
+        };
+        self.open = Some(OpenNode {
+            event: *event,
+            contributions,
+            first_half_open: !joined,
+        });
+    }
+
+    /// Places the segments between `previous` and its next node's `next`
+    /// (each node gives a segment half its weight), and `previous`'s first
+    /// half as a point mass when no segment took it.
+    fn join(&mut self, previous: OpenNode, next: &[Contribution]) {
+        if previous.first_half_open {
+            for contribution in &previous.contributions {
+                self.histogram.add_outgoing(self.bins, contribution, 0.5);
+            }
+        }
+        for (before, after) in previous.contributions.iter().zip(next) {
+            let matched = before.sorted_incoming();
+            for (rank, &matched) in matched.iter().enumerate() {
+                let segment = Segment {
+                    matched,
+                    ends: [before.outgoing[rank], after.outgoing[rank]],
+                    halves: [0.5 * before.weight, 0.5 * after.weight],
+                };
+                segment.spread(self.bins, self.histogram.part(rank, before.self_rank));
+            }
+        }
+    }
+
+    /// Places what is left of `open`'s outgoing measure as point masses.
+    fn close(&mut self, open: OpenNode) {
+        let share = if open.first_half_open { 1.0 } else { 0.5 };
+        for contribution in &open.contributions {
+            self.histogram.add_outgoing(self.bins, contribution, share);
+        }
+    }
+
+    fn finish(mut self) -> Histogram {
+        if let Some(open) = self.open.take() {
+            self.close(open);
+        }
+        self.histogram
+    }
+}
+
+/// [`histograms`] of quadrature nodes.
+fn node_histograms(
+    events: &[Event],
+    target: &Target,
+    bins: &Bins,
+    draws: &Draws,
+) -> Vec<Histogram> {
+    per_replicate(
+        events,
+        draws,
+        || NodeFold::new(bins),
+        |fold, event, scale| {
+            let scaled = contributions(event, target)
+                .map(|c| Contribution {
+                    weight: c.weight * scale,
+                    ..c
+                })
+                .collect();
+            fold.add(event, scaled);
+        },
+    )
+    .into_iter()
+    .map(NodeFold::finish)
+    .collect()
 }
 
 /// Folds the events of every replicate, replicates in parallel. Each replicate
