@@ -6,6 +6,7 @@ use std::collections::{BTreeMap, BTreeSet};
 
 use serde_json::Value;
 use ternary::config::{Config, Study};
+use ternary::physics::potential::Potential;
 
 /// A study that sets every optional table once (overrides, per-potential
 /// points, launch pairs, rings, gases), so that every key appears.
@@ -30,6 +31,9 @@ points = 3
 
 [collisions.points_per_potential]
 "<id>" = 64
+
+[collisions.method_per_potential]
+"<id>" = "sampled"
 
 [evolve]
 gas = "g"
@@ -591,7 +595,36 @@ fn collisions_section_rejects_bad_values() {
             "\"lj-0.2\" = 512",
             "collisions.points_per_potential.lj-0.2",
         ),
+        (
+            "\"lj-0.1\" = 512",
+            "\"lj-0.1\" = 512\n\n[collisions.method_per_potential]\n\"lj-0.1\" = \"quadrature\"",
+            "collisions.method_per_potential.lj-0.1",
+        ),
+        (
+            "\"lj-0.1\" = 512",
+            "\"lj-0.1\" = 512\n\n[collisions.method_per_potential]\n\"ipp-5\" = \"sampled\"",
+            "collisions.method_per_potential.ipp-5",
+        ),
     ]);
+}
+
+/// `method = "quadrature"` with the Lennard-Jones potential kept sampled: the
+/// inverse power law's plan integrates offsets, the Lennard-Jones one samples them.
+#[test]
+fn methods_can_differ_per_potential() {
+    let text = STUDY
+        .replace("method = \"sampled\"", "method = \"quadrature\"")
+        .replace(
+            "\"lj-0.1\" = 512",
+            "\"lj-0.1\" = 512\n\n[collisions.method_per_potential]\n\"lj-0.1\" = \"sampled\"",
+        );
+    let study = Study::parse(std::path::Path::new("pipeline.toml"), &text).expect("valid");
+    let engine = study.engine();
+    for potential in &study.potentials() {
+        let plan = study.config.collisions.params(*potential, engine).sampling;
+        let sampled = matches!(potential, Potential::LennardJones { .. });
+        assert_eq!(plan.offsets.is_sampled(), sampled, "{}", potential.id());
+    }
 }
 
 #[test]

@@ -41,6 +41,9 @@ pub struct CollisionsConfig {
     /// Per-potential replacements of `points`, keyed by potential id
     /// (`[collisions.points_per_potential]`, e.g. `"lj-0.1" = 8192`).
     pub points_per_potential: BTreeMap<String, u32>,
+    /// Per-potential replacements of `method`, keyed by potential id
+    /// (`[collisions.method_per_potential]`, e.g. `"lj-0.1" = "sampled"`).
+    pub method_per_potential: BTreeMap<String, OffsetMethod>,
 }
 
 impl Default for CollisionsConfig {
@@ -58,6 +61,7 @@ impl Default for CollisionsConfig {
             proposal: OffsetProposal::default(),
             quadrature: OffsetRule::default(),
             points_per_potential: BTreeMap::new(),
+            method_per_potential: BTreeMap::new(),
         }
     }
 }
@@ -129,9 +133,14 @@ pub const MAX_SCENES: u64 = 1 << 25;
 
 /// Checks the scenes per randomization `points` (under `key`) and the
 /// instance's total against [`MAX_SCENES`].
-fn check_scenes(sampling: &CollisionsConfig, points: u32, key: &str) -> Result<(), Invalid> {
+fn check_scenes(
+    sampling: &CollisionsConfig,
+    method: OffsetMethod,
+    points: u32,
+    key: &str,
+) -> Result<(), Invalid> {
     check(points >= 2, key, "must be at least 2")?;
-    let per_point = match sampling.method {
+    let per_point = match method {
         OffsetMethod::Sampled => 1,
         OffsetMethod::Quadrature => sampling.quadrature.max_nodes(),
     };
@@ -169,20 +178,42 @@ impl CollisionsConfig {
             ),
         )?;
         self.validate_quadrature()?;
-        if let Some(potential) = potentials
-            .iter()
-            .find(|p| matches!(p, Potential::LennardJones { .. }))
-        {
-            check(
-                self.method == OffsetMethod::Sampled,
-                "collisions.method",
-                format!(
-                    "\"quadrature\" cannot integrate {}: bound and orbiting pairs make the kick a non-smooth function of the arrival offset, where the offset rule does not converge (docs/benchmarks.md, \"Offset quadrature\"); use \"sampled\"",
-                    potential.id()
-                ),
+        for id in self.method_per_potential.keys() {
+            potential_named(
+                id,
+                potentials,
+                format!("collisions.method_per_potential.{id}"),
             )?;
         }
-        check_scenes(sampling, sampling.points, "collisions.points")?;
+        for potential in potentials {
+            let id = potential.id();
+            let key = if self.method_per_potential.contains_key(&id) {
+                format!("collisions.method_per_potential.{id}")
+            } else {
+                "collisions.method".to_string()
+            };
+            check(
+                self.method_of(potential) == OffsetMethod::Sampled
+                    || !matches!(potential, Potential::LennardJones { .. }),
+                key,
+                format!(
+                    "\"quadrature\" cannot integrate {id}: bound and orbiting pairs make the kick a non-smooth function of the arrival offset, where the offset rule does not converge (docs/benchmarks.md, \"Offset quadrature\"); use \"sampled\" for it ([collisions.method_per_potential] \"{id}\" = \"sampled\")"
+                ),
+            )?;
+            if !self.points_per_potential.contains_key(&id) {
+                check_scenes(
+                    sampling,
+                    self.method_of(potential),
+                    sampling.points,
+                    "collisions.points",
+                )?;
+            }
+        }
+        check(
+            sampling.points >= 2,
+            "collisions.points",
+            "must be at least 2",
+        )?;
         check(
             sampling.pilot_points == 0 || (16..=MAX_PILOT_POINTS).contains(&sampling.pilot_points),
             "collisions.pilot_points",
@@ -239,8 +270,8 @@ impl CollisionsConfig {
         }
         for (id, &points) in &self.points_per_potential {
             let key = format!("collisions.points_per_potential.{id}");
-            potential_named(id, potentials, key.clone())?;
-            check_scenes(self, points, &key)?;
+            let potential = potential_named(id, potentials, key.clone())?;
+            check_scenes(self, self.method_of(&potential), points, &key)?;
         }
         Ok(())
     }
@@ -284,9 +315,17 @@ impl CollisionsConfig {
         )
     }
 
-    /// How the plan integrates offsets.
-    fn offsets(&self) -> OffsetIntegration {
-        match self.method {
+    /// The method of `potential`: its `method_per_potential` entry, else `method`.
+    pub fn method_of(&self, potential: &Potential) -> OffsetMethod {
+        self.method_per_potential
+            .get(&potential.id())
+            .copied()
+            .unwrap_or(self.method)
+    }
+
+    /// How the plan of `potential` integrates offsets.
+    fn offsets(&self, potential: &Potential) -> OffsetIntegration {
+        match self.method_of(potential) {
             OffsetMethod::Sampled => OffsetIntegration::Sampled,
             OffsetMethod::Quadrature => OffsetIntegration::Quadrature(self.quadrature),
         }
@@ -310,7 +349,7 @@ impl CollisionsConfig {
             proposal: self.proposal,
             quasi_random: self.quasi_random,
             launch: self.launch(),
-            offsets: self.offsets(),
+            offsets: self.offsets(&potential),
         };
         let points = self
             .points_per_potential
