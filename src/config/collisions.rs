@@ -22,7 +22,7 @@ pub struct CollisionsConfig {
     pub randomizations: u32,
     /// Points per randomization (both strata together); each stratum's share is
     /// rounded to the nearest power of two. A point is one scene when offsets
-    /// are sampled, one launch pair (~50-160 scenes) with `method = "quadrature"`.
+    /// are sampled, one launch pair (49 or 97 scenes, ~50 on average) with `method = "quadrature"`.
     pub points: u32,
     /// Fraction of the scenes drawn in the same-side stratum when no pilot runs.
     pub same_side_fraction: f64,
