@@ -292,21 +292,31 @@ impl Histogram {
         }
     }
 
+    /// Adds `weight` in the bin of `velocity` (if inside) of the part rank `rank` feeds.
+    fn add_at(&mut self, bins: &Bins, rank: usize, self_rank: usize, velocity: f64, weight: f64) {
+        if let Some(k) = bins.index(velocity) {
+            self.part(rank, self_rank)[k] += weight;
+        }
+    }
+
     /// Adds -1 (times the weight) at every incoming velocity of a contribution.
     fn add_incoming(&mut self, bins: &Bins, contribution: &Contribution) {
-        for (rank, incoming) in contribution.sorted_incoming().iter().enumerate() {
-            if let Some(k) = bins.index(*incoming) {
-                self.part(rank, contribution.self_rank)[k] -= contribution.weight;
-            }
+        for (rank, incoming) in contribution.sorted_incoming().into_iter().enumerate() {
+            self.add_at(
+                bins,
+                rank,
+                contribution.self_rank,
+                incoming,
+                -contribution.weight,
+            );
         }
     }
 
     /// Adds `share` of +1 (times the weight) at every outgoing velocity.
     fn add_outgoing(&mut self, bins: &Bins, contribution: &Contribution, share: f64) {
-        for (rank, outgoing) in contribution.outgoing.iter().enumerate() {
-            if let Some(k) = bins.index(*outgoing) {
-                self.part(rank, contribution.self_rank)[k] += share * contribution.weight;
-            }
+        let weight = share * contribution.weight;
+        for (rank, outgoing) in contribution.outgoing.into_iter().enumerate() {
+            self.add_at(bins, rank, contribution.self_rank, outgoing, weight);
         }
     }
 
@@ -315,15 +325,11 @@ impl Histogram {
     pub fn add(&mut self, bins: &Bins, contribution: &Contribution, scale: f64) {
         let weight = contribution.weight * scale;
         let sorted_in = contribution.sorted_incoming();
-        for (rank, (incoming, outgoing)) in sorted_in.iter().zip(contribution.outgoing).enumerate()
+        for (rank, (incoming, outgoing)) in
+            sorted_in.into_iter().zip(contribution.outgoing).enumerate()
         {
-            let part = self.part(rank, contribution.self_rank);
-            if let Some(k) = bins.index(*incoming) {
-                part[k] -= weight;
-            }
-            if let Some(k) = bins.index(outgoing) {
-                part[k] += weight;
-            }
+            self.add_at(bins, rank, contribution.self_rank, incoming, -weight);
+            self.add_at(bins, rank, contribution.self_rank, outgoing, weight);
         }
     }
 }
