@@ -7,7 +7,10 @@ use std::process::ExitCode;
 use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand};
 
-use crate::bench::{self, KernelBenchOptions, MdBenchOptions, StudySettings, WorkPrecisionOptions};
+use crate::bench::{
+    self, BalanceBenchOptions, KernelBenchOptions, MdBenchOptions, StudySettings,
+    WorkPrecisionOptions,
+};
 use ternary::config::{MAX_EXPONENT, MAX_GAS_DENSITY, MAX_RING_ENCOUNTERS, Study, THETA_RANGE};
 use ternary::export::{self, ExportOptions};
 use ternary::physics::potential::Potential;
@@ -166,6 +169,27 @@ enum BenchCommand {
         #[arg(long, value_name = "DIR")]
         figures: Option<PathBuf>,
     },
+    /// Detailed balance far from u' = 0 (the paper's pair at -3.00, -2.96): its precision per second for the sweep's scene sets.
+    Balance {
+        /// Potential exponent n of U = x^-n, in (1, 100].
+        #[arg(long, default_value_t = 6.0, value_parser = exponent)]
+        n: f64,
+        /// Randomizations (replicates), 2 to 256.
+        #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u32).range(2..=256))]
+        randomizations: u32,
+        /// Velocity a of the pair (v_th), within [-3, 3].
+        #[arg(long, default_value_t = -3.0, allow_hyphen_values = true, value_parser = reachable)]
+        from: f64,
+        /// Separation b - a (v_th), in (0, 0.5].
+        #[arg(long, default_value_t = 0.04, value_parser = positive)]
+        separation: f64,
+        /// Bin width of the two kernels (v_th, > 0).
+        #[arg(long, default_value_t = 0.005, value_parser = positive)]
+        bin_width: f64,
+        /// Seed.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+    },
     /// Ring MD: cluster stepping against whole-ring stepping on one run of the published ring.
     Md {
         /// Particles N, 3 to 100000.
@@ -199,7 +223,24 @@ fn positive(text: &str) -> Result<f64, String> {
     }
 }
 
-/// An inverse-power exponent in (1, 100].
+/// A velocity `u'` within [-3, 3] (the reach of the sweep's launch proposals).
+fn reachable(text: &str) -> Result<f64, String> {
+    let value: f64 = text.parse().map_err(|e| format!("{e}"))?;
+    if (-3.0..=3.0).contains(&value) {
+        Ok(value)
+    } else {
+        Err(format!("{value} is outside [-3, 3]"))
+    }
+}
+
+/// The settings a benchmark takes from the study at `config`, or the
+/// defaults when there is no such file.
+fn bench_study(config: &Path) -> Result<StudySettings> {
+    let study = config.exists().then(|| Study::load(config)).transpose()?;
+    Ok(StudySettings::of(study.as_ref()))
+}
+
+/// A Lennard-Jones `theta = kT/eps` within `THETA_RANGE`.
 fn theta(text: &str) -> Result<f64, String> {
     let value: f64 = text.parse().map_err(|e| format!("{e}"))?;
     let [low, high] = THETA_RANGE;
@@ -210,6 +251,7 @@ fn theta(text: &str) -> Result<f64, String> {
     }
 }
 
+/// An inverse-power exponent in (1, 100].
 fn exponent(text: &str) -> Result<f64, String> {
     let value: f64 = text.parse().map_err(|e| format!("{e}"))?;
     if value > 1.0 && value <= MAX_EXPONENT {
@@ -502,11 +544,7 @@ fn dispatch(cli: Cli) -> Result<ExitCode> {
                     figures,
                 },
         } => {
-            let study = cli
-                .config
-                .exists()
-                .then(|| Study::load(&cli.config))
-                .transpose()?;
+            let study = bench_study(&cli.config)?;
             let options = KernelBenchOptions {
                 potential: theta.map_or(Potential::InversePower { n }, |theta| {
                     Potential::LennardJones { theta }
@@ -514,11 +552,35 @@ fn dispatch(cli: Cli) -> Result<ExitCode> {
                 randomizations,
                 points,
                 seed,
-                study: StudySettings::of(study.as_ref()),
+                study,
             };
             let (report, figure) = bench::kernel(&options);
             emit(&report);
             write_bench_figure(&figure, figures.as_deref())?;
+            Ok(ExitCode::SUCCESS)
+        }
+        Command::Bench {
+            which:
+                BenchCommand::Balance {
+                    n,
+                    randomizations,
+                    from,
+                    separation,
+                    bin_width,
+                    seed,
+                },
+        } => {
+            let study = bench_study(&cli.config)?;
+            let options = BalanceBenchOptions {
+                potential: Potential::InversePower { n },
+                randomizations,
+                from,
+                separation,
+                bin_width,
+                seed,
+                study,
+            };
+            emit(&bench::balance(&options));
             Ok(ExitCode::SUCCESS)
         }
         Command::Bench {

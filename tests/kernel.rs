@@ -478,6 +478,39 @@ fn single_bin_self_kernel_equals_the_histogram() {
     }
 }
 
+/// Under the offset quadrature the single-bin self kernel of a bin in the
+/// collisions' core (where the histogram holds the nodes' point masses)
+/// equals the histogram's self part up to the order of summation, at `u' =
+/// 0` and reweighted to `u' = -2.5`.
+#[test]
+fn single_bin_self_kernel_equals_the_histogram_under_the_quadrature() {
+    let events = draw(
+        Potential::InversePower { n: 6.0 },
+        &quadrature_plan(5, 3, OffsetRule::default()),
+    );
+    let draws = replicates(&events);
+    let bins = Bins::for_window(0.12, 0.005);
+    for target in [dilute(0.0), dilute(-2.5)] {
+        let full = histograms(&events, &target, &bins, &draws);
+        for k in (0..bins.len()).filter(|&k| k != bins.half_bins) {
+            let single = self_bin(&events, &target, &bins, k, &draws);
+            for (h, value) in full.iter().zip(&single) {
+                let scale = h.self_part.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+                // Sums of the same terms in another order: rounding only.
+                assert!(
+                    (h.self_part[k] - value).abs() <= 1e-12 * scale,
+                    "bin {k}: {} vs {value}",
+                    h.self_part[k]
+                );
+            }
+        }
+        let landed = (0..bins.len())
+            .filter(|&k| k != bins.half_bins && full.iter().any(|h| h.self_part[k] != 0.0))
+            .count();
+        assert!(landed > 6, "only {landed} off-centre bins received a kick");
+    }
+}
+
 /// `plan` with every launch pair integrated over the offset by `rule`: 32
 /// opposite-side and 8 same-side launch pairs per randomization (complete
 /// nets in each stratum).

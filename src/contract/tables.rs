@@ -543,7 +543,7 @@ pub mod sweep {
             "ratio",
             "1",
             "G(a -> b) / G(b -> a)",
-            "standard error (first order, estimates treated as independent)"
+            "standard error from the randomizations, the two kernels' correlation kept (first order)"
         );
         /// `f0(b) / f0(a)`.
         pub const EXPECTED_RATIO: Col<f64> =

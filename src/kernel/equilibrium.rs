@@ -92,7 +92,8 @@ pub struct Balance {
     pub forward: Estimate,
     /// `G_self(b -> a)`.
     pub backward: Estimate,
-    /// `G(a -> b) / G(b -> a)`, first-order error (estimates treated as independent).
+    /// `G(a -> b) / G(b -> a)`, its error from the replicates with the two
+    /// kernels' correlation kept (both from the same scenes: `Estimate::paired_ratio`).
     pub ratio: Estimate,
     /// `f0(b) / f0(a)`: the ratio detailed balance requires.
     pub expected_ratio: f64,
@@ -177,12 +178,13 @@ pub fn detailed_balance(a: f64, b: f64, forward: &[f64], backward: &[f64]) -> Ba
         .map(|(x, y)| thermal_density(a) * x - thermal_density(b) * y)
         .collect();
     let share = largest_share(&imbalance);
+    let ratio = Estimate::paired_ratio(forward, backward);
     let [forward, backward, total] = [forward, backward, &imbalance].map(Estimate::from_replicates);
     let flow = 0.5 * (thermal_density(a) * forward.mean + thermal_density(b) * backward.mean);
     Balance {
         forward,
         backward,
-        ratio: forward.ratio(backward),
+        ratio,
         expected_ratio: thermal_density(b) / thermal_density(a),
         imbalance_z: total.z(),
         relative_imbalance: imbalance.iter().map(|x| x / flow).collect(),

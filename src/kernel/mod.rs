@@ -21,7 +21,6 @@ use crate::physics::offset_quadrature::SCENES_PER_PAIR_ESTIMATE;
 use crate::physics::potential::Potential;
 use crate::physics::sampling::{OffsetIntegration, SamplingPlan, SceneRecord, Stratum};
 use crate::physics::scene::{EngineSettings, Method};
-use segments::Segment;
 
 /// One integrated scene as the kernel needs it (special particle's frame).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -182,8 +181,13 @@ impl Weighing {
 
 /// Per replicate, the self part of bin `k` of [`histograms`] for `k` off the
 /// centre bin (where the special particle's incoming velocity lies): the
-/// weights of the contributions whose special particle lands in bin `k`,
-/// summed in the same order, so the same bits. Only those are weighed.
+/// weights of the contributions whose special particle lands in bin `k`.
+/// Only those are weighed: sampled scenes in the histogram's order (the same
+/// bits); quadrature nodes when the bin lies in the collisions' core
+/// (`|u - u'| >= segments::CORE_KICK` throughout), where the histogram holds
+/// exactly their point masses (the same sum in another order). A bin
+/// reaching into the tails, where segments spread the nodes' measure, takes
+/// the whole histogram.
 pub fn self_bin(
     events: &[Event],
     target: &Target,
@@ -195,8 +199,8 @@ pub fn self_bin(
         k, bins.half_bins,
         "the centre bin also holds the incoming velocity"
     );
-    if integrates_offsets(events) {
-        // Segments between nodes reach many bins: weigh the whole kernel.
+    let in_core = bins.centre(k).abs() - 0.5 * bins.width >= segments::CORE_KICK;
+    if integrates_offsets(events) && !in_core {
         return node_histograms(events, target, bins, draws)
             .into_iter()
             .map(|h| h.self_part[k])
@@ -312,14 +316,6 @@ impl Histogram {
         }
     }
 
-    /// Adds `share` of +1 (times the weight) at every outgoing velocity.
-    fn add_outgoing(&mut self, bins: &Bins, contribution: &Contribution, share: f64) {
-        let weight = share * contribution.weight;
-        for (rank, outgoing) in contribution.outgoing.into_iter().enumerate() {
-            self.add_at(bins, rank, contribution.self_rank, outgoing, weight);
-        }
-    }
-
     /// Adds a contribution: -1 at every incoming, +1 at every outgoing velocity,
     /// the special particle's pair into `self_part`, the others into `bath_part`.
     pub fn add(&mut self, bins: &Bins, contribution: &Contribution, scale: f64) {
@@ -392,29 +388,21 @@ pub fn histograms(events: &[Event], target: &Target, bins: &Bins, draws: &Draws)
     )
 }
 
-/// A node whose outgoing measure is not yet all placed: its contributions
-/// (weights scaled to the replicate) and whether its first half still waits.
-struct OpenNode {
-    event: Event,
-    contributions: Vec<Contribution>,
-    first_half_open: bool,
+/// `true` when `next` is the node after `previous` of the same launch pair.
+fn is_next_node(previous: &Event, next: &Event) -> bool {
+    previous.node + 1 == next.node
+        && previous.randomization == next.randomization
+        && previous.stratum == next.stratum
+        && (previous.u2, previous.u3) == (next.u2, next.u3)
 }
 
-impl OpenNode {
-    /// `true` when `event` is the next node of the same launch pair.
-    fn is_followed_by(&self, event: &Event, contributions: usize) -> bool {
-        self.event.node + 1 == event.node
-            && self.event.stratum == event.stratum
-            && (self.event.u2, self.event.u3) == (event.u2, event.u3)
-            && self.contributions.len() == contributions
-    }
-}
-
-/// A replicate's histogram while its quadrature nodes are folded in.
+/// A replicate's histogram while its quadrature nodes are folded in, one
+/// launch pair at a time.
 struct NodeFold<'a> {
     bins: &'a Bins,
     histogram: Histogram,
-    open: Option<OpenNode>,
+    /// The nodes of the current launch pair: each node's event and contributions.
+    pair: Vec<(Event, Vec<Contribution>)>,
 }
 
 impl<'a> NodeFold<'a> {
@@ -422,69 +410,54 @@ impl<'a> NodeFold<'a> {
         NodeFold {
             bins,
             histogram: Histogram::new(bins),
-            open: None,
+            pair: Vec::new(),
         }
     }
 
     /// Folds in the next node: its incoming velocities at once; its outgoing
-    /// ones along the segment from the previous node of the same launch pair,
-    /// or (a pair's first node, or after a failed scene) as point masses.
+    /// ones when its launch pair is complete (a track's segment needs the
+    /// nodes on both sides of it).
     fn add(&mut self, event: &Event, contributions: Vec<Contribution>) {
         for contribution in &contributions {
             self.histogram.add_incoming(self.bins, contribution);
         }
-        let joined = match self.open.take() {
-            Some(previous) if previous.is_followed_by(event, contributions.len()) => {
-                self.join(previous, &contributions);
-                true
-            }
-            Some(previous) => {
-                self.close(previous);
-                false
-            }
-            None => false,
-        };
-        self.open = Some(OpenNode {
-            event: *event,
-            contributions,
-            first_half_open: !joined,
-        });
+        if self
+            .pair
+            .last()
+            .is_some_and(|(previous, _)| !is_next_node(previous, event))
+        {
+            self.place_pair();
+        }
+        self.pair.push((*event, contributions));
     }
 
-    /// Places the segments between `previous` and its next node's `next`
-    /// (each node gives a segment half its weight), and `previous`'s first
-    /// half as a point mass when no segment took it.
-    fn join(&mut self, previous: OpenNode, next: &[Contribution]) {
-        if previous.first_half_open {
-            for contribution in &previous.contributions {
-                self.histogram.add_outgoing(self.bins, contribution, 0.5);
+    /// Places the outgoing measure of the buffered pair along its velocity
+    /// tracks ([`segments::lay_track`]), run by run: a failed scene (no
+    /// contributions) ends a run.
+    fn place_pair(&mut self) {
+        let nodes = std::mem::take(&mut self.pair);
+        for run in nodes.chunk_by(|(_, a), (_, b)| a.len() == b.len()) {
+            let images = run[0].1.len();
+            for image in 0..images {
+                let first = &run[0].1[image];
+                let weights: Vec<f64> = run.iter().map(|(_, c)| c[image].weight).collect();
+                for (rank, matched) in first.sorted_incoming().into_iter().enumerate() {
+                    let track: Vec<f64> =
+                        run.iter().map(|(_, c)| c[image].outgoing[rank]).collect();
+                    segments::lay_track(
+                        self.bins,
+                        self.histogram.part(rank, first.self_rank),
+                        matched,
+                        &track,
+                        &weights,
+                    );
+                }
             }
-        }
-        for (before, after) in previous.contributions.iter().zip(next) {
-            let matched = before.sorted_incoming();
-            for (rank, &matched) in matched.iter().enumerate() {
-                let segment = Segment {
-                    matched,
-                    ends: [before.outgoing[rank], after.outgoing[rank]],
-                    halves: [0.5 * before.weight, 0.5 * after.weight],
-                };
-                segment.spread(self.bins, self.histogram.part(rank, before.self_rank));
-            }
-        }
-    }
-
-    /// Places what is left of `open`'s outgoing measure as point masses.
-    fn close(&mut self, open: OpenNode) {
-        let share = if open.first_half_open { 1.0 } else { 0.5 };
-        for contribution in &open.contributions {
-            self.histogram.add_outgoing(self.bins, contribution, share);
         }
     }
 
     fn finish(mut self) -> Histogram {
-        if let Some(open) = self.open.take() {
-            self.close(open);
-        }
+        self.place_pair();
         self.histogram
     }
 }

@@ -8,22 +8,154 @@
 //! factor ~2 in kick, so a bin of width 5e-5 near `u'` is hit by a node of one
 //! pair in twenty. Between two nodes the kick is a smooth, monotone function
 //! of `s`: the segment's measure (half of each node's weight) is laid along
-//! the kick interpolated between the nodes, exponentially when both kicks
-//! have one sign (exact for a power-law tail, `kick ~ e^(-(n+1) s)`),
-//! linearly otherwise, with a mass density along the segment interpolated
-//! exponentially between the two node weights (`dtau/ds = T cosh(s)`), and
-//! every bin the kick passes through receives the measure of its share.
+//! the kick interpolated between the nodes, `ln |kick|` quadratically in `s`
+//! when both kicks have one sign (through the neighbouring nodes: exact for a
+//! power-law tail, `kick ~ e^(-(n+1) s)`, and for the bend where the tail
+//! meets the core), linearly otherwise, with a mass density along the segment
+//! interpolated exponentially between the two node weights (`dtau/ds = T
+//! cosh(s)`), and every bin the kick passes through receives the measure of
+//! its share.
+//!
+//! Only in the tails. In the core of a collision (`|kick| >= CORE_KICK`) the
+//! kick curve turns and bends within a step, interpolation moves measure
+//! between bins (exponential interpolation put 2.5% of `G(0 -> u)` at `u ~
+//! 0.005` that belongs at 0.0075..0.015 for n = 6, and lost 17% of `G(-3 ->
+//! -2.96)`: docs/benchmarks.md), and many nodes feed every bin anyway: there
+//! the nodes stay the trapezoid's point masses, which the moved node grid
+//! (`OffsetRule::coarse_nodes`) makes unbiased. The split is by the value of
+//! the kick, a function of the offset alone, so each part keeps its rule's
+//! accuracy.
 
 use crate::binning::Bins;
 
-/// Most bins one segment is spread over. A segment that spans more (the kick
-/// changing fast, in the core of the collision, where bins are fed by many
-/// nodes anyway) keeps the trapezoid's point masses at its two nodes.
-pub const MAX_SEGMENT_BINS: f64 = 64.0;
+/// Kicks at least this large (`v_th`) belong to the core of a collision:
+/// there the nodes are point masses.
+pub const CORE_KICK: f64 = 2e-3;
+
+/// Lays a launch pair's measure along one velocity track into `part`:
+/// `outgoing[i]` is the track's velocity at node `i` (consecutive nodes of
+/// one pair, equally spaced in `s`, relative to `u'`), `weights[i]` the
+/// node's trapezoid weight, `matched` the incoming velocity the track is
+/// matched with. The offsets split by the kick into the core (`|kick| >=
+/// CORE_KICK`), the narrow windows where the kick passes through zero inside
+/// it, and the outer tails on either side. The nodes of the core and of the
+/// windows are point masses with their whole weight (the trapezoid rule of
+/// those parts, unbiased on average over the grid's move: a window narrower
+/// than a step is beyond any interpolation). In the outer tails each node
+/// gives the segment on either side its share of the mass
+/// ([`segment_masses`]), and the segments, the innermost cut where the
+/// interpolated kick reaches `CORE_KICK`, are spread ([`Segment::spread`]);
+/// where the track turns, along the parabola through the turn
+/// ([`Segment::turning`]).
+pub fn lay_track(bins: &Bins, part: &mut [f64], matched: f64, outgoing: &[f64], weights: &[f64]) {
+    let in_core = |velocity: f64| (velocity - matched).abs() >= CORE_KICK;
+    let last = outgoing.len() - 1;
+    let first_core = outgoing.iter().position(|&v| in_core(v));
+    let last_core = outgoing.iter().rposition(|&v| in_core(v));
+    // Between the first and the last core node: the core and its windows.
+    let inner = |i: usize| first_core.is_some_and(|f| i >= f) && last_core.is_some_and(|l| i <= l);
+    for (i, (&velocity, &weight)) in outgoing.iter().zip(weights).enumerate() {
+        if inner(i) {
+            add_point(bins, part, velocity, weight);
+        } else if i == 0 || i == last {
+            add_point(bins, part, velocity, 0.5 * weight);
+        }
+    }
+    for i in 0..last {
+        if inner(i) && inner(i + 1) {
+            continue;
+        }
+        let halves = segment_masses(weights[i], weights[i + 1]);
+        let ends = [outgoing[i], outgoing[i + 1]];
+        if inner(i) || inner(i + 1) || monotone_around(outgoing, i) {
+            Segment::monotone(matched, ends, halves, neighbours(outgoing, i))
+                .spread_tail(bins, part);
+        } else if let Some((third, at)) = turn_near(outgoing, i) {
+            Segment::turning(matched, ends, halves, third, at).spread_turning(bins, part);
+        } else {
+            add_point(bins, part, ends[0], halves[0]);
+            add_point(bins, part, ends[1], halves[1]);
+        }
+    }
+}
+
+/// The velocities one node before and one after the segment `(i, i + 1)`.
+fn neighbours(track: &[f64], i: usize) -> [Option<f64>; 2] {
+    [
+        i.checked_sub(1).map(|k| track[k]),
+        track.get(i + 2).copied(),
+    ]
+}
+
+/// Where the track turns next to the segment `(i, i + 1)`: the node beyond
+/// it that, with the segment's two, brackets the one extremal node (its
+/// velocity and position: -1 before the segment, 2 after it); `None` when
+/// neither or both of the segment's nodes are extremal (a zigzag, not
+/// resolved by the nodes).
+fn turn_near(track: &[f64], i: usize) -> Option<(f64, f64)> {
+    let extremal = |j: usize| {
+        j >= 1 && j + 1 < track.len() && (track[j] - track[j - 1]) * (track[j + 1] - track[j]) < 0.0
+    };
+    match (extremal(i), extremal(i + 1)) {
+        (true, false) => Some((track[i - 1], -1.0)),
+        (false, true) => Some((track[i + 2], 2.0)),
+        _ => None,
+    }
+}
+
+/// The masses two consecutive nodes of weights `first`, `second` give the
+/// segment between them: together the integral of the mass density
+/// interpolated exponentially between them, `first (r - 1) / ln r` with `r =
+/// second / first` (exact for `dtau/ds ~ e^|s|` in the tails, where the
+/// trapezoid's `(first + second) / 2` is `h^2 / 12` too large), in the ratio
+/// `r`.
+fn segment_masses(first: f64, second: f64) -> [f64; 2] {
+    let ratio = second / first;
+    let log_ratio = ratio.ln();
+    let mass = if log_ratio.abs() < 1e-9 {
+        0.5 * (first + second)
+    } else {
+        first * (ratio - 1.0) / log_ratio
+    };
+    [mass / (1.0 + ratio), mass * ratio / (1.0 + ratio)]
+}
+
+/// Adds `mass` in the bin of `velocity`, if inside.
+fn add_point(bins: &Bins, part: &mut [f64], velocity: f64, mass: f64) {
+    if let Some(k) = bins.index(velocity) {
+        part[k] += mass;
+    }
+}
+
+/// `true` when `track` does not turn between nodes `i - 1` and `i + 2` (as
+/// far as they exist): every step has the sign of the others or is zero, so
+/// no extremum of the curve lies in or next to the segment `(i, i + 1)`.
+fn monotone_around(track: &[f64], i: usize) -> bool {
+    let (low, high) = (i.saturating_sub(1), (i + 2).min(track.len() - 1));
+    let steps = track[low..=high].windows(2).map(|w| w[1] - w[0]);
+    let (mut rising, mut falling) = (false, false);
+    for step in steps {
+        rising |= step > 0.0;
+        falling |= step < 0.0;
+    }
+    !(rising && falling)
+}
+
+/// How a segment's track is interpolated: in `ln |kick|` (both end kicks of
+/// one sign) or in the kick itself.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Scale {
+    /// `g = ln |kick|`: exact for power-law tails.
+    Logarithmic,
+    /// `g = kick`: through a change of sign, or over a turn of the track.
+    Linear,
+}
 
 /// One velocity track (a sorted rank of the outgoing velocities) between two
 /// consecutive nodes of a launch pair. Velocities relative to `u'`, `v_th`;
-/// masses in the kernel's weight units.
+/// masses in the kernel's weight units. Along the segment, at `t` in `[0,
+/// 1]`, the track's `g` (its [`Scale`]) is `g0 + t (g1 - g0) + curvature t (t
+/// - 1)`: a parabola through the two end nodes.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Segment {
     /// The incoming velocity the track is matched with: kicks are measured from it.
@@ -32,22 +164,146 @@ pub struct Segment {
     pub ends: [f64; 2],
     /// The masses the two nodes give the segment (half their trapezoid weights).
     pub halves: [f64; 2],
+    /// What is interpolated.
+    pub scale: Scale,
+    /// Coefficient of `t (t - 1)` in `g` (0: `g` linear in `t`).
+    pub curvature: f64,
 }
 
 impl Segment {
+    /// A segment over which the track is monotone: `ln |kick|` bent like the
+    /// parabolas through the nodes on either side (`neighbours`: the
+    /// velocities one step before and after, where they exist and kick the
+    /// same way), averaged, and left straight when that bend would turn it
+    /// within the segment; the kick linear when it changes sign.
+    pub fn monotone(
+        matched: f64,
+        ends: [f64; 2],
+        halves: [f64; 2],
+        neighbours: [Option<f64>; 2],
+    ) -> Segment {
+        let [a, b] = ends.map(|v| v - matched);
+        let same_sign = a * b > 0.0;
+        let scale = if same_sign {
+            Scale::Logarithmic
+        } else {
+            Scale::Linear
+        };
+        let mut segment = Segment::straight(matched, ends, halves, scale);
+        let bends: Vec<f64> = neighbours
+            .iter()
+            .zip([-1.0, 2.0])
+            .filter_map(|(&v, at)| v.map(|v| (v - matched, at)))
+            .filter(|&(kick, _)| !same_sign || kick * a > 0.0)
+            .map(|(kick, at)| segment.curvature_through(segment.gauge(kick), at))
+            .collect();
+        if !bends.is_empty() {
+            segment.curvature = bends.iter().sum::<f64>() / bends.len() as f64;
+        }
+        if segment.vertex().is_some() {
+            segment.curvature = 0.0;
+        }
+        segment
+    }
+
+    /// A segment whose `g` is linear in `t`.
+    fn straight(matched: f64, ends: [f64; 2], halves: [f64; 2], scale: Scale) -> Segment {
+        Segment {
+            matched,
+            ends,
+            halves,
+            scale,
+            curvature: 0.0,
+        }
+    }
+
+    /// A segment next to a turn of the track: the kick is the parabola
+    /// through its two nodes and the `third` velocity at position `at` (-1:
+    /// the node before, 2: the node after), which puts the extremum where
+    /// the three nodes place it.
+    pub fn turning(matched: f64, ends: [f64; 2], halves: [f64; 2], third: f64, at: f64) -> Segment {
+        let mut segment = Segment::straight(matched, ends, halves, Scale::Linear);
+        segment.curvature = segment.curvature_through(third - matched, at);
+        segment
+    }
+
+    /// The curvature that puts `g = value` at position `at` (-1 or 2):
+    /// half the second difference of `g` over the three nodes.
+    fn curvature_through(&self, value: f64, at: f64) -> f64 {
+        let [g0, g1] = self.end_values();
+        if at < 0.0 {
+            0.5 * (value - 2.0 * g0 + g1)
+        } else {
+            0.5 * (value - 2.0 * g1 + g0)
+        }
+    }
+
+    /// `g` at the two nodes.
+    fn end_values(&self) -> [f64; 2] {
+        self.ends.map(|v| self.gauge(v - self.matched))
+    }
+
+    /// `g` of a kick.
+    fn gauge(&self, kick: f64) -> f64 {
+        match self.scale {
+            Scale::Logarithmic => kick.abs().ln(),
+            Scale::Linear => kick,
+        }
+    }
+
+    /// Position of the parabola's vertex when it lies inside `(0, 1)`.
+    fn vertex(&self) -> Option<f64> {
+        let [g0, g1] = self.end_values();
+        let t = (self.curvature - (g1 - g0)) / (2.0 * self.curvature);
+        (t > 0.0 && t < 1.0).then_some(t)
+    }
+
+    /// Adds the mass to the bins of `part`, in two monotone pieces when the
+    /// track turns inside the segment, each only where its kick is in the tails.
+    pub fn spread_turning(&self, bins: &Bins, part: &mut [f64]) {
+        match self.vertex() {
+            Some(t) => {
+                self.restricted(0.0, t).spread_tail(bins, part);
+                self.restricted(t, 1.0).spread_tail(bins, part);
+            }
+            None => self.spread_tail(bins, part),
+        }
+    }
+
+    /// Adds the mass of the part of this monotone segment whose kick lies in
+    /// the tails, `|kick| < CORE_KICK`, to the bins of `part` (the core's
+    /// measure is its nodes' point masses).
+    pub fn spread_tail(&self, bins: &Bins, part: &mut [f64]) {
+        let [a, b] = self.ends.map(|v| v - self.matched);
+        let (a_core, b_core) = (a.abs() >= CORE_KICK, b.abs() >= CORE_KICK);
+        match (a_core, b_core) {
+            (false, false) => self.spread(bins, part),
+            (true, true) => {}
+            _ => {
+                let core = if a_core { a } else { b };
+                let edge = self.position(self.matched + CORE_KICK.copysign(core));
+                let (from, to) = if a_core { (edge, 1.0) } else { (0.0, edge) };
+                self.restricted(from, to).spread(bins, part);
+            }
+        }
+    }
+
+    /// The velocity of the track at position `t` in `[0, 1]`.
+    fn velocity_at(&self, t: f64) -> f64 {
+        let [g0, g1] = self.end_values();
+        let g = g0 + t * (g1 - g0) + self.curvature * t * (t - 1.0);
+        let kick = match self.scale {
+            Scale::Logarithmic => g.exp().copysign(self.ends[0] - self.matched),
+            Scale::Linear => g,
+        };
+        self.matched + kick
+    }
+
     /// Adds the segment's mass to the bins of `part` (`bins` around `u'`).
     pub fn spread(&self, bins: &Bins, part: &mut [f64]) {
         let [a, b] = self.ends;
         let total = self.halves[0] + self.halves[1];
         let (first, last) = (bins.index(a), bins.index(b));
-        if (b - a).abs() > MAX_SEGMENT_BINS * bins.width {
-            for (index, half) in [first, last].into_iter().zip(self.halves) {
-                if let Some(k) = index {
-                    part[k] += half;
-                }
-            }
-            return;
-        }
         if first == last {
             if let Some(k) = first {
                 part[k] += total;
@@ -73,17 +329,46 @@ impl Segment {
         }
     }
 
+    /// The part of the segment between positions `from <= to` in `[0, 1]`:
+    /// the same interpolated track and mass density (both families are
+    /// closed under restriction), with the mass that part carries.
+    fn restricted(&self, from: f64, to: f64) -> Segment {
+        let [first, second] = self.halves;
+        let mass = (first + second) * (self.mass_fraction(to) - self.mass_fraction(from));
+        let ratio = (second / first).powf(to - from);
+        let ratio = if ratio.is_finite() { ratio } else { 1.0 };
+        Segment {
+            matched: self.matched,
+            ends: [self.velocity_at(from), self.velocity_at(to)],
+            halves: [mass / (1.0 + ratio), mass * ratio / (1.0 + ratio)],
+            scale: self.scale,
+            curvature: self.curvature * (to - from) * (to - from),
+        }
+    }
+
     /// Position `t` in `[0, 1]` along the segment where the track has the
-    /// outgoing velocity `velocity` (within the segment's range).
+    /// outgoing velocity `velocity` (within the range of a monotone segment):
+    /// the root in `[0, 1]` of `curvature t^2 + (g1 - g0 - curvature) t =
+    /// g - g0`, in the form that stays accurate as the curvature vanishes.
     fn position(&self, velocity: f64) -> f64 {
-        let [a, b] = self.ends.map(|v| v - self.matched);
+        let [g0, g1] = self.end_values();
         let kick = velocity - self.matched;
-        let t = if a * b > 0.0 && kick * a > 0.0 {
-            (kick / a).ln() / (b / a).ln()
+        let level = self.gauge(kick) - g0;
+        let linear = g1 - g0 - self.curvature;
+        let root = (linear * linear + 4.0 * self.curvature * level)
+            .max(0.0)
+            .sqrt();
+        let near = 2.0 * level / (linear + root.copysign(linear));
+        let t = if (0.0..=1.0).contains(&near) || self.curvature == 0.0 {
+            near
         } else {
-            (kick - a) / (b - a)
+            (-linear - root.copysign(linear)) / (2.0 * self.curvature)
         };
-        t.clamp(0.0, 1.0)
+        if t.is_finite() {
+            t.clamp(0.0, 1.0)
+        } else {
+            0.0
+        }
     }
 
     /// Fraction of the segment's mass between its first node and position
@@ -123,6 +408,8 @@ mod tests {
                 matched: 0.0,
                 ends: [kick(pair[0]), kick(pair[1])],
                 halves: [scale * pair[0].exp(), scale * pair[1].exp()],
+                scale: Scale::Logarithmic,
+                curvature: 0.0,
             }
             .spread(&bins, &mut spread);
             points[bins.index(kick(pair[0])).unwrap()] += weight(pair[0]);
@@ -160,6 +447,12 @@ mod tests {
                 matched: 0.0,
                 ends,
                 halves,
+                scale: if ends[0] * ends[1] > 0.0 {
+                    Scale::Logarithmic
+                } else {
+                    Scale::Linear
+                },
+                curvature: 0.0,
             };
             segment.spread(&bins, &mut part);
             let total: f64 = part.iter().sum();
@@ -169,20 +462,82 @@ mod tests {
             );
         }
     }
+}
 
-    /// A segment spanning more than `MAX_SEGMENT_BINS` bins keeps point masses.
-    #[test]
-    fn wide_segments_keep_their_nodes() {
-        let bins = Bins::for_window(0.02, 5e-5);
-        let mut part = vec![0.0; bins.len()];
-        Segment {
-            matched: 0.0,
-            ends: [1e-4, 8e-3],
-            halves: [0.25, 0.75],
+#[cfg(test)]
+mod track_tests {
+    use super::*;
+
+    /// The relative error, per group of bins (eight per decade of `|kick|`
+    /// from 1e-4 to 4e-2), of `lay_track` averaged over `shifts` moves of a
+    /// node grid of step `step` against the exact measure `int cosh(s) ds`
+    /// of the offsets whose kick lands in the group, for the kick curve
+    /// `kick(s)` on `|s| <= 3.3`.
+    fn group_errors(kick: impl Fn(f64) -> f64, step: f64, shifts: u32) -> Vec<(f64, f64)> {
+        let bins = Bins::for_window(0.1, 5e-5);
+        let span = (3.3 / step).round() as i32;
+        let mut laid = vec![0.0; bins.len()];
+        for k in 0..shifts {
+            let moved = (f64::from(k) + 0.5) / f64::from(shifts) - 0.5;
+            let nodes: Vec<f64> = (-span..=span)
+                .map(|j| (f64::from(j) + moved) * step)
+                .collect();
+            let outgoing: Vec<f64> = nodes.iter().map(|&s| kick(s)).collect();
+            let weights: Vec<f64> = nodes
+                .iter()
+                .map(|&s| step * s.cosh() / f64::from(shifts))
+                .collect();
+            lay_track(&bins, &mut laid, 0.0, &outgoing, &weights);
         }
-        .spread(&bins, &mut part);
-        assert_eq!(part[bins.index(1e-4).unwrap()], 0.25);
-        assert_eq!(part[bins.index(8e-3).unwrap()], 0.75);
-        assert_eq!(part.iter().filter(|&&v| v != 0.0).count(), 2);
+        let mut exact = vec![0.0; bins.len()];
+        let fine = 4_000_000;
+        let (low, high) = (
+            (-f64::from(span) - 0.5) * step,
+            (f64::from(span) + 0.5) * step,
+        );
+        let ds = (high - low) / f64::from(fine);
+        for j in 0..fine {
+            let s = low + (f64::from(j) + 0.5) * ds;
+            if let Some(k) = bins.index(kick(s)) {
+                exact[k] += s.cosh() * ds;
+            }
+        }
+        (0..20)
+            .map(|i| 1e-4 * 10f64.powf(f64::from(i) / 8.0))
+            .map(|edge| {
+                let group = |part: &[f64]| -> f64 {
+                    (0..bins.len())
+                        .filter(|&k| {
+                            let kick = bins.centre(k).abs();
+                            kick >= edge && kick < edge * 10f64.powf(0.125)
+                        })
+                        .map(|k| part[k])
+                        .sum()
+                };
+                (edge, group(&laid) / group(&exact) - 1.0)
+            })
+            .filter(|(_, error)| error.is_finite())
+            .collect()
+    }
+
+    /// A collision-like kick curve: a core where the kick changes sign
+    /// (`|kick|` up to ~0.03) between power-law tails `~ e^(-7 |s|)`.
+    fn collision_kick(s: f64) -> f64 {
+        0.03 * (3.0 * s + 0.4).tanh() / s.cosh().powi(7)
+    }
+
+    /// Averaged over the grid's move, the laid measure of every group of
+    /// bins agrees with the exact one to 0.2% at the default rule's step
+    /// (measured: <= 0.1%, the average over 2048 moves is itself exact to
+    /// ~0.05%), through the tails, the cut at `CORE_KICK` and the window
+    /// where the kick changes sign in the core. Interpolating across that
+    /// window instead puts 0.6% too much at 7.5e-4 (checked), the tails'
+    /// trapezoid masses 0.13% too much everywhere, and exponential
+    /// interpolation in the core 2.5% at 0.005 that belongs at 0.0075..0.015.
+    #[test]
+    fn laid_tracks_are_unbiased_on_average() {
+        for (edge, error) in group_errors(collision_kick, 0.125, 2048) {
+            assert!(error.abs() < 2e-3, "|kick| from {edge:.2e}: {error:+.4}");
+        }
     }
 }

@@ -75,7 +75,7 @@ impl Stage for ConvergenceStage {
     }
 
     fn version(&self) -> u32 {
-        2
+        3
     }
 
     fn params(&self) -> Value {

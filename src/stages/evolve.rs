@@ -484,7 +484,7 @@ impl Stage for EvolveStage {
     }
 
     fn version(&self) -> u32 {
-        2
+        3
     }
 
     fn params(&self) -> Value {

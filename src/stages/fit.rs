@@ -43,7 +43,7 @@ impl Stage for FitStage {
     }
 
     fn version(&self) -> u32 {
-        3
+        4
     }
 
     fn params(&self) -> Value {

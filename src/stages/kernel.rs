@@ -74,7 +74,7 @@ impl Stage for KernelStage {
     }
 
     fn version(&self) -> u32 {
-        1
+        2
     }
 
     fn params(&self) -> Value {

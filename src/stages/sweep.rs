@@ -169,7 +169,7 @@ impl Stage for SweepStage {
     }
 
     fn version(&self) -> u32 {
-        4
+        5
     }
 
     fn params(&self) -> Value {

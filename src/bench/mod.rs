@@ -26,6 +26,9 @@ use ternary::physics::scan::{LaunchPair, TIGHTEST_TOLERANCE, thermal_scenes};
 use ternary::physics::scene::{Collision, EngineSettings, FreeLine, Method, collide};
 use ternary::stats::Estimate;
 
+mod balance;
+pub use balance::{BalanceBenchOptions, balance};
+
 /// A benchmark's work-precision figure: error against cost, drawn like the
 /// study's figures (SVG and PNG, one column and screen size).
 pub struct BenchFigure {
