@@ -57,6 +57,9 @@ density_per_um = 1.0
 ring_particles = 3
 ring_radius_um = 1.0
 
+[sweep]
+points_share = 0.5
+
 [publication]
 date = "2026-01-01"
 
@@ -627,6 +630,40 @@ fn methods_can_differ_per_potential() {
     }
 }
 
+/// The studies the repository ships load and validate, so `ternary run` on
+/// them cannot stop at the configuration.
+#[test]
+fn shipped_studies_are_valid() {
+    for file in ["pipeline.toml", "publication.toml"] {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(file);
+        Study::load(&path).unwrap_or_else(|e| panic!("{file}: {e}"));
+    }
+}
+
+/// `sweep.points_share` sizes the sweep's own scene set and leaves the
+/// kernel's (256 points, the same-side share rounded to a power of two).
+#[test]
+fn sweep_points_share_sizes_only_the_sweep_set() {
+    let text = STUDY.replace(
+        "launch_spread = 2.0",
+        "launch_spread = 2.0\npoints_share = 0.25",
+    );
+    let study = Study::parse(std::path::Path::new("pipeline.toml"), &text).expect("valid");
+    let potential = Potential::InversePower { n: 6.0 };
+    let (_, wide) = study.wide_collisions(potential);
+    let wide = wide.expect("the sweep has its own scene set");
+    assert_eq!(wide.points, 64);
+    assert_eq!(wide.sampling.launch.spread, 2.0);
+    assert!(wide.sampling.opposite_points + wide.sampling.same_side_points <= 96);
+    let kernel = study.collisions_params(potential);
+    assert_eq!(kernel.points, 256);
+    assert!(kernel.sampling.opposite_points >= 128);
+    // A per-potential count is shared the same way.
+    let lennard_jones = Potential::LennardJones { theta: 0.1 };
+    let (_, wide) = study.wide_collisions(lennard_jones);
+    assert_eq!(wide.expect("own set").points, 128);
+}
+
 #[test]
 fn kernel_section_rejects_bad_values() {
     rejects(&[
@@ -689,6 +726,16 @@ fn sweep_section_rejects_bad_values() {
             "launch_spread = 2.0",
             "launch_spread = 4.0",
             "sweep.launch_spread",
+        ),
+        (
+            "launch_spread = 2.0",
+            "launch_spread = 2.0\npoints_share = 0.0",
+            "sweep.points_share",
+        ),
+        (
+            "launch_spread = 2.0",
+            "launch_spread = 2.0\npoints_share = 1.5",
+            "sweep.points_share",
         ),
         (
             "balance_bin_width = 0.005",

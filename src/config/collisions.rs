@@ -339,6 +339,25 @@ impl CollisionsConfig {
         }
     }
 
+    /// Resolved parameters of collision scenes of `potential` that draw
+    /// `share` (in (0, 1]) of its points per randomization, at least 2 (the
+    /// whole set when `share` is 1).
+    pub fn params_with_share(
+        &self,
+        potential: Potential,
+        engine: EngineSettings,
+        share: f64,
+    ) -> CollisionsParams {
+        let mut params = self.params(potential, engine);
+        if share < 1.0 {
+            params.points = ((f64::from(params.points) * share).round() as u32).max(2);
+            params
+                .sampling
+                .allocate(params.points, self.same_side_fraction);
+        }
+        params
+    }
+
     /// Resolved parameters of the collision scenes of `potential`.
     pub fn params(&self, potential: Potential, engine: EngineSettings) -> CollisionsParams {
         let mut plan = SamplingPlan {

@@ -293,7 +293,11 @@ impl Study {
         let name = self.config.sweep.wide_collisions(potential);
         let spread = self.config.sweep.launch_spread;
         let params = (spread > 0.0).then(|| {
-            let mut params = self.collisions_params(potential);
+            let mut params = self.config.collisions.params_with_share(
+                potential,
+                self.engine(),
+                self.config.sweep.points_share,
+            );
             params.sampling.launch.spread = spread;
             params
         });

@@ -26,6 +26,9 @@ pub struct SweepConfig {
     pub balance_bin_width: f64,
     /// Launch-proposal spread of the sweep's own scenes (0: reuse the kernel's).
     pub launch_spread: f64,
+    /// The sweep's own scenes draw this share of the kernel's points per
+    /// randomization (`collisions.points` or its per-potential value).
+    pub points_share: f64,
 }
 
 impl Default for SweepConfig {
@@ -38,6 +41,7 @@ impl Default for SweepConfig {
             balance_separations: vec![0.01, 0.02, 0.04, 0.05],
             balance_bin_width: 0.005,
             launch_spread: 2.0,
+            points_share: 1.0,
         }
     }
 }
@@ -105,6 +109,11 @@ impl SweepConfig {
             sweep.launch_spread.is_finite() && (0.0..=3.0).contains(&sweep.launch_spread),
             "sweep.launch_spread",
             format!("{} is outside [0, 3]", sweep.launch_spread),
+        )?;
+        check(
+            sweep.points_share.is_finite() && sweep.points_share > 0.0 && sweep.points_share <= 1.0,
+            "sweep.points_share",
+            format!("{} is outside (0, 1]", sweep.points_share),
         )?;
         check(
             sweep.balance_bin_width.is_finite() && sweep.balance_bin_width > 0.0,
