@@ -1,15 +1,20 @@
 //! The paper table: every row's relative difference and z-score recomputed
 //! here from its published value and ours, and ours read back from the
-//! artifacts it comes from (moments at the paper's truncation, the sweep's
-//! detailed-balance pair, the compared rings' final time, the scaling ratio
+//! artifacts it comes from (moments at the paper's truncation, the
+//! detailed-balance pair from scenes drawn for it, the compared rings' final time, the scaling ratio
 //! from the gases table and from MD, the N2 gas).
 
 use std::fs;
 use std::path::{Path, PathBuf};
 
 use arrow::array::RecordBatch;
+use ternary::binning::Bins;
 use ternary::contract;
+use ternary::kernel::{Target, histograms};
 use ternary::pipeline::table::read_parquet;
+use ternary::pipeline::{Input, InstanceId};
+use ternary::stages::kernel::collision_events;
+use ternary::stats::Estimate;
 
 mod common;
 
@@ -135,17 +140,54 @@ fn paper_rows_recompute_from_their_sources() {
             "{start}"
         );
     }
-    // The detailed-balance pair of the sweep.
+    // The detailed-balance pair: from launches drawn for u' = -3, recomputed
+    // here from the full histograms of those scenes; the sweep's own row
+    // (its launch mixture) in the note.
     {
         use contract::sweep::detailed_balance::{A, B, RATIO};
-        let balance = table(&store, "sweep", "ipp-6", "detailed_balance");
-        let (a, b) = (A.read(&balance).unwrap(), B.read(&balance).unwrap());
-        let pair = (0..a.len())
-            .position(|j| a[j] == -3.0 && (b[j] + 2.96).abs() < 1e-9)
-            .unwrap();
+        let events = table(&store, "collisions", "ipp-6_u-3", "events");
+        let input = Input {
+            id: InstanceId::new("collisions", "ipp-6_u-3"),
+            tables: [("events".to_string(), events)].into(),
+        };
+        let (events, draws, _) = collision_events(&input).unwrap();
+        let (a, b, width) = (-3.0, -2.96, 0.005);
+        let bins = Bins::for_window(2.0 * (b - a) + 4.0 * width, width);
+        let steps = ((b - a) / width).round() as usize;
+        let self_kernel = |from: f64, k: usize| -> Vec<f64> {
+            histograms(&events, &Target::dilute(from), &bins, &draws)
+                .iter()
+                .map(|h| h.self_part[k] / width)
+                .collect()
+        };
+        let expected = Estimate::paired_ratio(
+            &self_kernel(a, bins.half_bins + steps),
+            &self_kernel(b, bins.half_bins - steps),
+        );
         let k = row("G(-3.00");
-        assert_eq!(ours[k].mean, RATIO.read(&balance).unwrap()[pair].mean);
+        assert!(
+            close(ours[k].mean, expected.mean) && close(ours[k].stderr, expected.stderr),
+            "{:?} vs {expected:?}",
+            ours[k]
+        );
         assert!(converged[k].mean.is_nan(), "one definition");
+        // Drawn for u' = -3: the thermal launches overtake the special
+        // particle at relative speeds near +3.
+        let launches = table(&store, "launches", "ipp-6_u-3", "launches");
+        let u2 = contract::launches::U2.read(&launches).unwrap();
+        let mean = u2.iter().sum::<f64>() / u2.len() as f64;
+        assert!(mean > 2.5, "mean launch speed {mean}");
+        let balance = table(&store, "sweep", "ipp-6", "detailed_balance");
+        let (first, second) = (A.read(&balance).unwrap(), B.read(&balance).unwrap());
+        let pair = (0..first.len())
+            .position(|j| first[j] == a && (second[j] - b).abs() < 1e-9)
+            .unwrap();
+        let grid = RATIO.read(&balance).unwrap()[pair];
+        let note = &NOTE.read(&paper).unwrap()[k];
+        assert!(
+            note.contains(&format!("{:.3} +- {:.3}", grid.mean, grid.stderr)),
+            "{note}"
+        );
     }
     // Gamma t_f = a_6(0.04) rho^2 l v_th t_f of the compared rings.
     {

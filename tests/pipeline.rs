@@ -56,10 +56,11 @@ fn python_check(script: &str, artifact: &Path) {
 
 /// Every instance of the default DAG: per potential scan, launches and
 /// collisions, the sweep's own launches and collisions, sweep, and kernel,
-/// moments and fit at (u' = 0, dilute), plus the table, the paper table, and
-/// the figures of the kicked potential (kernels, kernel with fit, rates,
+/// moments and fit at (u' = 0, dilute), plus the table, the launches and
+/// collisions drawn for the paper's balance pair (u' = -3), the paper table,
+/// and the figures of the kicked potential (kernels, kernel with fit, rates,
 /// truncation, kicks).
-const INSTANCES: usize = 25;
+const INSTANCES: usize = 27;
 
 fn stage_dirs(store: &Path, stage: &str) -> Vec<PathBuf> {
     let mut dirs: Vec<PathBuf> = fs::read_dir(store.join("artifacts").join(stage))

@@ -304,6 +304,20 @@ impl Study {
         (name, params)
     }
 
+    /// The collisions of `potential` drawn for a special particle at `u'`:
+    /// the kernel's plan with the launch density of `u'` (no mixture), named
+    /// `<id>_u<u'>`.
+    pub fn tuned_collisions(
+        &self,
+        potential: Potential,
+        u_prime: f64,
+    ) -> (String, CollisionsParams) {
+        let mut params = self.collisions_params(potential);
+        params.sampling.launch.shift = u_prime;
+        params.sampling.launch.spread = 0.0;
+        (format!("{}_u{u_prime}", potential.id()), params)
+    }
+
     /// Resolved parameters of the sweep of `potential`, if enabled.
     pub fn sweep_params(&self, potential: Potential) -> Option<SweepParams> {
         let kernel = self.kernel_params(potential, 0.0, 0.0);

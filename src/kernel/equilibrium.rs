@@ -15,7 +15,8 @@
 //! bins (the `sweep` stage's parameters). Units: rates in `rho^2 l v_th`,
 //! velocities in `v_th`.
 
-use super::{Draws, Event, Target, moments};
+use super::{Draws, Event, Target, moments, self_bin};
+use crate::binning::Bins;
 use crate::physics::launch::thermal_density;
 use crate::stats::Estimate;
 
@@ -166,6 +167,29 @@ fn largest_share(values: &[f64]) -> f64 {
     let squares: Vec<f64> = values.iter().map(|x| (x - mean).powi(2)).collect();
     let total: f64 = squares.iter().sum();
     squares.iter().copied().fold(0.0, f64::max) / total
+}
+
+/// Detailed balance between `a` and `b = a + steps bins.width` from the
+/// self kernel's bins `bins` (around each `u'`; `steps` off the centre):
+/// `G_self(a -> b)` at `target(a)` against `G_self(b -> a)` at `target(b)`,
+/// per replicate, in `rho^2 l v_th / v_th`.
+pub fn balance_between(
+    events: &[Event],
+    draws: &Draws,
+    bins: &Bins,
+    (a, steps): (f64, usize),
+    target: impl Fn(f64) -> Target,
+) -> Balance {
+    let b = a + steps as f64 * bins.width;
+    let kernel = |from: f64, k: usize| -> Vec<f64> {
+        self_bin(events, &target(from), bins, k, draws)
+            .iter()
+            .map(|v| v / bins.width)
+            .collect()
+    };
+    let there = kernel(a, bins.half_bins + steps);
+    let back = kernel(b, bins.half_bins - steps);
+    detailed_balance(a, b, &there, &back)
 }
 
 /// Detailed balance from the self kernel per replicate: `forward` =

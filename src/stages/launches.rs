@@ -32,8 +32,9 @@ impl LaunchesStage {
         InstanceId::new(contract::launches::STAGE, name)
     }
 
-    /// The plan with the strata split the pilot chooses (without any
-    /// contribution, as for n = 2, the configured split stays).
+    /// The plan with the strata split the pilot chooses for the self
+    /// variance rate at the launch proposal's own `u'` (its shift); without
+    /// any contribution, as for n = 2, the configured split stays.
     fn allocated_plan(&self) -> SamplingPlan {
         let mut plan = self.params.sampling;
         if self.params.pilot_points > 0
@@ -41,7 +42,7 @@ impl LaunchesStage {
                 &plan,
                 &self.params.potential,
                 &PILOT_ENGINE,
-                &Target::dilute(0.0),
+                &Target::dilute(plan.launch.shift),
                 self.params.pilot_points,
             )
         {
@@ -57,7 +58,7 @@ impl Stage for LaunchesStage {
     }
 
     fn version(&self) -> u32 {
-        1
+        2
     }
 
     fn params(&self) -> Value {

@@ -150,6 +150,9 @@ pub fn plan(study: &Study) -> Vec<Box<dyn Stage>> {
         .map(|&p| study.kernel_params(p, 0.0, 0.0))
         .collect();
     stages.push(Box::new(table::TableStage::new(rows)));
+    if let Some((name, params)) = paper::balance_collisions(study) {
+        push_collisions(&mut stages, params, name);
+    }
     if let Some(paper) = paper::paper_stage(study, &stages) {
         stages.push(Box::new(paper));
     }

@@ -17,10 +17,10 @@ use crate::binning::Bins;
 use crate::config::SweepParams;
 use crate::contract::{self, Rows};
 use crate::kernel::equilibrium::{
-    Balance, FokkerPlanckPoint, JointBalance, SelfRates, detailed_balance, fokker_planck_check,
+    Balance, FokkerPlanckPoint, JointBalance, SelfRates, balance_between, fokker_planck_check,
     joint_balance, self_rates,
 };
-use crate::kernel::{Draws, Event, Target, self_bin};
+use crate::kernel::{Draws, Event, Target};
 use crate::pipeline::{Input, InstanceId, Progress, Stage, StageError, Table};
 
 /// The `sweep` stage for one potential.
@@ -99,16 +99,9 @@ impl SweepStage {
                     .iter()
                     .map(move |&separation| {
                         let steps = (separation / width).round() as usize;
-                        let b = a + steps as f64 * width;
-                        let self_kernel = |from: f64, k: usize| -> Vec<f64> {
-                            self_bin(events, &self.target(from), &bins, k, draws)
-                                .iter()
-                                .map(|v| v / width)
-                                .collect()
-                        };
-                        let there = self_kernel(a, bins.half_bins + steps);
-                        let back = self_kernel(b, bins.half_bins - steps);
-                        (a, b, detailed_balance(a, b, &there, &back))
+                        let balance =
+                            balance_between(events, draws, &bins, (a, steps), |u| self.target(u));
+                        (a, a + steps as f64 * width, balance)
                     })
             })
             .collect();
