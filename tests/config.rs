@@ -305,8 +305,7 @@ uniform_range = 40.0
 [collisions.quadrature]
 coarse_step = 0.5
 half_range = 3.3
-max_halvings = 3
-tolerance = 1e-3
+halvings = 3
 
 [collisions.points_per_potential]
 "lj-0.1" = 512
@@ -579,14 +578,14 @@ fn collisions_section_rejects_bad_values() {
             "collisions.quadrature.half_range",
         ),
         (
-            "max_halvings = 3",
-            "max_halvings = 9",
-            "collisions.quadrature.max_halvings",
+            "halvings = 3",
+            "halvings = 9",
+            "collisions.quadrature.halvings",
         ),
         (
-            "tolerance = 1e-3",
-            "tolerance = -1.0",
-            "collisions.quadrature.tolerance",
+            "halvings = 3",
+            "halvings = 0",
+            "collisions.quadrature.halvings",
         ),
         (
             "\"lj-0.1\" = 512",

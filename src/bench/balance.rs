@@ -9,7 +9,6 @@ use std::time::Instant;
 use ternary::binning::Bins;
 use ternary::kernel::{Draws, Event, Target, pilot_same_side_fraction, self_bin};
 use ternary::physics::launch::thermal_density;
-use ternary::physics::offset_quadrature::SCENES_PER_PAIR_ESTIMATE;
 use ternary::physics::potential::Potential;
 use ternary::physics::sampling::{LaunchProposal, OffsetIntegration, SamplingPlan};
 use ternary::stats::Estimate;
@@ -122,7 +121,7 @@ pub fn balance(options: &BalanceBenchOptions) -> String {
         shift: options.from,
         spread: 0.0,
     };
-    let pairs = |scenes: u32| scenes / SCENES_PER_PAIR_ESTIMATE;
+    let pairs = |scenes: u32| scenes / options.study.quadrature.nodes();
     let mut variants = vec![Variant {
         name: "sampled offsets, launch mixture 0, +-2 (the sweep set today)".into(),
         launch: mixture(2.0),

@@ -17,7 +17,7 @@ use ternary::config::{KernelConfig, Study};
 use ternary::figures::{Axis, Layout, Panel, Point, Style, render};
 use ternary::kernel::fit::{FIT_GROUPS, Shape, fit_kernel};
 use ternary::kernel::{Draws, Event, Histogram, Target, histograms, moments};
-use ternary::physics::offset_quadrature::{OffsetIntegral, OffsetRule, SCENES_PER_PAIR_ESTIMATE};
+use ternary::physics::offset_quadrature::{OffsetIntegral, OffsetRule};
 use ternary::physics::potential::Potential;
 use ternary::physics::sampling::{
     LaunchProposal, OffsetIntegration, OffsetProposal, SamplingPlan, SceneRecord,
@@ -602,7 +602,7 @@ pub fn kernel(options: &KernelBenchOptions) -> (String, BenchFigure) {
         offsets: OffsetIntegration::Quadrature(study.quadrature),
         ..piloted
     };
-    let pairs = (options.points / SCENES_PER_PAIR_ESTIMATE).max(16);
+    let pairs = (options.points / study.quadrature.nodes()).max(16);
     let run = run_quadrature(&potential, &quadrature, options, pairs);
     let name = format!(
         "{} ({pairs} pairs per randomization, pilot {:.2} s included)",
@@ -794,8 +794,7 @@ fn inner_rule_convergence(potential: &Potential, study: &StudySettings, seed: u6
         .map(|point| (point.launch, point.offset_coordinate))
         .collect();
     let fixed = |halvings: u32| OffsetRule {
-        max_halvings: halvings,
-        tolerance: 0.0,
+        halvings,
         ..study.quadrature
     };
     let integrals = |rule: OffsetRule| -> Vec<OffsetIntegral> {
@@ -806,9 +805,10 @@ fn inner_rule_convergence(potential: &Potential, study: &StudySettings, seed: u6
     };
     let reference = integrals(fixed(HALVINGS + 3));
     let mut out = format!(
-        "\nInner rule (tau = T sinh(s), step {} halved, |s| <= {:.2}): relative error of int kick^2 dtau against {} halvings, {} thermal pairs per stratum:\n\n",
+        "\nInner rule (tau = T sinh(s), step {} halved, |s| <= {:.2}; the study halves {} times): relative error of int kick^2 dtau against {} halvings, {} thermal pairs per stratum:\n\n",
         study.quadrature.coarse_step,
         study.quadrature.half_range,
+        study.quadrature.halvings,
         HALVINGS + 3,
         PAIRS
     );
@@ -838,20 +838,6 @@ fn inner_rule_convergence(potential: &Potential, study: &StudySettings, seed: u6
             covered,
         );
     }
-    let adaptive = integrals(study.quadrature);
-    let nodes =
-        adaptive.iter().map(|r| r.nodes.len()).sum::<usize>() as f64 / adaptive.len() as f64;
-    let worst = adaptive
-        .iter()
-        .zip(&reference)
-        .filter(|(_, r)| r.self_variance > 0.0)
-        .map(|(a, r)| (a.self_variance - r.self_variance).abs() / r.self_variance)
-        .fold(0.0, f64::max);
-    let _ = writeln!(
-        out,
-        "| adaptive (tolerance {:.0e}, at most {}) | {nodes:.1} (mean) | | {worst:.1e} | |",
-        study.quadrature.tolerance, study.quadrature.max_halvings
-    );
     out
 }
 

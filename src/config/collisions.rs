@@ -22,7 +22,7 @@ pub struct CollisionsConfig {
     pub randomizations: u32,
     /// Points per randomization (both strata together); each stratum's share is
     /// rounded to the nearest power of two. A point is one scene when offsets
-    /// are sampled, one launch pair (49 or 97 scenes, ~50 on average) with `method = "quadrature"`.
+    /// are sampled, one launch pair (`quadrature.halvings` sets its scenes, 49 by default) with `method = "quadrature"`.
     pub points: u32,
     /// Fraction of the scenes drawn in the same-side stratum when no pilot runs.
     pub same_side_fraction: f64,
@@ -142,7 +142,7 @@ fn check_scenes(
     check(points >= 2, key, "must be at least 2")?;
     let per_point = match method {
         OffsetMethod::Sampled => 1,
-        OffsetMethod::Quadrature => sampling.quadrature.max_nodes(),
+        OffsetMethod::Quadrature => u64::from(sampling.quadrature.nodes()),
     };
     let total = u64::from(sampling.randomizations) * u64::from(points) * per_point;
     check(
@@ -298,19 +298,11 @@ impl CollisionsConfig {
             ),
         )?;
         check(
-            rule.max_halvings <= 8,
-            "collisions.quadrature.max_halvings",
+            (1..=8).contains(&rule.halvings),
+            "collisions.quadrature.halvings",
             format!(
-                "{} exceeds 8 (256x the coarse nodes per launch pair)",
-                rule.max_halvings
-            ),
-        )?;
-        check(
-            rule.tolerance.is_finite() && rule.tolerance >= 0.0,
-            "collisions.quadrature.tolerance",
-            format!(
-                "{} must be a finite relative tolerance >= 0",
-                rule.tolerance
+                "{} is outside [1, 8] (the last halving's change is each pair's error bound; 8: 256x the coarse nodes)",
+                rule.halvings
             ),
         )
     }

@@ -17,7 +17,6 @@ use rayon::prelude::*;
 
 use crate::binning::Bins;
 use crate::physics::launch::{launch_rate, thermal_density};
-use crate::physics::offset_quadrature::SCENES_PER_PAIR_ESTIMATE;
 use crate::physics::potential::Potential;
 use crate::physics::sampling::{OffsetIntegration, SamplingPlan, SceneRecord, Stratum};
 use crate::physics::scene::{EngineSettings, Method};
@@ -578,7 +577,7 @@ const PILOT_SEED_MASK: u64 = 0x5049_4c4f_545f_5345;
 /// sampled scene, or a launch pair's offset integral) and `c_s` its mean cost
 /// in force evaluations, both from plain Monte Carlo points of a separate seed
 /// (the main points are not reused): `pilot_points` per stratum when offsets
-/// are sampled, `pilot_points / SCENES_PER_PAIR_ESTIMATE` launch pairs (at least 16) when
+/// are sampled, `pilot_points / nodes` launch pairs (at least 16; `nodes` per pair) when
 /// each pair is integrated by quadrature, about the same number of scenes.
 /// Clamped to [0.02, 0.5] so that neither stratum starves; `None` when neither
 /// stratum contributes (the integrable n = 2).
@@ -591,7 +590,7 @@ pub fn pilot_same_side_fraction(
 ) -> Option<f64> {
     let points = match plan.offsets {
         OffsetIntegration::Sampled => pilot_points,
-        OffsetIntegration::Quadrature(_) => (pilot_points / SCENES_PER_PAIR_ESTIMATE).max(16),
+        OffsetIntegration::Quadrature(rule) => (pilot_points / rule.nodes()).max(16),
     };
     let pilot = SamplingPlan {
         seed: plan.seed ^ PILOT_SEED_MASK,

@@ -5,20 +5,19 @@
 //! change decays as a power of `|tau|` (about `|tau|^-(n+1)` for an inverse
 //! power law). The map `tau = T sinh(s)`, with the collision time
 //! `T = 1/|u2| + 1/|u3|`, turns those power-law tails into exponential decay
-//! in `s`, where the trapezoid rule converges exponentially fast. Halving the
-//! step reuses every node, so each pair is refined until its self variance
-//! integral `int kick^2 dtau` (the `a_n` integrand, `v_th^2 l / v_th`)
-//! changes by less than a tolerance. This is the inner integral of the
-//! kernel's `int du2 du3 dtau` (`sampling`).
+//! in `s`, where the trapezoid rule converges exponentially fast. Every pair
+//! takes the same number of halvings of the coarse step (reusing every node);
+//! the change of its self variance integral `int kick^2 dtau` (the `a_n`
+//! integrand, `v_th^2 l / v_th`) at the last halving bounds its error. The
+//! step is fixed, not chosen per pair from that change: the grid's random
+//! move makes each rule unbiased, but a choice between two rules that looks
+//! at their results is not (an early stop kept `a_12` 1.4e-4 high, eight of
+//! its standard errors; docs/benchmarks.md). This is the inner integral of
+//! the kernel's `int du2 du3 dtau` (`sampling`).
 
 use super::potential::Potential;
 use super::scan::LaunchPair;
 use super::scene::{Collision, EngineSettings, collide};
-
-/// Scenes a launch pair takes, roughly, under the default rule (49 or 97;
-/// 50.3 on average for n = 6): for sizing pilots and comparisons against
-/// one scene per point.
-pub const SCENES_PER_PAIR_ESTIMATE: u32 = 50;
 
 /// Nested trapezoid rule on `tau = T sinh(s)`, `|s| <= half_range`.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -28,28 +27,25 @@ pub struct OffsetRule {
     pub coarse_step: f64,
     /// Largest `|s|`: offsets reach `T sinh(half_range)`.
     pub half_range: f64,
-    /// Most halvings of `coarse_step`.
-    pub max_halvings: u32,
-    /// Relative agreement of two successive rules that ends the refinement
-    /// (after two halvings at least: the coarsest rule is too rough to judge).
-    pub tolerance: f64,
+    /// Halvings of `coarse_step` (every pair the same, at least one: the
+    /// last one's change is the pair's error bound).
+    pub halvings: u32,
 }
 
 impl Default for OffsetRule {
     /// Offsets to `T sinh(3.3) = 13.5 T` (the self variance integral beyond
-    /// holds a fraction `~13.5^-(2n+1)` of it, 1e-10 for n = 4, and kicks
-    /// there are below 1e-7 v_th, far inside the centre bin), 13 coarse
-    /// nodes, then 25, 49 and at most 97; a pair stops when two rules agree to
-    /// 3e-2: the change bounds the coarser rule's error, and the finer one's,
-    /// converging exponentially, is near 1e-8 (median; 97 nodes for the ~1 in
-    /// 40 pairs that change more: 50.3 nodes per pair and a bias of 1e-8 of
-    /// `a_6` against five halvings, docs/benchmarks.md, "Offset quadrature").
+    /// holds a fraction `~13.5^-(2n+1)` of it, 1e-10 for n = 4; the largest
+    /// of a scene's three kicks at the ends is 8e-6 v_th for n = 4 and 9e-8
+    /// for n = 6 (medians), inside the centre bin), 13 coarse nodes
+    /// halved twice: 49 nodes. Against a rule with a third halving (97 nodes)
+    /// on the same pairs, `a_n` moves by 1.6e-9 (n = 6) to 8e-7 (n = 12) of
+    /// itself, within the paired error, while each launch pair costs half as
+    /// much (docs/benchmarks.md, "Offset quadrature").
     fn default() -> Self {
         OffsetRule {
             coarse_step: 0.5,
             half_range: 3.3,
-            max_halvings: 3,
-            tolerance: 3e-2,
+            halvings: 2,
         }
     }
 }
@@ -79,8 +75,6 @@ pub struct OffsetIntegral {
     /// before), the finer one's with a wide margin; plus the tails beyond the
     /// range ([`tail_estimate`]).
     pub error: f64,
-    /// Halvings made.
-    pub halvings: u32,
 }
 
 /// Velocity changes below this (`v_th`) are the engine's error floor
@@ -88,10 +82,10 @@ pub struct OffsetIntegral {
 const KICK_FLOOR: f64 = 1e-10;
 
 impl OffsetRule {
-    /// Most nodes (scenes) one launch pair can take.
-    pub fn max_nodes(&self) -> u64 {
-        let coarse_intervals = 2 * (self.half_range / self.coarse_step).floor() as u64;
-        (coarse_intervals << self.max_halvings) + 1
+    /// Nodes (scenes) of one launch pair.
+    pub fn nodes(&self) -> u32 {
+        let coarse_intervals = 2 * (self.half_range / self.coarse_step).floor() as u32;
+        (coarse_intervals << self.halvings) + 1
     }
 
     /// Coarse nodes in `s` for the grid coordinate `shift` in `[0, 1)`: the
@@ -112,8 +106,8 @@ impl OffsetRule {
     }
 
     /// Integrates the scenes of `launch` at the rule's nodes (grid coordinate
-    /// `shift`, [`OffsetRule::coarse_nodes`]), halving the step until two
-    /// successive rules agree to `tolerance` (or `max_halvings`).
+    /// `shift`, [`OffsetRule::coarse_nodes`]): the coarse step halved
+    /// `halvings` times.
     pub fn integrate(
         &self,
         potential: &Potential,
@@ -132,12 +126,7 @@ impl OffsetRule {
         let mut step = self.coarse_step;
         let mut integral = self.sum(&scenes, step, time);
         let mut error = f64::INFINITY;
-        let mut halvings = 0;
-        // An integrand of only sub-floor kicks is converged at any step.
-        let floor = KICK_FLOOR * KICK_FLOOR * time;
-        while halvings < self.max_halvings
-            && (halvings < 2 || error > self.tolerance * integral + floor)
-        {
+        for _ in 0..self.halvings {
             let midpoints: Vec<(f64, Collision)> = scenes[1..]
                 .iter()
                 .map(|&(s, _)| scene(s - 0.5 * step))
@@ -147,7 +136,6 @@ impl OffsetRule {
             let refined = self.sum(&scenes, step, time);
             error = (refined - integral).abs();
             integral = refined;
-            halvings += 1;
         }
         let at = |node: &(f64, Collision)| integrand(node, time);
         let ends = scenes.len().saturating_sub(2);
@@ -169,7 +157,6 @@ impl OffsetRule {
                 .collect(),
             self_variance: integral,
             error: error + tails,
-            halvings,
         }
     }
 
@@ -241,16 +228,15 @@ mod tests {
     fn nodes_cover_the_range_in_order() {
         let launch = LaunchPair { u2: 1.1, u3: -0.9 };
         let rule = OffsetRule {
-            max_halvings: 2,
-            tolerance: 0.0,
+            halvings: 2,
             ..OffsetRule::default()
         };
         let integral = rule.integrate(&Potential::InversePower { n: 6.0 }, &engine(), launch, 0.5);
-        assert_eq!(integral.halvings, 2);
         let offsets: Vec<f64> = integral.nodes.iter().map(|n| n.offset).collect();
         assert!(offsets.windows(2).all(|w| w[0] < w[1]));
         let coarse = (rule.half_range / rule.coarse_step).floor() as usize;
         assert_eq!(offsets.len(), 4 * 2 * coarse + 1);
+        assert_eq!(offsets.len(), rule.nodes() as usize);
         let time = launch.collision_time();
         let last = coarse as f64 * rule.coarse_step;
         let step = rule.coarse_step / 4.0;
@@ -293,10 +279,10 @@ mod tests {
         assert!((indicator_sum(0.5, 0) - (high - low)).abs() > 0.2);
     }
 
-    /// The integrable n = 2: every kick is zero, the refinement stops as soon
-    /// as it may (two halvings).
+    /// The integrable n = 2: every kick is zero, and so are the integral and
+    /// its error bound.
     #[test]
-    fn integrable_pairs_stop_after_two_halvings() {
+    fn integrable_pairs_integrate_to_zero() {
         let integral = OffsetRule::default().integrate(
             &Potential::InversePower { n: 2.0 },
             &engine(),
@@ -304,7 +290,7 @@ mod tests {
             0.5,
         );
         assert_eq!(integral.self_variance, 0.0);
-        assert_eq!(integral.halvings, 2);
+        assert_eq!(integral.error, 0.0);
     }
 
     /// The error bound holds: a much finer rule (3 more halvings) lies within
@@ -317,8 +303,7 @@ mod tests {
             let launch = LaunchPair { u2, u3 };
             let rule = OffsetRule::default();
             let fine = OffsetRule {
-                max_halvings: 6,
-                tolerance: 0.0,
+                halvings: rule.halvings + 3,
                 ..rule
             }
             .integrate(&potential, &engine(), launch, 0.3);

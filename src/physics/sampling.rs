@@ -381,7 +381,7 @@ pub struct SceneRecord {
 /// Launch points per chunk of parallel work when each is one scene.
 const CHUNK_SCENES: usize = 512;
 
-/// Launch points per chunk when each is integrated by quadrature (~25-97 scenes each).
+/// Launch points per chunk when each is integrated by quadrature (49 scenes each by default).
 const CHUNK_PAIRS: usize = 8;
 
 /// The power of two nearest to `count` (at least 2) in the logarithm: scrambled

@@ -60,7 +60,7 @@ impl Stage for CollisionsStage {
     }
 
     fn version(&self) -> u32 {
-        4
+        5
     }
 
     fn params(&self) -> Value {
