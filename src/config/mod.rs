@@ -36,6 +36,7 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 
 use crate::physics::potential::Potential;
+use crate::physics::sampling::OffsetIntegration;
 use crate::physics::scene::EngineSettings;
 
 pub use check::MAX_LIST;
@@ -304,9 +305,14 @@ impl Study {
         (name, params)
     }
 
-    /// The collisions of `potential` drawn for a special particle at `u'`:
-    /// the kernel's plan with the launch density of `u'` (no mixture), named
-    /// `<id>_u<u'>`.
+    /// The collisions of `potential` drawn for a special particle at `u'`
+    /// for the sweep's balance pairs: the kernel's plan with the launch
+    /// density of `u'` (no mixture), named `<id>_u<u'>`. Under the offset
+    /// quadrature each pair takes one halving more than the kernel's (at
+    /// most 8): the balance bins lie in the collision's core (`|du| = 0.04`),
+    /// where nodes are point masses and a finer step is what lowers their
+    /// error (n = 6: +-0.035 at two halvings in 25 s, +-0.0098 at three in
+    /// 51 s, +-0.022 at three with half the points; docs/benchmarks.md).
     pub fn tuned_collisions(
         &self,
         potential: Potential,
@@ -315,6 +321,9 @@ impl Study {
         let mut params = self.collisions_params(potential);
         params.sampling.launch.shift = u_prime;
         params.sampling.launch.spread = 0.0;
+        if let OffsetIntegration::Quadrature(rule) = &mut params.sampling.offsets {
+            rule.halvings = (rule.halvings + 1).min(8);
+        }
         (format!("{}_u{u_prime}", potential.id()), params)
     }
 
