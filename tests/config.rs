@@ -783,6 +783,11 @@ fn convergence_section_rejects_bad_values() {
             "convergence.tolerances[1]",
         ),
         (
+            "tolerances = [1e-10]",
+            "tolerances = [1e-10]\ntolerance_share = 1.5",
+            "convergence.tolerance_share",
+        ),
+        (
             "bin_widths = [2e-4, 1e-3]",
             "bin_widths = [2e-4, 0.2]",
             "convergence.bin_widths[1]",

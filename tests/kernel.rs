@@ -14,8 +14,8 @@ use ternary::physics::offset_quadrature::OffsetRule;
 use ternary::physics::potential::Potential;
 use ternary::physics::quasi_random::ScrambledSobol;
 use ternary::physics::sampling::{
-    LaunchProposal, OffsetIntegration, OffsetProposal, SamplingPlan, SceneRecord, Stratum,
-    literal_scene,
+    LaunchPoint, LaunchProposal, OffsetIntegration, OffsetProposal, SamplingPlan, SceneRecord,
+    Stratum, leading_share, literal_scene,
 };
 use ternary::physics::scan::LaunchPair;
 use ternary::physics::scene::{EngineSettings, Method, collide};
@@ -684,4 +684,27 @@ fn offset_rule_averaged_over_grid_moves_is_the_integral() {
             point.launch
         );
     }
+}
+
+/// `leading_share` keeps, in table order, the first `ceil(share n)` launch
+/// points of every randomization and stratum (at least one), and all of them
+/// at share 1.
+#[test]
+fn leading_share_keeps_each_strata_prefix() {
+    let plan = plan(3, 4, 203);
+    let launches = plan.launch_points(0..4);
+    assert_eq!(leading_share(launches.clone(), 1.0), launches);
+    let kept = leading_share(launches.clone(), 0.25);
+    let expected: Vec<LaunchPoint> = launches
+        .iter()
+        .filter(|l| {
+            let count = plan.points(l.stratum);
+            l.point < (count as f64 * 0.25).ceil() as u32
+        })
+        .copied()
+        .collect();
+    assert_eq!(kept, expected);
+    assert_eq!(kept.len(), 4 * (44 + 8));
+    let tiny = leading_share(launches, 1e-6);
+    assert_eq!(tiny.len(), 4 * 2, "one point per randomization and stratum");
 }

@@ -91,6 +91,11 @@ pub struct CollisionsParams {
     pub points: u32,
     /// Pilot scenes per stratum for the Neyman allocation (0: keep the fraction).
     pub pilot_points: u32,
+    /// Integrate only this share of every randomization's and stratum's
+    /// launch pairs, the leading ones
+    /// ([`leading_share`](crate::physics::sampling::leading_share)); `None`: all.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub launch_share: Option<f64>,
 }
 
 /// Resolved parameters of a `launches` instance: everything that decides the
@@ -374,6 +379,7 @@ impl CollisionsConfig {
             sampling: plan,
             points,
             pilot_points: self.pilot_points,
+            launch_share: None,
         }
     }
 }

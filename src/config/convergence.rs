@@ -21,6 +21,10 @@ pub struct ConvergenceConfig {
     pub offset_bounds: Vec<f64>,
     /// Integrator tolerances (scenes re-integrated at the same points).
     pub tolerances: Vec<f64>,
+    /// Share of the launch pairs re-integrated at each tolerance (the leading
+    /// ones of every randomization and stratum; the shift is paired with the
+    /// default on the same pairs).
+    pub tolerance_share: f64,
     /// Bin widths of the binned `a_n`.
     pub bin_widths: Vec<f64>,
 }
@@ -33,6 +37,7 @@ impl Default for ConvergenceConfig {
             densities: vec![5e-5, 5e-4, 5e-3],
             offset_bounds: vec![1.5, 3.0, 10.0, 30.0, 100.0],
             tolerances: vec![1e-10, 1e-11, 1e-13],
+            tolerance_share: 0.125,
             bin_widths: vec![5e-5, 2e-4, 1e-3, 4e-3],
         }
     }
@@ -109,12 +114,18 @@ impl ConvergenceConfig {
             }
         }
         check_unique(&self.tolerances, |k| format!("convergence.tolerances[{k}]"))?;
+        check(
+            self.tolerance_share > 0.0 && self.tolerance_share <= 1.0,
+            "convergence.tolerance_share",
+            format!("{} is outside (0, 1]", self.tolerance_share),
+        )?;
         let variants = self
             .tolerances
             .iter()
             .map(|&tolerance| {
                 let mut params = context.collisions.params(potential, context.engine);
                 params.engine.tolerance = tolerance;
+                params.launch_share = (self.tolerance_share < 1.0).then_some(self.tolerance_share);
                 params
             })
             .collect();

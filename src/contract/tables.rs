@@ -292,6 +292,27 @@ pub mod kernel {
         "part of G from the bath particles' velocities",
         "standard error of G_bath"
     );
+
+    /// `kernel_replicates.parquet`: `G` of every randomization alone, one row
+    /// per randomization and bin (what `fit` refits one by one, and what any
+    /// other error analysis of the kernel starts from).
+    pub mod replicates {
+        pub use super::super::collisions::RANDOMIZATION;
+        use super::*;
+
+        /// The table.
+        pub const TABLE: TableSpec = TableSpec {
+            stage: STAGE,
+            name: "kernel_replicates",
+            description: "collision kernel G(u' -> u) of each randomization alone, in units of rho^2 l v_th per v_th",
+        };
+        /// The kernel of one randomization.
+        pub const G: Col<f64> = Col::f64(
+            "G",
+            G_UNIT,
+            "kernel G(u' -> u) of this randomization alone: self plus bath",
+        );
+    }
 }
 
 /// Scenes drawn (moments and study tables).
@@ -649,7 +670,7 @@ pub mod convergence {
         value: Col::f64(
             super::A_N,
             RATE,
-            "self variance rate at u' = 0 within half the window",
+            "self variance rate at u' = 0 within half the window (tolerance rows: of the launch pairs re-integrated)",
         ),
         stderr: Col::f64(
             "a_n_stderr",
@@ -661,7 +682,7 @@ pub mod convergence {
     pub const SHIFT: Pair = pair!(
         "shift",
         RATE,
-        "a_n minus the default's, per replicate, averaged",
+        "a_n minus the default's on the same launch pairs, per replicate, averaged",
         "standard error of the paired shift"
     );
     /// Shift over the default's error.

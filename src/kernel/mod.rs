@@ -28,6 +28,8 @@ pub struct Event {
     pub stratum: Stratum,
     /// Randomization (replicate) it belongs to.
     pub randomization: u32,
+    /// Index of its launch point within the randomization and stratum.
+    pub point: u32,
     /// Node of the offset rule within its launch pair (0 for sampled offsets:
     /// every event with node 0 is one drawn point).
     pub node: u32,
@@ -83,6 +85,7 @@ impl Event {
         Event {
             stratum: record.scene.stratum,
             randomization: record.randomization,
+            point: record.point,
             node: record.node,
             u2: record.scene.u2,
             u3: record.scene.u3,

@@ -245,9 +245,22 @@ impl Segment {
 
     /// `g` of a kick.
     fn gauge(&self, kick: f64) -> f64 {
-        match self.scale {
-            Scale::Logarithmic => kick.abs().ln(),
-            Scale::Linear => kick,
+        gauge(self.scale, kick)
+    }
+
+    /// What locating velocities and masses along the segment needs, computed once.
+    fn profile(&self) -> Profile {
+        let [g0, g1] = self.end_values();
+        let [first, second] = self.halves;
+        let log_ratio = (second / first).ln();
+        Profile {
+            matched: self.matched,
+            scale: self.scale,
+            g0,
+            linear: g1 - g0 - self.curvature,
+            curvature: self.curvature,
+            log_ratio,
+            ratio_m1: log_ratio.exp_m1(),
         }
     }
 
@@ -315,6 +328,8 @@ impl Segment {
             (low / bins.width).round() as i64,
             (high / bins.width).round() as i64,
         );
+        let profile = self.profile();
+        let fraction_at = |velocity: f64| profile.mass_fraction(profile.position(velocity));
         for bin in low_bin..=high_bin {
             let Some(k) = bins.index(bin as f64 * bins.width) else {
                 continue;
@@ -322,9 +337,7 @@ impl Segment {
             let centre = bins.centre(k);
             let lower = (centre - 0.5 * bins.width).max(low);
             let upper = (centre + 0.5 * bins.width).min(high);
-            let share = (self.mass_fraction(self.position(upper))
-                - self.mass_fraction(self.position(lower)))
-            .abs();
+            let share = (fraction_at(upper) - fraction_at(lower)).abs();
             part[k] += total * share;
         }
     }
@@ -347,14 +360,50 @@ impl Segment {
     }
 
     /// Position `t` in `[0, 1]` along the segment where the track has the
+    /// outgoing velocity `velocity` ([`Profile::position`]).
+    fn position(&self, velocity: f64) -> f64 {
+        self.profile().position(velocity)
+    }
+
+    /// Fraction of the segment's mass between its first node and position
+    /// `t` ([`Profile::mass_fraction`]).
+    fn mass_fraction(&self, t: f64) -> f64 {
+        self.profile().mass_fraction(t)
+    }
+}
+
+/// `g` of a kick on `scale`.
+fn gauge(scale: Scale, kick: f64) -> f64 {
+    match scale {
+        Scale::Logarithmic => kick.abs().ln(),
+        Scale::Linear => kick,
+    }
+}
+
+/// A segment's track and mass density in the form that locates velocities
+/// and masses along it: `g(t) = g0 + linear t + curvature t^2`, and the node
+/// masses' ratio `e^log_ratio`. Computed once per spread segment, it saves
+/// the logarithms of the ends and of the ratio at every bin edge (the same
+/// numbers, so the same bits).
+struct Profile {
+    matched: f64,
+    scale: Scale,
+    g0: f64,
+    linear: f64,
+    curvature: f64,
+    log_ratio: f64,
+    /// `e^log_ratio - 1`.
+    ratio_m1: f64,
+}
+
+impl Profile {
+    /// Position `t` in `[0, 1]` along the segment where the track has the
     /// outgoing velocity `velocity` (within the range of a monotone segment):
     /// the root in `[0, 1]` of `curvature t^2 + (g1 - g0 - curvature) t =
     /// g - g0`, in the form that stays accurate as the curvature vanishes.
     fn position(&self, velocity: f64) -> f64 {
-        let [g0, g1] = self.end_values();
-        let kick = velocity - self.matched;
-        let level = self.gauge(kick) - g0;
-        let linear = g1 - g0 - self.curvature;
+        let level = gauge(self.scale, velocity - self.matched) - self.g0;
+        let linear = self.linear;
         let root = (linear * linear + 4.0 * self.curvature * level)
             .max(0.0)
             .sqrt();
@@ -374,12 +423,11 @@ impl Segment {
     /// Fraction of the segment's mass between its first node and position
     /// `t`, the density interpolated exponentially between the node masses.
     fn mass_fraction(&self, t: f64) -> f64 {
-        let [first, second] = self.halves;
-        let log_ratio = (second / first).ln();
+        let log_ratio = self.log_ratio;
         if !log_ratio.is_finite() || log_ratio.abs() < 1e-9 {
             return t;
         }
-        (t * log_ratio).exp_m1() / log_ratio.exp_m1()
+        (t * log_ratio).exp_m1() / self.ratio_m1
     }
 }
 

@@ -101,8 +101,7 @@ impl<P: PairPotential> ClusterForces<'_, P> {
     /// Particle accelerations of the run with internal gaps `gaps` into `out`.
     fn particle_accelerations(&self, gaps: &[f64], out: &mut [f64]) {
         self.for_each_pair(gaps, |i, j, arc| {
-            let push = self.forces.potential.force(self.forces.chord(arc))
-                * (PI * arc / self.forces.circumference).cos();
+            let push = self.forces.push(arc);
             out[i] -= push;
             out[j] += push;
         });

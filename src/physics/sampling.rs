@@ -21,6 +21,8 @@
 //! density (balance heuristic). Coordinates come from Owen-scrambled Sobol'
 //! points, one independent randomization per replicate.
 
+use std::collections::HashMap;
+
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
@@ -339,6 +341,26 @@ impl OffsetIntegration {
     pub fn is_sampled(&self) -> bool {
         matches!(self, OffsetIntegration::Sampled)
     }
+}
+
+/// The leading `share` (in `(0, 1]`) of the launch points of every
+/// randomization and stratum, at least one each, in their order. The leading
+/// points of a scrambled Sobol' sequence are themselves a randomized
+/// quasi-Monte Carlo set (and those of a plain one a Monte Carlo sample), so
+/// estimates from the subset stay unbiased: a re-integration at other
+/// settings can afford a share, paired with the same share of the full set.
+pub fn leading_share(launches: Vec<LaunchPoint>, share: f64) -> Vec<LaunchPoint> {
+    let mut counts: HashMap<(u32, u32), u32> = HashMap::new();
+    for launch in &launches {
+        *counts
+            .entry((launch.randomization, launch.stratum.index()))
+            .or_default() += 1;
+    }
+    let kept = |launch: &LaunchPoint| {
+        let count = counts[&(launch.randomization, launch.stratum.index())];
+        launch.point < ((f64::from(count) * share).ceil() as u32).max(1)
+    };
+    launches.into_iter().filter(kept).collect()
 }
 
 /// One sampled launch pair with its place in the point set: what the

@@ -6,12 +6,14 @@
 //! store holds an intact artifact under that key (checked down to its file
 //! hashes) it is fresh, otherwise it is computed and committed atomically.
 
-use std::collections::BTreeMap;
+use std::cell::RefCell;
+use std::collections::{BTreeMap, VecDeque};
 use std::io::{ErrorKind, IsTerminal, Write};
 use std::ops::Range;
 use std::path::Path;
 use std::time::Instant;
 
+use arrow::array::RecordBatch;
 use indicatif::{ProgressBar, ProgressStyle};
 
 use super::key::{InputRecord, changed_params, sha256_hex, stage_key};
@@ -283,6 +285,7 @@ pub fn run(
     let mut resolved: BTreeMap<InstanceId, Manifest> = BTreeMap::new();
     let mut reports = Vec::new();
     let sharding = options.sharding;
+    let decoded = DecodedTables::default();
     for stage in stages {
         let id = stage.id();
         let shardable = stage.shard_units() > 0;
@@ -332,6 +335,7 @@ pub fn run(
                     stage: stage.as_ref(),
                     resolved: &resolved,
                     options,
+                    decoded: &decoded,
                 };
                 match sharding.task.filter(|_| shardable) {
                     Some(index) => Action::Shard {
@@ -409,12 +413,57 @@ fn progress_for(stage: &dyn Stage, verbosity: Verbosity) -> Progress {
     Progress { bar: Some(bar) }
 }
 
+/// Tables decoded during one run, by the SHA-256 of their file's bytes: a
+/// table that several stages read (a potential's events feed its kernel and
+/// moments at every `u'` and density) is hashed and decoded once. The most
+/// recently read are kept, up to [`DECODED_BUDGET`] bytes in all. Only bytes
+/// that matched their manifest's hash are decoded, so a hit is such bytes.
+#[derive(Default)]
+struct DecodedTables {
+    recent: RefCell<VecDeque<(String, RecordBatch)>>,
+}
+
+/// Memory the decoded tables of a run may keep: a few event sets of the
+/// default study (~300 MB each).
+const DECODED_BUDGET: usize = 1 << 30;
+
+impl DecodedTables {
+    /// The table of `file` in `dir`: kept, or read, checked and decoded.
+    fn get(
+        &self,
+        id: &InstanceId,
+        dir: &Path,
+        file: &FileRecord,
+    ) -> Result<RecordBatch, ExecError> {
+        let mut recent = self.recent.borrow_mut();
+        if let Some(at) = recent.iter().position(|(sha, _)| sha == &file.sha256) {
+            let entry = recent.remove(at).expect("position is inside");
+            recent.push_front(entry.clone());
+            return Ok(entry.1);
+        }
+        let bytes = read_checked(id, dir, file)?;
+        let (batch, _) =
+            read_parquet_bytes(&file.name, bytes).map_err(|source| ExecError::Input {
+                id: id.clone(),
+                source,
+            })?;
+        recent.push_front((file.sha256.clone(), batch.clone()));
+        let mut kept = 0;
+        recent.retain(|(_, table)| {
+            kept += table.get_array_memory_size();
+            kept <= DECODED_BUDGET
+        });
+        Ok(batch)
+    }
+}
+
 /// Reads the input tables of `stage`, hashing each file's bytes against its
 /// manifest before decoding them: nothing damaged since it was checked is used.
 fn load_inputs(
     store: &Store,
     stage: &dyn Stage,
     resolved: &BTreeMap<InstanceId, Manifest>,
+    decoded: &DecodedTables,
 ) -> Result<Vec<Input>, ExecError> {
     let id = stage.id();
     stage
@@ -425,12 +474,7 @@ fn load_inputs(
             let dir = store.artifact_dir(&input.stage, &manifest.key);
             let mut tables = BTreeMap::new();
             for file in manifest.files.iter().filter(|f| is_table_file(&f.name)) {
-                let bytes = read_checked(&id, &dir, file)?;
-                let (batch, _) =
-                    read_parquet_bytes(&file.name, bytes).map_err(|source| ExecError::Input {
-                        id: id.clone(),
-                        source,
-                    })?;
+                let batch = decoded.get(&id, &dir, file)?;
                 tables.insert(file.name.trim_end_matches(".parquet").to_string(), batch);
             }
             Ok(Input { id: input, tables })
@@ -491,6 +535,7 @@ struct Job<'a> {
     stage: &'a dyn Stage,
     resolved: &'a BTreeMap<InstanceId, Manifest>,
     options: &'a RunOptions,
+    decoded: &'a DecodedTables,
 }
 
 impl Job<'_> {
@@ -513,7 +558,7 @@ impl Job<'_> {
                 source,
             })?
         } else {
-            let loaded = load_inputs(self.store, self.stage, self.resolved)?;
+            let loaded = load_inputs(self.store, self.stage, self.resolved, self.decoded)?;
             self.produce(self.stage.tables(), |progress| {
                 self.stage.run(&loaded, progress)
             })?
@@ -583,7 +628,7 @@ impl Job<'_> {
         );
         let started = Instant::now();
         let mut staging = self.store.begin(&shard_id.stage, &shard.key)?;
-        let loaded = load_inputs(self.store, self.stage, self.resolved)?;
+        let loaded = load_inputs(self.store, self.stage, self.resolved, self.decoded)?;
         let tables = self.produce(self.stage.shard_tables(), |progress| {
             self.stage.run_shard(&loaded, units.clone(), progress)
         })?;

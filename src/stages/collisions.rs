@@ -16,7 +16,7 @@ use serde_json::Value;
 use crate::config::CollisionsParams;
 use crate::contract::{self, Rows};
 use crate::kernel::Event;
-use crate::physics::sampling::{SceneRecord, Stratum};
+use crate::physics::sampling::{SceneRecord, Stratum, leading_share};
 use crate::pipeline::{Input, InstanceId, Progress, Stage, StageError, Table};
 use crate::stages::launches::{LaunchesStage, read_launches};
 
@@ -95,7 +95,10 @@ impl Stage for CollisionsStage {
         randomizations: Range<u32>,
         progress: &Progress,
     ) -> Result<Vec<Table>, StageError> {
-        let launches = read_launches(&inputs[0], randomizations)?;
+        let mut launches = read_launches(&inputs[0], randomizations)?;
+        if let Some(share) = self.params.launch_share {
+            launches = leading_share(launches, share);
+        }
         progress.set_total(launches.len() as u64);
         let rows = self.params.sampling.integrate_launches(
             &launches,
@@ -136,6 +139,7 @@ pub fn read_events(input: &Input) -> Result<Vec<Event>, StageError> {
     let batch = TABLE.of(input)?;
     let randomization = RANDOMIZATION.read(batch)?;
     let stratum = STRATUM.read(batch)?;
+    let point = POINT.read(batch)?;
     let node = NODE.read(batch)?;
     let (u2, u3) = (U2.read(batch)?, U3.read(batch)?);
     let offset = ARRIVAL_OFFSET.read(batch)?;
@@ -155,6 +159,7 @@ pub fn read_events(input: &Input) -> Result<Vec<Event>, StageError> {
             Ok(Event {
                 stratum,
                 randomization: randomization[k],
+                point: point[k],
                 node: node[k],
                 u2: u2[k],
                 u3: u3[k],

@@ -2,11 +2,15 @@
 //! settings, to show the defaults are converged rather than assert it: the
 //! density `rho l` of the literal algorithm's `exp(-r |delay|)` (a physical
 //! finite-density correction, tabulated), a bound on the arrival offset
-//! `|tau| <= B T`, the integrator tolerance (scenes re-integrated at the same
-//! points), and the bin width when `a_n` is taken from the binned kernel.
+//! `|tau| <= B T`, the integrator tolerance (the leading share of every
+//! randomization's and stratum's launch pairs re-integrated, compared with
+//! the default on the same pairs), and the bin width when `a_n` is taken from
+//! the binned kernel.
 //! Every shift is a per-replicate difference against the default, so the
 //! shared randomness cancels and its standard error says whether it is resolved;
 //! `shift_over_error` compares it with the default's statistical error.
+
+use std::collections::HashSet;
 
 use serde_json::Value;
 
@@ -59,11 +63,29 @@ impl ConvergenceStage {
     }
 }
 
-/// One row: a setting, its `a_n` per replicate, compared with the default's.
+/// One row: a setting, its `a_n` per replicate, and the default's on the
+/// same launch pairs (all of them, or the share a tolerance re-integrates).
 struct Row {
     parameter: &'static str,
     value: f64,
     replicates: Vec<f64>,
+    default: Vec<f64>,
+}
+
+/// The events of `events` whose launch pair (randomization, stratum, point)
+/// is among those of `subset`.
+fn same_launches(events: &[Event], subset: &[Event]) -> Vec<Event> {
+    let pairs: HashSet<(u32, u32, u32)> = subset.iter().map(launch_of).collect();
+    events
+        .iter()
+        .filter(|e| pairs.contains(&launch_of(e)))
+        .copied()
+        .collect()
+}
+
+/// The launch pair of an event.
+fn launch_of(event: &Event) -> (u32, u32, u32) {
+    (event.randomization, event.stratum.index(), event.point)
 }
 
 impl Stage for ConvergenceStage {
@@ -75,7 +97,7 @@ impl Stage for ConvergenceStage {
     }
 
     fn version(&self) -> u32 {
-        3
+        4
     }
 
     fn params(&self) -> Value {
@@ -111,6 +133,7 @@ impl Stage for ConvergenceStage {
             parameter: DEFAULT,
             value: f64::NAN,
             replicates: baseline.clone(),
+            default: baseline.clone(),
         }];
         for &density in &self.params.densities {
             let dense = Target { density, ..target };
@@ -118,6 +141,7 @@ impl Stage for ConvergenceStage {
                 parameter: DENSITY,
                 value: density,
                 replicates: self.self_variance(&events, &draws, &dense),
+                default: baseline.clone(),
             });
         }
         progress.advance(1);
@@ -133,15 +157,18 @@ impl Stage for ConvergenceStage {
                 parameter: OFFSET_BOUND,
                 value: bound,
                 replicates: self.self_variance(&kept, &draws, &target),
+                default: baseline.clone(),
             });
         }
         progress.advance(1);
         for (input, &tolerance) in inputs[1..].iter().zip(&self.params.tolerances) {
-            let (events, draws, _) = collision_events(input)?;
+            let (again, again_draws, _) = collision_events(input)?;
+            let same = same_launches(&events, &again);
             rows.push(Row {
                 parameter: TOLERANCE,
                 value: tolerance,
-                replicates: self.self_variance(&events, &draws, &target),
+                replicates: self.self_variance(&again, &again_draws, &target),
+                default: self.self_variance(&same, &Draws::count(&same), &target),
             });
         }
         progress.advance(1);
@@ -150,6 +177,7 @@ impl Stage for ConvergenceStage {
                 parameter: BIN_WIDTH,
                 value: width,
                 replicates: self.binned_self_variance(&events, &draws, width),
+                default: baseline.clone(),
             });
         }
         progress.advance(1);
@@ -166,7 +194,7 @@ fn convergence_table(rows: &[Row], baseline: &[f64]) -> Result<Table, StageError
             let differences: Vec<f64> = row
                 .replicates
                 .iter()
-                .zip(baseline)
+                .zip(&row.default)
                 .map(|(a, b)| a - b)
                 .collect();
             (row, Estimate::from_replicates(&differences))

@@ -1,17 +1,15 @@
 //! `fit`: the shape `g(x) = alpha |x|^-beta exp(-x^2 / 2 sigma^2)` of the kernel
 //! near `u'` (physics.md §5) at one `u'` and density, fitted to the mean kernel
 //! with weights `1 / G_stderr^2` over a configurable range of `|u - u'|`;
-//! standard errors and covariance from refitting every randomization alone.
+//! standard errors and covariance from refitting every randomization alone
+//! (the `kernel` stage's `kernel_replicates` table).
 
 use serde_json::Value;
 
-use super::collisions::CollisionsStage;
-use super::kernel::{input_events, target_instance, target_of};
-use crate::binning::Bins;
+use super::kernel::{read_replicates, target_instance};
 use crate::config::{FitParams, KernelParams};
 use crate::contract::{self, Rows};
 use crate::kernel::fit::{FIT_GROUPS, KernelFit, Shape, fit_kernel};
-use crate::kernel::{Histogram, histograms};
 use crate::pipeline::{Input, InstanceId, Progress, Stage, StageError, Table};
 use crate::stats::Estimate;
 
@@ -32,18 +30,13 @@ impl FitStage {
     }
 }
 
-/// `G` per bin: self plus bath over the bin width.
-fn kernel_of(histogram: &Histogram, bins: &Bins) -> Vec<f64> {
-    histogram.total().iter().map(|v| v / bins.width).collect()
-}
-
 impl Stage for FitStage {
     fn id(&self) -> InstanceId {
         FitStage::instance(&self.params.kernel)
     }
 
     fn version(&self) -> u32 {
-        4
+        5
     }
 
     fn params(&self) -> Value {
@@ -55,8 +48,9 @@ impl Stage for FitStage {
     }
 
     fn inputs(&self) -> Vec<InstanceId> {
-        vec![CollisionsStage::instance(
-            &self.params.kernel.potential.id(),
+        vec![InstanceId::new(
+            contract::kernel::STAGE,
+            &target_instance(&self.params.kernel),
         )]
     }
 
@@ -65,14 +59,10 @@ impl Stage for FitStage {
     }
 
     fn run(&self, inputs: &[Input], progress: &Progress) -> Result<Vec<Table>, StageError> {
-        let kernel = &self.params.kernel;
-        let (events, draws, _) = input_events(inputs)?;
-        let bins = Bins::for_window(kernel.window, kernel.bin_width);
-        let fine: Vec<Vec<f64>> = histograms(&events, &target_of(kernel), &bins, &draws)
-            .iter()
-            .map(|h| kernel_of(h, &bins))
-            .collect();
-        let offsets: Vec<f64> = (0..bins.len()).map(|k| bins.centre(k)).collect();
+        let input = inputs
+            .first()
+            .ok_or_else(|| StageError::Input("no kernel input".into()))?;
+        let (fine, offsets) = read_replicates(input)?;
         let (low, high) = (self.params.range_min, self.params.range_max);
         let fit = fit_kernel(&fine, &offsets, (low, high), FIT_GROUPS);
         progress.advance(1);

@@ -74,7 +74,7 @@ impl Stage for KernelStage {
     }
 
     fn version(&self) -> u32 {
-        2
+        3
     }
 
     fn params(&self) -> Value {
@@ -82,7 +82,10 @@ impl Stage for KernelStage {
     }
 
     fn tables(&self) -> &'static [&'static str] {
-        &[contract::kernel::TABLE.name]
+        &[
+            contract::kernel::TABLE.name,
+            contract::kernel::replicates::TABLE.name,
+        ]
     }
 
     fn inputs(&self) -> Vec<InstanceId> {
@@ -113,6 +116,53 @@ impl Stage for KernelStage {
             .table(&TABLE)?
             .with_metadata("ternary.events", events.len().to_string())
             .with_metadata("ternary.failed_events", failed.to_string());
-        Ok(vec![table])
+        Ok(vec![table, replicates_table(&replicates, &bins)?])
     }
+}
+
+/// `G` of every randomization alone: one row per randomization and bin.
+fn replicates_table(replicates: &[Histogram], bins: &Bins) -> Result<Table, StageError> {
+    use contract::kernel::replicates::*;
+    let rows: Vec<(u32, usize)> = (0..replicates.len() as u32)
+        .flat_map(|r| (0..bins.len()).map(move |k| (r, k)))
+        .collect();
+    Ok(Rows::new(&rows)
+        .with(contract::kernel::DU, |&(_, k)| bins.centre(k))
+        .with(RANDOMIZATION, |&(r, _)| r)
+        .with(G, |&(r, k)| {
+            let histogram = &replicates[r as usize];
+            (histogram.self_part[k] + histogram.bath_part[k]) / bins.width
+        })
+        .table(&TABLE)?)
+}
+
+/// The kernel of every randomization from a `kernel` input's replicates
+/// table, and the bins' centres relative to `u'`.
+pub fn read_replicates(input: &Input) -> Result<(Vec<Vec<f64>>, Vec<f64>), StageError> {
+    use contract::kernel::replicates::*;
+    let batch = TABLE.of(input)?;
+    let (du, randomization, g) = (
+        contract::kernel::DU.read(batch)?,
+        RANDOMIZATION.read(batch)?,
+        G.read(batch)?,
+    );
+    let mut kernels: Vec<Vec<f64>> = Vec::new();
+    let mut offsets = Vec::new();
+    for k in 0..batch.num_rows() {
+        let r = randomization[k] as usize;
+        if r >= kernels.len() {
+            kernels.resize(r + 1, Vec::new());
+        }
+        kernels[r].push(g[k]);
+        if r == 0 {
+            offsets.push(du[k]);
+        }
+    }
+    if kernels.iter().any(|kernel| kernel.len() != offsets.len()) {
+        return Err(StageError::Input(format!(
+            "{}: randomizations with different bins",
+            input.id
+        )));
+    }
+    Ok((kernels, offsets))
 }

@@ -339,7 +339,7 @@ impl Stage for MdStage {
     }
 
     fn version(&self) -> u32 {
-        7
+        8
     }
 
     fn params(&self) -> Value {
