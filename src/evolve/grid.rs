@@ -11,6 +11,19 @@
 
 use crate::physics::launch::thermal_density;
 
+/// Where a point mass at a fixed offset from a node is deposited: its
+/// offset in steps, the nearest node's and the three quadratic Lagrange weights
+/// around that one. Computed once, it serves every node of a column sweep.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Stencil {
+    /// Offset in node units.
+    shift: f64,
+    /// Nearest node, relative.
+    centre: i64,
+    /// Weights of the nodes `centre - 1`, `centre`, `centre + 1`.
+    weights: [f64; 3],
+}
+
 /// Nodes `u_i = (i - half_nodes) * step`, `i = 0 ..= 2 half_nodes`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct VelocityGrid {
@@ -93,6 +106,34 @@ impl VelocityGrid {
         }
     }
 
+    /// The stencil of a point mass `x` (`v_th`) away from a node.
+    pub fn stencil(&self, x: f64) -> Stencil {
+        let shift = x / self.step;
+        let centre = shift.round();
+        let d = shift - centre;
+        Stencil {
+            shift,
+            centre: centre as i64,
+            weights: [0.5 * (d * d - d), 1.0 - d * d, 0.5 * (d * d + d)],
+        }
+    }
+
+    /// Adds `scale` times the point mass of `stencil` seen from node `node`:
+    /// [`VelocityGrid::deposit`] of it, whose weights inside the grid depend
+    /// on the offset alone (the same three moments), and which near the ends,
+    /// where it reflects, is called.
+    pub fn deposit_stencil(&self, column: &mut [f64], node: usize, stencil: &Stencil, scale: f64) {
+        let k = node as i64 + stencil.centre;
+        if k < 1 || k + 1 >= self.len() as i64 {
+            self.deposit(column, node as f64 + stencil.shift, [1.0, 0.0, 0.0], scale);
+            return;
+        }
+        let k = k as usize;
+        for (slot, weight) in column[k - 1..=k + 1].iter_mut().zip(stencil.weights) {
+            *slot += scale * weight;
+        }
+    }
+
     /// Adds a point mass `scale` at velocity `u`.
     pub fn deposit_point(&self, column: &mut [f64], u: f64, scale: f64) {
         self.deposit(column, self.position(u), [1.0, 0.0, 0.0], scale);
@@ -154,6 +195,34 @@ mod tests {
             assert!((moments[0] - 2.5).abs() < 1e-13, "{u}: {moments:?}");
             assert!((moments[1] - 2.5 * u).abs() < 1e-13, "{u}: {moments:?}");
             assert!((moments[2] - 2.5 * u * u).abs() < 1e-13, "{u}: {moments:?}");
+        }
+    }
+
+    /// A stencil deposits the three moments of its point mass from every
+    /// node, inside the grid and where it reflects at the ends.
+    #[test]
+    fn stencils_keep_three_moments_from_every_node() {
+        let grid = VelocityGrid::covering(1.0, 0.1);
+        for x in [-0.349, -0.05, 0.0, 0.031, 0.05, 0.27] {
+            let stencil = grid.stencil(x);
+            for node in 0..grid.len() {
+                let mut column = vec![0.0; grid.len()];
+                grid.deposit_stencil(&mut column, node, &stencil, 2.5);
+                let mut direct = vec![0.0; grid.len()];
+                let position = node as f64 + x / grid.step;
+                grid.deposit(&mut direct, position, [1.0, 0.0, 0.0], 2.5);
+                let u = grid.velocity(node) + x;
+                let m = grid.moments(&column, 0.0, f64::INFINITY);
+                assert!((m[0] - 2.5).abs() < 1e-13, "{x} from {node}: {m:?}");
+                let centre = node as i64 + (x / grid.step).round() as i64;
+                if centre >= 1 && centre + 2 <= grid.len() as i64 {
+                    assert!((m[1] - 2.5 * u).abs() < 1e-13, "{x} from {node}: {m:?}");
+                    assert!((m[2] - 2.5 * u * u).abs() < 1e-13, "{x} from {node}: {m:?}");
+                } else {
+                    let apart = column.iter().zip(&direct).map(|(a, b)| (a - b).abs());
+                    assert!(apart.fold(0.0, f64::max) < 1e-13, "{x} from {node}");
+                }
+            }
         }
     }
 

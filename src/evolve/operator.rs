@@ -14,7 +14,7 @@
 
 use rayon::prelude::*;
 
-use super::grid::VelocityGrid;
+use super::grid::{Stencil, VelocityGrid};
 use super::propagate::Generator;
 use crate::kernel::{Contribution, Draws, Event, images};
 
@@ -37,20 +37,25 @@ struct Placed {
     /// `exp(-((u' + u2)^2 + (u' + u3)^2) / 2)`.
     factor: f64,
     launches: [f64; 2],
-    incoming: [f64; 3],
-    outgoing: [f64; 3],
+    /// Per sorted rank, where its incoming and outgoing velocities (relative
+    /// to `u'`) are deposited; `None` when the rank's velocity is unchanged.
+    moves: [Option<[Stencil; 2]>; 3],
     self_rank: usize,
 }
 
 impl Placed {
-    fn new(image: &Contribution, replicate: usize, scale: f64) -> Placed {
+    fn new(image: &Contribution, replicate: usize, scale: f64, grid: &VelocityGrid) -> Placed {
         let [_, u2, u3] = image.incoming;
+        let incoming = image.sorted_incoming();
+        let moves = std::array::from_fn(|rank| {
+            let (from, to) = (incoming[rank], image.outgoing[rank]);
+            (from != to).then(|| [grid.stencil(from), grid.stencil(to)])
+        });
         Placed {
             replicate,
             factor: image.weight * scale * (u2 * u3).abs() / (2.0 * std::f64::consts::PI),
             launches: [u2, u3],
-            incoming: image.sorted_incoming(),
-            outgoing: image.outgoing,
+            moves,
             self_rank: image.self_rank,
         }
     }
@@ -70,19 +75,17 @@ impl ColumnSums {
         if weight == 0.0 {
             return;
         }
-        let at = |x: f64| node as f64 + x / grid.step;
-        for rank in 0..3 {
-            let (from, to) = (placed.incoming[rank], placed.outgoing[rank]);
-            if from == to {
+        for (rank, moves) in placed.moves.iter().enumerate() {
+            let Some([from, to]) = moves else {
                 continue;
-            }
-            let moves = |column: &mut Vec<f64>| {
-                grid.deposit(column, at(from), [1.0, 0.0, 0.0], -weight);
-                grid.deposit(column, at(to), [1.0, 0.0, 0.0], weight);
             };
-            moves(&mut self.full[placed.replicate]);
+            let deposit = |column: &mut Vec<f64>| {
+                grid.deposit_stencil(column, node, from, -weight);
+                grid.deposit_stencil(column, node, to, weight);
+            };
+            deposit(&mut self.full[placed.replicate]);
             if rank == placed.self_rank {
-                moves(&mut self.tagged[placed.replicate]);
+                deposit(&mut self.tagged[placed.replicate]);
             }
         }
     }
@@ -111,7 +114,8 @@ pub fn kernel_generators(
             .par_iter()
             .flat_map_iter(|event| {
                 let (replicate, scale) = (event.randomization as usize, draws.scale(event));
-                images(event, kick_floor).map(move |image| Placed::new(&image, replicate, scale))
+                images(event, kick_floor)
+                    .map(move |image| Placed::new(&image, replicate, scale, grid))
             })
             .collect();
         columns

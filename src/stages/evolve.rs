@@ -484,7 +484,7 @@ impl Stage for EvolveStage {
     }
 
     fn version(&self) -> u32 {
-        3
+        4
     }
 
     fn params(&self) -> Value {
