@@ -171,25 +171,28 @@ fn largest_share(values: &[f64]) -> f64 {
 
 /// Detailed balance between `a` and `b = a + steps bins.width` from the
 /// self kernel's bins `bins` (around each `u'`; `steps` off the centre):
-/// `G_self(a -> b)` at `target(a)` against `G_self(b -> a)` at `target(b)`,
-/// per replicate, in `rho^2 l v_th / v_th`.
+/// `G_self(a -> b)` at `target(a)` from the events `there` against `G_self(b
+/// -> a)` at `target(b)` from `back`, per replicate, in `rho^2 l v_th /
+/// v_th`. `there` and `back` are the events, or the feeders
+/// ([`self_bin_feeders`](super::self_bin_feeders)) of the bins `half_bins + steps` and `half_bins -
+/// steps`; `draws` counts the whole set.
 pub fn balance_between(
-    events: &[Event],
+    (there, back): (&[Event], &[Event]),
     draws: &Draws,
     bins: &Bins,
     (a, steps): (f64, usize),
     target: impl Fn(f64) -> Target,
 ) -> Balance {
     let b = a + steps as f64 * bins.width;
-    let kernel = |from: f64, k: usize| -> Vec<f64> {
+    let kernel = |events: &[Event], from: f64, k: usize| -> Vec<f64> {
         self_bin(events, &target(from), bins, k, draws)
             .iter()
             .map(|v| v / bins.width)
             .collect()
     };
-    let there = kernel(a, bins.half_bins + steps);
-    let back = kernel(b, bins.half_bins - steps);
-    detailed_balance(a, b, &there, &back)
+    let forward = kernel(there, a, bins.half_bins + steps);
+    let backward = kernel(back, b, bins.half_bins - steps);
+    detailed_balance(a, b, &forward, &backward)
 }
 
 /// Detailed balance from the self kernel per replicate: `forward` =

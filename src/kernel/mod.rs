@@ -223,6 +223,26 @@ pub fn self_bin(
     )
 }
 
+/// The events that can feed bin `k` of [`self_bin`] at any target of kick
+/// floor `kick_floor`, in their order: where the bin takes point masses
+/// (sampled scenes, or a bin in the collisions' core), those with an image
+/// whose special particle lands in it (a self kick does not depend on `u'`),
+/// so [`self_bin`] of them is the same sum, bit for bit; all events where the
+/// bin takes the tails' spread measure. A sweep over `u'` weighs only these.
+pub fn self_bin_feeders(events: &[Event], bins: &Bins, k: usize, kick_floor: f64) -> Vec<Event> {
+    let in_core = bins.centre(k).abs() - 0.5 * bins.width >= segments::CORE_KICK;
+    if integrates_offsets(events) && !in_core {
+        return events.to_vec();
+    }
+    events
+        .iter()
+        .filter(|event| {
+            images(event, kick_floor).any(|image| bins.index(image.self_kick()) == Some(k))
+        })
+        .copied()
+        .collect()
+}
+
 /// The `u'`-independent geometry of an event: the event itself and its mirror
 /// image, each with weight `1 / (proposal density * images)`. For the
 /// same-side stratum the mirror image stands for the both-negative sign

@@ -18,8 +18,8 @@ use super::moments::{MomentsStage, self_variance_at};
 use crate::binning::Bins;
 use crate::config::{CollisionsParams, KernelParams, MdParams, PAPER_TRUNCATION, Study};
 use crate::contract::{self, Rows};
-use crate::kernel::Target;
 use crate::kernel::equilibrium::{balance_between, self_rates};
+use crate::kernel::{Target, self_bin_feeders};
 use crate::physics::potential::Potential;
 use crate::physics::units::PhysicalGas;
 use crate::pipeline::{Input, InstanceId, Progress, Stage, StageError, Table};
@@ -430,7 +430,11 @@ impl Check {
                     u_prime,
                     ..target_of(kernel)
                 };
-                let balance = balance_between(&events, &draws, &bins, (*a, *steps), target);
+                let kick_floor = target_of(kernel).kick_floor;
+                let fed = [bins.half_bins + steps, bins.half_bins - steps]
+                    .map(|k| self_bin_feeders(&events, &bins, k, kick_floor));
+                let balance =
+                    balance_between((&fed[0], &fed[1]), &draws, &bins, (*a, *steps), target);
                 let note = format!(
                     "launches drawn for u' = {a} ({id}), bins of {bin_width}, error paired over the randomizations; the sweep's own row (its launch mixture): {:.3} +- {:.3}; f0(b)/f0(a) = {:.4} (detailed balance)",
                     grid.mean, grid.stderr, balance.expected_ratio

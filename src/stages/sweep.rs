@@ -8,6 +8,8 @@
 //! arithmetic are `kernel::equilibrium`'s; the table gives both sides of
 //! each and their difference.
 
+use std::collections::HashMap;
+
 use rayon::prelude::*;
 use serde_json::Value;
 
@@ -20,7 +22,7 @@ use crate::kernel::equilibrium::{
     Balance, FokkerPlanckPoint, JointBalance, SelfRates, balance_between, fokker_planck_check,
     joint_balance, self_rates,
 };
-use crate::kernel::{Draws, Event, Target};
+use crate::kernel::{Draws, Event, Target, self_bin_feeders};
 use crate::pipeline::{Input, InstanceId, Progress, Stage, StageError, Table};
 
 /// The `sweep` stage for one potential.
@@ -91,6 +93,20 @@ impl SweepStage {
             .copied()
             .fold(0.0, f64::max);
         let bins = Bins::for_window(2.0 * largest + 4.0 * width, width);
+        // The self kicks landing in a bin do not depend on u': each bin's
+        // feeders are found once for the whole grid.
+        let kick_floor = self.params.kernel.kick_floor;
+        let feeders: HashMap<usize, Vec<Event>> = self
+            .params
+            .balance_separations
+            .iter()
+            .flat_map(|&separation| {
+                let steps = (separation / width).round() as usize;
+                [bins.half_bins + steps, bins.half_bins - steps]
+            })
+            .map(|k| (k, self_bin_feeders(events, &bins, k, kick_floor)))
+            .collect();
+        let feeders = &feeders;
         let rows: Vec<(f64, f64, Balance)> = grid
             .par_iter()
             .flat_map_iter(|&a| {
@@ -99,8 +115,12 @@ impl SweepStage {
                     .iter()
                     .map(move |&separation| {
                         let steps = (separation / width).round() as usize;
+                        let fed = (
+                            feeders[&(bins.half_bins + steps)].as_slice(),
+                            feeders[&(bins.half_bins - steps)].as_slice(),
+                        );
                         let balance =
-                            balance_between(events, draws, &bins, (a, steps), |u| self.target(u));
+                            balance_between(fed, draws, &bins, (a, steps), |u| self.target(u));
                         (a, a + steps as f64 * width, balance)
                     })
             })
