@@ -152,8 +152,9 @@ pub struct ClusterRing<P> {
     forces: RingForces<P>,
     reach: usize,
     cutoff: f64,
-    /// Pairs closer than this are colliding (`|U| > COLLISION_LEVEL` beyond it never).
-    collision_range: f64,
+    /// Pairs closer than this arc (`l`) are colliding: their chord is within
+    /// the range beyond which `|U| <= COLLISION_LEVEL`.
+    collision_arc: f64,
     tolerance: f64,
     /// `g_k = s_(k+1) - s_k`, the last wrapping around.
     pub gaps: Vec<f64>,
@@ -188,7 +189,7 @@ impl<P: PairPotential> ClusterRing<P> {
         let state = RingState::new(positions, velocities, forces.circumference);
         ClusterRing {
             cutoff: forces.potential.range(tail_level),
-            collision_range: forces.potential.range(COLLISION_LEVEL),
+            collision_arc: forces.arc_within(forces.potential.range(COLLISION_LEVEL)),
             forces,
             reach,
             tolerance,
@@ -299,7 +300,7 @@ impl<P: PairPotential> ClusterRing<P> {
             momentum: self.velocities.iter().sum(),
         };
         let n = self.gaps.len();
-        let (forces_copy, collision_range) = (self.forces, self.collision_range);
+        let collision_arc = self.collision_arc;
         let momentum = state.momentum;
         let members: Vec<usize> = (0..n).collect();
         let lineages = &mut self.lineages;
@@ -312,9 +313,7 @@ impl<P: PairPotential> ClusterRing<P> {
             max_steps,
             |gaps, rates| {
                 let velocities = ring_velocities(rates, momentum);
-                lineages.observe(&members, &velocities, |k| {
-                    touching(&forces_copy, collision_range, gaps[k])
-                });
+                lineages.observe(&members, &velocities, |k| gaps[k] < collision_arc);
             },
         )?;
         self.add_work(work, n * self.reach);
@@ -345,10 +344,8 @@ impl<P: PairPotential> ClusterRing<P> {
         };
         let n = self.gaps.len();
         let bounds = self.speed_bounds(runs, &cluster);
-        let mut member = vec![false; n];
         let mut internal = vec![false; n];
         for run in runs {
-            run.iter().for_each(|&p| member[p] = true);
             run[..run.len() - 1]
                 .iter()
                 .for_each(|&p| internal[p] = true);
@@ -403,7 +400,7 @@ impl<P: PairPotential> ClusterRing<P> {
         };
         let job = RunJob {
             run,
-            collision_range: self.collision_range,
+            collision_arc: self.collision_arc,
             centre,
             duration: integrated,
             tolerance: self.tolerance,
@@ -534,7 +531,7 @@ fn centred_partial_sums(values: &[f64]) -> Vec<f64> {
 /// One run's integration over a macro step.
 struct RunJob<'a> {
     run: &'a [usize],
-    collision_range: f64,
+    collision_arc: f64,
     centre: f64,
     duration: f64,
     tolerance: f64,
@@ -559,10 +556,16 @@ impl RunJob<'_> {
             self.tolerance,
             self.max_steps,
             |gaps, rates| {
-                let velocities = run_velocities(rates, self.centre);
-                lineages.observe(self.run, &velocities, |k| {
-                    touching(cluster.forces, self.collision_range, gaps[k])
-                });
+                let mut stack = [0.0; STACK_PARTICLES];
+                let mut heap = Vec::new();
+                let velocities: &mut [f64] = if rates.len() < STACK_PARTICLES {
+                    &mut stack[..=rates.len()]
+                } else {
+                    heap.resize(rates.len() + 1, 0.0);
+                    &mut heap
+                };
+                run_velocities(rates, self.centre, velocities);
+                lineages.observe(self.run, velocities, |k| gaps[k] < self.collision_arc);
             },
         )?;
         Ok((g.components().to_vec(), w.components().to_vec(), work))
@@ -574,19 +577,20 @@ fn fixed<const D: usize>(values: &[f64]) -> [f64; D] {
     std::array::from_fn(|k| values[k])
 }
 
-/// Whether a pair at arc separation `gap` is colliding: closer than the
-/// separation `range` beyond which `|U| <= COLLISION_LEVEL` (a distance, not
-/// the energy: a Lennard-Jones pair crossing `U = 0` mid-collision stays in).
-fn touching<P: PairPotential>(forces: &RingForces<P>, range: f64, gap: f64) -> bool {
-    forces.chord(gap) < range
-}
-
-/// Velocities of a run from its gap rates and centre-of-mass velocity.
-fn run_velocities(rates: &[f64], centre: f64) -> Vec<f64> {
-    centred_partial_sums(rates)
-        .iter()
-        .map(|offset| centre + offset)
-        .collect()
+/// Velocities of a run from its gap rates and centre-of-mass velocity, into
+/// `out` (one more than the rates): [`centred_partial_sums`] plus `centre`,
+/// without allocating (it runs after every step of every run).
+fn run_velocities(rates: &[f64], centre: f64, out: &mut [f64]) {
+    let mut sum = 0.0;
+    out[0] = 0.0;
+    for (slot, rate) in out[1..].iter_mut().zip(rates) {
+        sum += rate;
+        *slot = sum;
+    }
+    let mean = out.iter().sum::<f64>() / out.len() as f64;
+    for slot in out.iter_mut() {
+        *slot = centre + (*slot - mean);
+    }
 }
 
 /// Velocity labels and the collision groups that pass them on.

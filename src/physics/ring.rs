@@ -74,6 +74,17 @@ impl<P: PairPotential> RingForces<P> {
         self.circumference / PI * sine
     }
 
+    /// The arc separation (`l`) below which pairs are closer than the chord
+    /// `chord`: `(C/pi) asin(pi chord / C)`; unbounded when every chord is shorter.
+    pub fn arc_within(&self, chord: f64) -> f64 {
+        let sine = PI * chord / self.circumference;
+        if sine >= 1.0 {
+            f64::INFINITY
+        } else {
+            self.circumference / PI * sine.asin()
+        }
+    }
+
     /// Force along the ring that the leading particle of a pair `arc` apart
     /// exerts on the trailing one, negated: `f(d) cos(pi s / C)` with `d` the
     /// chord (`kT / l`).

@@ -339,7 +339,7 @@ impl Stage for MdStage {
     }
 
     fn version(&self) -> u32 {
-        8
+        9
     }
 
     fn params(&self) -> Value {
