@@ -201,8 +201,7 @@ pub fn self_bin(
         k, bins.half_bins,
         "the centre bin also holds the incoming velocity"
     );
-    let in_core = bins.centre(k).abs() - 0.5 * bins.width >= segments::CORE_KICK;
-    if integrates_offsets(events) && !in_core {
+    if !takes_point_masses(events, bins, k) {
         return node_histograms(events, target, bins, draws)
             .into_iter()
             .map(|h| h.self_part[k])
@@ -223,6 +222,14 @@ pub fn self_bin(
     )
 }
 
+/// `true` when bin `k` holds its events' point masses: sampled scenes, or
+/// quadrature nodes in a bin wholly in the collisions' core (`|u - u'| >=
+/// segments::CORE_KICK`); `false` where the tails' measure is spread between nodes.
+fn takes_point_masses(events: &[Event], bins: &Bins, k: usize) -> bool {
+    let in_core = bins.centre(k).abs() - 0.5 * bins.width >= segments::CORE_KICK;
+    in_core || !integrates_offsets(events)
+}
+
 /// The events that can feed bin `k` of [`self_bin`] at any target of kick
 /// floor `kick_floor`, in their order: where the bin takes point masses
 /// (sampled scenes, or a bin in the collisions' core), those with an image
@@ -230,8 +237,7 @@ pub fn self_bin(
 /// so [`self_bin`] of them is the same sum, bit for bit; all events where the
 /// bin takes the tails' spread measure. A sweep over `u'` weighs only these.
 pub fn self_bin_feeders(events: &[Event], bins: &Bins, k: usize, kick_floor: f64) -> Vec<Event> {
-    let in_core = bins.centre(k).abs() - 0.5 * bins.width >= segments::CORE_KICK;
-    if integrates_offsets(events) && !in_core {
+    if !takes_point_masses(events, bins, k) {
         return events.to_vec();
     }
     events

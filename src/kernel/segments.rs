@@ -347,7 +347,8 @@ impl Segment {
     /// closed under restriction), with the mass that part carries.
     fn restricted(&self, from: f64, to: f64) -> Segment {
         let [first, second] = self.halves;
-        let mass = (first + second) * (self.mass_fraction(to) - self.mass_fraction(from));
+        let profile = self.profile();
+        let mass = (first + second) * (profile.mass_fraction(to) - profile.mass_fraction(from));
         let ratio = (second / first).powf(to - from);
         let ratio = if ratio.is_finite() { ratio } else { 1.0 };
         Segment {
@@ -363,12 +364,6 @@ impl Segment {
     /// outgoing velocity `velocity` ([`Profile::position`]).
     fn position(&self, velocity: f64) -> f64 {
         self.profile().position(velocity)
-    }
-
-    /// Fraction of the segment's mass between its first node and position
-    /// `t` ([`Profile::mass_fraction`]).
-    fn mass_fraction(&self, t: f64) -> f64 {
-        self.profile().mass_fraction(t)
     }
 }
 

@@ -122,21 +122,29 @@ impl<P: PairPotential> ClusterForces<'_, P> {
 /// velocities on joining are asymptotic to this level).
 const COLLISION_LEVEL: f64 = 1e-8;
 
-/// Runs of up to this many particles keep their accelerations on the stack.
+/// Runs of up to this many particles keep their per-particle values on the stack.
 const STACK_PARTICLES: usize = 16;
+
+/// `m` zeroed per-particle slots: the start of `stack` for a run of up to
+/// [`STACK_PARTICLES`], else `heap` grown to `m` (allocation only for long runs).
+fn per_particle<'a>(
+    stack: &'a mut [f64; STACK_PARTICLES],
+    heap: &'a mut Vec<f64>,
+    m: usize,
+) -> &'a mut [f64] {
+    if m <= STACK_PARTICLES {
+        &mut stack[..m]
+    } else {
+        heap.resize(m, 0.0);
+        heap
+    }
+}
 
 impl<P: PairPotential, V: Vector> Acceleration<V> for ClusterForces<'_, P> {
     fn acceleration(&self, gaps: &V) -> V {
         let g = gaps.components();
-        let m = g.len() + 1;
-        let mut stack = [0.0; STACK_PARTICLES];
-        let mut heap = Vec::new();
-        let a: &mut [f64] = if m <= STACK_PARTICLES {
-            &mut stack[..m]
-        } else {
-            heap.resize(m, 0.0);
-            &mut heap
-        };
+        let (mut stack, mut heap) = ([0.0; STACK_PARTICLES], Vec::new());
+        let a = per_particle(&mut stack, &mut heap, g.len() + 1);
         self.particle_accelerations(g, a);
         let mut out = gaps.zeros_like();
         for (k, o) in out.components_mut().iter_mut().enumerate() {
@@ -517,15 +525,23 @@ fn turning_point(above: &impl Fn(f64) -> bool, mut outside: f64, mut inside: f64
 
 /// `x_j - mean(x)` for the partial sums `x_j = sum_(k<j) values_k`, `j = 0..=len`.
 fn centred_partial_sums(values: &[f64]) -> Vec<f64> {
-    let mut sums = Vec::with_capacity(values.len() + 1);
+    let mut sums = vec![0.0; values.len() + 1];
+    centred_partial_sums_into(values, &mut sums);
+    sums
+}
+
+/// [`centred_partial_sums`] into `out` (one longer than `values`), without allocating.
+fn centred_partial_sums_into(values: &[f64], out: &mut [f64]) {
     let mut sum = 0.0;
-    sums.push(0.0);
-    for v in values {
+    out[0] = 0.0;
+    for (slot, v) in out[1..].iter_mut().zip(values) {
         sum += v;
-        sums.push(sum);
+        *slot = sum;
     }
-    let mean = sums.iter().sum::<f64>() / sums.len() as f64;
-    sums.iter().map(|s| s - mean).collect()
+    let mean = out.iter().sum::<f64>() / out.len() as f64;
+    for slot in out.iter_mut() {
+        *slot -= mean;
+    }
 }
 
 /// One run's integration over a macro step.
@@ -556,14 +572,8 @@ impl RunJob<'_> {
             self.tolerance,
             self.max_steps,
             |gaps, rates| {
-                let mut stack = [0.0; STACK_PARTICLES];
-                let mut heap = Vec::new();
-                let velocities: &mut [f64] = if rates.len() < STACK_PARTICLES {
-                    &mut stack[..=rates.len()]
-                } else {
-                    heap.resize(rates.len() + 1, 0.0);
-                    &mut heap
-                };
+                let (mut stack, mut heap) = ([0.0; STACK_PARTICLES], Vec::new());
+                let velocities = per_particle(&mut stack, &mut heap, rates.len() + 1);
                 run_velocities(rates, self.centre, velocities);
                 lineages.observe(self.run, velocities, |k| gaps[k] < self.collision_arc);
             },
@@ -578,18 +588,12 @@ fn fixed<const D: usize>(values: &[f64]) -> [f64; D] {
 }
 
 /// Velocities of a run from its gap rates and centre-of-mass velocity, into
-/// `out` (one more than the rates): [`centred_partial_sums`] plus `centre`,
-/// without allocating (it runs after every step of every run).
+/// `out` (one more than the rates), without allocating (it runs after every
+/// step of every run).
 fn run_velocities(rates: &[f64], centre: f64, out: &mut [f64]) {
-    let mut sum = 0.0;
-    out[0] = 0.0;
-    for (slot, rate) in out[1..].iter_mut().zip(rates) {
-        sum += rate;
-        *slot = sum;
-    }
-    let mean = out.iter().sum::<f64>() / out.len() as f64;
+    centred_partial_sums_into(rates, out);
     for slot in out.iter_mut() {
-        *slot = centre + (*slot - mean);
+        *slot += centre;
     }
 }
 

@@ -64,12 +64,13 @@ impl ConvergenceStage {
 }
 
 /// One row: a setting, its `a_n` per replicate, and the default's on the
-/// same launch pairs (all of them, or the share a tolerance re-integrates).
+/// share of the launch pairs a tolerance re-integrates (`None`: on all of
+/// them, the baseline).
 struct Row {
     parameter: &'static str,
     value: f64,
     replicates: Vec<f64>,
-    default: Vec<f64>,
+    default: Option<Vec<f64>>,
 }
 
 /// The events of `events` whose launch pair (randomization, stratum, point)
@@ -133,7 +134,7 @@ impl Stage for ConvergenceStage {
             parameter: DEFAULT,
             value: f64::NAN,
             replicates: baseline.clone(),
-            default: baseline.clone(),
+            default: None,
         }];
         for &density in &self.params.densities {
             let dense = Target { density, ..target };
@@ -141,7 +142,7 @@ impl Stage for ConvergenceStage {
                 parameter: DENSITY,
                 value: density,
                 replicates: self.self_variance(&events, &draws, &dense),
-                default: baseline.clone(),
+                default: None,
             });
         }
         progress.advance(1);
@@ -157,7 +158,7 @@ impl Stage for ConvergenceStage {
                 parameter: OFFSET_BOUND,
                 value: bound,
                 replicates: self.self_variance(&kept, &draws, &target),
-                default: baseline.clone(),
+                default: None,
             });
         }
         progress.advance(1);
@@ -168,7 +169,7 @@ impl Stage for ConvergenceStage {
                 parameter: TOLERANCE,
                 value: tolerance,
                 replicates: self.self_variance(&again, &again_draws, &target),
-                default: self.self_variance(&same, &Draws::count(&same), &target),
+                default: Some(self.self_variance(&same, &Draws::count(&same), &target)),
             });
         }
         progress.advance(1);
@@ -177,7 +178,7 @@ impl Stage for ConvergenceStage {
                 parameter: BIN_WIDTH,
                 value: width,
                 replicates: self.binned_self_variance(&events, &draws, width),
-                default: baseline.clone(),
+                default: None,
             });
         }
         progress.advance(1);
@@ -194,7 +195,7 @@ fn convergence_table(rows: &[Row], baseline: &[f64]) -> Result<Table, StageError
             let differences: Vec<f64> = row
                 .replicates
                 .iter()
-                .zip(&row.default)
+                .zip(row.default.as_deref().unwrap_or(baseline))
                 .map(|(a, b)| a - b)
                 .collect();
             (row, Estimate::from_replicates(&differences))
