@@ -98,7 +98,7 @@ impl Stage for ConvergenceStage {
     }
 
     fn version(&self) -> u32 {
-        4
+        5
     }
 
     fn params(&self) -> Value {

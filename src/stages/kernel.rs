@@ -74,7 +74,7 @@ impl Stage for KernelStage {
     }
 
     fn version(&self) -> u32 {
-        3
+        4
     }
 
     fn params(&self) -> Value {
