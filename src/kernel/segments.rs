@@ -30,10 +30,10 @@
 //! zero, between a positive and a negative kick), a node in that narrow
 //! window put its whole weight into one bin near `u'`, one launch pair in a
 //! few: at n = 12 those point masses were half the variance of the bins at
-//! `|du| ~ 1e-3`. Such a node keeps its weight (the trapezoid's estimate of
-//! the window's measure) but spreads it over the window's kicks
-//! ([`lay_window_node`]). Interpolating the window itself instead (its
-//! edges on the quintic through six nodes) put 25% too much measure there
+//! `|du| ~ 1e-3`. The window's nodes keep their weight (the trapezoid's
+//! estimate of the window's measure) but spread it over the whole window's
+//! kicks ([`lay_window`]). Interpolating the window itself instead (its
+//! edges on the quintic through six nodes) put ~25% too much measure there
 //! at n = 12, where a step spans a third of the swing from the kick's peak
 //! to zero (docs/benchmarks.md).
 
@@ -52,7 +52,7 @@ pub const CORE_KICK: f64 = 2e-3;
 /// it, and the outer tails on either side. The nodes of the core and of the
 /// windows keep their whole weight (the trapezoid rule of those parts,
 /// unbiased on average over the grid's move): the core's as point masses,
-/// a window's spread over the window's kicks ([`lay_window_node`]). In the
+/// a window's spread over the whole window's kicks ([`lay_window`]). In the
 /// outer tails each node gives the segment on either side its share of the
 /// mass ([`segment_masses`]), and the segments, the innermost cut where the
 /// interpolated kick reaches `CORE_KICK`, are spread ([`Segment::spread`]);
@@ -66,14 +66,25 @@ pub fn lay_track(bins: &Bins, part: &mut [f64], matched: f64, outgoing: &[f64], 
     // Between the first and the last core node: the core and its windows.
     let inner = |i: usize| first_core.is_some_and(|f| i >= f) && last_core.is_some_and(|l| i <= l);
     for (i, (&velocity, &weight)) in outgoing.iter().zip(weights).enumerate() {
-        if inner(i) {
-            if in_core(velocity) {
-                add_point(bins, part, velocity, weight);
-            } else {
-                lay_window_node(bins, part, matched, outgoing, i, weight);
-            }
-        } else if i == 0 || i == last {
+        if inner(i) && in_core(velocity) {
+            add_point(bins, part, velocity, weight);
+        } else if !inner(i) && (i == 0 || i == last) {
             add_point(bins, part, velocity, 0.5 * weight);
+        }
+    }
+    if let (Some(first), Some(last_core)) = (first_core, last_core) {
+        // Windows: runs of nodes between core nodes that kick less than CORE_KICK.
+        let mut j = first;
+        while j < last_core {
+            let start = j;
+            while !in_core(outgoing[j]) {
+                j += 1;
+            }
+            if j > start {
+                let mass = weights[start..j].iter().sum();
+                lay_window(bins, part, matched, &outgoing[start - 1..=j], mass);
+            }
+            j += 1;
         }
     }
     for i in 0..last {
@@ -94,42 +105,36 @@ pub fn lay_track(bins: &Bins, part: &mut [f64], matched: f64, outgoing: &[f64], 
     }
 }
 
-/// Lays the weight of node `j`, inside the core but kicking less than
-/// `CORE_KICK` (a window where the kick passes through zero, or dips), over
-/// the window's kicks: along the lines to the neighbouring nodes, each as
-/// far as the kick stays below `CORE_KICK`, uniformly in `s`. The weight
-/// stays the node's (the trapezoid rule of the window's measure, unbiased
-/// over the grid's move); only its spread over the bins is interpolated,
-/// where a point mass would put it all into one bin.
-fn lay_window_node(
-    bins: &Bins,
-    part: &mut [f64],
-    matched: f64,
-    track: &[f64],
-    j: usize,
-    weight: f64,
-) {
-    let kick = track[j] - matched;
-    let pieces: Vec<(f64, f64)> = [j.checked_sub(1), Some(j + 1).filter(|&k| k < track.len())]
-        .into_iter()
-        .flatten()
-        .map(|other| {
-            let towards = track[other] - matched;
-            let reach = if towards.abs() < CORE_KICK {
-                1.0
-            } else {
-                (CORE_KICK.copysign(towards) - kick) / (towards - kick)
-            };
-            (reach, kick + reach * (towards - kick))
-        })
+/// Lays the `mass` of a window's nodes (the trapezoid's estimate of the
+/// window's measure, unbiased over the grid's move) over the window's
+/// kicks: `track` runs from the core node before the window through the
+/// window's nodes to the core node after it, the kick linear between
+/// nodes, cut where it reaches `CORE_KICK`, the mass uniform in `s`. Every
+/// node of the window spreads over the whole window: for a kick linear
+/// across it, the expected mass in each bin is then exactly its measure,
+/// whereas spreading each node only around itself moves mass away from the
+/// window's edges (1.7% of `G` at `|du|` from 1.5e-3 to 2e-3, n = 12, 193
+/// nodes).
+fn lay_window(bins: &Bins, part: &mut [f64], matched: f64, track: &[f64], mass: f64) {
+    let last = track.len() - 1;
+    let kick = |j: usize| track[j] - matched;
+    // Each piece: its length in steps and the kicks at its ends.
+    let edge_piece = |core: usize, inside: usize| {
+        let edge = CORE_KICK.copysign(kick(core));
+        let reach = (edge - kick(inside)) / (kick(core) - kick(inside));
+        (reach, [edge, kick(inside)])
+    };
+    let pieces: Vec<(f64, [f64; 2])> = std::iter::once(edge_piece(0, 1))
+        .chain((1..last - 1).map(|j| (1.0, [kick(j), kick(j + 1)])))
+        .chain(std::iter::once(edge_piece(last, last - 1)))
         .collect();
     let length: f64 = pieces.iter().map(|&(reach, _)| reach).sum();
-    for (reach, end) in pieces {
-        let mass = 0.5 * weight * reach / length;
+    for (reach, ends) in pieces {
+        let share = 0.5 * mass * reach / length;
         Segment::straight(
             matched,
-            [track[j], matched + end],
-            [mass, mass],
+            ends.map(|k| matched + k),
+            [share, share],
             Scale::Linear,
         )
         .spread(bins, part);
@@ -646,11 +651,12 @@ mod track_tests {
     }
 
     /// Averaged over the grid's move, the laid measure of every group of
-    /// bins agrees with the exact one to 0.2% at the default rule's step
-    /// (measured: <= 0.1%, the average over 2048 moves is itself exact to
-    /// ~0.05%), through the tails, the cut at `CORE_KICK` and the window
-    /// where the kick changes sign in the core. Laying that window linearly
-    /// between the two nodes around it instead puts 0.6% too much at 7.5e-4
+    /// bins agrees with the exact one to 0.2% at the default rule's step and
+    /// at a quarter of it, where the window spans several nodes (measured:
+    /// <= 0.1%, the average over 2048 moves is itself exact to ~0.05%),
+    /// through the tails, the cut at `CORE_KICK` and the window where the
+    /// kick changes sign in the core. Laying that window linearly between
+    /// the two nodes around it instead puts 0.6% too much at 7.5e-4
     /// (checked), the tails' trapezoid masses 0.13% too much everywhere, and
     /// exponential interpolation in the core 2.5% at 0.005 that belongs at
     /// 0.0075..0.015.
@@ -659,9 +665,14 @@ mod track_tests {
         let moves: Vec<f64> = (0..2048)
             .map(|k| (f64::from(k) + 0.5) / 2048.0 - 0.5)
             .collect();
-        let exact = exact_measure(collision_kick, 0.125);
-        for (edge, error) in group_errors(collision_kick, 0.125, &moves, &exact) {
-            assert!(error.abs() < 2e-3, "|kick| from {edge:.2e}: {error:+.4}");
+        for step in [0.125, 0.03125] {
+            let exact = exact_measure(collision_kick, step);
+            for (edge, error) in group_errors(collision_kick, step, &moves, &exact) {
+                assert!(
+                    error.abs() < 2e-3,
+                    "step {step}, |kick| from {edge:.2e}: {error:+.4}"
+                );
+            }
         }
     }
 

@@ -98,7 +98,7 @@ impl Stage for ConvergenceStage {
     }
 
     fn version(&self) -> u32 {
-        5
+        6
     }
 
     fn params(&self) -> Value {

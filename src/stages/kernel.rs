@@ -74,7 +74,7 @@ impl Stage for KernelStage {
     }
 
     fn version(&self) -> u32 {
-        4
+        5
     }
 
     fn params(&self) -> Value {
