@@ -88,17 +88,17 @@ pub fn lay_track(bins: &Bins, part: &mut [f64], matched: f64, outgoing: &[f64], 
         }
     }
     for i in 0..last {
-        let ends = [outgoing[i], outgoing[i + 1]];
-        let halves = || segment_masses(weights[i], weights[i + 1]);
         if inner(i) && inner(i + 1) {
             continue;
-        } else if inner(i) || inner(i + 1) || monotone_around(outgoing, i) {
-            Segment::monotone(matched, ends, halves(), neighbours(outgoing, i))
+        }
+        let halves = segment_masses(weights[i], weights[i + 1]);
+        let ends = [outgoing[i], outgoing[i + 1]];
+        if inner(i) || inner(i + 1) || monotone_around(outgoing, i) {
+            Segment::monotone(matched, ends, halves, neighbours(outgoing, i))
                 .spread_tail(bins, part);
         } else if let Some((third, at)) = turn_near(outgoing, i) {
-            Segment::turning(matched, ends, halves(), third, at).spread_turning(bins, part);
+            Segment::turning(matched, ends, halves, third, at).spread_turning(bins, part);
         } else {
-            let halves = halves();
             add_point(bins, part, ends[0], halves[0]);
             add_point(bins, part, ends[1], halves[1]);
         }
@@ -468,7 +468,7 @@ impl Profile {
         let far = (-linear - root.copysign(linear)) / (2.0 * self.curvature);
         // The root in [0, 1], or (rounding at an end) the one nearest to it.
         let outside = |t: f64| (-t).max(t - 1.0).max(0.0);
-        let t = if self.curvature == 0.0 || outside(near) <= outside(far) || far.is_nan() {
+        let t = if self.curvature == 0.0 || outside(near) <= outside(far) {
             near
         } else {
             far
