@@ -39,6 +39,13 @@
 
 use crate::binning::Bins;
 
+/// Revision of how a launch pair's nodes are laid into bins ([`lay_track`]).
+/// Every stage whose tables come from histograms of quadrature nodes adds it
+/// to its own version, so that a change here re-keys all of them: kernel,
+/// convergence, sweep, evolve, compare, paper. Revision 4: cubic turns
+/// ([`Segment::turning`]).
+pub const LAYING_REVISION: u32 = 4;
+
 /// Kicks at least this large (`v_th`) belong to the core of a collision:
 /// there the nodes are point masses.
 pub const CORE_KICK: f64 = 2e-3;
@@ -96,8 +103,9 @@ pub fn lay_track(bins: &Bins, part: &mut [f64], matched: f64, outgoing: &[f64], 
         if inner(i) || inner(i + 1) || monotone_around(outgoing, i) {
             Segment::monotone(matched, ends, halves, neighbours(outgoing, i))
                 .spread_tail(bins, part);
-        } else if let Some((third, at)) = turn_near(outgoing, i) {
-            Segment::turning(matched, ends, halves, third, at).spread_turning(bins, part);
+        } else if turns_once(outgoing, i) {
+            Segment::turning(matched, ends, halves, neighbours(outgoing, i))
+                .spread_turning(bins, part);
         } else {
             add_point(bins, part, ends[0], halves[0]);
             add_point(bins, part, ends[1], halves[1]);
@@ -149,20 +157,14 @@ fn neighbours(track: &[f64], i: usize) -> [Option<f64>; 2] {
     ]
 }
 
-/// Where the track turns next to the segment `(i, i + 1)`: the node beyond
-/// it that, with the segment's two, brackets the one extremal node (its
-/// velocity and position: -1 before the segment, 2 after it); `None` when
-/// neither or both of the segment's nodes are extremal (a zigzag, not
+/// `true` when exactly one of the segment `(i, i + 1)`'s nodes is extremal
+/// (the track turns there); `false` when neither or both are (a zigzag, not
 /// resolved by the nodes).
-fn turn_near(track: &[f64], i: usize) -> Option<(f64, f64)> {
+fn turns_once(track: &[f64], i: usize) -> bool {
     let extremal = |j: usize| {
         j >= 1 && j + 1 < track.len() && (track[j] - track[j - 1]) * (track[j + 1] - track[j]) < 0.0
     };
-    match (extremal(i), extremal(i + 1)) {
-        (true, false) => Some((track[i - 1], -1.0)),
-        (false, true) => Some((track[i + 2], 2.0)),
-        _ => None,
-    }
+    extremal(i) != extremal(i + 1)
 }
 
 /// The masses two consecutive nodes of weights `first`, `second` give the
@@ -216,8 +218,8 @@ pub enum Scale {
 /// One velocity track (a sorted rank of the outgoing velocities) between two
 /// consecutive nodes of a launch pair. Velocities relative to `u'`, `v_th`;
 /// masses in the kernel's weight units. Along the segment, at `t` in `[0,
-/// 1]`, the track's `g` (its [`Scale`]) is `g0 + t (g1 - g0) + curvature t (t
-/// - 1)`: a parabola through the two end nodes.
+/// 1]`, the track's `g` (its [`Scale`]) is `g0 + t (g1 - g0) + t (t - 1)
+/// (curvature + cubic t)`: a parabola or a cubic through the two end nodes.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Segment {
     /// The incoming velocity the track is matched with: kicks are measured from it.
@@ -228,8 +230,10 @@ pub struct Segment {
     pub halves: [f64; 2],
     /// What is interpolated.
     pub scale: Scale,
-    /// Coefficient of `t (t - 1)` in `g` (0: `g` linear in `t`).
+    /// Coefficient of `t (t - 1)` in `g` (0, with `cubic`: `g` linear in `t`).
     pub curvature: f64,
+    /// Coefficient of `t^2 (t - 1)` in `g` (0: a parabola).
+    pub cubic: f64,
 }
 
 impl Segment {
@@ -262,7 +266,7 @@ impl Segment {
         if !bends.is_empty() {
             segment.curvature = bends.iter().sum::<f64>() / bends.len() as f64;
         }
-        if segment.vertex().is_some() {
+        if !segment.turns().is_empty() {
             segment.curvature = 0.0;
         }
         segment
@@ -276,21 +280,43 @@ impl Segment {
             halves,
             scale,
             curvature: 0.0,
+            cubic: 0.0,
         }
     }
 
-    /// A segment next to a turn of the track: the kick is the parabola
-    /// through its two nodes and the `third` velocity at position `at` (-1:
-    /// the node before, 2: the node after), which puts the extremum where
-    /// the three nodes place it.
-    pub fn turning(matched: f64, ends: [f64; 2], halves: [f64; 2], third: f64, at: f64) -> Segment {
+    /// A segment next to a turn of the track: the kick is the cubic through
+    /// its two nodes and the `neighbours` (the velocities one step before and
+    /// after), or the parabola through the one that exists. At a sharp
+    /// extremum (a weak collision's peak, a few steps wide) the parabola
+    /// through three nodes falls short of the peak and puts the offsets
+    /// above it into the bins below: +3% in `|kick|` 1.5e-3..2e-3 at n = 12
+    /// and 49 nodes, 0.6% with the cubic (docs/benchmarks.md).
+    pub fn turning(
+        matched: f64,
+        ends: [f64; 2],
+        halves: [f64; 2],
+        neighbours: [Option<f64>; 2],
+    ) -> Segment {
         let mut segment = Segment::straight(matched, ends, halves, Scale::Linear);
-        segment.curvature = segment.curvature_through(third - matched, at);
+        let bends = neighbours.map(|v| v.map(|v| v - matched));
+        match bends {
+            [Some(before), Some(after)] => {
+                let (early, late) = (
+                    segment.curvature_through(before, -1.0),
+                    segment.curvature_through(after, 2.0),
+                );
+                segment.cubic = (late - early) / 3.0;
+                segment.curvature = early + segment.cubic;
+            }
+            [Some(before), None] => segment.curvature = segment.curvature_through(before, -1.0),
+            [None, Some(after)] => segment.curvature = segment.curvature_through(after, 2.0),
+            [None, None] => {}
+        }
         segment
     }
 
-    /// The curvature that puts `g = value` at position `at` (-1 or 2):
-    /// half the second difference of `g` over the three nodes.
+    /// The curvature of the parabola that puts `g = value` at position `at`
+    /// (-1 or 2): half the second difference of `g` over the three nodes.
     fn curvature_through(&self, value: f64, at: f64) -> f64 {
         let [g0, g1] = self.end_values();
         if at < 0.0 {
@@ -320,28 +346,52 @@ impl Segment {
             scale: self.scale,
             g0,
             linear: g1 - g0 - self.curvature,
-            curvature: self.curvature,
+            quadratic: self.curvature - self.cubic,
+            cubic: self.cubic,
             log_ratio,
             ratio_m1: log_ratio.exp_m1(),
         }
     }
 
-    /// Position of the parabola's vertex when it lies inside `(0, 1)`.
-    fn vertex(&self) -> Option<f64> {
+    /// Positions inside `(0, 1)`, ascending, where the track turns (`g`'s
+    /// derivative vanishes): none, one or two.
+    fn turns(&self) -> Vec<f64> {
         let [g0, g1] = self.end_values();
-        let t = (self.curvature - (g1 - g0)) / (2.0 * self.curvature);
-        (t > 0.0 && t < 1.0).then_some(t)
+        let roots = if self.cubic == 0.0 {
+            vec![(self.curvature - (g1 - g0)) / (2.0 * self.curvature)]
+        } else {
+            // g'(t) = linear + 2 quadratic t + 3 cubic t^2.
+            let (linear, quadratic) = (g1 - g0 - self.curvature, self.curvature - self.cubic);
+            let discriminant = quadratic * quadratic - 3.0 * self.cubic * linear;
+            if discriminant < 0.0 {
+                Vec::new()
+            } else {
+                let root = discriminant.sqrt();
+                let mut roots = vec![
+                    (-quadratic - root) / (3.0 * self.cubic),
+                    (-quadratic + root) / (3.0 * self.cubic),
+                ];
+                roots.sort_by(f64::total_cmp);
+                roots
+            }
+        };
+        roots.into_iter().filter(|&t| t > 0.0 && t < 1.0).collect()
     }
 
-    /// Adds the mass to the bins of `part`, in two monotone pieces when the
-    /// track turns inside the segment, each only where its kick is in the tails.
+    /// Adds the mass to the bins of `part`, in monotone pieces between the
+    /// points where the track turns inside the segment, each only where its
+    /// kick is in the tails.
     pub fn spread_turning(&self, bins: &Bins, part: &mut [f64]) {
-        match self.vertex() {
-            Some(t) => {
-                self.restricted(0.0, t).spread_tail(bins, part);
-                self.restricted(t, 1.0).spread_tail(bins, part);
-            }
-            None => self.spread_tail(bins, part),
+        let turns = self.turns();
+        let edges: Vec<f64> = std::iter::once(0.0)
+            .chain(turns.iter().copied())
+            .chain(std::iter::once(1.0))
+            .collect();
+        if edges.len() == 2 {
+            return self.spread_tail(bins, part);
+        }
+        for piece in edges.windows(2) {
+            self.restricted(piece[0], piece[1]).spread_tail(bins, part);
         }
     }
 
@@ -366,7 +416,7 @@ impl Segment {
     /// The velocity of the track at position `t` in `[0, 1]`.
     fn velocity_at(&self, t: f64) -> f64 {
         let [g0, g1] = self.end_values();
-        let g = g0 + t * (g1 - g0) + self.curvature * t * (t - 1.0);
+        let g = g0 + t * (g1 - g0) + (self.curvature + self.cubic * t) * t * (t - 1.0);
         let kick = match self.scale {
             Scale::Logarithmic => g.exp().copysign(self.ends[0] - self.matched),
             Scale::Linear => g,
@@ -413,12 +463,17 @@ impl Segment {
         let mass = (first + second) * (profile.mass_fraction(to) - profile.mass_fraction(from));
         let ratio = (second / first).powf(to - from);
         let ratio = if ratio.is_finite() { ratio } else { 1.0 };
+        // The same polynomial in t' = (t - from) / (to - from).
+        let length = to - from;
+        let cubic = self.cubic * length.powi(3);
+        let quadratic = self.curvature - self.cubic + 3.0 * self.cubic * from;
         Segment {
             matched: self.matched,
             ends: [self.velocity_at(from), self.velocity_at(to)],
             halves: [mass / (1.0 + ratio), mass * ratio / (1.0 + ratio)],
             scale: self.scale,
-            curvature: self.curvature * (to - from) * (to - from),
+            curvature: cubic + quadratic * length * length,
+            cubic,
         }
     }
 
@@ -438,8 +493,8 @@ fn gauge(scale: Scale, kick: f64) -> f64 {
 }
 
 /// A segment's track and mass density in the form that locates velocities
-/// and masses along it: `g(t) = g0 + linear t + curvature t^2`, and the node
-/// masses' ratio `e^log_ratio`. Computed once per spread segment, it saves
+/// and masses along it: `g(t) = g0 + linear t + quadratic t^2 + cubic t^3`,
+/// and the node masses' ratio `e^log_ratio`. Computed once per spread segment, it saves
 /// the logarithms of the ends and of the ratio at every bin edge (the same
 /// numbers, so the same bits).
 struct Profile {
@@ -447,7 +502,8 @@ struct Profile {
     scale: Scale,
     g0: f64,
     linear: f64,
-    curvature: f64,
+    quadratic: f64,
+    cubic: f64,
     log_ratio: f64,
     /// `e^log_ratio - 1`.
     ratio_m1: f64,
@@ -456,19 +512,22 @@ struct Profile {
 impl Profile {
     /// Position `t` in `[0, 1]` along the segment where the track has the
     /// outgoing velocity `velocity` (within the range of a monotone segment):
-    /// the root in `[0, 1]` of `curvature t^2 + (g1 - g0 - curvature) t =
-    /// g - g0`, in the form that stays accurate as the curvature vanishes.
+    /// the root in `[0, 1]` of `g(t) = g`; for a parabola in the form that
+    /// stays accurate as the curvature vanishes, for a cubic by bisection.
     fn position(&self, velocity: f64) -> f64 {
         let level = gauge(self.scale, velocity - self.matched) - self.g0;
+        if self.cubic != 0.0 {
+            return self.cubic_position(level);
+        }
         let linear = self.linear;
-        let root = (linear * linear + 4.0 * self.curvature * level)
+        let root = (linear * linear + 4.0 * self.quadratic * level)
             .max(0.0)
             .sqrt();
         let near = 2.0 * level / (linear + root.copysign(linear));
-        let far = (-linear - root.copysign(linear)) / (2.0 * self.curvature);
+        let far = (-linear - root.copysign(linear)) / (2.0 * self.quadratic);
         // The root in [0, 1], or (rounding at an end) the one nearest to it.
         let outside = |t: f64| (-t).max(t - 1.0).max(0.0);
-        let t = if self.curvature == 0.0 || outside(near) <= outside(far) {
+        let t = if self.quadratic == 0.0 || outside(near) <= outside(far) {
             near
         } else {
             far
@@ -478,6 +537,23 @@ impl Profile {
         } else {
             0.0
         }
+    }
+
+    /// The root in `[0, 1]` of `g(t) - g0 = level` on a monotone cubic, by
+    /// bisection to the last bit (the end nearest to `level` when outside).
+    fn cubic_position(&self, level: f64) -> f64 {
+        let rise = |t: f64| t * (self.linear + t * (self.quadratic + t * self.cubic));
+        let increasing = rise(1.0) >= 0.0;
+        let (mut low, mut high) = (0.0_f64, 1.0_f64);
+        for _ in 0..64 {
+            let middle = 0.5 * (low + high);
+            if (rise(middle) < level) == increasing {
+                low = middle;
+            } else {
+                high = middle;
+            }
+        }
+        0.5 * (low + high)
     }
 
     /// Fraction of the segment's mass between its first node and position
@@ -518,6 +594,7 @@ mod tests {
                 halves: [scale * pair[0].exp(), scale * pair[1].exp()],
                 scale: Scale::Logarithmic,
                 curvature: 0.0,
+                cubic: 0.0,
             }
             .spread(&bins, &mut spread);
             points[bins.index(kick(pair[0])).unwrap()] += weight(pair[0]);
@@ -561,6 +638,7 @@ mod tests {
                     Scale::Linear
                 },
                 curvature: 0.0,
+                cubic: 0.0,
             };
             segment.spread(&bins, &mut part);
             let total: f64 = part.iter().sum();
@@ -587,18 +665,21 @@ mod track_tests {
     }
 
     /// The exact measure `int cosh(s) ds` of the offsets whose kick lands
-    /// in each bin, for the kick curve `kick(s)` over the grids of step `step`.
-    fn exact_measure(kick: impl Fn(f64) -> f64, step: f64) -> Vec<f64> {
+    /// in each bin, summed over the kick curves `curves` (`kick(s)`), over
+    /// the grids of step `step`.
+    fn exact_measure(curves: &[&dyn Fn(f64) -> f64], step: f64) -> Vec<f64> {
         let bins = test_bins();
         let span = f64::from(half_span(step));
         let mut exact = vec![0.0; bins.len()];
         let fine = 4_000_000;
         let (low, high) = ((-span - 0.5) * step, (span + 0.5) * step);
         let ds = (high - low) / f64::from(fine);
-        for j in 0..fine {
-            let s = low + (f64::from(j) + 0.5) * ds;
-            if let Some(k) = bins.index(kick(s)) {
-                exact[k] += s.cosh() * ds;
+        for kick in curves {
+            for j in 0..fine {
+                let s = low + (f64::from(j) + 0.5) * ds;
+                if let Some(k) = bins.index(kick(s)) {
+                    exact[k] += s.cosh() * ds;
+                }
             }
         }
         exact
@@ -607,9 +688,9 @@ mod track_tests {
     /// The relative error, per group of bins (eight per decade of `|kick|`
     /// from 1e-4 to 4e-2), of `lay_track` averaged over the `moves` (in
     /// steps) of a node grid of step `step` against the `exact` measure of
-    /// the kick curve `kick(s)` ([`exact_measure`]).
+    /// the kick curves `curves` ([`exact_measure`]).
     fn group_errors(
-        kick: impl Fn(f64) -> f64,
+        curves: &[&dyn Fn(f64) -> f64],
         step: f64,
         moves: &[f64],
         exact: &[f64],
@@ -618,13 +699,15 @@ mod track_tests {
         let span = half_span(step);
         let mut laid = vec![0.0; bins.len()];
         let share = 1.0 / moves.len() as f64;
-        for &moved in moves {
-            let nodes: Vec<f64> = (-span..=span)
-                .map(|j| (f64::from(j) + moved) * step)
-                .collect();
-            let outgoing: Vec<f64> = nodes.iter().map(|&s| kick(s)).collect();
-            let weights: Vec<f64> = nodes.iter().map(|&s| step * s.cosh() * share).collect();
-            lay_track(&bins, &mut laid, 0.0, &outgoing, &weights);
+        for kick in curves {
+            for &moved in moves {
+                let nodes: Vec<f64> = (-span..=span)
+                    .map(|j| (f64::from(j) + moved) * step)
+                    .collect();
+                let outgoing: Vec<f64> = nodes.iter().map(|&s| kick(s)).collect();
+                let weights: Vec<f64> = nodes.iter().map(|&s| step * s.cosh() * share).collect();
+                lay_track(&bins, &mut laid, 0.0, &outgoing, &weights);
+            }
         }
         (0..20)
             .map(|i| 1e-4 * 10f64.powf(f64::from(i) / 8.0))
@@ -666,8 +749,8 @@ mod track_tests {
             .map(|k| (f64::from(k) + 0.5) / 2048.0 - 0.5)
             .collect();
         for step in [0.125, 0.03125] {
-            let exact = exact_measure(collision_kick, step);
-            for (edge, error) in group_errors(collision_kick, step, &moves, &exact) {
+            let exact = exact_measure(&[&collision_kick], step);
+            for (edge, error) in group_errors(&[&collision_kick], step, &moves, &exact) {
                 assert!(
                     error.abs() < 2e-3,
                     "step {step}, |kick| from {edge:.2e}: {error:+.4}"
@@ -685,10 +768,10 @@ mod track_tests {
     /// into one bin: +50% for the groups from 1e-3 to 1.5e-3, one move in ten.
     #[test]
     fn one_grid_lays_the_window_through_zero() {
-        let exact = exact_measure(collision_kick, 0.125);
+        let exact = exact_measure(&[&collision_kick], 0.125);
         for k in 0..16 {
             let moved = f64::from(k) / 16.0 - 0.5;
-            for (edge, error) in group_errors(collision_kick, 0.125, &[moved], &exact) {
+            for (edge, error) in group_errors(&[&collision_kick], 0.125, &[moved], &exact) {
                 if edge * 10f64.powf(0.125) <= CORE_KICK {
                     assert!(
                         error.abs() < 0.15,
@@ -696,6 +779,33 @@ mod track_tests {
                     );
                 }
             }
+        }
+    }
+
+    /// Weak collisions, whose kick peaks in the tails' range and changes
+    /// sign within a few steps (here a third as wide as
+    /// [`collision_kick`]'s core, peaks from 5e-4 to 8e-3 log-uniformly):
+    /// averaged over the grid's move and the population, every group of
+    /// bins within 5% of the exact measure (measured: -1.3% to +4.3%). The
+    /// parabola through three nodes at each turn fell short of the peaks:
+    /// +12% at 1.3e-3 (measured).
+    #[test]
+    fn weak_collisions_turn_on_cubics() {
+        let shape = |s: f64| (9.0 * s + 0.4).tanh() / (3.0 * s).cosh().powi(7);
+        let top = (0..100_000)
+            .map(|j| shape(f64::from(j) / 1e5 - 0.5).abs())
+            .fold(0.0, f64::max);
+        let curves: Vec<Box<dyn Fn(f64) -> f64>> = (0..40)
+            .map(|k| 5e-4 * 16f64.powf((f64::from(k) + 0.5) / 40.0) / top)
+            .map(|height| Box::new(move |s: f64| height * shape(s)) as Box<dyn Fn(f64) -> f64>)
+            .collect();
+        let curves: Vec<&dyn Fn(f64) -> f64> = curves.iter().map(|c| c.as_ref()).collect();
+        let moves: Vec<f64> = (0..256)
+            .map(|k| (f64::from(k) + 0.5) / 256.0 - 0.5)
+            .collect();
+        let exact = exact_measure(&curves, 0.125);
+        for (edge, error) in group_errors(&curves, 0.125, &moves, &exact) {
+            assert!(error.abs() < 0.05, "|kick| from {edge:.2e}: {error:+.4}");
         }
     }
 }

@@ -171,15 +171,24 @@ pub fn check_plan(stages: &[Box<dyn Stage>], names: &[String]) -> Result<(), Exe
     }
     for name in names {
         if !seen.iter().any(|id| &id.stage == name) {
-            let mut known: Vec<&str> = seen.iter().map(|id| id.stage.as_str()).collect();
-            known.dedup();
             return Err(ExecError::Plan(format!(
                 "unknown stage `{name}`; stages are: {}",
-                known.join(", ")
+                stage_names(&seen).join(", ")
             )));
         }
     }
     Ok(())
+}
+
+/// The stages of `ids`, each once, in order of first appearance.
+fn stage_names(ids: &[InstanceId]) -> Vec<&str> {
+    let mut names: Vec<&str> = Vec::new();
+    for id in ids {
+        if !names.contains(&id.stage.as_str()) {
+            names.push(&id.stage);
+        }
+    }
+    names
 }
 
 /// Input records of `stage` from the manifests resolved so far; `None` while an
@@ -1067,5 +1076,18 @@ mod tests {
             error.to_string().contains("unknown stage `sorce`"),
             "{error}"
         );
+    }
+
+    /// An unknown stage's error names each stage once, in the plan's order,
+    /// however many instances it has.
+    #[test]
+    fn stage_names_are_listed_once() {
+        let ids = [
+            InstanceId::new("scan", "ipp-6"),
+            InstanceId::new("kernel", "a"),
+            InstanceId::new("scan", "ipp-8"),
+            InstanceId::new("kernel", "b"),
+        ];
+        assert_eq!(stage_names(&ids), ["scan", "kernel"]);
     }
 }

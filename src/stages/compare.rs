@@ -387,7 +387,7 @@ impl Stage for CompareStage {
     }
 
     fn version(&self) -> u32 {
-        4
+        1 + crate::kernel::segments::LAYING_REVISION
     }
 
     fn params(&self) -> Value {

@@ -98,7 +98,7 @@ impl Stage for ConvergenceStage {
     }
 
     fn version(&self) -> u32 {
-        6
+        3 + crate::kernel::segments::LAYING_REVISION
     }
 
     fn params(&self) -> Value {

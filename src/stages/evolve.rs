@@ -484,7 +484,7 @@ impl Stage for EvolveStage {
     }
 
     fn version(&self) -> u32 {
-        4
+        1 + crate::kernel::segments::LAYING_REVISION
     }
 
     fn params(&self) -> Value {

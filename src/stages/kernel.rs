@@ -74,7 +74,7 @@ impl Stage for KernelStage {
     }
 
     fn version(&self) -> u32 {
-        5
+        2 + crate::kernel::segments::LAYING_REVISION
     }
 
     fn params(&self) -> Value {

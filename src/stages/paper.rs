@@ -550,7 +550,7 @@ impl Stage for PaperStage {
     }
 
     fn version(&self) -> u32 {
-        1
+        1 + crate::kernel::segments::LAYING_REVISION
     }
 
     fn params(&self) -> Value {

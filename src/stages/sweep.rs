@@ -182,7 +182,7 @@ impl Stage for SweepStage {
     }
 
     fn version(&self) -> u32 {
-        5
+        2 + crate::kernel::segments::LAYING_REVISION
     }
 
     fn params(&self) -> Value {
