@@ -243,6 +243,8 @@ where
     let font = |scale: f64| ("sans-serif", text * scale).into_font();
     let mut chart = ChartBuilder::on(area)
         .margin((text * 0.6) as i32)
+        // Room for half the widest tick label at the x axis's right end.
+        .margin_right((text * 2.0) as i32)
         .x_label_area_size((text * 2.8) as i32)
         .y_label_area_size((text * 4.6) as i32)
         .build_cartesian_2d(x, y)?;

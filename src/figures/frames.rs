@@ -123,8 +123,9 @@ pub fn series_of(
     series(&values, panel, name, (X.name, Y.name, Some(Y_ERROR.name)))
 }
 
-/// One series per value of the column `key` (in order of first appearance),
-/// each named by `label` of that value (as text), from the same columns.
+/// One series per value of the column `key` (ascending when every value is a
+/// number, else in order of first appearance), each named by `label` of that
+/// value (as text), from the same columns.
 pub fn series_by(
     frame: &DataFrame,
     panel: &str,
@@ -133,7 +134,7 @@ pub fn series_by(
     columns: (&str, &str, Option<&str>),
 ) -> Result<Vec<DataFrame>, StageError> {
     let parts = frame.partition_by_stable([key], true).map_err(failed)?;
-    parts
+    let mut valued = parts
         .iter()
         .map(|part| {
             let value = part
@@ -147,8 +148,20 @@ pub fn series_by(
                 .get(0)
                 .unwrap_or_default()
                 .to_string();
-            series(part, panel, &label(&value), columns)
+            Ok((value, part))
         })
+        .collect::<Result<Vec<_>, StageError>>()?;
+    let number = |value: &str| value.parse::<f64>().ok();
+    if valued.iter().all(|(value, _)| number(value).is_some()) {
+        valued.sort_by(|(a, _), (b, _)| {
+            number(a)
+                .partial_cmp(&number(b))
+                .unwrap_or(std::cmp::Ordering::Equal)
+        });
+    }
+    valued
+        .into_iter()
+        .map(|(value, part)| series(part, panel, &label(&value), columns))
         .collect()
 }
 

@@ -273,7 +273,7 @@ impl Stage for FiguresStage {
     }
 
     fn version(&self) -> u32 {
-        3
+        4
     }
 
     fn params(&self) -> Value {
