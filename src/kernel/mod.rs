@@ -331,19 +331,6 @@ impl Histogram {
         }
     }
 
-    /// Adds -1 (times the weight) at every incoming velocity of a contribution.
-    fn add_incoming(&mut self, bins: &Bins, contribution: &Contribution) {
-        for (rank, incoming) in contribution.sorted_incoming().into_iter().enumerate() {
-            self.add_at(
-                bins,
-                rank,
-                contribution.self_rank,
-                incoming,
-                -contribution.weight,
-            );
-        }
-    }
-
     /// Adds a contribution: -1 at every incoming, +1 at every outgoing velocity,
     /// the special particle's pair into `self_part`, the others into `bath_part`.
     pub fn add(&mut self, bins: &Bins, contribution: &Contribution, scale: f64) {
@@ -442,13 +429,10 @@ impl<'a> NodeFold<'a> {
         }
     }
 
-    /// Folds in the next node: its incoming velocities at once; its outgoing
-    /// ones when its launch pair is complete (a track's segment needs the
-    /// nodes on both sides of it).
+    /// Folds in the next node, placing the buffered launch pair when the
+    /// node starts another (a track's segment needs the nodes on both sides
+    /// of it).
     fn add(&mut self, event: &Event, contributions: Vec<Contribution>) {
-        for contribution in &contributions {
-            self.histogram.add_incoming(self.bins, contribution);
-        }
         if self
             .pair
             .last()
@@ -460,8 +444,10 @@ impl<'a> NodeFold<'a> {
     }
 
     /// Places the outgoing measure of the buffered pair along its velocity
-    /// tracks ([`segments::lay_track`]), run by run: a failed scene (no
-    /// contributions) ends a run.
+    /// tracks ([`segments::lay_track`]), run by run (a failed scene, without
+    /// contributions, ends a run), and the same measure, negative, at each
+    /// track's incoming velocity: every track conserves the number of
+    /// particles exactly.
     fn place_pair(&mut self) {
         let nodes = std::mem::take(&mut self.pair);
         for run in nodes.chunk_by(|(_, a), (_, b)| a.len() == b.len()) {
@@ -472,13 +458,15 @@ impl<'a> NodeFold<'a> {
                 for (rank, matched) in first.sorted_incoming().into_iter().enumerate() {
                     let track: Vec<f64> =
                         run.iter().map(|(_, c)| c[image].outgoing[rank]).collect();
-                    segments::lay_track(
+                    let laid = segments::lay_track(
                         self.bins,
                         self.histogram.part(rank, first.self_rank),
                         matched,
                         &track,
                         &weights,
                     );
+                    self.histogram
+                        .add_at(self.bins, rank, first.self_rank, matched, -laid);
                 }
             }
         }

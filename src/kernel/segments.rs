@@ -43,8 +43,9 @@ use crate::binning::Bins;
 /// Every stage whose tables come from histograms of quadrature nodes adds it
 /// to its own version, so that a change here re-keys all of them: kernel,
 /// convergence, sweep, evolve, compare, paper. Revision 4: cubic turns
-/// ([`Segment::turning`]).
-pub const LAYING_REVISION: u32 = 4;
+/// ([`Segment::turning`]); 5: the loss at a track's incoming velocity is the
+/// measure laid along it.
+pub const LAYING_REVISION: u32 = 5;
 
 /// Kicks at least this large (`v_th`) belong to the core of a collision:
 /// there the nodes are point masses.
@@ -63,20 +64,32 @@ pub const CORE_KICK: f64 = 2e-3;
 /// outer tails each node gives the segment on either side its share of the
 /// mass ([`segment_masses`]), and the segments, the innermost cut where the
 /// interpolated kick reaches `CORE_KICK`, are spread ([`Segment::spread`]);
-/// where the track turns, along the parabola through the turn
-/// ([`Segment::turning`]).
-pub fn lay_track(bins: &Bins, part: &mut [f64], matched: f64, outgoing: &[f64], weights: &[f64]) {
+/// where the track turns, along the cubic through the turn
+/// ([`Segment::turning`]). Returns the measure laid, also where it falls
+/// outside `bins`: the loss at the incoming velocity must be the same, or
+/// the track creates or destroys particles (with the nodes' trapezoid
+/// weights as the loss, `h^2 / 12` of a pair's whole offset range was left
+/// at the incoming velocity of every bath particle: -0.3% of `G` at `|du|`
+/// 1e-2..5e-2 at 49 nodes, docs/benchmarks.md).
+pub fn lay_track(
+    bins: &Bins,
+    part: &mut [f64],
+    matched: f64,
+    outgoing: &[f64],
+    weights: &[f64],
+) -> f64 {
     let in_core = |velocity: f64| (velocity - matched).abs() >= CORE_KICK;
     let last = outgoing.len() - 1;
     let first_core = outgoing.iter().position(|&v| in_core(v));
     let last_core = outgoing.iter().rposition(|&v| in_core(v));
     // Between the first and the last core node: the core and its windows.
     let inner = |i: usize| first_core.is_some_and(|f| i >= f) && last_core.is_some_and(|l| i <= l);
+    let mut laid = 0.0;
     for (i, (&velocity, &weight)) in outgoing.iter().zip(weights).enumerate() {
         if inner(i) && in_core(velocity) {
-            add_point(bins, part, velocity, weight);
+            laid += add_point(bins, part, velocity, weight);
         } else if !inner(i) && (i == 0 || i == last) {
-            add_point(bins, part, velocity, 0.5 * weight);
+            laid += add_point(bins, part, velocity, 0.5 * weight);
         }
     }
     if let (Some(first), Some(last_core)) = (first_core, last_core) {
@@ -89,7 +102,7 @@ pub fn lay_track(bins: &Bins, part: &mut [f64], matched: f64, outgoing: &[f64], 
             }
             if j > start {
                 let mass = weights[start..j].iter().sum();
-                lay_window(bins, part, matched, &outgoing[start - 1..=j], mass);
+                laid += lay_window(bins, part, matched, &outgoing[start - 1..=j], mass);
             }
             j += 1;
         }
@@ -100,17 +113,17 @@ pub fn lay_track(bins: &Bins, part: &mut [f64], matched: f64, outgoing: &[f64], 
         }
         let halves = segment_masses(weights[i], weights[i + 1]);
         let ends = [outgoing[i], outgoing[i + 1]];
-        if inner(i) || inner(i + 1) || monotone_around(outgoing, i) {
+        laid += if inner(i) || inner(i + 1) || monotone_around(outgoing, i) {
             Segment::monotone(matched, ends, halves, neighbours(outgoing, i))
-                .spread_tail(bins, part);
+                .spread_tail(bins, part)
         } else if turns_once(outgoing, i) {
             Segment::turning(matched, ends, halves, neighbours(outgoing, i))
-                .spread_turning(bins, part);
+                .spread_turning(bins, part)
         } else {
-            add_point(bins, part, ends[0], halves[0]);
-            add_point(bins, part, ends[1], halves[1]);
-        }
+            add_point(bins, part, ends[0], halves[0]) + add_point(bins, part, ends[1], halves[1])
+        };
     }
+    laid
 }
 
 /// Lays the `mass` of a window's nodes (the trapezoid's estimate of the
@@ -122,8 +135,8 @@ pub fn lay_track(bins: &Bins, part: &mut [f64], matched: f64, outgoing: &[f64], 
 /// across it, the expected mass in each bin is then exactly its measure,
 /// whereas spreading each node only around itself moves mass away from the
 /// window's edges (1.7% of `G` at `|du|` from 1.5e-3 to 2e-3, n = 12, 193
-/// nodes).
-fn lay_window(bins: &Bins, part: &mut [f64], matched: f64, track: &[f64], mass: f64) {
+/// nodes). Returns the mass laid.
+fn lay_window(bins: &Bins, part: &mut [f64], matched: f64, track: &[f64], mass: f64) -> f64 {
     let last = track.len() - 1;
     let kick = |j: usize| track[j] - matched;
     // Each piece: its length in steps and the kicks at its ends.
@@ -137,16 +150,19 @@ fn lay_window(bins: &Bins, part: &mut [f64], matched: f64, track: &[f64], mass: 
         .chain(std::iter::once(edge_piece(last, last - 1)))
         .collect();
     let length: f64 = pieces.iter().map(|&(reach, _)| reach).sum();
-    for (reach, ends) in pieces {
-        let share = 0.5 * mass * reach / length;
-        Segment::straight(
-            matched,
-            ends.map(|k| matched + k),
-            [share, share],
-            Scale::Linear,
-        )
-        .spread(bins, part);
-    }
+    pieces
+        .into_iter()
+        .map(|(reach, ends)| {
+            let share = 0.5 * mass * reach / length;
+            Segment::straight(
+                matched,
+                ends.map(|k| matched + k),
+                [share, share],
+                Scale::Linear,
+            )
+            .spread(bins, part)
+        })
+        .sum()
 }
 
 /// The velocities one node before and one after the segment `(i, i + 1)`.
@@ -184,11 +200,12 @@ fn segment_masses(first: f64, second: f64) -> [f64; 2] {
     [mass / (1.0 + ratio), mass * ratio / (1.0 + ratio)]
 }
 
-/// Adds `mass` in the bin of `velocity`, if inside.
-fn add_point(bins: &Bins, part: &mut [f64], velocity: f64, mass: f64) {
+/// Adds `mass` in the bin of `velocity`, if inside; returns `mass`.
+fn add_point(bins: &Bins, part: &mut [f64], velocity: f64, mass: f64) -> f64 {
     if let Some(k) = bins.index(velocity) {
         part[k] += mass;
     }
+    mass
 }
 
 /// `true` when `track` does not turn between nodes `i - 1` and `i + 2` (as
@@ -380,8 +397,8 @@ impl Segment {
 
     /// Adds the mass to the bins of `part`, in monotone pieces between the
     /// points where the track turns inside the segment, each only where its
-    /// kick is in the tails.
-    pub fn spread_turning(&self, bins: &Bins, part: &mut [f64]) {
+    /// kick is in the tails; returns the mass laid.
+    pub fn spread_turning(&self, bins: &Bins, part: &mut [f64]) -> f64 {
         let turns = self.turns();
         let edges: Vec<f64> = std::iter::once(0.0)
             .chain(turns.iter().copied())
@@ -390,25 +407,26 @@ impl Segment {
         if edges.len() == 2 {
             return self.spread_tail(bins, part);
         }
-        for piece in edges.windows(2) {
-            self.restricted(piece[0], piece[1]).spread_tail(bins, part);
-        }
+        edges
+            .windows(2)
+            .map(|piece| self.restricted(piece[0], piece[1]).spread_tail(bins, part))
+            .sum()
     }
 
     /// Adds the mass of the part of this monotone segment whose kick lies in
     /// the tails, `|kick| < CORE_KICK`, to the bins of `part` (the core's
-    /// measure is its nodes' point masses).
-    pub fn spread_tail(&self, bins: &Bins, part: &mut [f64]) {
+    /// measure is its nodes' point masses); returns that mass.
+    pub fn spread_tail(&self, bins: &Bins, part: &mut [f64]) -> f64 {
         let [a, b] = self.ends.map(|v| v - self.matched);
         let (a_core, b_core) = (a.abs() >= CORE_KICK, b.abs() >= CORE_KICK);
         match (a_core, b_core) {
             (false, false) => self.spread(bins, part),
-            (true, true) => {}
+            (true, true) => 0.0,
             _ => {
                 let core = if a_core { a } else { b };
                 let edge = self.position(self.matched + CORE_KICK.copysign(core));
                 let (from, to) = if a_core { (edge, 1.0) } else { (0.0, edge) };
-                self.restricted(from, to).spread(bins, part);
+                self.restricted(from, to).spread(bins, part)
             }
         }
     }
@@ -424,8 +442,9 @@ impl Segment {
         self.matched + kick
     }
 
-    /// Adds the segment's mass to the bins of `part` (`bins` around `u'`).
-    pub fn spread(&self, bins: &Bins, part: &mut [f64]) {
+    /// Adds the segment's mass to the bins of `part` (`bins` around `u'`);
+    /// returns the mass, also the part outside the bins.
+    pub fn spread(&self, bins: &Bins, part: &mut [f64]) -> f64 {
         let [a, b] = self.ends;
         let total = self.halves[0] + self.halves[1];
         let (first, last) = (bins.index(a), bins.index(b));
@@ -433,7 +452,7 @@ impl Segment {
             if let Some(k) = first {
                 part[k] += total;
             }
-            return;
+            return total;
         }
         let (low, high) = (a.min(b), a.max(b));
         let (low_bin, high_bin) = (
@@ -452,6 +471,7 @@ impl Segment {
             let share = (fraction_at(upper) - fraction_at(lower)).abs();
             part[k] += total * share;
         }
+        total
     }
 
     /// The part of the segment between positions `from <= to` in `[0, 1]`:
