@@ -73,6 +73,7 @@ fn work_precision_panel(
         marks: Vec::new(),
         styles: vec![("", style)],
         paired: false,
+        dodge: false,
     }
 }
 

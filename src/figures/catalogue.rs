@@ -182,7 +182,7 @@ impl Figure {
                 "tagged particle's h(u, t) relaxing to f0 (a, log scale) and the early variance of h with its closed form t kappa_2 (b)"
             }
             Figure::FiniteSize => {
-                "MD / Boltzmann window variance at t_f against rho l, one series per N: tagged (a) and thermal (b) estimators"
+                "MD / Boltzmann window variance at t_f against rho l, one series per N (drawn side by side: N = 41, 81, 161 at one rho l are moved apart by 1.2% of the axis), tagged (a) and thermal (b) estimators"
             }
             Figure::MdTimes { .. } => {
                 "h(u, t) of one ring at several times: Boltzmann (band) and MD, tagged particles (markers)"
@@ -207,6 +207,7 @@ impl Figure {
             marks: Vec::new(),
             styles,
             paired: false,
+            dodge: false,
         };
         let panels = match self {
             Figure::KernelsEveryN { .. } | Figure::KernelsLennardJones { .. } => vec![panel(
@@ -315,7 +316,10 @@ impl Figure {
             }],
             Figure::FiniteSize => ["tagged", "thermal"]
                 .into_iter()
-                .map(|name| panel(name, linear("ρ l"), linear("MD / Boltzmann"), Vec::new()))
+                .map(|name| Panel {
+                    dodge: true,
+                    ..panel(name, linear("ρ l"), linear("MD / Boltzmann"), Vec::new())
+                })
                 .collect(),
         };
         Layout { panels }

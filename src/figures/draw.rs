@@ -9,7 +9,7 @@ use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 use plotters::style::{FontStyle, register_font};
 
-use super::{Layout, Panel, Point, Style};
+use super::{DODGE, Layout, Panel, Point, Style};
 
 /// DejaVu Sans (Bitstream Vera licence: fonts/DejaVu-LICENSE), the one font of
 /// every figure.
@@ -270,21 +270,25 @@ where
         f64::NEG_INFINITY
     };
     let names = series_names(points);
-    for (name, colour) in names.iter().zip(series_colours(panel, &names)) {
-        let series: Vec<&Point> = points
+    let x_range = chart.x_range();
+    for (k, (name, colour)) in names.iter().zip(series_colours(panel, &names)).enumerate() {
+        let style = panel.style_of(name);
+        let moved = if panel.dodge && style == Style::Markers {
+            (k as f64 - 0.5 * (names.len() - 1) as f64) * DODGE
+        } else {
+            0.0
+        };
+        let series: Vec<Point> = points
             .iter()
-            .copied()
             .filter(|p| p.series == *name && p.x.is_finite() && p.y.is_finite())
             .filter(|p| (!panel.x.log || p.x > 0.0) && p.y >= y_low)
+            .map(|p| Point {
+                x: dodged(p.x, moved, panel.x.log, &x_range),
+                ..(*p).clone()
+            })
             .collect();
-        draw_series(
-            &mut chart,
-            panel.style_of(name),
-            &series,
-            colour,
-            size,
-            panel.y.log,
-        )?;
+        let series: Vec<&Point> = series.iter().collect();
+        draw_series(&mut chart, style, &series, colour, size, panel.y.log)?;
     }
     for mark in &panel.marks {
         let (low, high) = (chart.y_range().start, chart.y_range().end);
@@ -317,6 +321,18 @@ pub fn series_colours(panel: &Panel, names: &[&str]) -> Vec<RGBColor> {
             PALETTE[index % PALETTE.len()]
         })
         .collect()
+}
+
+/// `x` moved by the share `moved` of the axis `range` (of its decades on a
+/// log axis).
+fn dodged(x: f64, moved: f64, log: bool, range: &Range<f64>) -> f64 {
+    if moved == 0.0 {
+        x
+    } else if log {
+        x * (range.end / range.start).powf(moved)
+    } else {
+        x + moved * (range.end - range.start)
+    }
 }
 
 /// Colour of vertical marks.

@@ -96,7 +96,17 @@ pub struct Panel {
     /// 960 ns`) share a colour, told apart by their styles.
     #[serde(skip_serializing_if = "std::ops::Not::not")]
     pub paired: bool,
+    /// Marker series drawn side by side: the `k`-th of `n` moved along the
+    /// horizontal axis by `(k - (n - 1) / 2)` times [`DODGE`] of its span
+    /// (in decades on a log axis), so points of several series at one `x`
+    /// stay apart. Drawing only: the figure table keeps the true `x`.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub dodge: bool,
 }
+
+/// The share of the horizontal axis between neighbouring series of a
+/// [`Panel::dodge`] panel.
+pub const DODGE: f64 = 0.012;
 
 impl Panel {
     /// How the series `name` is drawn.

@@ -273,7 +273,7 @@ impl Stage for FiguresStage {
     }
 
     fn version(&self) -> u32 {
-        4
+        5
     }
 
     fn params(&self) -> Value {
