@@ -327,18 +327,31 @@ fn expected(store: &Path, figure: &Artifact) -> Vec<Row> {
             rows
         }
         "finite_size" => {
-            use contract::compare::finite_size::{DENSITY, PARTICLES, RATIO, THERMAL_RATIO};
+            use contract::compare::finite_size::{
+                DENSITY, PARTICLES, RATIO, SCALED_TIME, THERMAL_RATIO,
+            };
             let rings = figure.input(store, 0).table("finite_size");
             let particles = PARTICLES.read(&rings).unwrap();
             let density = DENSITY.read(&rings).unwrap();
+            // Only the rings at the median scaled time, N ascending.
+            let times = SCALED_TIME.read(&rings).unwrap();
+            let mut sorted = times.clone();
+            sorted.sort_by(f64::total_cmp);
+            let median = sorted[sorted.len() / 2];
+            let drawn: Vec<bool> = times
+                .iter()
+                .map(|t| (t - median).abs() <= 1e-6 * median)
+                .collect();
+            let mut counts = in_order(&particles);
+            counts.sort_unstable();
             let mut rows = Vec::new();
             for (panel, pair) in [("tagged", RATIO), ("thermal", THERMAL_RATIO)] {
                 let all = pair_rows(&rings, panel, "", &density, &pair);
-                for n in in_order(&particles) {
+                for &n in &counts {
                     rows.extend(
                         all.iter()
-                            .zip(&particles)
-                            .filter(|(_, p)| **p == n)
+                            .zip(particles.iter().zip(&drawn))
+                            .filter(|(_, (p, drawn))| **p == n && **drawn)
                             .map(|(row, _)| {
                                 (row.0.clone(), format!("N = {n}"), row.2, row.3, row.4)
                             }),

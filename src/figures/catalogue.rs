@@ -182,7 +182,7 @@ impl Figure {
                 "tagged particle's h(u, t) relaxing to f0 (a, log scale) and the early variance of h with its closed form t kappa_2 (b)"
             }
             Figure::FiniteSize => {
-                "MD / Boltzmann window variance at t_f against rho l, one series per N (drawn side by side: N = 41, 81, 161 at one rho l are moved apart by 1.2% of the axis), tagged (a) and thermal (b) estimators"
+                "MD / Boltzmann window variance at t_f against rho l, one series per N (drawn side by side: N = 41, 81, 161 at one rho l are moved apart by 1.2% of the axis), tagged (a) and thermal (b) estimators; the rings at the study's common rho^2 l v_th t_f (others, such as a ring's earlier time, are in the table, not drawn)"
             }
             Figure::MdTimes { .. } => {
                 "h(u, t) of one ring at several times: Boltzmann (band) and MD, tagged particles (markers)"
@@ -663,8 +663,10 @@ fn evolution(input: &Input, times: &[f64]) -> Result<DataFrame, StageError> {
 }
 
 fn finite_size(input: &Input) -> Result<DataFrame, StageError> {
-    use contract::compare::finite_size::{DENSITY, PARTICLES, RATIO, TABLE, THERMAL_RATIO};
-    let rings = frame(TABLE.of(input)?)?;
+    use contract::compare::finite_size::{
+        DENSITY, PARTICLES, RATIO, SCALED_TIME, TABLE, THERMAL_RATIO,
+    };
+    let rings = at_common_time(&frame(TABLE.of(input)?)?, SCALED_TIME.name)?;
     let named = |n: &str| format!("N = {n}");
     let pair = |pair: &contract::Pair| (DENSITY.name, pair.value.name, Some(pair.stderr.name));
     let mut parts = series_by(&rings, "tagged", PARTICLES.name, named, pair(&RATIO))?;
@@ -676,6 +678,23 @@ fn finite_size(input: &Input) -> Result<DataFrame, StageError> {
         pair(&THERMAL_RATIO),
     )?);
     stack(parts)
+}
+
+/// The rows of `rings` at their median scaled time `rho^2 l v_th t_f` (within
+/// 1e-6 of it): a figure against `rho l` compares rings at one scaled time.
+fn at_common_time(rings: &DataFrame, scaled_time: &str) -> Result<DataFrame, StageError> {
+    let mut sorted = numbers(rings, scaled_time)?;
+    sorted.sort_by(f64::total_cmp);
+    let median = *sorted
+        .get(sorted.len() / 2)
+        .ok_or_else(|| failed("no ring to draw"))?;
+    let times = rings
+        .column(scaled_time)
+        .map_err(failed)?
+        .f64()
+        .map_err(failed)?;
+    let keep = times.gt_eq(median * (1.0 - 1e-6)) & times.lt_eq(median * (1.0 + 1e-6));
+    rings.filter(&keep).map_err(failed)
 }
 
 fn md_times(input: &Input, rings: &[String], times_ns: &[f64]) -> Result<DataFrame, StageError> {

@@ -273,7 +273,7 @@ impl Stage for FiguresStage {
     }
 
     fn version(&self) -> u32 {
-        5
+        6
     }
 
     fn params(&self) -> Value {
