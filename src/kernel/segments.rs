@@ -283,7 +283,7 @@ impl Segment {
         if !bends.is_empty() {
             segment.curvature = bends.iter().sum::<f64>() / bends.len() as f64;
         }
-        if !segment.turns().is_empty() {
+        if segment.turns().iter().any(Option::is_some) {
             segment.curvature = 0.0;
         }
         segment
@@ -306,8 +306,9 @@ impl Segment {
     /// after), or the parabola through the one that exists. At a sharp
     /// extremum (a weak collision's peak, a few steps wide) the parabola
     /// through three nodes falls short of the peak and puts the offsets
-    /// above it into the bins below: +3% in `|kick|` 1.5e-3..2e-3 at n = 12
-    /// and 49 nodes, 0.6% with the cubic (docs/benchmarks.md).
+    /// above it into the bins below: +1.9% of `G` at `|du|` 1.5e-3..2e-3
+    /// for n = 12 at 49 nodes against 193, +0.4% with the cubic
+    /// (docs/benchmarks.md).
     pub fn turning(
         matched: f64,
         ends: [f64; 2],
@@ -371,37 +372,31 @@ impl Segment {
     }
 
     /// Positions inside `(0, 1)`, ascending, where the track turns (`g`'s
-    /// derivative vanishes): none, one or two.
-    fn turns(&self) -> Vec<f64> {
+    /// derivative vanishes): none, one or two (no allocation: every tail
+    /// segment asks).
+    fn turns(&self) -> [Option<f64>; 2] {
         let [g0, g1] = self.end_values();
         let roots = if self.cubic == 0.0 {
-            vec![(self.curvature - (g1 - g0)) / (2.0 * self.curvature)]
+            [
+                (self.curvature - (g1 - g0)) / (2.0 * self.curvature),
+                f64::NAN,
+            ]
         } else {
-            // g'(t) = linear + 2 quadratic t + 3 cubic t^2.
+            // g'(t) = linear + 2 quadratic t + 3 cubic t^2; no real root: NaN.
             let (linear, quadratic) = (g1 - g0 - self.curvature, self.curvature - self.cubic);
-            let discriminant = quadratic * quadratic - 3.0 * self.cubic * linear;
-            if discriminant < 0.0 {
-                Vec::new()
-            } else {
-                let root = discriminant.sqrt();
-                let mut roots = vec![
-                    (-quadratic - root) / (3.0 * self.cubic),
-                    (-quadratic + root) / (3.0 * self.cubic),
-                ];
-                roots.sort_by(f64::total_cmp);
-                roots
-            }
+            let root = (quadratic * quadratic - 3.0 * self.cubic * linear).sqrt();
+            let [a, b] = [-root, root].map(|r| (-quadratic + r) / (3.0 * self.cubic));
+            [a.min(b), a.max(b)]
         };
-        roots.into_iter().filter(|&t| t > 0.0 && t < 1.0).collect()
+        roots.map(|t| (t > 0.0 && t < 1.0).then_some(t))
     }
 
     /// Adds the mass to the bins of `part`, in monotone pieces between the
     /// points where the track turns inside the segment, each only where its
     /// kick is in the tails; returns the mass laid.
     pub fn spread_turning(&self, bins: &Bins, part: &mut [f64]) -> f64 {
-        let turns = self.turns();
         let edges: Vec<f64> = std::iter::once(0.0)
-            .chain(turns.iter().copied())
+            .chain(self.turns().into_iter().flatten())
             .chain(std::iter::once(1.0))
             .collect();
         if edges.len() == 2 {
