@@ -69,8 +69,15 @@ enum Command {
     /// Check every artifact to the bottom (or an exported bundle); exit non-zero on any problem.
     Verify {
         /// Check the exported bundle in this directory instead of the store.
-        #[arg(long, value_name = "DIR")]
+        #[arg(long, value_name = "DIR", conflicts_with_all = ["recompute", "only"])]
         bundle: Option<PathBuf>,
+        /// Recompute the current artifacts in memory from their stored inputs
+        /// and compare their bytes with the stored ones under the same key.
+        #[arg(long)]
+        recompute: bool,
+        /// With --recompute: only this stage's instances (repeatable).
+        #[arg(long, value_name = "STAGE", requires = "recompute")]
+        only: Vec<String>,
     },
     /// Write the study's current artifacts as a citable dataset bundle.
     Export {
@@ -438,9 +445,17 @@ fn dispatch(cli: Cli) -> Result<ExitCode> {
             emit(&report::dag(&stages::plan(&study)));
             Ok(ExitCode::SUCCESS)
         }
-        Command::Verify { bundle } => {
+        Command::Verify {
+            bundle,
+            recompute,
+            only,
+        } => {
             let (text, problems) = match bundle {
                 Some(dir) => export::verify_bundle(&dir)?,
+                None if recompute => {
+                    let (study, store) = load(&cli.config, Opening::Existing)?;
+                    report::audit(&store, &stages::plan(&study), &only)?
+                }
                 None => {
                     let (study, store) = load(&cli.config, Opening::Existing)?;
                     report::verify(&store, &stages::plan(&study))?

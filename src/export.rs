@@ -34,6 +34,7 @@ use serde_json::{Value, json};
 
 use crate::config::{AuthorConfig, PublicationConfig, Study};
 use crate::pipeline::Stage;
+use crate::pipeline::code::CodeRecord;
 use crate::pipeline::executor::{self, Freshness, tool_version};
 use crate::pipeline::key::sha256_hex;
 use crate::pipeline::store::{Depth, Store};
@@ -71,7 +72,7 @@ struct Entry {
     stage: String,
     instance: String,
     key: String,
-    version: u32,
+    code: CodeRecord,
     params: Value,
     table: String,
     source: PathBuf,
@@ -204,7 +205,7 @@ fn selected_entries(
                 stage: stage.clone(),
                 instance: instance.clone(),
                 key: key.clone(),
-                version: manifest.version,
+                code: manifest.code.clone(),
                 params: manifest.params.clone(),
                 table,
                 source: store.artifact_dir(stage, &key).join(&file.name),
@@ -389,7 +390,7 @@ fn figure_resource(entry: &Entry, bytes: u64) -> Value {
         "description": format!("figure `{}` of `{}[{}]`", entry.table, entry.stage, entry.instance),
         "ternary": {
             "stage": entry.stage,
-            "stage_version": entry.version,
+            "code": entry.code,
             "instance": entry.instance,
             "key": entry.key,
         },
@@ -443,7 +444,7 @@ fn resource(entry: &Entry, file: &Path, bytes: u64) -> Result<Value> {
         "schema": { "fields": fields },
         "ternary": {
             "stage": entry.stage,
-            "stage_version": entry.version,
+            "code": entry.code,
             "instance": entry.instance,
             "table": entry.table,
             "key": entry.key,
@@ -666,7 +667,9 @@ fn bundle_readme(publication: &PublicationConfig, tables: &[Value]) -> String {
             resource["description"].as_str().unwrap_or_default(),
             meta["rows"],
             meta["stage"].as_str().unwrap_or_default(),
-            meta["stage_version"],
+            meta["code"]["fingerprint"]
+                .as_str()
+                .map_or("", |fingerprint| &fingerprint[..12.min(fingerprint.len())]),
             meta["instance"].as_str().unwrap_or_default(),
             meta["key"].as_str().unwrap_or_default(),
         );

@@ -1,12 +1,18 @@
 //! Byte identity of every stage's output across code changes: a reduced study
 //! that runs every stage (scan, collisions and the sweep's own, kernel,
 //! moments, fit, sweep, convergence, evolve, md for an inverse power law, the
-//! n = 2 ring and Lennard-Jones, compare, gases, table, paper, figures) is computed and the
-//! SHA-256 of each output file is compared with `tests/golden/reduced-study.txt`.
+//! n = 2 ring and Lennard-Jones, compare, gases, table, paper, figures) is
+//! computed, and each output file's key and content hash (data and its own
+//! metadata, without provenance) are compared with `tests/golden/reduced-study.txt`.
 //!
-//! A refactoring must leave the file unchanged. A change meant to move bytes
-//! bumps the stage's version and rewrites the file with
-//! `TERNARY_BLESS=1 cargo test --release --test golden`; the commit says why.
+//! * Content that changes under an unchanged key is a broken promise (a
+//!   non-deterministic stage, or code the fingerprint misses): always a failure.
+//! * Content that changes with its key (the stage's code changed) fails until
+//!   the file is rewritten with `TERNARY_BLESS=1 cargo test --release --test
+//!   golden`; the commit says why. A refactoring leaves the content unchanged.
+//! * A key that changes with the same content passes (a note says so).
+//!
+//! The recompute audit (`verify --recompute`) then runs on the same store.
 //!
 //! Floating-point results depend on the CPU's vector paths (rustfft picks
 //! AVX or SSE at run time): the golden file records the features it was made
@@ -14,11 +20,11 @@
 
 use std::collections::BTreeMap;
 use std::fs;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 mod common;
 
-use common::{REDUCED_STUDY, files_under, ternary, workspace, write_config};
+use common::{REDUCED_STUDY, files_under, stdout, ternary, workspace, write_config};
 
 const GOLDEN: &str = "tests/golden/reduced-study.txt";
 
@@ -45,24 +51,47 @@ fn cpu_features() -> String {
     }
 }
 
-/// `<stage> <instance> <file> <sha256>` of every output file, sorted.
-fn output_hashes(store: &Path) -> BTreeMap<String, String> {
+/// `<stage> <instance> <file>` -> `(key, content sha256)` of every output file.
+fn output_records(store: &Path) -> BTreeMap<String, (String, String)> {
     files_under(&store.join("artifacts"))
         .into_iter()
-        .filter(|path| path.file_name().is_some_and(|n| n != "manifest.json"))
-        .map(|path| {
-            let dir: PathBuf = store.join("artifacts").join(path.parent().unwrap());
-            let manifest: serde_json::Value =
-                serde_json::from_str(&fs::read_to_string(dir.join("manifest.json")).unwrap())
-                    .unwrap();
-            let bytes = fs::read(store.join("artifacts").join(&path)).unwrap();
-            let name = format!(
-                "{} {} {}",
-                manifest["stage"].as_str().unwrap(),
-                manifest["instance"].as_str().unwrap(),
-                path.file_name().unwrap().to_string_lossy()
-            );
-            (name, ternary::pipeline::key::sha256_hex(&bytes))
+        .filter(|path| path.file_name().is_some_and(|n| n == "manifest.json"))
+        .flat_map(|path| {
+            let text = fs::read_to_string(store.join("artifacts").join(&path)).unwrap();
+            let manifest: serde_json::Value = serde_json::from_str(&text).unwrap();
+            let field = |name: &str| manifest[name].as_str().unwrap().to_string();
+            let (stage, instance, key) = (field("stage"), field("instance"), field("key"));
+            manifest["files"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|file| {
+                    let name = format!("{stage} {instance} {}", file["name"].as_str().unwrap());
+                    let content = file["content_sha256"].as_str().unwrap().to_string();
+                    (name, (key.clone(), content))
+                })
+                .collect::<Vec<_>>()
+        })
+        .collect()
+}
+
+/// The golden file's text for `records`.
+fn golden_text(records: &BTreeMap<String, (String, String)>) -> String {
+    let mut text = format!("# cpu: {}\n", cpu_features());
+    for (name, (key, content)) in records {
+        text.push_str(&format!("{name} key={key} content={content}\n"));
+    }
+    text
+}
+
+/// The records of a golden file's text.
+fn parse_golden(text: &str) -> BTreeMap<String, (String, String)> {
+    text.lines()
+        .skip(1)
+        .map(|line| {
+            let (name, rest) = line.split_once(" key=").expect("golden line");
+            let (key, content) = rest.split_once(" content=").expect("golden line");
+            (name.to_string(), (key.to_string(), content.to_string()))
         })
         .collect()
 }
@@ -77,20 +106,22 @@ fn every_stage_keeps_its_bytes() {
         "{}",
         String::from_utf8_lossy(&run.stderr)
     );
-    let hashes = output_hashes(&dir.join("data"));
-    let stages: std::collections::BTreeSet<&str> = hashes
+    let records = output_records(&dir.join("data"));
+    let stages: std::collections::BTreeSet<&str> = records
         .keys()
         .map(|name| name.split(' ').next().unwrap())
         .collect();
     assert_eq!(stages.len(), 15, "every stage runs: {stages:?}");
-    let mut text = format!("# cpu: {}\n", cpu_features());
-    for (name, sha) in &hashes {
-        text.push_str(&format!("{name} {sha}\n"));
-    }
+    let audit = ternary(&config, &["verify", "--recompute"]);
+    assert!(
+        audit.status.success(),
+        "recompute audit:\n{}",
+        stdout(&audit)
+    );
     let golden = Path::new(env!("CARGO_MANIFEST_DIR")).join(GOLDEN);
     if std::env::var_os("TERNARY_BLESS").is_some() {
         fs::create_dir_all(golden.parent().unwrap()).unwrap();
-        fs::write(&golden, &text).unwrap();
+        fs::write(&golden, golden_text(&records)).unwrap();
         return;
     }
     let expected = fs::read_to_string(&golden).expect("tests/golden/reduced-study.txt");
@@ -102,17 +133,32 @@ fn every_stage_keeps_its_bytes() {
         );
         return;
     }
-    let differing: Vec<String> = expected
-        .lines()
-        .skip(1)
-        .zip(text.lines().skip(1))
-        .filter(|(a, b)| a != b)
-        .map(|(a, b)| format!("expected {a}\n     got {b}"))
-        .collect();
+    let expected = parse_golden(&expected);
+    let mut broken = Vec::new();
+    let mut changed = Vec::new();
+    let mut rekeyed = 0;
+    for name in expected.keys().chain(records.keys()) {
+        match (expected.get(name), records.get(name)) {
+            (Some(before), Some(now)) if before == now => {}
+            (Some((key, _)), Some((now_key, _))) if key == now_key => broken.push(name.clone()),
+            (Some((_, content)), Some((_, now_content))) if content == now_content => rekeyed += 1,
+            _ => changed.push(name.clone()),
+        }
+    }
+    changed.sort();
+    changed.dedup();
     assert!(
-        differing.is_empty() && expected == text,
-        "output bytes changed ({} lines differ; if intended, bump the stage version and bless):\n{}",
-        differing.len(),
-        differing.join("\n")
+        broken.is_empty(),
+        "SAME KEY, DIFFERENT CONTENT (a stage is not deterministic, or its fingerprint misses code it runs; never bless this):\n{}",
+        broken.join("\n")
     );
+    assert!(
+        changed.is_empty(),
+        "content changed with the code ({} files; if intended, bless and say why in the commit):\n{}",
+        changed.len(),
+        changed.join("\n")
+    );
+    if rekeyed > 0 {
+        eprintln!("note: {rekeyed} files have new keys (code changed) and the same content");
+    }
 }

@@ -39,14 +39,6 @@
 
 use crate::binning::Bins;
 
-/// Revision of how a launch pair's nodes are laid into bins ([`lay_track`]).
-/// Every stage whose tables come from histograms of quadrature nodes adds it
-/// to its own version, so that a change here re-keys all of them: kernel,
-/// convergence, sweep, evolve, compare, paper. Revision 4: cubic turns
-/// ([`Segment::turning`]); 5: the loss at a track's incoming velocity is the
-/// measure laid along it.
-pub const LAYING_REVISION: u32 = 5;
-
 /// Kicks at least this large (`v_th`) belong to the core of a collision:
 /// there the nodes are point masses.
 pub const CORE_KICK: f64 = 2e-3;

@@ -2,7 +2,7 @@
 //! fresh, stale or missing (`status`).
 //!
 //! Instances are given in topological order. An instance's key is computed from
-//! its stage name, version, parameters and the file hashes of its inputs; if the
+//! its stage name, code fingerprint, parameters and the file hashes of its inputs; if the
 //! store holds an intact artifact under that key (checked down to its file
 //! hashes) it is fresh, otherwise it is computed and committed atomically.
 
@@ -16,6 +16,7 @@ use std::time::Instant;
 use arrow::array::RecordBatch;
 use indicatif::{ProgressBar, ProgressStyle};
 
+use super::code::CodeRecord;
 use super::key::{InputRecord, changed_params, sha256_hex, stage_key};
 use super::shards::{self, Sharding};
 use super::store::{
@@ -313,11 +314,16 @@ pub fn run(
             });
             continue;
         };
-        let key = stage_key(&id.stage, stage.version(), &stage.params(), &inputs);
+        let key = stage_key(
+            &id.stage,
+            stage.code().fingerprint,
+            &stage.params(),
+            &inputs,
+        );
         let forced = options.force.contains(&id.stage);
         let entry = InstanceRef {
             key: key.clone(),
-            version: stage.version(),
+            code: stage.code().into(),
             params: stage.params(),
             inputs,
         };
@@ -583,6 +589,21 @@ impl Job<'_> {
         Ok((manifest, started.elapsed().as_secs_f64()))
     }
 
+    /// Every file of `entry`'s artifact, computed from the stored inputs in
+    /// memory (unsharded: a merge of shards must give the same bytes).
+    fn recomputed_files(&self, entry: &InstanceRef) -> Result<Vec<(String, Vec<u8>)>, ExecError> {
+        let id = self.stage.id();
+        let loaded = load_inputs(self.store, self.stage, self.resolved, self.decoded)?;
+        let tables = self.produce(self.stage.tables(), |progress| {
+            self.stage.run(&loaded, progress)
+        })?;
+        let mut files = self.rendered(&tables)?;
+        for table in encoded_tables(&id, entry, &tables).map_err(stage_failure(&id))? {
+            files.push((table.file, table.bytes));
+        }
+        Ok(files)
+    }
+
     /// The stage's files drawn from `tables`, checked against the declared names.
     fn rendered(&self, tables: &[Table]) -> Result<Vec<(String, Vec<u8>)>, ExecError> {
         let id = self.stage.id();
@@ -691,8 +712,8 @@ impl Job<'_> {
         Ok(tables)
     }
 
-    /// Encodes `tables` with their provenance into `staging` and returns the
-    /// manifest of the artifact `id` under `entry`'s key.
+    /// Writes `tables`, encoded with their provenance, into `staging` and
+    /// returns the manifest of the artifact `id` under `entry`'s key.
     fn write(
         &self,
         staging: &mut Staging,
@@ -701,33 +722,13 @@ impl Job<'_> {
         tables: &[Table],
         started: Instant,
     ) -> Result<Manifest, ExecError> {
-        let values = [
-            id.stage.clone(),
-            entry.version.to_string(),
-            entry.key.clone(),
-            super::key::canonical_json(&entry.params),
-            super::key::embedded_inputs(&entry.inputs),
-            tool_version(),
-        ];
-        let provenance: BTreeMap<String, String> = PROVENANCE_KEYS
-            .iter()
-            .map(ToString::to_string)
-            .zip(values)
-            .collect();
-        for table in tables {
-            let bytes = table.to_parquet(&provenance).map_err(stage_failure(id))?;
-            let content = table.content_sha256().map_err(stage_failure(id))?;
-            staging.write_file(
-                &format!("{}.parquet", table.name),
-                &bytes,
-                table.rows(),
-                content,
-            )?;
+        for table in encoded_tables(id, entry, tables).map_err(stage_failure(id))? {
+            staging.write_file(&table.file, &table.bytes, table.rows, table.content_sha256)?;
         }
         Ok(Manifest {
             key: entry.key.clone(),
             stage: id.stage.clone(),
-            version: entry.version,
+            code: entry.code.clone(),
             instance: id.instance.clone(),
             params: entry.params.clone(),
             inputs: entry.inputs.clone(),
@@ -737,6 +738,191 @@ impl Job<'_> {
             manifest_sha256: None,
         })
     }
+}
+
+/// One table as it is written: file name, Parquet bytes, rows and the
+/// content hash downstream keys take.
+struct EncodedTable {
+    file: String,
+    bytes: Vec<u8>,
+    rows: u64,
+    content_sha256: String,
+}
+
+/// The files of `tables` of the artifact `id` under `entry`'s key: Parquet
+/// with the executor's provenance metadata. Part of every stage's code
+/// fingerprint (the build script's shared root): what it does to a table
+/// is in every artifact's bytes.
+fn encoded_tables(
+    id: &InstanceId,
+    entry: &InstanceRef,
+    tables: &[Table],
+) -> Result<Vec<EncodedTable>, TableError> {
+    let values = [
+        id.stage.clone(),
+        entry.code.fingerprint.clone(),
+        entry.key.clone(),
+        super::key::canonical_json(&entry.params),
+        super::key::embedded_inputs(&entry.inputs),
+        tool_version(),
+    ];
+    let provenance: BTreeMap<String, String> = PROVENANCE_KEYS
+        .iter()
+        .map(ToString::to_string)
+        .zip(values)
+        .collect();
+    tables
+        .iter()
+        .map(|table| {
+            Ok(EncodedTable {
+                file: format!("{}.parquet", table.name),
+                bytes: table.to_parquet(&provenance)?,
+                rows: table.rows(),
+                content_sha256: table.content_sha256()?,
+            })
+        })
+        .collect()
+}
+
+/// What `verify --recompute` found for one instance.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Audit {
+    /// Recomputed: every file has the stored bytes.
+    Same {
+        /// Wall time of the recomputation, seconds.
+        seconds: f64,
+    },
+    /// Recomputed under the same key, some files with other bytes:
+    /// `(file, stored SHA-256, recomputed SHA-256)` (`-` for a file one side lacks).
+    Differs(Vec<(String, String, String)>),
+    /// Not recomputed, and why: no intact artifact under the current key.
+    NotFresh(String),
+}
+
+/// Recomputes the fresh instances of the stages in `only` (all when empty)
+/// from their stored inputs, in memory, and compares every file's bytes with
+/// the stored artifact under the same key: the audit that a key means its
+/// bytes (`ternary verify --recompute`), one line per selected instance as
+/// it is checked. Instances not selected are only resolved; nothing is written.
+pub fn recompute(
+    store: &Store,
+    stages: &[Box<dyn Stage>],
+    only: &[String],
+    verbosity: Verbosity,
+) -> Result<Vec<(InstanceId, Audit)>, ExecError> {
+    check_plan(stages, only)?;
+    let options = RunOptions {
+        only: only.to_vec(),
+        force: Vec::new(),
+        verbosity,
+        sharding: Sharding::default(),
+    };
+    let decoded = DecodedTables::default();
+    let mut resolved: BTreeMap<InstanceId, Manifest> = BTreeMap::new();
+    let mut audits = Vec::new();
+    for stage in stages {
+        let id = stage.id();
+        let selected = only.is_empty() || only.contains(&id.stage);
+        let inputs = input_records(stage.as_ref(), &resolved);
+        let entry = inputs.map(|inputs| InstanceRef {
+            key: stage_key(
+                &id.stage,
+                stage.code().fingerprint,
+                &stage.params(),
+                &inputs,
+            ),
+            code: stage.code().into(),
+            params: stage.params(),
+            inputs,
+        });
+        let checked = entry
+            .as_ref()
+            .map(|entry| checked(store, stage.as_ref(), &entry.key));
+        let (Some(entry), Some(Ok(manifest))) = (entry, &checked) else {
+            if selected {
+                let reason = match checked {
+                    Some(Err(Some(problems))) => format!("damaged ({})", problems.join("; ")),
+                    Some(_) => "no artifact under the current key".to_string(),
+                    None => "an input is not fresh".to_string(),
+                };
+                let audit = Audit::NotFresh(reason);
+                if verbosity == Verbosity::Normal {
+                    let _ = writeln!(std::io::stdout().lock(), "{}", audit_line(&id, &audit));
+                }
+                audits.push((id, audit));
+            }
+            continue;
+        };
+        if selected {
+            let job = Job {
+                store,
+                stage: stage.as_ref(),
+                resolved: &resolved,
+                options: &options,
+                decoded: &decoded,
+            };
+            let started = Instant::now();
+            let files = job.recomputed_files(&entry)?;
+            let audit = compare_files(manifest, files, started.elapsed().as_secs_f64());
+            if verbosity == Verbosity::Normal {
+                let _ = writeln!(std::io::stdout().lock(), "{}", audit_line(&id, &audit));
+            }
+            audits.push((id.clone(), audit));
+        }
+        resolved.insert(id, manifest.clone());
+    }
+    Ok(audits)
+}
+
+/// The stored files of `manifest` against recomputed `(name, bytes)`.
+fn compare_files(manifest: &Manifest, files: Vec<(String, Vec<u8>)>, seconds: f64) -> Audit {
+    let recomputed: BTreeMap<String, String> = files
+        .into_iter()
+        .map(|(name, bytes)| (name, sha256_hex(&bytes)))
+        .collect();
+    let stored: BTreeMap<String, String> = manifest
+        .files
+        .iter()
+        .map(|file| (file.name.clone(), file.sha256.clone()))
+        .collect();
+    let mut names: Vec<&String> = stored.keys().chain(recomputed.keys()).collect();
+    names.sort();
+    names.dedup();
+    let differing: Vec<(String, String, String)> = names
+        .into_iter()
+        .filter(|name| stored.get(*name) != recomputed.get(*name))
+        .map(|name| {
+            let side =
+                |map: &BTreeMap<String, String>| map.get(name).cloned().unwrap_or("-".into());
+            (name.clone(), side(&stored), side(&recomputed))
+        })
+        .collect();
+    if differing.is_empty() {
+        Audit::Same { seconds }
+    } else {
+        Audit::Differs(differing)
+    }
+}
+
+/// One line of `verify --recompute`.
+pub fn audit_line(id: &InstanceId, audit: &Audit) -> String {
+    let what = match audit {
+        Audit::Same { seconds } => format!("same bytes (recomputed in {seconds:.2} s)"),
+        Audit::Differs(files) => format!(
+            "SAME KEY, DIFFERENT BYTES: {}",
+            files
+                .iter()
+                .map(|(name, stored, now)| format!(
+                    "{name} (stored {}, recomputed {})",
+                    &stored[..stored.len().min(12)],
+                    &now[..now.len().min(12)]
+                ))
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+        Audit::NotFresh(reason) => format!("not checked: {reason}; run first"),
+    };
+    format!("{:<24} {what}", id.to_string())
 }
 
 /// `ternary <crate version>`.
@@ -809,7 +995,12 @@ pub fn status(
                 }
             }
             Some(inputs) => {
-                let current = stage_key(&id.stage, stage.version(), &stage.params(), &inputs);
+                let current = stage_key(
+                    &id.stage,
+                    stage.code().fingerprint,
+                    &stage.params(),
+                    &inputs,
+                );
                 let freshness = match checked(store, stage.as_ref(), &current) {
                     Ok(manifest) => {
                         resolved.insert(id.clone(), manifest);
@@ -821,7 +1012,7 @@ pub fn status(
                 if freshness != Freshness::Fresh && stage.shard_units() > 0 && shards > 1 {
                     let whole = InstanceRef {
                         key: current.clone(),
-                        version: stage.version(),
+                        code: stage.code().into(),
                         params: stage.params(),
                         inputs,
                     };
@@ -885,11 +1076,13 @@ fn explain(
         return Freshness::Missing("its artifact was removed".to_string());
     }
     let mut reasons = Vec::new();
-    if previous.version != stage.version() {
+    let code = CodeRecord::from(stage.code());
+    if previous.code.fingerprint.is_empty() {
+        reasons.push("code changed (computed before keys followed the code)".to_string());
+    } else if previous.code.fingerprint != code.fingerprint {
         reasons.push(format!(
-            "stage version {} -> {}",
-            previous.version,
-            stage.version()
+            "code changed ({})",
+            previous.code.changed_parts(&code).join(", ")
         ));
     }
     reasons.extend(
@@ -915,8 +1108,15 @@ fn explain(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::pipeline::code::Code;
     use crate::pipeline::{Column, Table};
     use serde_json::json;
+
+    static TEST_CODE: Code = Code {
+        root: "src/pipeline/executor.rs",
+        fingerprint: "test",
+        parts: &[],
+    };
 
     /// A source whose `label` does not change its output bytes.
     struct Source {
@@ -931,8 +1131,8 @@ mod tests {
         fn id(&self) -> InstanceId {
             InstanceId::new("source", "a")
         }
-        fn version(&self) -> u32 {
-            1
+        fn code(&self) -> &'static Code {
+            &TEST_CODE
         }
         fn params(&self) -> serde_json::Value {
             json!({ "label": self.label, "value": self.value })
@@ -958,8 +1158,8 @@ mod tests {
         fn id(&self) -> InstanceId {
             InstanceId::new("double", "a")
         }
-        fn version(&self) -> u32 {
-            1
+        fn code(&self) -> &'static Code {
+            &TEST_CODE
         }
         fn params(&self) -> serde_json::Value {
             json!({})

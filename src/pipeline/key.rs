@@ -1,6 +1,6 @@
 //! Content keys: SHA-256 over a canonical encoding of what determines an
-//! artifact (stage name, stage version, resolved parameters, and the content
-//! hashes of the input files). Identical inputs give identical keys; a
+//! artifact (stage name, the fingerprint of the code it runs, resolved
+//! parameters, and the content hashes of the input files). Identical inputs give identical keys; a
 //! recomputed input with identical bytes leaves downstream keys unchanged
 //! (early cutoff).
 
@@ -94,23 +94,16 @@ pub fn embedded_inputs(inputs: &[InputRecord]) -> String {
     canonical_json(&keyed_inputs(inputs))
 }
 
-/// The key of a stage instance: stage, version, parameters and
-/// [`keyed_inputs`]. Encoding 2 marks stages with inputs, whose files embed
-/// [`embedded_inputs`] (encoding 1 embedded upstream keys, which the key does
-/// not hash); files of stages without inputs kept their bytes and keys.
-pub fn stage_key(stage: &str, version: u32, params: &Value, inputs: &[InputRecord]) -> String {
-    let encoding = if inputs.is_empty() {
-        "ternary-stage-key/1"
-    } else {
-        "ternary-stage-key/2"
-    };
-    let inputs = keyed_inputs(inputs);
+/// The key of a stage instance: stage, the fingerprint of its code
+/// ([`super::code`]), parameters and [`keyed_inputs`]. Encoding 3: keys
+/// follow the code (encodings 1 and 2 hashed a hand-kept stage version).
+pub fn stage_key(stage: &str, code: &str, params: &Value, inputs: &[InputRecord]) -> String {
     let document = serde_json::json!({
-        "encoding": encoding,
+        "encoding": "ternary-stage-key/3",
         "stage": stage,
-        "version": version,
+        "code": code,
         "params": params,
-        "inputs": inputs,
+        "inputs": keyed_inputs(inputs),
     });
     sha256_hex(canonical_json(&document).as_bytes())
 }
@@ -160,7 +153,7 @@ mod tests {
     }
 
     #[test]
-    fn key_depends_on_params_version_and_input_files_but_not_upstream_keys() {
+    fn key_depends_on_params_code_and_input_files_but_not_upstream_keys() {
         let params = json!({"n": 6.0});
         let input = |key: &str, sha: &str| InputRecord {
             stage: "scan".into(),
@@ -168,15 +161,24 @@ mod tests {
             key: key.into(),
             files: vec![("curve.parquet".into(), sha.into())],
         };
-        let base = stage_key("table", 1, &params, &[input("k1", "aa")]);
+        let base = stage_key("table", "c1", &params, &[input("k1", "aa")]);
         assert_eq!(base.len(), 64);
-        assert_eq!(base, stage_key("table", 1, &params, &[input("k2", "aa")]));
-        assert_ne!(base, stage_key("table", 2, &params, &[input("k1", "aa")]));
+        assert_eq!(
+            base,
+            stage_key("table", "c1", &params, &[input("k2", "aa")])
+        );
         assert_ne!(
             base,
-            stage_key("table", 1, &json!({"n": 8.0}), &[input("k1", "aa")])
+            stage_key("table", "c2", &params, &[input("k1", "aa")])
         );
-        assert_ne!(base, stage_key("table", 1, &params, &[input("k1", "ab")]));
+        assert_ne!(
+            base,
+            stage_key("table", "c1", &json!({"n": 8.0}), &[input("k1", "aa")])
+        );
+        assert_ne!(
+            base,
+            stage_key("table", "c1", &params, &[input("k1", "ab")])
+        );
     }
 
     /// Records that differ only in upstream key and instance embed the same
@@ -193,8 +195,8 @@ mod tests {
         assert_eq!(embedded_inputs(&a), embedded_inputs(&b));
         let params = serde_json::json!({});
         assert_eq!(
-            stage_key("compare", 1, &params, &a),
-            stage_key("compare", 1, &params, &b)
+            stage_key("compare", "c", &params, &a),
+            stage_key("compare", "c", &params, &b)
         );
         assert!(!embedded_inputs(&a).contains("k1"));
     }

@@ -4,6 +4,7 @@
 //! tables, and the executor owns caching, keys, progress, atomic writes and
 //! logging (stages never touch the store).
 
+pub mod code;
 pub mod executor;
 pub mod key;
 pub mod shards;
@@ -95,8 +96,9 @@ impl Progress {
 pub trait Stage: Sync {
     /// Stage and instance name.
     fn id(&self) -> InstanceId;
-    /// Bumped whenever the stage's code changes its output.
-    fn version(&self) -> u32;
+    /// The code the stage runs, fingerprinted at build time: for a stage of
+    /// the library `code::of(file!())` in a constant (see [`code`]).
+    fn code(&self) -> &'static code::Code;
     /// Resolved parameters: everything besides the inputs that the output depends on.
     fn params(&self) -> Value;
     /// Names of the tables it writes (`<name>.parquet`), always all of them.

@@ -65,8 +65,13 @@ pub fn shard_entry(stage: &dyn Stage, whole: &InstanceRef, units: &Range<u32>) -
     let params = json!({ "of": whole.key, "units": [units.start, units.end] });
     let stage_name = shard_stage(&stage.id().stage);
     InstanceRef {
-        key: stage_key(&stage_name, stage.version(), &params, &whole.inputs),
-        version: stage.version(),
+        key: stage_key(
+            &stage_name,
+            stage.code().fingerprint,
+            &params,
+            &whole.inputs,
+        ),
+        code: stage.code().into(),
         params,
         inputs: whole.inputs.clone(),
     }

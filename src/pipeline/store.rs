@@ -35,6 +35,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
+use super::code::CodeRecord;
 use super::key::{InputRecord, canonical_json, hex, sha256_hex, stage_key};
 use super::table::content_sha256_of_file;
 
@@ -146,8 +147,10 @@ pub struct Manifest {
     pub key: String,
     /// Stage name.
     pub stage: String,
-    /// Stage version.
-    pub version: u32,
+    /// The code that computed it (absent, hence empty, in manifests written
+    /// before code fingerprints).
+    #[serde(default)]
+    pub code: CodeRecord,
     /// Instance that first produced this key.
     pub instance: String,
     /// Resolved parameters.
@@ -193,8 +196,9 @@ impl Manifest {
 pub struct InstanceRef {
     /// Key computed last.
     pub key: String,
-    /// Stage version then.
-    pub version: u32,
+    /// The stage's code then (empty in refs written before code fingerprints).
+    #[serde(default)]
+    pub code: CodeRecord,
     /// Parameters then.
     pub params: Value,
     /// Inputs then.
@@ -205,7 +209,7 @@ impl From<&Manifest> for InstanceRef {
     fn from(manifest: &Manifest) -> InstanceRef {
         InstanceRef {
             key: manifest.key.clone(),
-            version: manifest.version,
+            code: manifest.code.clone(),
             params: manifest.params.clone(),
             inputs: manifest.inputs.clone(),
         }
@@ -673,7 +677,7 @@ impl Store {
 }
 
 /// Problems of a manifest as a document: it must name this artifact, its key
-/// must follow from its stage, version, parameters and inputs, and it must
+/// must follow from its stage, code fingerprint, parameters and inputs, and it must
 /// list plain, unique file names (exactly `outputs` when given).
 fn manifest_problems(
     manifest: &Manifest,
@@ -695,15 +699,20 @@ fn manifest_problems(
             manifest.stage, manifest.key
         ));
     }
-    let derived = stage_key(
+    if manifest.code.fingerprint.is_empty() {
+        problems.push(
+            "written by an earlier ternary, before keys followed the code: no current key names it (`ternary gc` removes it)"
+                .to_string(),
+        );
+    } else if stage_key(
         &manifest.stage,
-        manifest.version,
+        &manifest.code.fingerprint,
         &manifest.params,
         &manifest.inputs,
-    );
-    if derived != manifest.key {
+    ) != manifest.key
+    {
         problems.push(
-            "the manifest's stage version, parameters or inputs do not give its key".to_string(),
+            "the manifest's code fingerprint, parameters or inputs do not give its key".to_string(),
         );
     }
     let mut names: Vec<&str> = manifest.files.iter().map(|f| f.name.as_str()).collect();
@@ -1027,7 +1036,10 @@ mod tests {
         Manifest {
             key: key.to_string(),
             stage: "source".into(),
-            version: 1,
+            code: CodeRecord {
+                fingerprint: "c".into(),
+                parts: Default::default(),
+            },
             instance: "a".into(),
             params: Value::Null,
             inputs: Vec::new(),
@@ -1046,7 +1058,7 @@ mod tests {
         let root = std::env::temp_dir().join(format!("ternary-race-{}", std::process::id()));
         let _ = fs::remove_dir_all(&root);
         let store = Store::open(&root).unwrap();
-        let key = stage_key("source", 1, &Value::Null, &[]);
+        let key = stage_key("source", "c", &Value::Null, &[]);
         let write = |bytes: &[u8], writer: &str| {
             let mut staging = store.begin_as("source", &key, writer).unwrap();
             staging
@@ -1067,6 +1079,25 @@ mod tests {
         ));
         assert!(store.staging_debris().unwrap().is_empty());
         assert!(store.inspect("source", &key, None, Depth::Hashes).is_ok());
+    }
+
+    /// A manifest written before keys followed the code (a stage version, no
+    /// code record) is named as such, not as an edit.
+    #[test]
+    fn a_manifest_from_before_code_fingerprints_is_named_as_such() {
+        let mut old = serde_json::to_value(manifest_of(&"a".repeat(64), &[])).unwrap();
+        let object = old.as_object_mut().unwrap();
+        object.remove("code");
+        object.insert("version".into(), 3.into());
+        let manifest: Manifest = serde_json::from_value(old).unwrap();
+        let problems = manifest_problems(&manifest, "source", &"a".repeat(64), None);
+        assert!(
+            problems
+                .iter()
+                .any(|p| p.contains("written by an earlier ternary")),
+            "{problems:?}"
+        );
+        assert!(!problems.iter().any(|p| p.contains("do not give its key")));
     }
 
     #[test]

@@ -260,7 +260,7 @@ pub fn text_values(batch: &RecordBatch, name: &str) -> Result<Vec<String>, Table
 /// content (left out of [`Table::content_sha256`]).
 pub const PROVENANCE_KEYS: [&str; 6] = [
     "ternary.stage",
-    "ternary.stage_version",
+    "ternary.code",
     "ternary.key",
     "ternary.params",
     "ternary.inputs",

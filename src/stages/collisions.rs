@@ -17,6 +17,7 @@ use crate::config::CollisionsParams;
 use crate::contract::{self, Rows};
 use crate::kernel::Event;
 use crate::physics::sampling::{SceneRecord, Stratum, leading_share};
+use crate::pipeline::code::{self, Code};
 use crate::pipeline::{Input, InstanceId, Progress, Stage, StageError, Table};
 use crate::stages::launches::{LaunchesStage, read_launches};
 
@@ -54,13 +55,16 @@ impl CollisionsStage {
     }
 }
 
+/// The code this stage runs (fingerprinted by the build script).
+const CODE: &Code = code::of(file!());
+
 impl Stage for CollisionsStage {
     fn id(&self) -> InstanceId {
         InstanceId::new(contract::collisions::STAGE, &self.instance)
     }
 
-    fn version(&self) -> u32 {
-        5
+    fn code(&self) -> &'static Code {
+        CODE
     }
 
     fn params(&self) -> Value {

@@ -24,6 +24,7 @@ use crate::evolve::convolution;
 use crate::physics::md::{
     published_reference_variance, tagged_expected_counts, tagged_reference_variance,
 };
+use crate::pipeline::code::{self, Code};
 use crate::pipeline::{Input, InstanceId, Progress, Stage, StageError, Table};
 use crate::stats::{
     ChiSquare, Estimate, MINIMUM_EXPECTED_COUNT, Replicated, chi_square, grouped_chi_square,
@@ -381,13 +382,16 @@ impl CompareStage {
     }
 }
 
+/// The code this stage runs (fingerprinted by the build script).
+const CODE: &Code = code::of(file!());
+
 impl Stage for CompareStage {
     fn id(&self) -> InstanceId {
         CompareStage::instance()
     }
 
-    fn version(&self) -> u32 {
-        1 + crate::kernel::segments::LAYING_REVISION
+    fn code(&self) -> &'static Code {
+        CODE
     }
 
     fn params(&self) -> Value {

@@ -21,6 +21,7 @@ use crate::config::ConvergenceParams;
 use crate::contract::{self, Rows};
 use crate::kernel::equilibrium::self_rates;
 use crate::kernel::{Draws, Event, Target, histograms};
+use crate::pipeline::code::{self, Code};
 use crate::pipeline::{Input, InstanceId, Progress, Stage, StageError, Table};
 use crate::stats::Estimate;
 
@@ -89,6 +90,9 @@ fn launch_of(event: &Event) -> (u32, u32, u32) {
     (event.randomization, event.stratum.index(), event.point)
 }
 
+/// The code this stage runs (fingerprinted by the build script).
+const CODE: &Code = code::of(file!());
+
 impl Stage for ConvergenceStage {
     fn id(&self) -> InstanceId {
         InstanceId::new(
@@ -97,8 +101,8 @@ impl Stage for ConvergenceStage {
         )
     }
 
-    fn version(&self) -> u32 {
-        3 + crate::kernel::segments::LAYING_REVISION
+    fn code(&self) -> &'static Code {
+        CODE
     }
 
     fn params(&self) -> Value {

@@ -36,6 +36,7 @@ use crate::evolve::propagate::Generator;
 use crate::evolve::spectral::Dissipative;
 use crate::kernel::equilibrium::self_rates;
 use crate::kernel::{Draws, Event};
+use crate::pipeline::code::{self, Code};
 use crate::pipeline::{Input, InstanceId, Progress, Stage, StageError, Table};
 use crate::stats::{Estimate, Replicated, replicate_means};
 
@@ -475,6 +476,9 @@ struct Process {
     diagnostics: Option<[Estimate; 2]>,
 }
 
+/// The code this stage runs (fingerprinted by the build script).
+const CODE: &Code = code::of(file!());
+
 impl Stage for EvolveStage {
     fn id(&self) -> InstanceId {
         InstanceId::new(
@@ -483,8 +487,8 @@ impl Stage for EvolveStage {
         )
     }
 
-    fn version(&self) -> u32 {
-        1 + crate::kernel::segments::LAYING_REVISION
+    fn code(&self) -> &'static Code {
+        CODE
     }
 
     fn params(&self) -> Value {

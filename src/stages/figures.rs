@@ -9,6 +9,7 @@ use crate::config::{MdParams, Study};
 use crate::contract::{self, TableSpec};
 use crate::figures::{DILUTE, Figure, FigureRows, Size, frames, render};
 use crate::physics::potential::Potential;
+use crate::pipeline::code::{self, Code};
 use crate::pipeline::{Input, InstanceId, Progress, Stage, StageError, Table};
 
 use super::compare::CompareStage;
@@ -267,13 +268,16 @@ fn spread(values: &[f64], count: usize) -> Vec<f64> {
     picked
 }
 
+/// The code this stage runs (fingerprinted by the build script).
+const CODE: &Code = code::of(file!());
+
 impl Stage for FiguresStage {
     fn id(&self) -> InstanceId {
         InstanceId::new(contract::figures::STAGE, &self.figure.name())
     }
 
-    fn version(&self) -> u32 {
-        6
+    fn code(&self) -> &'static Code {
+        CODE
     }
 
     fn params(&self) -> Value {

@@ -10,6 +10,7 @@ use super::kernel::{read_replicates, target_instance};
 use crate::config::{FitParams, KernelParams};
 use crate::contract::{self, Rows};
 use crate::kernel::fit::{FIT_GROUPS, KernelFit, Shape, fit_kernel};
+use crate::pipeline::code::{self, Code};
 use crate::pipeline::{Input, InstanceId, Progress, Stage, StageError, Table};
 use crate::stats::Estimate;
 
@@ -30,13 +31,16 @@ impl FitStage {
     }
 }
 
+/// The code this stage runs (fingerprinted by the build script).
+const CODE: &Code = code::of(file!());
+
 impl Stage for FitStage {
     fn id(&self) -> InstanceId {
         FitStage::instance(&self.params.kernel)
     }
 
-    fn version(&self) -> u32 {
-        5
+    fn code(&self) -> &'static Code {
+        CODE
     }
 
     fn params(&self) -> Value {

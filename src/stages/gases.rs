@@ -9,6 +9,7 @@ use serde_json::Value;
 use super::moments::{MomentsStage, self_variance_at};
 use crate::config::{GasParams, KernelParams};
 use crate::contract::{self, Rows};
+use crate::pipeline::code::{self, Code};
 use crate::pipeline::{Input, InstanceId, Progress, Stage, StageError, Table};
 use crate::stats::Estimate;
 
@@ -38,13 +39,16 @@ struct GasRates<'a> {
     dense: Estimate,
 }
 
+/// The code this stage runs (fingerprinted by the build script).
+const CODE: &Code = code::of(file!());
+
 impl Stage for GasesStage {
     fn id(&self) -> InstanceId {
         InstanceId::new(contract::gases::STAGE, "study")
     }
 
-    fn version(&self) -> u32 {
-        3
+    fn code(&self) -> &'static Code {
+        CODE
     }
 
     fn params(&self) -> Value {

@@ -10,6 +10,7 @@ use crate::binning::Bins;
 use crate::config::KernelParams;
 use crate::contract::{self, Rows};
 use crate::kernel::{Draws, Event, Histogram, Target, histograms};
+use crate::pipeline::code::{self, Code};
 use crate::pipeline::{Input, InstanceId, Progress, Stage, StageError, Table};
 use crate::stats::Estimate;
 
@@ -68,13 +69,16 @@ pub fn input_events(inputs: &[Input]) -> Result<(Vec<Event>, Draws, usize), Stag
     )
 }
 
+/// The code this stage runs (fingerprinted by the build script).
+const CODE: &Code = code::of(file!());
+
 impl Stage for KernelStage {
     fn id(&self) -> InstanceId {
         InstanceId::new(contract::kernel::STAGE, &target_instance(&self.params))
     }
 
-    fn version(&self) -> u32 {
-        2 + crate::kernel::segments::LAYING_REVISION
+    fn code(&self) -> &'static Code {
+        CODE
     }
 
     fn params(&self) -> Value {

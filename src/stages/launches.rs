@@ -13,6 +13,7 @@ use crate::contract::{self, Rows};
 use crate::kernel::{PILOT_ENGINE, Target, pilot_same_side_fraction};
 use crate::physics::sampling::{LaunchPoint, SamplingPlan, Stratum};
 use crate::physics::scan::LaunchPair;
+use crate::pipeline::code::{self, Code};
 use crate::pipeline::{Input, InstanceId, Progress, Stage, StageError, Table};
 
 /// The `launches` stage of one point set.
@@ -52,13 +53,16 @@ impl LaunchesStage {
     }
 }
 
+/// The code this stage runs (fingerprinted by the build script).
+const CODE: &Code = code::of(file!());
+
 impl Stage for LaunchesStage {
     fn id(&self) -> InstanceId {
         LaunchesStage::instance(&self.instance)
     }
 
-    fn version(&self) -> u32 {
-        2
+    fn code(&self) -> &'static Code {
+        CODE
     }
 
     fn params(&self) -> Value {

@@ -19,6 +19,7 @@ use crate::contract::{self, Col, Rows, TableSpec};
 use crate::physics::md::{RunResult, RunSettings, ThermalLineages, run};
 use crate::physics::potential::{PairPotential, PotentialVisitor};
 use crate::physics::ring::{Reach, RingForces};
+use crate::pipeline::code::{self, Code};
 use crate::pipeline::{Input, InstanceId, Progress, Stage, StageError, Table};
 use crate::stats::Estimate;
 
@@ -333,13 +334,16 @@ fn results_of(tables: &[Table], bins: usize) -> Result<Vec<RunResult>, StageErro
         .collect())
 }
 
+/// The code this stage runs (fingerprinted by the build script).
+const CODE: &Code = code::of(file!());
+
 impl Stage for MdStage {
     fn id(&self) -> InstanceId {
         MdStage::instance(&self.params.name)
     }
 
-    fn version(&self) -> u32 {
-        9
+    fn code(&self) -> &'static Code {
+        CODE
     }
 
     fn params(&self) -> Value {

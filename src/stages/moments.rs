@@ -14,6 +14,7 @@ use super::kernel::{input_events, target_instance, target_of};
 use crate::config::KernelParams;
 use crate::contract::{self, Rows};
 use crate::kernel::{MomentSums, moments};
+use crate::pipeline::code::{self, Code};
 use crate::pipeline::{Input, InstanceId, Progress, Stage, StageError, Table};
 use crate::stats::Estimate;
 
@@ -79,13 +80,16 @@ pub fn self_variance_at(batch: &RecordBatch, limit: f64) -> Result<Estimate, Sta
     Ok(SELF_VARIANCE.read(batch)?[row])
 }
 
+/// The code this stage runs (fingerprinted by the build script).
+const CODE: &Code = code::of(file!());
+
 impl Stage for MomentsStage {
     fn id(&self) -> InstanceId {
         MomentsStage::instance(&self.params)
     }
 
-    fn version(&self) -> u32 {
-        3
+    fn code(&self) -> &'static Code {
+        CODE
     }
 
     fn params(&self) -> Value {

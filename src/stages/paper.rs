@@ -22,6 +22,7 @@ use crate::kernel::equilibrium::{balance_between, self_rates};
 use crate::kernel::{Target, self_bin_feeders};
 use crate::physics::potential::Potential;
 use crate::physics::units::PhysicalGas;
+use crate::pipeline::code::{self, Code};
 use crate::pipeline::{Input, InstanceId, Progress, Stage, StageError, Table};
 use crate::stats::Estimate;
 
@@ -544,13 +545,16 @@ impl Check {
     }
 }
 
+/// The code this stage runs (fingerprinted by the build script).
+const CODE: &Code = code::of(file!());
+
 impl Stage for PaperStage {
     fn id(&self) -> InstanceId {
         InstanceId::new(contract::paper::STAGE, "study")
     }
 
-    fn version(&self) -> u32 {
-        1 + crate::kernel::segments::LAYING_REVISION
+    fn code(&self) -> &'static Code {
+        CODE
     }
 
     fn params(&self) -> Value {

@@ -15,6 +15,7 @@ use crate::physics::scan::{
     special_final_velocity,
 };
 use crate::physics::scene::EngineSettings;
+use crate::pipeline::code::{self, Code};
 use crate::pipeline::{Input, InstanceId, Progress, Stage, StageError, Table};
 use crate::stats::Estimate;
 
@@ -75,13 +76,16 @@ fn pair_of(launch: &NamedLaunch) -> LaunchPair {
     }
 }
 
+/// The code this stage runs (fingerprinted by the build script).
+const CODE: &Code = code::of(file!());
+
 impl Stage for ScanStage {
     fn id(&self) -> InstanceId {
         ScanStage::instance(&self.params.potential)
     }
 
-    fn version(&self) -> u32 {
-        2
+    fn code(&self) -> &'static Code {
+        CODE
     }
 
     fn params(&self) -> Value {

@@ -23,6 +23,7 @@ use crate::kernel::equilibrium::{
     joint_balance, self_rates,
 };
 use crate::kernel::{Draws, Event, Target, self_bin_feeders};
+use crate::pipeline::code::{self, Code};
 use crate::pipeline::{Input, InstanceId, Progress, Stage, StageError, Table};
 
 /// The `sweep` stage for one potential.
@@ -176,13 +177,16 @@ impl SweepStage {
     }
 }
 
+/// The code this stage runs (fingerprinted by the build script).
+const CODE: &Code = code::of(file!());
+
 impl Stage for SweepStage {
     fn id(&self) -> InstanceId {
         InstanceId::new(contract::sweep::STAGE, &self.params.kernel.potential.id())
     }
 
-    fn version(&self) -> u32 {
-        2 + crate::kernel::segments::LAYING_REVISION
+    fn code(&self) -> &'static Code {
+        CODE
     }
 
     fn params(&self) -> Value {

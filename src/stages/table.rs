@@ -12,6 +12,7 @@ use super::scan::ScanStage;
 use crate::config::KernelParams;
 use crate::contract::{self, Pair, Rows, table};
 use crate::physics::potential::Potential;
+use crate::pipeline::code::{self, Code};
 use crate::pipeline::{Column, Input, InstanceId, Progress, Stage, StageError, Table};
 use crate::stats::Estimate;
 
@@ -93,13 +94,16 @@ fn scan_maxima(rows: &[PotentialRow]) -> Result<Vec<Column>, StageError> {
     Ok(columns)
 }
 
+/// The code this stage runs (fingerprinted by the build script).
+const CODE: &Code = code::of(file!());
+
 impl Stage for TableStage {
     fn id(&self) -> InstanceId {
         InstanceId::new(contract::table::STAGE, "study")
     }
 
-    fn version(&self) -> u32 {
-        3
+    fn code(&self) -> &'static Code {
+        CODE
     }
 
     fn params(&self) -> Value {
