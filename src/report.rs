@@ -47,13 +47,13 @@ pub fn with_error(value: f64, error: f64, undefined: &str) -> String {
     let error = error.abs();
     // Decimal exponent of the error's second significant digit, after
     // rounding it to two digits (9.96 rounds to 10: one place up).
-    let mut last = error.log10().floor() as i32 - 1;
+    let mut last = libm::log10(error).floor() as i32 - 1;
     if (error / 10f64.powi(last)).round() >= 100.0 {
         last += 1;
     }
     let digits = (error / 10f64.powi(last)).round();
     let rounded = digits * 10f64.powi(last);
-    let magnitude = value.abs().max(rounded).log10().floor() as i32;
+    let magnitude = libm::log10(value.abs().max(rounded)).floor() as i32;
     let concise = magnitude - last + 1 > CONCISE_DIGITS;
     if (-4..=5).contains(&magnitude) {
         // Errors of 100 and more round the value to tens, hundreds, ...
@@ -98,7 +98,7 @@ fn significant(x: f64) -> String {
     if x == 0.0 {
         return "0".to_string();
     }
-    let magnitude = x.abs().log10().floor() as i32;
+    let magnitude = libm::log10(x.abs()).floor() as i32;
     let trim = |digits: &str| -> String {
         if digits.contains('.') {
             digits

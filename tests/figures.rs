@@ -146,7 +146,7 @@ fn grouped_side(
     let g = G.read(&batch).unwrap();
     let mut groups: Vec<(f64, Vec<Bin>)> = Vec::new();
     for (du, g) in du.iter().zip(&g).filter(|(du, _)| **du > 0.0) {
-        let group = (du.log10() * per_decade).floor();
+        let group = (libm::log10(*du) * per_decade).floor();
         match groups.iter_mut().find(|(key, _)| *key == group) {
             Some((_, members)) => members.push((*du, g.mean, g.stderr)),
             None => groups.push((group, vec![(*du, g.mean, g.stderr)])),
@@ -196,7 +196,7 @@ fn expected(store: &Path, figure: &Artifact) -> Vec<Row> {
                 .filter(|row| range.contains(&row.2))
                 .map(|row| {
                     let x = row.2;
-                    let y = alpha * x.powf(-beta) * (-x * x / (2.0 * sigma * sigma)).exp();
+                    let y = alpha * libm::pow(x, -beta) * libm::exp(-x * x / (2.0 * sigma * sigma));
                     ("kernel".into(), "fit".into(), x, y, 0.0)
                 })
                 .collect();
@@ -403,7 +403,7 @@ fn expected(store: &Path, figure: &Artifact) -> Vec<Row> {
                         let error = if k == 0 {
                             0.0
                         } else {
-                            ratio.abs() * (row.4 / row.3).hypot(d.4 / d.3)
+                            ratio.abs() * libm::hypot(row.4 / row.3, d.4 / d.3)
                         };
                         rows.push(("ratio".into(), label.to_string(), row.2, ratio, error));
                     }

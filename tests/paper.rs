@@ -218,7 +218,10 @@ fn paper_rows_recompute_from_their_sources() {
         // Both rates come from one set of scenes: positively correlated, so
         // the paired error lies below the independent propagation.
         let independent = dense_hot.mean / dense_cold.mean
-            * (dense_hot.stderr / dense_hot.mean).hypot(dense_cold.stderr / dense_cold.mean);
+            * libm::hypot(
+                dense_hot.stderr / dense_hot.mean,
+                dense_cold.stderr / dense_cold.mean,
+            );
         assert!(
             ours[k].stderr < independent,
             "{:?} vs {independent}",
@@ -239,7 +242,7 @@ fn paper_rows_recompute_from_their_sources() {
         let time = |ring: &str| md_params(&store, ring)["final_time_ns"].as_f64().unwrap();
         let (v_cold, v_hot) = (variance(cold), variance(hot));
         let ratio = (v_hot.mean / time(hot)) / (v_cold.mean / time(cold));
-        let error = ratio * (v_hot.stderr / v_hot.mean).hypot(v_cold.stderr / v_cold.mean);
+        let error = ratio * libm::hypot(v_hot.stderr / v_hot.mean, v_cold.stderr / v_cold.mean);
         let k = row("Gamma(2 rho, 800 meV) / Gamma(2 rho, 100 meV), n = 6, MD");
         assert!(close(ours[k].mean, ratio) && close(ours[k].stderr, error));
         assert!(converged[k].mean.is_nan(), "one definition");

@@ -12,8 +12,7 @@
 //! its normalized shape against [`closed_form_variance`] and the like).
 //! Units: `x` in `v_th`, `g` in `rho^2 l v_th`, `t` in `1 / (rho^2 l v_th)`.
 
-use rustfft::FftPlanner;
-use rustfft::num_complex::Complex;
+use super::fourier::{Complex, Fourier};
 
 use crate::binning::Bins;
 use crate::kernel::{Draws, Event, Target, histograms};
@@ -54,7 +53,7 @@ pub fn kernel_moments(rates: &[f64], width: f64) -> [f64; 5] {
 /// Number `exp(t kappa_0)` of `h` at time `t` from the kernel's moments
 /// ([`kernel_moments`]).
 pub fn closed_form_number(kappa: &[f64; 5], t: f64) -> f64 {
-    (t * kappa[0]).exp()
+    libm::exp(t * kappa[0])
 }
 
 /// Variance `t kappa_2` of the normalized `h` at time `t`, `v_th^2`.
@@ -122,16 +121,15 @@ pub fn evolve(rates: &[f64], size: usize, times: &[f64]) -> Vec<Vec<f64>> {
     let mut spectrum = vec![Complex::new(0.0, 0.0); size];
     for (k, &g) in rates.iter().enumerate() {
         let index = (k + size - half) % size;
-        spectrum[index] += g;
+        spectrum[index].re += g;
     }
-    let mut planner = FftPlanner::<f64>::new();
-    planner.plan_fft_forward(size).process(&mut spectrum);
-    let inverse = planner.plan_fft_inverse(size);
+    let fourier = Fourier::new(size);
+    fourier.forward(&mut spectrum);
     times
         .iter()
         .map(|&t| {
-            let mut h: Vec<Complex<f64>> = spectrum.iter().map(|&g| (g * t).exp()).collect();
-            inverse.process(&mut h);
+            let mut h: Vec<Complex> = spectrum.iter().map(|&g| (g * t).exp()).collect();
+            fourier.inverse(&mut h);
             (0..size)
                 .map(|i| h[(i + size / 2) % size].re / size as f64)
                 .collect()
@@ -194,7 +192,7 @@ mod tests {
         let mut rates = vec![0.0; 41];
         for (k, rate) in rates.iter_mut().enumerate() {
             let x = (k as f64 - 20.0) * width;
-            *rate = (-x * x / 0.005).exp() * (1.0 + 3.0 * x);
+            *rate = libm::exp(-x * x / 0.005) * (1.0 + 3.0 * x);
         }
         rates[20] = -rates.iter().sum::<f64>() + rates[20] - 0.02;
         let kappa = kernel_moments(&rates, width);
@@ -203,11 +201,12 @@ mod tests {
         for (h, t) in evolve(&rates, size, &times).iter().zip(times) {
             let half = (size / 2) as f64;
             // FFT rounding leaves ~EPSILON per bin everywhere on the periodic
-            // grid; weighted by x^p it bounds the p-th moment's error.
+            // grid; weighted by |x|^p it bounds the p-th moment's error (the
+            // mean at t = 40: 1.4e-12 against 3.7e-11).
             let floor = |p: i32| {
                 f64::EPSILON
                     * (0..size)
-                        .map(|i| ((i as f64 - half) * width).powi(p))
+                        .map(|i| ((i as f64 - half) * width).abs().powi(p))
                         .sum::<f64>()
             };
             let mass = state_moment(h, width, 0);
@@ -216,7 +215,7 @@ mod tests {
             let kurtosis = excess_kurtosis(h, width);
             let number = closed_form_number(&kappa, t);
             assert!((mass - number).abs() < 1e-12, "t {t}: {mass}");
-            assert!((mean - t * kappa[1]).abs() < 1e-12, "t {t}: {mean}");
+            assert!((mean - t * kappa[1]).abs() < floor(1), "t {t}: {mean}");
             let closed = closed_form_variance(&kappa, t);
             assert!(
                 (variance - closed).abs() < floor(2),

@@ -8,6 +8,7 @@
 //! kernel and once with each randomization left out. Pure math: no IO.
 
 pub mod convolution;
+pub mod fourier;
 pub mod grid;
 pub mod operator;
 pub mod propagate;

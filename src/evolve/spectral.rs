@@ -104,7 +104,7 @@ impl Dissipative {
     pub fn propagate(&self, h0: &[f64], times: &[f64]) -> Vec<Vec<f64>> {
         times
             .iter()
-            .map(|&t| self.superpose(h0, |lambda| (lambda.min(0.0) * t).exp()))
+            .map(|&t| self.superpose(h0, |lambda| libm::exp(lambda.min(0.0) * t)))
             .collect()
     }
 
@@ -121,7 +121,7 @@ impl Dissipative {
             .map(|&t| {
                 self.superpose(h0, |lambda| {
                     if lambda > self.rounding {
-                        -(lambda * t).exp_m1()
+                        -libm::expm1(lambda * t)
                     } else {
                         0.0
                     }
@@ -169,7 +169,7 @@ mod tests {
         assert!(projected.asymmetry < 1e-15 && projected.largest_clipped < 1e-15);
         for t in [0.1, 2.0, 50.0] {
             let h = &projected.propagate(&[1.0, 0.0], &[t])[0];
-            let exact = b / (a + b) + a / (a + b) * (-(a + b) * t).exp();
+            let exact = b / (a + b) + a / (a + b) * libm::exp(-(a + b) * t);
             assert!((h[0] - exact).abs() < 1e-14, "{} vs {exact}", h[0]);
         }
     }

@@ -519,7 +519,7 @@ fn fitted_shape(kernel: &DataFrame, fit: &Input) -> Result<DataFrame, StageError
         .collect();
     let ys: Vec<f64> = xs
         .iter()
-        .map(|x| alpha * x.powf(-beta) * (-x * x / (2.0 * sigma * sigma)).exp())
+        .map(|x| alpha * libm::pow(*x, -beta) * libm::exp(-x * x / (2.0 * sigma * sigma)))
         .collect();
     series_of("kernel", "fit", xs, ys, None)
 }

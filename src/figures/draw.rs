@@ -180,7 +180,7 @@ fn span(values: impl Iterator<Item = (f64, f64)>, log: bool, decades: u32) -> Ra
     }
     if log {
         let low = low.max(high / 10f64.powi(decades as i32));
-        let pad = (high / low).powf(0.04).max(1.05);
+        let pad = libm::pow(high / low, 0.04).max(1.05);
         low / pad..high * pad
     } else {
         let pad = ((high - low) * 0.04).max(high.abs().max(1e-300) * 1e-9);
@@ -329,7 +329,7 @@ fn dodged(x: f64, moved: f64, log: bool, range: &Range<f64>) -> f64 {
     if moved == 0.0 {
         x
     } else if log {
-        x * (range.end / range.start).powf(moved)
+        x * libm::pow(range.end / range.start, moved)
     } else {
         x + moved * (range.end - range.start)
     }
@@ -492,8 +492,8 @@ fn marker_radius(size: &Size) -> i32 {
 /// A tick label: `1e-3` on a log axis, plain (shortest form) on a linear one.
 fn tick(value: f64, log: bool) -> String {
     if log {
-        let exponent = value.log10().round();
-        if (value.log10() - exponent).abs() < 1e-9 {
+        let exponent = libm::log10(value).round();
+        if (libm::log10(value) - exponent).abs() < 1e-9 {
             return format!("1e{exponent}");
         }
         return format!("{value:.0e}");

@@ -190,7 +190,7 @@ pub fn log_groups(long: &DataFrame, per_decade: f64) -> Result<DataFrame, StageE
     let mut frame = long.filter(&positive).map_err(failed)?;
     let group: Vec<f64> = numbers(&frame, X.name)?
         .iter()
-        .map(|x| (x.log10() * per_decade).floor())
+        .map(|x| (libm::log10(*x) * per_decade).floor())
         .collect();
     frame
         .with_column(Series::new(GROUP.into(), group).into_column())

@@ -234,7 +234,7 @@ impl StepControl {
     fn reject(&mut self, error: f64) -> Result<(), StepCollapse> {
         self.just_rejected = true;
         let factor = if error > 1.0 && error.is_finite() {
-            (SAFETY * error.powf(self.exponent)).clamp(MIN_STEP_FACTOR, SAFETY)
+            (SAFETY * libm::pow(error, self.exponent)).clamp(MIN_STEP_FACTOR, SAFETY)
         } else if error <= 1.0 {
             0.5
         } else {
@@ -256,7 +256,7 @@ impl StepControl {
             MAX_STEP_FACTOR
         };
         self.just_rejected = false;
-        self.ratio *= (SAFETY * error.powf(self.exponent)).clamp(MIN_STEP_FACTOR, growth_cap);
+        self.ratio *= (SAFETY * libm::pow(error, self.exponent)).clamp(MIN_STEP_FACTOR, growth_cap);
     }
 }
 
@@ -340,9 +340,9 @@ mod tests {
     /// Largest deviation of `(gap, rate)` from the spring released at rest at `REST + 1`,
     /// `(REST + cos t, -sin t)`, at time `t`.
     fn spring_error(gaps: [f64; 1], rates: [f64; 1], t: f64) -> f64 {
-        (gaps[0] - (REST + t.cos()))
+        (gaps[0] - (REST + libm::cos(t)))
             .abs()
-            .max((rates[0] + t.sin()).abs())
+            .max((rates[0] + libm::sin(t)).abs())
     }
 
     /// Over three periods the spring stays on its closed form within the local tolerance

@@ -44,12 +44,12 @@ pub struct FitData<'a> {
 /// Groups the bins with `low <= |x| <= high` into `groups` log-spaced
 /// intervals of `|x|`; returns the member bin indices of each non-empty group.
 pub fn log_groups(offsets: &[f64], low: f64, high: f64, groups: usize) -> Vec<Vec<usize>> {
-    let ratio = (high / low).ln() / groups as f64;
+    let ratio = libm::log(high / low) / groups as f64;
     let mut members = vec![Vec::new(); groups];
     for (k, &x) in offsets.iter().enumerate() {
         let size = x.abs();
         if (low..=high).contains(&size) {
-            let group = (((size / low).ln() / ratio) as usize).min(groups - 1);
+            let group = ((libm::log(size / low) / ratio) as usize).min(groups - 1);
             members[group].push(k);
         }
     }
@@ -72,13 +72,13 @@ pub struct ShapeFit {
 type Coordinates = [f64; 3];
 
 fn model(p: &Coordinates, x: f64) -> f64 {
-    (p[0] - p[1] * x.abs().ln() - 0.5 * p[2] * x * x).exp()
+    libm::exp(p[0] - p[1] * libm::log(x.abs()) - 0.5 * p[2] * x * x)
 }
 
 /// Gradient of the model in the fit coordinates.
 fn gradient(p: &Coordinates, x: f64) -> [f64; 3] {
     let g = model(p, x);
-    [g, -g * x.abs().ln(), -0.5 * g * x * x]
+    [g, -g * libm::log(x.abs()), -0.5 * g * x * x]
 }
 
 /// The model averaged over a point's bins.
@@ -101,7 +101,7 @@ fn point_gradient(p: &Coordinates, members: &[f64]) -> [f64; 3] {
 
 /// Geometric mean of `|x|` over a point's bins (for the log-linear start).
 fn representative(members: &[f64]) -> f64 {
-    (members.iter().map(|x| x.abs().ln()).sum::<f64>() / members.len() as f64).exp()
+    libm::exp(members.iter().map(|x| libm::log(x.abs())).sum::<f64>() / members.len() as f64)
 }
 
 /// Solves the 3x3 symmetric system `a z = b` (Cramer's rule; `None` if singular).
@@ -143,10 +143,10 @@ fn log_linear_start(data: &FitData, bins: &[usize]) -> Option<Coordinates> {
         .filter(|&&k| data.values[k] > 3.0 * data.errors[k])
     {
         let x = representative(&data.members[k]);
-        let basis = [1.0, -x.ln(), -0.5 * x * x];
+        let basis = [1.0, -libm::log(x), -0.5 * x * x];
         let weight = (data.values[k] / data.errors[k]).powi(2);
         for i in 0..3 {
-            right[i] += weight * basis[i] * data.values[k].ln();
+            right[i] += weight * basis[i] * libm::log(data.values[k]);
             for j in 0..3 {
                 normal[i][j] += weight * basis[i] * basis[j];
             }
@@ -216,7 +216,7 @@ pub fn fit_shape(data: &FitData) -> Option<ShapeFit> {
     }
     Some(ShapeFit {
         shape: Shape {
-            alpha: p[0].exp(),
+            alpha: libm::exp(p[0]),
             beta: p[1],
             sigma: p[2].sqrt().recip(),
         },
@@ -340,7 +340,7 @@ mod tests {
     /// Exact data with noise-free values are fitted back to the generating shape.
     #[test]
     fn recovers_the_generating_shape() {
-        let truth: Coordinates = [2.0f64.ln(), 1.17, 1.0 / (0.02f64 * 0.02)];
+        let truth: Coordinates = [libm::log(2.0f64), 1.17, 1.0 / (0.02f64 * 0.02)];
         let offsets: Vec<f64> = (1..=400)
             .map(|k| f64::from(k) * 2.5e-4 * if k % 2 == 0 { 1.0 } else { -1.0 })
             .collect();

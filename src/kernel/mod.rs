@@ -165,7 +165,7 @@ impl Weighing {
         } else {
             let delay = event.offset
                 - 0.5 * target.launch_length * (1.0 / event.u3.abs() - 1.0 / event.u2.abs());
-            (-target.density * launch_rate(target.u_prime) * delay.abs()).exp()
+            libm::exp(-target.density * launch_rate(target.u_prime) * delay.abs())
         };
         let count = images(event, target.kick_floor).len() as f64;
         Weighing {
@@ -642,7 +642,7 @@ pub fn pilot_same_side_fraction(
         OffsetIntegration::Sampled => 1.0,
         OffsetIntegration::Quadrature(_) => 2.0 / 3.0,
     };
-    let (opposite, same) = (opposite.powf(exponent), same.powf(exponent));
+    let (opposite, same) = (libm::pow(opposite, exponent), libm::pow(same, exponent));
     let fraction = same / (opposite + same);
     fraction.is_finite().then(|| fraction.clamp(0.02, 0.5))
 }

@@ -183,7 +183,7 @@ fn turns_once(track: &[f64], i: usize) -> bool {
 /// `r`.
 fn segment_masses(first: f64, second: f64) -> [f64; 2] {
     let ratio = second / first;
-    let log_ratio = ratio.ln();
+    let log_ratio = libm::log(ratio);
     let mass = if log_ratio.abs() < 1e-9 {
         0.5 * (first + second)
     } else {
@@ -350,7 +350,7 @@ impl Segment {
     fn profile(&self) -> Profile {
         let [g0, g1] = self.end_values();
         let [first, second] = self.halves;
-        let log_ratio = (second / first).ln();
+        let log_ratio = libm::log(second / first);
         Profile {
             matched: self.matched,
             scale: self.scale,
@@ -359,7 +359,7 @@ impl Segment {
             quadratic: self.curvature - self.cubic,
             cubic: self.cubic,
             log_ratio,
-            ratio_m1: log_ratio.exp_m1(),
+            ratio_m1: libm::expm1(log_ratio),
         }
     }
 
@@ -423,7 +423,7 @@ impl Segment {
         let [g0, g1] = self.end_values();
         let g = g0 + t * (g1 - g0) + (self.curvature + self.cubic * t) * t * (t - 1.0);
         let kick = match self.scale {
-            Scale::Logarithmic => g.exp().copysign(self.ends[0] - self.matched),
+            Scale::Logarithmic => libm::exp(g).copysign(self.ends[0] - self.matched),
             Scale::Linear => g,
         };
         self.matched + kick
@@ -468,7 +468,7 @@ impl Segment {
         let [first, second] = self.halves;
         let profile = self.profile();
         let mass = (first + second) * (profile.mass_fraction(to) - profile.mass_fraction(from));
-        let ratio = (second / first).powf(to - from);
+        let ratio = libm::pow(second / first, to - from);
         let ratio = if ratio.is_finite() { ratio } else { 1.0 };
         // The same polynomial in t' = (t - from) / (to - from).
         let length = to - from;
@@ -494,7 +494,7 @@ impl Segment {
 /// `g` of a kick on `scale`.
 fn gauge(scale: Scale, kick: f64) -> f64 {
     match scale {
-        Scale::Logarithmic => kick.abs().ln(),
+        Scale::Logarithmic => libm::log(kick.abs()),
         Scale::Linear => kick,
     }
 }
@@ -570,7 +570,7 @@ impl Profile {
         if !log_ratio.is_finite() || log_ratio.abs() < 1e-9 {
             return t;
         }
-        (t * log_ratio).exp_m1() / self.ratio_m1
+        libm::expm1(t * log_ratio) / self.ratio_m1
     }
 }
 
@@ -586,19 +586,19 @@ mod tests {
     fn a_power_law_tail_lands_exactly() {
         let bins = Bins::for_window(0.01, 5e-5);
         let (c, h) = (2e-3, 0.125);
-        let kick = |s: f64| c * (-7.0 * s).exp();
-        let weight = |s: f64| h * s.exp();
+        let kick = |s: f64| c * libm::exp(-7.0 * s);
+        let weight = |s: f64| h * libm::exp(s);
         let nodes: Vec<f64> = (0..24).map(|k| f64::from(k) * h).collect();
         let mut spread = vec![0.0; bins.len()];
         let mut points = vec![0.0; bins.len()];
         for pair in nodes.windows(2) {
             // Node masses in the ratio of dtau/ds, summing to the segment's exact measure.
-            let exact = pair[1].exp() - pair[0].exp();
-            let scale = exact / (pair[0].exp() + pair[1].exp());
+            let exact = libm::exp(pair[1]) - libm::exp(pair[0]);
+            let scale = exact / (libm::exp(pair[0]) + libm::exp(pair[1]));
             Segment {
                 matched: 0.0,
                 ends: [kick(pair[0]), kick(pair[1])],
-                halves: [scale * pair[0].exp(), scale * pair[1].exp()],
+                halves: [scale * libm::exp(pair[0]), scale * libm::exp(pair[1])],
                 scale: Scale::Logarithmic,
                 curvature: 0.0,
                 cubic: 0.0,
@@ -607,13 +607,13 @@ mod tests {
             points[bins.index(kick(pair[0])).unwrap()] += weight(pair[0]);
         }
         // Exact: the measure int e^s ds of the s where the kick lies in the bin.
-        let s_at = |velocity: f64| (c / velocity).ln() / 7.0;
+        let s_at = |velocity: f64| libm::log(c / velocity) / 7.0;
         let first_full = bins.index(kick(0.0)).unwrap() - 1;
         let mut missed = 0;
         for k in bins.index(kick(nodes[23])).unwrap() + 1..=first_full {
             let centre = bins.centre(k);
             let (low, high) = (centre - 2.5e-5, centre + 2.5e-5);
-            let exact = s_at(low).exp() - s_at(high).exp();
+            let exact = libm::exp(s_at(low)) - libm::exp(s_at(high));
             assert!(
                 (spread[k] - exact).abs() < 1e-9 * exact,
                 "bin {centre}: {} vs {exact}",
@@ -685,7 +685,7 @@ mod track_tests {
             for j in 0..fine {
                 let s = low + (f64::from(j) + 0.5) * ds;
                 if let Some(k) = bins.index(kick(s)) {
-                    exact[k] += s.cosh() * ds;
+                    exact[k] += libm::cosh(s) * ds;
                 }
             }
         }
@@ -712,18 +712,21 @@ mod track_tests {
                     .map(|j| (f64::from(j) + moved) * step)
                     .collect();
                 let outgoing: Vec<f64> = nodes.iter().map(|&s| kick(s)).collect();
-                let weights: Vec<f64> = nodes.iter().map(|&s| step * s.cosh() * share).collect();
+                let weights: Vec<f64> = nodes
+                    .iter()
+                    .map(|&s| step * libm::cosh(s) * share)
+                    .collect();
                 lay_track(&bins, &mut laid, 0.0, &outgoing, &weights);
             }
         }
         (0..20)
-            .map(|i| 1e-4 * 10f64.powf(f64::from(i) / 8.0))
+            .map(|i| 1e-4 * libm::pow(10f64, f64::from(i) / 8.0))
             .map(|edge| {
                 let group = |part: &[f64]| -> f64 {
                     (0..bins.len())
                         .filter(|&k| {
                             let kick = bins.centre(k).abs();
-                            kick >= edge && kick < edge * 10f64.powf(0.125)
+                            kick >= edge && kick < edge * libm::pow(10f64, 0.125)
                         })
                         .map(|k| part[k])
                         .sum()
@@ -737,7 +740,7 @@ mod track_tests {
     /// A collision-like kick curve: a core where the kick changes sign
     /// (`|kick|` up to ~0.03) between power-law tails `~ e^(-7 |s|)`.
     fn collision_kick(s: f64) -> f64 {
-        0.03 * (3.0 * s + 0.4).tanh() / s.cosh().powi(7)
+        0.03 * libm::tanh(3.0 * s + 0.4) / libm::cosh(s).powi(7)
     }
 
     /// Averaged over the grid's move, the laid measure of every group of
@@ -779,7 +782,7 @@ mod track_tests {
         for k in 0..16 {
             let moved = f64::from(k) / 16.0 - 0.5;
             for (edge, error) in group_errors(&[&collision_kick], 0.125, &[moved], &exact) {
-                if edge * 10f64.powf(0.125) <= CORE_KICK {
+                if edge * libm::pow(10f64, 0.125) <= CORE_KICK {
                     assert!(
                         error.abs() < 0.15,
                         "move {moved}, |kick| from {edge:.2e}: {error:+.4}"
@@ -798,12 +801,12 @@ mod track_tests {
     /// +12% at 1.3e-3 (measured).
     #[test]
     fn weak_collisions_turn_on_cubics() {
-        let shape = |s: f64| (9.0 * s + 0.4).tanh() / (3.0 * s).cosh().powi(7);
+        let shape = |s: f64| libm::tanh(9.0 * s + 0.4) / libm::cosh(3.0 * s).powi(7);
         let top = (0..100_000)
             .map(|j| shape(f64::from(j) / 1e5 - 0.5).abs())
             .fold(0.0, f64::max);
         let curves: Vec<Box<dyn Fn(f64) -> f64>> = (0..40)
-            .map(|k| 5e-4 * 16f64.powf((f64::from(k) + 0.5) / 40.0) / top)
+            .map(|k| 5e-4 * libm::pow(16f64, (f64::from(k) + 0.5) / 40.0) / top)
             .map(|height| Box::new(move |s: f64| height * shape(s)) as Box<dyn Fn(f64) -> f64>)
             .collect();
         let curves: Vec<&dyn Fn(f64) -> f64> = curves.iter().map(|c| c.as_ref()).collect();

@@ -500,8 +500,8 @@ pub fn bound_period<P: PairPotential>(
     let sum: f64 = (0..PERIOD_NODES)
         .map(|j| {
             let phi = step * (j as f64 + 0.5);
-            let depth = energy - potential(centre + half * phi.sin());
-            half * phi.cos().abs() / depth.max(f64::MIN_POSITIVE).sqrt()
+            let depth = energy - potential(centre + half * libm::sin(phi));
+            half * libm::cos(phi).abs() / depth.max(f64::MIN_POSITIVE).sqrt()
         })
         .sum();
     Some(0.5 * step * sum)

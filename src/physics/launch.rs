@@ -7,7 +7,7 @@ use super::quasi_random::standard_normal_cdf;
 
 /// Thermal velocity density `f0(u) = exp(-u^2/2) / sqrt(2 pi)` (per `v_th`).
 pub fn thermal_density(u: f64) -> f64 {
-    (-0.5 * u * u).exp() / (2.0 * PI).sqrt()
+    libm::exp(-0.5 * u * u) / (2.0 * PI).sqrt()
 }
 
 /// Launch rate `r(u') / rho` in units of `v_th`: the flux of thermal particles
@@ -22,13 +22,13 @@ pub fn launch_rate(u_prime: f64) -> f64 {
 /// `|u| exp(-u^2/2)` on each side: `|u| = sqrt(-2 ln(1 - U))` for `U` uniform
 /// in `[0, 1)` (numerics.md, "Sampling scenes"). Units: `v_th`.
 pub fn thermal_launch_speed(uniform: f64) -> f64 {
-    (-2.0 * (-uniform).ln_1p()).sqrt()
+    (-2.0 * libm::log1p(-uniform)).sqrt()
 }
 
 /// Normalization `Z(b) = int_0^inf v exp(-(v + b)^2 / 2) dv
 /// = exp(-b^2/2) - b sqrt(2 pi) Phi(-b)` of the shifted launch-speed density.
 fn shifted_normalization(shift: f64) -> f64 {
-    (-0.5 * shift * shift).exp() - shift * (2.0 * PI).sqrt() * standard_normal_cdf(-shift)
+    libm::exp(-0.5 * shift * shift) - shift * (2.0 * PI).sqrt() * standard_normal_cdf(-shift)
 }
 
 /// Density of a launch speed `v = |u| > 0` on one side of the special particle
@@ -36,13 +36,13 @@ fn shifted_normalization(shift: f64) -> f64 {
 /// shape of `f0(u + u') |u|` on that side (physics.md §3). `b = 0` is the
 /// Rayleigh density of [`thermal_launch_speed`].
 pub fn shifted_speed_density(speed: f64, shift: f64) -> f64 {
-    speed * (-0.5 * (speed + shift).powi(2)).exp() / shifted_normalization(shift)
+    speed * libm::exp(-0.5 * (speed + shift).powi(2)) / shifted_normalization(shift)
 }
 
 /// Cumulative distribution of [`shifted_speed_density`]:
 /// `[exp(-b^2/2) - exp(-(v+b)^2/2) - b sqrt(2 pi) (Phi(v+b) - Phi(b))] / Z(b)`.
 fn shifted_speed_cdf(speed: f64, shift: f64) -> f64 {
-    let gaussian = (-0.5 * shift * shift).exp() - (-0.5 * (speed + shift).powi(2)).exp();
+    let gaussian = libm::exp(-0.5 * shift * shift) - libm::exp(-0.5 * (speed + shift).powi(2));
     let drift = shift
         * (2.0 * PI).sqrt()
         * (standard_normal_cdf(-shift) - standard_normal_cdf(-(speed + shift)));
@@ -137,7 +137,7 @@ mod tests {
     #[test]
     fn inverse_cdf_matches_rayleigh_quantiles() {
         for &u in &[0.01_f64, 0.5, 1.0, 2.0, 5.0] {
-            let cdf = 1.0 - (-0.5 * u * u).exp();
+            let cdf = 1.0 - libm::exp(-0.5 * u * u);
             assert!((thermal_launch_speed(cdf) - u).abs() < 1e-12 * u.max(1.0) / u.min(1.0));
         }
     }

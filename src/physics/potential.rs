@@ -35,19 +35,19 @@ pub struct InversePower {
 
 impl PairPotential for InversePower {
     fn energy(&self, x: f64) -> f64 {
-        x.powf(-self.n)
+        libm::pow(x, -self.n)
     }
     fn force(&self, x: f64) -> f64 {
-        self.n * x.powf(-self.n - 1.0)
+        self.n * libm::pow(x, -self.n - 1.0)
     }
     fn tail_integral(&self, x: f64) -> f64 {
-        x.powf(1.0 - self.n) / (self.n - 1.0)
+        libm::pow(x, 1.0 - self.n) / (self.n - 1.0)
     }
     fn well_depth(&self) -> f64 {
         0.0
     }
     fn range(&self, level: f64) -> f64 {
-        level.powf(-1.0 / self.n)
+        libm::pow(level, -1.0 / self.n)
     }
 }
 
@@ -72,7 +72,7 @@ impl<const N: i32> PairPotential for InverseIntegerPower<N> {
         0.0
     }
     fn range(&self, level: f64) -> f64 {
-        level.powf(-1.0 / f64::from(N))
+        libm::pow(level, -1.0 / f64::from(N))
     }
 }
 
@@ -105,9 +105,7 @@ impl PairPotential for LennardJones {
     }
     /// Each of the two terms is below `level / 2` beyond this separation.
     fn range(&self, level: f64) -> f64 {
-        (2.0 * self.theta / level)
-            .powf(1.0 / 12.0)
-            .max((2.0 / level).powf(1.0 / 6.0))
+        libm::pow(2.0 * self.theta / level, 1.0 / 12.0).max(libm::pow(2.0 / level, 1.0 / 6.0))
     }
 }
 
@@ -121,7 +119,7 @@ impl LennardJones {
     /// which makes the integrand smooth at both ends.
     pub fn bound_pair_length(&self) -> f64 {
         const INTERVALS: usize = 4000;
-        let zero = self.theta.powf(1.0 / 6.0);
+        let zero = libm::pow(self.theta, 1.0 / 6.0);
         let integrand = |s: f64| {
             let y = (1.0 - s * s) / zero;
             if y <= 0.0 {
@@ -129,7 +127,7 @@ impl LennardJones {
             }
             let binding = -self.energy(y.recip()).min(0.0);
             let erf = 1.0 - 2.0 * standard_normal_cdf(-(2.0 * binding).sqrt());
-            binding.exp() * erf * 2.0 * s / (zero * y * y)
+            libm::exp(binding) * erf * 2.0 * s / (zero * y * y)
         };
         let h = 1.0 / INTERVALS as f64;
         let sum: f64 = (0..=INTERVALS)
@@ -276,7 +274,7 @@ mod tests {
     #[test]
     fn lennard_jones_well_depth_is_minus_minimum() {
         let potential = LennardJones { theta: 0.05 };
-        let x_min = (2.0 * potential.theta).powf(1.0 / 6.0);
+        let x_min = libm::pow(2.0 * potential.theta, 1.0 / 6.0);
         assert!((potential.energy(x_min) + potential.well_depth()).abs() < 1e-12);
         assert!(potential.force(x_min).abs() < 1e-10);
     }

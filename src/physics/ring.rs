@@ -57,7 +57,7 @@ const SMALL_HALF_ANGLE: f64 = 1.0 / 16.0;
 /// `x^9` and `x^8`, exact to rounding; elsewhere libm.
 fn half_angle(x: f64) -> (f64, f64) {
     if x.abs() >= SMALL_HALF_ANGLE {
-        return x.sin_cos();
+        return libm::sincos(x);
     }
     // Taylor coefficients: (-1)^k / (2k + 1)! and (-1)^k / (2k)!.
     const SINE: [f64; 4] = [-1.0 / 6.0, 1.0 / 120.0, -1.0 / 5040.0, 1.0 / 362_880.0];
@@ -81,7 +81,7 @@ impl<P: PairPotential> RingForces<P> {
         if sine >= 1.0 {
             f64::INFINITY
         } else {
-            self.circumference / PI * sine.asin()
+            self.circumference / PI * libm::asin(sine)
         }
     }
 
@@ -243,7 +243,7 @@ impl RingState {
             real[(j + n) * m + j + n] = u[j];
             for k in 0..n {
                 if j != k {
-                    let b = PI / circumference / (PI * (s[j] - s[k]) / circumference).tan();
+                    let b = PI / circumference / libm::tan(PI * (s[j] - s[k]) / circumference);
                     real[j * m + k + n] = -b;
                     real[(j + n) * m + k] = b;
                 }
@@ -305,7 +305,7 @@ pub fn thermal_start<P: PairPotential, R: RngExt>(
     for _ in 0..max_draws {
         let positions = uniform_positions(rng);
         let gaps = gaps_of(&positions, circumference);
-        if rng.random::<f64>() < (-forces.potential_energy(&gaps)).exp() {
+        if rng.random::<f64>() < libm::exp(-forces.potential_energy(&gaps)) {
             return Ok((positions, velocities));
         }
     }
@@ -336,7 +336,7 @@ pub fn metropolis_sweep<P: PairPotential, R: RngExt>(
         gaps[k] = span - gaps[behind];
         let change = forces.particle_energy(gaps, k) - before.1;
         // A NaN change (both energies infinite: overlapping cores) rejects.
-        let accepted = rng.random::<f64>() < (-change).exp();
+        let accepted = rng.random::<f64>() < libm::exp(-change);
         if !accepted {
             gaps[behind] = before.0;
             gaps[k] = span - before.0;
@@ -513,11 +513,11 @@ mod tests {
     fn half_angle_series_match_libm() {
         let ulps = |a: f64, b: f64| (a - b).abs() / (b.abs() * f64::EPSILON);
         for k in 0..4000 {
-            let x = 1e-12 * (SMALL_HALF_ANGLE / 1e-12).powf(f64::from(k) / 4000.0);
+            let x = 1e-12 * libm::pow(SMALL_HALF_ANGLE / 1e-12, f64::from(k) / 4000.0);
             for x in [x, -x] {
                 let (sine, cosine) = half_angle(x);
-                assert!(ulps(sine, x.sin()) <= 2.0, "sin {x:e}: {sine:e}");
-                assert!(ulps(cosine, x.cos()) <= 2.0, "cos {x:e}: {cosine:e}");
+                assert!(ulps(sine, libm::sin(x)) <= 2.0, "sin {x:e}: {sine:e}");
+                assert!(ulps(cosine, libm::cos(x)) <= 2.0, "cos {x:e}: {cosine:e}");
             }
         }
     }

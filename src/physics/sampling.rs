@@ -112,7 +112,7 @@ impl OffsetProposal {
             self.core_width * collision_time * standard_normal_quantile(p)
         } else if x < self.core_weight + self.tail_weight {
             let p = (x - self.core_weight) / self.tail_weight;
-            self.tail_width * collision_time * (std::f64::consts::PI * (p - 0.5)).tan()
+            self.tail_width * collision_time * libm::tan(std::f64::consts::PI * (p - 0.5))
         } else {
             let p = (x - self.core_weight - self.tail_weight) / self.uniform_weight;
             self.uniform_range * collision_time * (2.0 * p - 1.0)
@@ -124,7 +124,8 @@ impl OffsetProposal {
         let total = self.core_weight + self.tail_weight + self.uniform_weight;
         let core = {
             let sigma = self.core_width * collision_time;
-            (-0.5 * (offset / sigma).powi(2)).exp() / (sigma * (2.0 * std::f64::consts::PI).sqrt())
+            libm::exp(-0.5 * (offset / sigma).powi(2))
+                / (sigma * (2.0 * std::f64::consts::PI).sqrt())
         };
         let tail = {
             let gamma = self.tail_width * collision_time;
@@ -282,7 +283,7 @@ pub fn literal_scene(coordinates: [f64; 3], density: f64, launch_length: f64) ->
     };
     let (u2, u3) = (velocity(x_first), velocity(x_second));
     let rate = density * (2.0 / std::f64::consts::PI).sqrt();
-    let delay = -(-x_delay).ln_1p() / rate;
+    let delay = -libm::log1p(-x_delay) / rate;
     let offset = delay + 0.5 * launch_length * (1.0 / u3.abs() - 1.0 / u2.abs());
     SampledScene {
         stratum: Stratum::Literal,
@@ -293,7 +294,7 @@ pub fn literal_scene(coordinates: [f64; 3], density: f64, launch_length: f64) ->
             * shifted_speed_density(u2.abs(), 0.0)
             * shifted_speed_density(u3.abs(), 0.0)
             * rate
-            * (-rate * delay).exp(),
+            * libm::exp(-rate * delay),
     }
 }
 
@@ -409,7 +410,7 @@ const CHUNK_PAIRS: usize = 8;
 /// The power of two nearest to `count` (at least 2) in the logarithm: scrambled
 /// Sobol' points converge fastest as complete nets of `2^m` points.
 pub fn nearest_power_of_two(count: f64) -> u32 {
-    2u32.pow(count.max(2.0).log2().round().clamp(1.0, 31.0) as u32)
+    2u32.pow(libm::log2(count.max(2.0)).round().clamp(1.0, 31.0) as u32)
 }
 
 impl SamplingPlan {
@@ -591,7 +592,7 @@ mod tests {
                 .sum::<f64>()
                 * h;
             let tail_below = proposal.tail_weight
-                * (0.5 + ((low / (proposal.tail_width * time)).atan()) / std::f64::consts::PI);
+                * (0.5 + (libm::atan(low / (proposal.tail_width * time))) / std::f64::consts::PI);
             assert!(
                 (fraction - integral - tail_below).abs() < 2e-5,
                 "c = {c}: {fraction} vs {}",
@@ -680,7 +681,7 @@ mod tests {
             * h;
         let gamma = proposal.tail_width * time;
         let outside =
-            proposal.tail_weight * 2.0 * (0.5 - (edge / gamma).atan() / std::f64::consts::PI);
+            proposal.tail_weight * 2.0 * (0.5 - libm::atan(edge / gamma) / std::f64::consts::PI);
         assert!(
             (inside + outside - 1.0).abs() < 1e-6,
             "{}",

@@ -53,7 +53,7 @@ pub struct PhysicalGas {
 impl PhysicalGas {
     /// Length unit `l = l0 (eps/kT)^(1/n)`, um (`n` the length exponent).
     pub fn length_unit_um(&self, length_exponent: f64) -> f64 {
-        self.l0_um * (self.eps_ev / self.kt_ev).powf(1.0 / length_exponent)
+        self.l0_um * libm::pow(self.eps_ev / self.kt_ev, 1.0 / length_exponent)
     }
 
     /// Thermal speed `v_th = sqrt(kT/m)`, um/ns (1 m/s = 1e-3 um/ns).

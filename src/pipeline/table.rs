@@ -10,7 +10,7 @@ use std::path::Path;
 use std::sync::Arc;
 
 use arrow::array::{ArrayRef, Float64Array, RecordBatch, StringArray, UInt32Array};
-use arrow::datatypes::{Field, Schema};
+use arrow::datatypes::{DataType, Field, Schema};
 use parquet::arrow::ArrowWriter;
 use parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder;
 use parquet::basic::{Compression, ZstdLevel};
@@ -34,19 +34,26 @@ impl Column {
             ("unit".to_string(), unit.to_string()),
             ("description".to_string(), description.to_string()),
         ];
-        let field = Field::new(name, values.data_type().clone(), false)
+        // Float columns may hold nulls (undefined values, see `Column::f64`):
+        // declared nullable whether or not this table has one, so that every
+        // table of a stage (and every shard) has one schema.
+        let nullable = values.data_type() == &DataType::Float64;
+        let field = Field::new(name, values.data_type().clone(), nullable)
             .with_metadata(HashMap::from(metadata));
         Column { field, values }
     }
 
     /// A `float64` column; `unit` is e.g. `v_th`, `l/v_th` or `1` (dimensionless).
+    /// A NaN (a value that is undefined or missing) is written as a null: any
+    /// Parquet reader sees it as missing, and no NaN's sign or payload (which
+    /// the compiler and CPU decide) reaches the bytes. [`f64_values`] reads
+    /// nulls back as NaN.
     pub fn f64(name: &str, unit: &str, description: &str, values: Vec<f64>) -> Column {
-        Column::new(
-            name,
-            unit,
-            description,
-            Arc::new(Float64Array::from(values)),
-        )
+        let values: Float64Array = values
+            .into_iter()
+            .map(|value| (!value.is_nan()).then_some(value))
+            .collect();
+        Column::new(name, unit, description, Arc::new(values))
     }
 
     /// A `uint32` column (counts).

@@ -56,7 +56,12 @@ impl MomentsStage {
         let edge = 0.5 * self.params.window;
         let count = TRUNCATIONS_PER_DECADE * TRUNCATION_DECADES;
         let mut grid: Vec<f64> = (0..=count)
-            .map(|k| edge * 10f64.powf(-f64::from(count - k) / f64::from(TRUNCATIONS_PER_DECADE)))
+            .map(|k| {
+                edge * libm::pow(
+                    10f64,
+                    -f64::from(count - k) / f64::from(TRUNCATIONS_PER_DECADE),
+                )
+            })
             .chain(self.extra.iter().copied())
             .collect();
         grid.sort_by(f64::total_cmp);

@@ -609,5 +609,5 @@ impl Stage for PaperStage {
 
 /// `(ours - published) / sqrt(ours_stderr^2 + published_uncertainty^2)`.
 fn z_score(ours: Estimate, published: Published) -> f64 {
-    (ours.mean - published.value) / ours.stderr.hypot(published.uncertainty)
+    (ours.mean - published.value) / libm::hypot(ours.stderr, published.uncertainty)
 }
