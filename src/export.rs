@@ -32,7 +32,7 @@ use anyhow::{Context, Result, bail};
 use arrow::datatypes::DataType;
 use serde_json::{Value, json};
 
-use crate::config::{AuthorConfig, PublicationConfig, Study};
+use crate::config::{AuthorConfig, PublicationConfig, Study, license_url};
 use crate::pipeline::Stage;
 use crate::pipeline::code::CodeRecord;
 use crate::pipeline::executor::{self, Freshness, tool_version};
@@ -97,38 +97,12 @@ pub fn export(
         );
     }
     let entries = selected_entries(store, plan, options)?;
-    if dir.exists() && fs::read_dir(dir)?.next().is_some() {
-        bail!(
-            "{} is not empty: export into a new or empty directory",
-            dir.display()
-        );
-    }
-    let parent = dir
-        .parent()
-        .filter(|p| !p.as_os_str().is_empty())
-        .unwrap_or(Path::new("."));
-    fs::create_dir_all(parent)?;
-    let name = dir
-        .file_name()
-        .context("the bundle directory has no name")?;
-    let staging = parent.join(format!(
-        ".{}.export-{}",
-        name.to_string_lossy(),
-        std::process::id()
-    ));
-    if staging.exists() {
-        fs::remove_dir_all(&staging)?;
-    }
-    let written = write_bundle(study, &entries, &staging);
-    if let Err(error) = written {
-        let _ = fs::remove_dir_all(&staging);
+    let staging = prepare_target(dir)?;
+    let placed = write_bundle(study, &entries, &staging.dir).and_then(|()| staging.place(dir));
+    if let Err(error) = placed {
+        let _ = fs::remove_dir_all(&staging.dir);
         return Err(error);
     }
-    if dir.exists() {
-        fs::remove_dir(dir)?;
-    }
-    fs::rename(&staging, dir)
-        .with_context(|| format!("moving the bundle into {}", dir.display()))?;
     let bytes: u64 = files_of(dir)?
         .iter()
         .map(|path| fs::metadata(dir.join(path)).map(|m| m.len()).unwrap_or(0))
@@ -138,6 +112,113 @@ pub fn export(
         entries.len(),
         dir.display()
     ))
+}
+
+/// Where a bundle is written before it appears at its target.
+struct BundleStaging {
+    /// The staging directory.
+    dir: PathBuf,
+    /// `true` when it lies inside the (empty) target, which may be a mount
+    /// point: its entries are then moved up one by one; otherwise the whole
+    /// directory is renamed onto the target.
+    inside: bool,
+}
+
+impl BundleStaging {
+    /// Moves the written bundle to `target`.
+    fn place(&self, target: &Path) -> Result<()> {
+        let moved = |from: &Path, to: &Path| {
+            fs::rename(from, to).with_context(|| format!("moving the bundle into {}", to.display()))
+        };
+        if !self.inside {
+            return moved(&self.dir, target);
+        }
+        for entry in
+            fs::read_dir(&self.dir).with_context(|| format!("reading {}", self.dir.display()))?
+        {
+            let name = entry?.file_name();
+            moved(&self.dir.join(&name), &target.join(&name))?;
+        }
+        fs::remove_dir(&self.dir).with_context(|| format!("removing {}", self.dir.display()))
+    }
+}
+
+/// Prefix of a staging directory inside an existing empty target.
+const INSIDE_STAGING: &str = ".export-";
+
+/// Checks the target `dir` (missing, or an empty directory, which may be a
+/// mount point), removes staging debris of exports that were killed (named
+/// for a process that no longer runs), and creates the staging directory:
+/// inside an existing target (a mount point cannot be renamed over), beside
+/// a missing one. Every error names its path.
+fn prepare_target(dir: &Path) -> Result<BundleStaging> {
+    let name = dir
+        .file_name()
+        .with_context(|| format!("{}: the bundle directory has no name", dir.display()))?
+        .to_string_lossy()
+        .into_owned();
+    let parent = dir
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    let beside = format!(".{name}.export-");
+    remove_dead_staging(parent, &beside)?;
+    let pid = std::process::id();
+    if dir.exists() {
+        if !dir.is_dir() {
+            bail!(
+                "{} is a file, not a directory: export into a new or empty directory",
+                dir.display()
+            );
+        }
+        remove_dead_staging(dir, INSIDE_STAGING)?;
+        let listing = fs::read_dir(dir).with_context(|| format!("reading {}", dir.display()))?;
+        if listing.count() > 0 {
+            bail!(
+                "{} is not empty: export into a new or empty directory",
+                dir.display()
+            );
+        }
+        let staging = dir.join(format!("{INSIDE_STAGING}{pid}"));
+        fs::create_dir(&staging).with_context(|| format!("creating {}", staging.display()))?;
+        return Ok(BundleStaging {
+            dir: staging,
+            inside: true,
+        });
+    }
+    fs::create_dir_all(parent).with_context(|| format!("creating {}", parent.display()))?;
+    let staging = parent.join(format!("{beside}{pid}"));
+    if staging.exists() {
+        fs::remove_dir_all(&staging).with_context(|| format!("removing {}", staging.display()))?;
+    }
+    fs::create_dir(&staging).with_context(|| format!("creating {}", staging.display()))?;
+    Ok(BundleStaging {
+        dir: staging,
+        inside: false,
+    })
+}
+
+/// Removes the directories `<prefix><pid>` in `dir` whose process no longer
+/// runs: what an export killed midway left.
+fn remove_dead_staging(dir: &Path, prefix: &str) -> Result<()> {
+    let Ok(listing) = fs::read_dir(dir) else {
+        return Ok(());
+    };
+    for entry in listing.flatten() {
+        let name = entry.file_name().to_string_lossy().into_owned();
+        let Some(pid) = name
+            .strip_prefix(prefix)
+            .and_then(|p| p.parse::<u32>().ok())
+        else {
+            continue;
+        };
+        let running = Path::new("/proc").join(pid.to_string()).exists();
+        if !running && entry.path().is_dir() {
+            fs::remove_dir_all(entry.path())
+                .with_context(|| format!("removing {}", entry.path().display()))?;
+        }
+    }
+    Ok(())
 }
 
 /// The tables of the selected, fresh instances, in plan order.
@@ -240,7 +321,8 @@ fn write_bundle(study: &Study, entries: &[Entry], dir: &Path) -> Result<()> {
     let mut resources = Vec::new();
     for entry in entries {
         let target = dir.join(&entry.path);
-        fs::create_dir_all(target.parent().unwrap_or(dir))?;
+        let folder = target.parent().unwrap_or(dir);
+        fs::create_dir_all(folder).with_context(|| format!("creating {}", folder.display()))?;
         let bytes = fs::read(&entry.source)
             .with_context(|| format!("reading {}", entry.source.display()))?;
         if sha256_hex(&bytes) != entry.sha256 {
@@ -249,7 +331,7 @@ fn write_bundle(study: &Study, entries: &[Entry], dir: &Path) -> Result<()> {
                 entry.source.display()
             );
         }
-        fs::write(&target, &bytes)?;
+        fs::write(&target, &bytes).with_context(|| format!("writing {}", target.display()))?;
         resources.push(if is_table_file(&entry.path) {
             resource(entry, &target, bytes.len() as u64)?
         } else {
@@ -454,17 +536,6 @@ fn resource(entry: &Entry, file: &Path, bytes: u64) -> Result<Value> {
     }))
 }
 
-/// URL of a licence by its SPDX id, where known.
-fn license_path(spdx: &str) -> Option<&'static str> {
-    match spdx {
-        "CC-BY-4.0" => Some("https://creativecommons.org/licenses/by/4.0/"),
-        "CC0-1.0" => Some("https://creativecommons.org/publicdomain/zero/1.0/"),
-        "CC-BY-SA-4.0" => Some("https://creativecommons.org/licenses/by-sa/4.0/"),
-        "ODC-BY-1.0" => Some("https://opendatacommons.org/licenses/by/1-0/"),
-        _ => None,
-    }
-}
-
 /// `https://orcid.org/<id>`.
 fn orcid_url(orcid: &str) -> String {
     format!("https://orcid.org/{orcid}")
@@ -472,7 +543,7 @@ fn orcid_url(orcid: &str) -> String {
 
 fn datapackage(publication: &PublicationConfig, resources: Vec<Value>) -> Value {
     let mut license = json!({ "name": publication.license });
-    if let Some(path) = license_path(&publication.license) {
+    if let Some(path) = license_url(&publication.license) {
         license["path"] = json!(path);
     }
     let contributors: Vec<Value> = publication

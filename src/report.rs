@@ -252,6 +252,12 @@ fn paper_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
         "", "published", "ours", "ours/pub", "z", "converged", "unit"
     )?;
     for row in 0..frame.height() {
+        // No value of ours (nothing to compute it from): no converged one either.
+        let converged_undefined = if number(&frame, row, OURS.value)?.is_nan() {
+            "-"
+        } else {
+            "same"
+        };
         writeln!(
             out,
             "{:<4} {:<26} {:<28} {:>9} {:>7.2}  {:<28} {:<14} {} [{}]",
@@ -260,7 +266,7 @@ fn paper_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
             estimate(&frame, row, OURS, "-")?,
             format!("{:.4}", 1.0 + number(&frame, row, RELATIVE_DIFFERENCE)?),
             number(&frame, row, Z)?,
-            estimate(&frame, row, OURS_CONVERGED, "same")?,
+            estimate(&frame, row, OURS_CONVERGED, converged_undefined)?,
             text(&frame, row, UNIT)?,
             text(&frame, row, QUANTITY)?,
             text(&frame, row, SOURCE)?,
@@ -772,15 +778,27 @@ pub fn gc(store: &Store, stages: &[Box<dyn Stage>]) -> Result<String> {
             !store.artifact_dir(&stage, &key).is_dir() && keep.contains(&(stage, key))
         })
     };
+    let mut held = Vec::new();
     for (stage, key) in store.artifacts()? {
         if !keep.contains(&(stage.clone(), key.clone())) && !awaiting_merge(&stage, &key) {
-            bytes += store.remove_artifact(&lock, &stage, &key)?;
-            removed += 1;
+            if store.foreign_in_artifact(&stage, &key, &[]).is_empty() {
+                bytes += store.remove_artifact(&lock, &stage, &key)?;
+                removed += 1;
+            } else {
+                held.push(store.artifact_dir(&stage, &key));
+            }
         }
     }
     let debris = store.clean_staging(&lock)?;
     let mut out =
         format!("gc: removed {removed} artifacts ({bytes} bytes) and {debris} staging entries\n");
+    for dir in held {
+        writeln!(
+            out,
+            "gc: kept {} (unreferenced, but it holds entries ternary did not write; remove them to let gc remove it)",
+            dir.display()
+        )?;
+    }
     for path in store.foreign_entries()? {
         writeln!(out, "gc: kept {} (not written by ternary)", path.display())?;
     }
@@ -824,12 +842,15 @@ fn show_file(path: &Path, rows: usize) -> Result<String> {
     Ok(out)
 }
 
-/// An artifact (by key or unique key prefix, or its directory) or a Parquet file.
-pub fn show(store: Option<&Store>, target: &str, rows: usize) -> Result<String> {
+/// An artifact (by key or unique key prefix, or its directory) or a Parquet
+/// file, and the number of problems of an artifact looked up by key (checked
+/// to its file hashes; a damaged one is shown under a warning).
+pub fn show(store: Option<&Store>, target: &str, rows: usize) -> Result<(String, usize)> {
     let path = Path::new(target);
     if path.is_file() {
-        return show_file(path, rows);
+        return Ok((show_file(path, rows)?, 0));
     }
+    let mut problems = Vec::new();
     let dir = if path.is_dir() {
         path.to_path_buf()
     } else {
@@ -847,7 +868,12 @@ pub fn show(store: Option<&Store>, target: &str, rows: usize) -> Result<String> 
             .filter(|(_, key)| key.starts_with(target))
             .collect();
         match matches.as_slice() {
-            [(stage, key)] => store.artifact_dir(stage, key),
+            [(stage, key)] => {
+                if let Err(found) = store.inspect(stage, key, None, Depth::Hashes) {
+                    problems = found;
+                }
+                store.artifact_dir(stage, key)
+            }
             [] => bail!(
                 "no artifact key starts with `{target}` in {}",
                 store.root().display()
@@ -858,7 +884,16 @@ pub fn show(store: Option<&Store>, target: &str, rows: usize) -> Result<String> 
     let manifest_path = dir.join("manifest.json");
     let manifest = std::fs::read_to_string(&manifest_path)
         .with_context(|| format!("reading {}", manifest_path.display()))?;
-    let mut out = format!("{manifest}\n");
+    let mut out = String::new();
+    if !problems.is_empty() {
+        writeln!(
+            out,
+            "DAMAGED {}: {} (not to be trusted; the next run recomputes it)",
+            dir.display(),
+            problems.join("; ")
+        )?;
+    }
+    writeln!(out, "{manifest}")?;
     let value: serde_json::Value = serde_json::from_str(&manifest)?;
     for file in value["files"].as_array().into_iter().flatten() {
         let name = file["name"].as_str().unwrap_or_default();
@@ -873,7 +908,7 @@ pub fn show(store: Option<&Store>, target: &str, rows: usize) -> Result<String> 
             )?;
         }
     }
-    Ok(out)
+    Ok((out, problems.len()))
 }
 
 #[cfg(test)]

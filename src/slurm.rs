@@ -44,6 +44,75 @@ pub struct SubmitOptions {
     pub dry_run: bool,
 }
 
+impl SubmitOptions {
+    /// Refuses a value that is not in Slurm's own syntax: whatever goes into
+    /// a `#SBATCH` line must not end it (a newline would turn the rest into
+    /// a shell command) or change its meaning.
+    pub fn check(&self) -> Result<()> {
+        if let Some(partition) = &self.partition
+            && !is_partition_list(partition)
+        {
+            bail!(
+                "--partition {partition:?}: not a Slurm partition name (letters, digits, `_`, `-`, `.`; several separated by commas)"
+            );
+        }
+        if let Some(time) = &self.time
+            && !is_time_limit(time)
+        {
+            bail!(
+                "--time {time:?}: not a Slurm time limit (`M`, `M:S`, `H:M:S`, `D-H`, `D-H:M`, `D-H:M:S` or `UNLIMITED`)"
+            );
+        }
+        Ok(())
+    }
+}
+
+/// `name[,name...]`, each of letters, digits, `_`, `-` and `.`.
+fn is_partition_list(text: &str) -> bool {
+    text.split(',').all(|name| {
+        !name.is_empty()
+            && name
+                .chars()
+                .all(|c| c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '.'))
+    })
+}
+
+/// Slurm's time formats: `M`, `M:S`, `H:M:S`, `D-H`, `D-H:M`, `D-H:M:S`,
+/// `UNLIMITED` or `infinite`.
+fn is_time_limit(text: &str) -> bool {
+    if text.eq_ignore_ascii_case("unlimited") || text.eq_ignore_ascii_case("infinite") {
+        return true;
+    }
+    let digits = |part: &str| {
+        !part.is_empty() && part.len() <= 9 && part.bytes().all(|b| b.is_ascii_digit())
+    };
+    let (days, clock) = match text.split_once('-') {
+        Some((days, clock)) => (Some(days), clock),
+        None => (None, text),
+    };
+    let fields: Vec<&str> = clock.split(':').collect();
+    let counted = match days {
+        Some(days) => digits(days) && (1..=3).contains(&fields.len()),
+        None => (1..=3).contains(&fields.len()),
+    };
+    counted && fields.iter().all(|f| digits(f))
+}
+
+/// A path that goes into a `#SBATCH` line as is: no control characters,
+/// whitespace or quotes, which would end or split the directive.
+fn directive_path(path: &Path) -> Result<String> {
+    let text = path.display().to_string();
+    if text
+        .chars()
+        .any(|c| c.is_control() || c.is_whitespace() || matches!(c, '"' | '\''))
+    {
+        bail!(
+            "{text:?}: Slurm's #SBATCH --output cannot take a path with whitespace, quotes or control characters; use a store path without them"
+        );
+    }
+    Ok(text)
+}
+
 /// The shard indices with at least one shard still to compute.
 pub fn missing_shards(
     store: &Store,
@@ -57,12 +126,10 @@ pub fn missing_shards(
         .collect())
 }
 
-/// A `#SBATCH` header: job name, log file and the chosen resources.
-fn header(name: &str, output: &Path, options: &SubmitOptions) -> String {
-    let mut out = format!(
-        "#!/bin/bash\n#SBATCH --job-name={name}\n#SBATCH --output={}\n",
-        output.display()
-    );
+/// A `#SBATCH` header: job name, log file and the chosen resources (all
+/// checked: [`SubmitOptions::check`], [`directive_path`]).
+fn header(name: &str, output: &str, options: &SubmitOptions) -> String {
+    let mut out = format!("#!/bin/bash\n#SBATCH --job-name={name}\n#SBATCH --output={output}\n");
     if let Some(partition) = &options.partition {
         let _ = writeln!(out, "#SBATCH --partition={partition}");
     }
@@ -84,26 +151,28 @@ fn scripts(
     logs: &Path,
     tasks: &BTreeSet<u32>,
     options: &SubmitOptions,
-) -> (String, String) {
+) -> Result<(String, String)> {
     let command = format!("{} --config {}", quoted(binary), quoted(config));
     let list: Vec<String> = tasks.iter().map(ToString::to_string).collect();
     let throttle = options
         .max_parallel
         .map_or(String::new(), |k| format!("%{k}"));
-    let mut array = header("ternary-shards", &logs.join("shard-%A_%a.out"), options);
+    let array_log = directive_path(&logs.join("shard-%A_%a.out"))?;
+    let merge_log = directive_path(&logs.join("merge-%j.out"))?;
+    let mut array = header("ternary-shards", &array_log, options);
     let _ = writeln!(array, "#SBATCH --array={}{throttle}", list.join(","));
     let _ = writeln!(
         array,
         "set -euo pipefail\nexec {command} run --shards {} --shard \"$SLURM_ARRAY_TASK_ID\"",
         options.shards
     );
-    let mut merge = header("ternary-merge", &logs.join("merge-%j.out"), options);
+    let mut merge = header("ternary-merge", &merge_log, options);
     let _ = writeln!(
         merge,
         "set -euo pipefail\nexec {command} run --shards {}",
         options.shards
     );
-    (array, merge)
+    Ok((array, merge))
 }
 
 /// `sbatch --parsable [args] script`: the job id.
@@ -142,13 +211,14 @@ pub fn submit(
     plan: &[Box<dyn Stage>],
     options: &SubmitOptions,
 ) -> Result<String> {
+    options.check()?;
     let tasks = missing_shards(store, plan, options.shards)?;
     let binary = std::env::current_exe().context("locating the ternary binary")?;
     let config =
         fs::canonicalize(config).with_context(|| format!("resolving {}", config.display()))?;
     let dir = fs::canonicalize(store.root())?.join("slurm");
     let logs = dir.join("logs");
-    let (array, merge) = scripts(&binary, &config, &logs, &tasks, options);
+    let (array, merge) = scripts(&binary, &config, &logs, &tasks, options)?;
     let (array_path, merge_path) = (dir.join("shards.sbatch"), dir.join("merge.sbatch"));
     let mut out = String::new();
     if options.dry_run {
@@ -189,4 +259,50 @@ pub fn submit(
         logs.display()
     );
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn time_limits_follow_slurms_formats() {
+        for good in [
+            "30",
+            "30:00",
+            "2:00:00",
+            "1-0",
+            "1-12:30",
+            "1-12:30:00",
+            "UNLIMITED",
+            "infinite",
+        ] {
+            assert!(is_time_limit(good), "{good}");
+        }
+        for bad in [
+            "",
+            ":",
+            "1:",
+            "1:2:3:4",
+            "1-",
+            "-1",
+            "1-2-3",
+            "1-1:2:3:4",
+            "1h",
+            " 1",
+            "1\n",
+        ] {
+            assert!(!is_time_limit(bad), "{bad:?}");
+        }
+    }
+
+    #[test]
+    fn partition_lists_are_names_separated_by_commas() {
+        for good in ["debug", "a,b", "long.q", "gpu_a-1"] {
+            assert!(is_partition_list(good), "{good}");
+        }
+        for bad in ["", ",", "a,", "a b", "a\nb", "a;b", "$(x)"] {
+            assert!(!is_partition_list(bad), "{bad:?}");
+        }
+    }
 }

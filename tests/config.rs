@@ -699,7 +699,57 @@ fn kernel_section_rejects_bad_values() {
             "fit_range = [0.05, 2e-4]",
             "kernel.fit_range",
         ),
+        // A third value was silently dropped; a huge window named bin_width
+        // (not written) and had no line.
+        (
+            "fit_range = [2e-4, 0.05]",
+            "fit_range = [2e-4, 0.05, 1]",
+            "kernel.fit_range",
+        ),
+        (
+            "window = 0.2\nbin_width = 5e-5",
+            "window = 1e300\nbin_width = 5e-5",
+            "kernel.window",
+        ),
     ]);
+}
+
+/// Accepted before and wrong: a licence that is no SPDX id, launch speeds
+/// and offsets for which every scene fails; numbers in messages print in
+/// exponent form, not as 301 digits.
+#[test]
+fn unbounded_or_unknown_values_are_refused_with_short_numbers() {
+    let licence =
+        |id: &str| format!("density_per_um = 5e-4\n\n[publication]\nlicense = \"{id}\"\n");
+    rejects(&[
+        (
+            "density_per_um = 5e-4\n",
+            &licence("NOT-A-LICENSE"),
+            "publication.license",
+        ),
+        ("u2 = 1.0", "u2 = 1e300", "scan.launch[0].u2"),
+        ("offset_max = 3.0", "offset_max = 1e300", "scan.offset_max"),
+        (
+            "offset_min = -3.0",
+            "offset_min = -2000.0",
+            "scan.offset_min",
+        ),
+    ]);
+    let path = std::path::Path::new("pipeline.toml");
+    for text in [
+        STUDY.replace("u2 = 1.0", "u2 = 1e300"),
+        STUDY.replace("window = 0.2", "window = 1e300"),
+    ] {
+        let message = Study::parse(path, &text).unwrap_err().to_string();
+        assert!(
+            message.contains("1e300") && !message.contains("0000000000"),
+            "{message}"
+        );
+    }
+    for id in ["CC0-1.0", "cc-by-sa-4.0", "ODbL-1.0", "MIT"] {
+        let text = STUDY.replace("density_per_um = 5e-4\n", &licence(id));
+        Study::parse(path, &text).unwrap_or_else(|e| panic!("{id}: {e}"));
+    }
 }
 
 #[test]
@@ -942,4 +992,43 @@ fn gas_section_rejects_bad_values() {
         ),
         ("name = \"lj\"", "name = \"ring\"", "gas[1].name"),
     ]);
+}
+
+/// Every table with documented defaults accepts any one of its keys alone:
+/// the study of the required keys plus one key, at its default, in its own
+/// table (today `[collisions.quadrature]` with only `halvings` and `[store]`
+/// with only `path` were refused: "missing field").
+#[test]
+fn every_table_with_defaults_accepts_any_one_of_its_keys() {
+    let base = DEFAULTS
+        .replace("[potentials]\n", "[potentials]\ninverse_power = [6]\n")
+        .replace("launch = []\n", "");
+    let base = format!("{base}\n[[scan.launch]]\nname = \"a\"\nu2 = 1.0\nu3 = -1.0\n");
+    let path = std::path::Path::new("pipeline.toml");
+    Study::parse(path, &base).expect("the base study is valid");
+    let mut tables = BTreeSet::new();
+    for (key, value) in leaves(DEFAULTS) {
+        // Top-level arrays of tables (`[[gas]]`) have no defaults.
+        let Some((table, name)) = key.rsplit_once('.') else {
+            continue;
+        };
+        if ["potentials", "scan"].contains(&table) || value.is_null() {
+            continue;
+        }
+        let value = toml::Value::try_from(&value).expect("a TOML value");
+        let text = format!("{base}\n[{table}]\n{name} = {value}\n");
+        if let Err(error) = Study::parse(path, &text) {
+            panic!("[{table}] with only `{name} = {value}`: {error}");
+        }
+        tables.insert(table.to_string());
+    }
+    for table in [
+        "store",
+        "collisions.quadrature",
+        "collisions.proposal",
+        "md",
+        "evolve",
+    ] {
+        assert!(tables.contains(table), "{table} not covered: {tables:?}");
+    }
 }

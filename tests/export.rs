@@ -306,3 +306,73 @@ fn verify_bundle_names_each_problem() {
     assert!(shown.status.success(), "{}", stderr(&shown));
     assert!(stdout(&shown).contains("ternary.stage: kernel"));
 }
+
+/// An export into an empty directory that is a mount point failed with
+/// "Device or resource busy" and left a full hidden copy beside it; a killed
+/// export left its staging copy forever; a file as target gave an error
+/// without its path. Now the bundle is staged inside an existing target,
+/// debris of exports that no longer run is removed, and errors name paths.
+#[test]
+fn exports_land_in_empty_mount_points_and_leave_no_debris() {
+    let (config, dir) = computed("export-places");
+    // A staging copy of a killed export (its process is gone) beside the
+    // target, and one inside another target.
+    let dead = (100_000..u32::MAX)
+        .find(|pid| !Path::new("/proc").join(pid.to_string()).exists())
+        .unwrap();
+    let beside = dir.join(format!(".bundle.export-{dead}"));
+    fs::create_dir_all(beside.join("kernel")).unwrap();
+    fs::write(beside.join("kernel/x.parquet"), "half").unwrap();
+    let bundle = dir.join("bundle");
+    assert!(
+        export(&config, &bundle, &["--stage", "kernel"])
+            .status
+            .success()
+    );
+    assert!(!beside.exists(), "the killed export's copy was removed");
+    assert!(verify_bundle(&config, &bundle).status.success());
+    let siblings: Vec<String> = fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|name| name.contains(".export-"))
+        .collect();
+    assert!(siblings.is_empty(), "{siblings:?}");
+    // An existing empty directory, with a dead export's staging inside.
+    let empty = dir.join("empty");
+    fs::create_dir_all(empty.join(format!(".export-{dead}"))).unwrap();
+    assert!(
+        export(&config, &empty, &["--stage", "kernel"])
+            .status
+            .success()
+    );
+    assert!(verify_bundle(&config, &empty).status.success());
+    assert!(!empty.join(format!(".export-{dead}")).exists());
+    // A file as target: the error names it.
+    let file = dir.join("a-file");
+    fs::write(&file, "mine").unwrap();
+    let refused = export(&config, &file, &[]);
+    assert!(!refused.status.success());
+    assert!(
+        stderr(&refused).contains(&file.display().to_string()),
+        "{}",
+        stderr(&refused)
+    );
+    assert_eq!(fs::read_to_string(&file).unwrap(), "mine");
+    // A mount point (when this process may mount: root in CI).
+    let mount = dir.join("mounted");
+    fs::create_dir_all(&mount).unwrap();
+    let mounted = Command::new("mount")
+        .args(["-t", "tmpfs", "none"])
+        .arg(&mount)
+        .output()
+        .is_ok_and(|o| o.status.success());
+    if !mounted {
+        eprintln!("skipped the mount point: cannot mount a tmpfs here");
+        return;
+    }
+    let exported = export(&config, &mount, &["--stage", "kernel"]);
+    let checked = verify_bundle(&config, &mount);
+    let _ = Command::new("umount").arg(&mount).output();
+    assert!(exported.status.success(), "{}", stderr(&exported));
+    assert!(checked.status.success(), "{}", stdout(&checked));
+}

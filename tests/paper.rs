@@ -273,3 +273,34 @@ fn paper_rows_recompute_from_their_sources() {
         );
     }
 }
+
+/// Every ring at `u' = 0.5`: valid, so the study runs (before: 15 instances,
+/// then "paper[study]: no compared ring", no figures). The paper row that
+/// compares a ring at `u' = 0` says "no ring"; the finite-size figure, which
+/// has no ring to draw, is not planned.
+#[test]
+fn a_study_without_a_ring_at_rest_runs_and_says_no_ring() {
+    let dir = workspace("paper-no-ring");
+    let study = REDUCED_STUDY.replace("[[md.system]]\n", "[[md.system]]\nu_prime = 0.5\n");
+    assert!(study.matches("u_prime = 0.5").count() >= 2);
+    let config = write_config(&dir, &study);
+    let run = ternary(&config, &["run"]);
+    let text = stdout(&run);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let row = text
+        .lines()
+        .find(|line| line.contains("Gamma t_f of the MD rings"))
+        .expect("the ring row");
+    assert!(row.contains(" - "), "{row}");
+    assert!(text.contains("no ring: no [[md.system]]"), "{text}");
+    assert!(
+        !dir.join("data/artifacts/figures")
+            .join("finite_size")
+            .exists()
+    );
+    assert!(!text.contains("figures[finite_size]"), "{text}");
+}

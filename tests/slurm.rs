@@ -231,3 +231,59 @@ fn a_slurm_array_with_a_cancelled_task_resubmits_only_what_is_missing() {
         "{status}"
     );
 }
+
+/// Values that go into `#SBATCH` lines are in Slurm's own syntax: a newline
+/// in `--partition` or `--time` wrote a bare `echo injected` line into both
+/// scripts (run as a command), and `--partition ''` was accepted. Valid
+/// lists and time formats still produce the directives.
+#[test]
+fn slurm_options_cannot_inject_lines_into_the_scripts() {
+    let dir = workspace("slurm-inject");
+    let config = write_config(&dir, &study());
+    let submit = |extra: &[&str]| {
+        let args = [
+            &["slurm", "submit", "--shards", "2", "--dry-run"][..],
+            extra,
+        ]
+        .concat();
+        ternary(&config, &args)
+    };
+    for (option, value) in [
+        ("--partition", "p\necho injected"),
+        ("--partition", ""),
+        ("--partition", "a,,b"),
+        ("--partition", "p q"),
+        ("--time", "1:00\necho injected"),
+        ("--time", "1:2:3:4"),
+        ("--time", "tomorrow"),
+        ("--time", "-1"),
+    ] {
+        let output = submit(&[&format!("{option}={value}")]);
+        let message = stderr(&output);
+        assert!(!output.status.success(), "{option} {value:?} accepted");
+        assert!(message.contains(option), "{option} {value:?}: {message}");
+        assert!(!stdout(&output).contains("echo injected"));
+    }
+    assert!(
+        !dir.join("data/slurm/shards.sbatch").exists(),
+        "no script is written"
+    );
+    for (partition, time) in [
+        ("debug,long.q", "1-02:30:00"),
+        ("gpu_a-1", "90"),
+        ("x", "UNLIMITED"),
+    ] {
+        let output = submit(&["--partition", partition, "--time", time]);
+        let text = stdout(&output);
+        assert!(
+            output.status.success(),
+            "{partition} {time}: {}",
+            stderr(&output)
+        );
+        assert!(
+            text.contains(&format!("#SBATCH --partition={partition}\n")),
+            "{text}"
+        );
+        assert!(text.contains(&format!("#SBATCH --time={time}\n")), "{text}");
+    }
+}

@@ -138,6 +138,111 @@ fn foreign_entries_inside_a_store_are_left_alone() {
     }
 }
 
+/// A user's file (and folder) inside an artifact directory was deleted by
+/// `run` ("replaced a damaged artifact: notes.txt: not listed in the
+/// manifest"). Now it is no damage: the artifact stays fresh and `verify`
+/// lists the entries as foreign; a forced recomputation moves the old
+/// artifact aside with them (`<key>.kept-1`, kept by every command) and says
+/// so; `gc` keeps an unreferenced artifact that holds them.
+#[test]
+fn a_users_files_inside_an_artifact_are_kept() {
+    let (config, store) = computed_study("user-files-in-artifact");
+    let kernel = artifact_of(&store, "kernel");
+    let notes = kernel.join("notes.txt");
+    let folder = kernel.join("mine/plot.py");
+    fs::write(&notes, "mine").unwrap();
+    fs::create_dir_all(folder.parent().unwrap()).unwrap();
+    fs::write(&folder, "mine").unwrap();
+    assert_eq!(run_counts(&config, &[]), (0, SMALL_STUDY_INSTANCES));
+    let verify = ternary(&config, &["verify"]);
+    let text = stdout(&verify);
+    assert!(verify.status.success(), "{text}");
+    assert!(
+        text.contains(&format!("foreign  {}", notes.display())),
+        "{text}"
+    );
+    assert!(
+        text.contains(&format!("foreign  {}", kernel.join("mine").display())),
+        "{text}"
+    );
+    let forced = ternary(&config, &["run", "--only", "kernel", "--force", "kernel"]);
+    let line = stdout(&forced);
+    assert!(forced.status.success(), "{}", stderr(&forced));
+    let aside = kernel.with_file_name(format!(
+        "{}.kept-1",
+        kernel.file_name().unwrap().to_string_lossy()
+    ));
+    assert!(
+        line.contains(&format!("moved it to {}", aside.display())),
+        "{line}"
+    );
+    assert!(line.contains("mine, notes.txt"), "{line}");
+    assert_eq!(fs::read_to_string(aside.join("notes.txt")).unwrap(), "mine");
+    assert_eq!(
+        fs::read_to_string(aside.join("mine/plot.py")).unwrap(),
+        "mine"
+    );
+    assert!(kernel.join("manifest.json").is_file());
+    assert!(ternary(&config, &["verify"]).status.success());
+    // Unreferenced once the kernel's parameters change: gc keeps it (the
+    // user's file inside), and the set-aside copy, a foreign entry.
+    fs::write(kernel.join("notes.txt"), "mine again").unwrap();
+    let changed = small_study("data").replace("[sweep]", "[kernel]\nbin_width = 1e-4\n\n[sweep]");
+    let config = write_config(config.parent().unwrap(), &changed);
+    assert!(ternary(&config, &["run", "--quiet"]).status.success());
+    let gc = ternary(&config, &["gc"]);
+    let text = stdout(&gc);
+    assert!(gc.status.success(), "{}", stderr(&gc));
+    assert!(
+        text.contains(&format!("gc: kept {} (unreferenced", kernel.display())),
+        "{text}"
+    );
+    assert_eq!(
+        fs::read_to_string(kernel.join("notes.txt")).unwrap(),
+        "mine again"
+    );
+    assert_eq!(fs::read_to_string(aside.join("notes.txt")).unwrap(), "mine");
+}
+
+/// A stray file where ternary keeps directories blocked the store: after
+/// `refs/notes.txt`, `run`, `verify` and `gc` exited 1 with "Not a directory
+/// (os error 20)"; after `artifacts/notes.txt`, `verify` and `gc` did. Now
+/// they are listed as foreign and kept, and every command goes on.
+#[test]
+fn stray_files_among_the_stores_folders_are_foreign_not_fatal() {
+    let (config, store) = computed_study("stray-files");
+    let stray = [
+        store.join("refs/notes.txt"),
+        store.join("artifacts/notes.txt"),
+        store.join("refs/kernel/notes.md"),
+    ];
+    for path in &stray {
+        fs::write(path, "mine").unwrap();
+    }
+    assert_eq!(run_counts(&config, &[]), (0, SMALL_STUDY_INSTANCES));
+    let verify = ternary(&config, &["verify"]);
+    let text = stdout(&verify);
+    assert!(verify.status.success(), "{text}{}", stderr(&verify));
+    for path in &stray {
+        assert!(
+            text.contains(&format!("foreign  {}", path.display())),
+            "{text}"
+        );
+    }
+    let gc = ternary(&config, &["gc"]);
+    assert!(gc.status.success(), "{}", stderr(&gc));
+    let status = ternary(&config, &["status"]);
+    assert!(status.status.success(), "{}", stderr(&status));
+    for path in &stray {
+        assert_eq!(
+            fs::read_to_string(path).unwrap(),
+            "mine",
+            "{}",
+            path.display()
+        );
+    }
+}
+
 /// One flipped byte in an input: `status` calls it damaged, a forced
 /// downstream stage refuses to read it (today it wrote different bytes under
 /// the same key), and the next run recomputes it to the original bytes while
@@ -198,7 +303,17 @@ fn an_edited_manifest_is_damaged() {
         ("seal", |m| m["manifest_sha256"] = "1".repeat(64).into()),
     ];
     for (what, edit) in edits {
-        edit_manifest(&artifact_of(&store, "kernel"), edit);
+        let kernel = artifact_of(&store, "kernel");
+        edit_manifest(&kernel, edit);
+        // `show` warns and exits non-zero (before: rows, exit 0, no warning).
+        let key = kernel.file_name().unwrap().to_string_lossy().into_owned();
+        let show = ternary(&config, &["show", &key[..12]]);
+        assert!(!show.status.success(), "{what}: show passed");
+        assert!(
+            stdout(&show).starts_with("DAMAGED "),
+            "{what}: {}",
+            stdout(&show)
+        );
         let verify = ternary(&config, &["verify"]);
         assert!(!verify.status.success(), "{what}: verify passed");
         assert!(stdout(&verify).contains("DAMAGED  kernel/"), "{what}");
@@ -428,11 +543,12 @@ fn syntax_and_encoding_errors_name_their_line() {
 }
 
 /// Bench arguments are validated: each bad value exits with an error naming
-/// it, quickly, without a panic (today: index out of bounds, CrowdedRing,
-/// Breakdown, hangs, a 48 TB allocation, NaN tables with exit 0).
+/// it, quickly, without a panic (before: index out of bounds, CrowdedRing,
+/// Breakdown, hangs, a 48 TB allocation, NaN tables with exit 0; balance's
+/// bin width "capacity overflow" (exit 101) and NaN tables).
 #[test]
 fn bench_arguments_are_validated() {
-    let cases: [(&[&str], &str); 11] = [
+    let cases: [(&[&str], &str); 14] = [
         (&["md", "--particles", "0"], "--particles"),
         (&["md", "--radius-um", "0"], "--radius-um"),
         (&["md", "--kt-ev", "0"], "--kt-ev"),
@@ -447,6 +563,12 @@ fn bench_arguments_are_validated() {
         (&["integrators", "--scenes", "1000000000000"], "--scenes"),
         (&["integrators", "--scenes", "0"], "--scenes"),
         (&["integrators", "--n", "nan"], "--n"),
+        (
+            &["balance", "--bin-width", "1e-300", "--randomizations", "2"],
+            "--bin-width",
+        ),
+        (&["balance", "--bin-width", "1e300"], "--bin-width"),
+        (&["balance", "--separation", "1000"], "--separation"),
     ];
     for (args, option) in cases {
         let started = Instant::now();

@@ -622,22 +622,17 @@ pub fn kernel(options: &KernelBenchOptions) -> (String, BenchFigure) {
     let _ = writeln!(out, "|---|---|---|---|---|---|---|---|---|---|");
     let default = &piloted;
     let mut sampled_runs = Vec::new();
-    for power in [10, 12, 14, 16] {
+    for points in work_precision_sizes(options.points, &[(1, 4), (1, 1), (4, 1), (16, 1)]) {
         let run = run_sampler(
             &potential,
-            &plan_for(
-                default,
-                options.seed + 1,
-                options.randomizations,
-                1 << power,
-            ),
+            &plan_for(default, options.seed + 1, options.randomizations, points),
             study,
         );
         let [alpha, beta, sigma] = run.shape;
         let _ = writeln!(
             out,
             "{} {alpha:.2e} | {beta:.2e} | {sigma:.2e} | {:.1} |",
-            precision_cells(1 << power, &run),
+            precision_cells(points, &run),
             run.chi2_per_dof,
         );
         sampled_runs.push(run);
@@ -651,6 +646,18 @@ pub fn kernel(options: &KernelBenchOptions) -> (String, BenchFigure) {
         ("offset quadrature", &quadrature_runs),
     ];
     (out, kernel_figure(&series, options.randomizations))
+}
+
+/// The sizes of a work-precision table: `points * num / den` for each
+/// `(num, den)`, at least 16, each once (the default 4096 points gives 2^10
+/// to 2^16 sampled scenes and 64 to 12288 quadrature pairs).
+fn work_precision_sizes(points: u32, ratios: &[(u32, u32)]) -> Vec<u32> {
+    let mut sizes: Vec<u32> = ratios
+        .iter()
+        .map(|&(num, den)| (points * num / den).max(16))
+        .collect();
+    sizes.dedup();
+    sizes
 }
 
 /// A relative error a kernel run reports.
@@ -759,8 +766,10 @@ fn quadrature_work_precision(
         ..*options
     };
     let mut runs = Vec::new();
-    // 12288: 8192 + 4096 pairs for a same-side share near 1/3 (each stratum a power of two).
-    for pairs in [64, 256, 1024, 4096, 8192, 12288] {
+    // 3x: at the default 4096 points, 12288 = 8192 + 4096 pairs for a
+    // same-side share near 1/3 (each stratum a power of two).
+    let sizes = [(1, 64), (1, 16), (1, 4), (1, 1), (2, 1), (3, 1)];
+    for pairs in work_precision_sizes(options.points, &sizes) {
         let QuadratureRun { run, .. } = run_quadrature(potential, quadrature, &shifted, pairs);
         let _ = writeln!(
             out,

@@ -9,6 +9,18 @@ use crate::physics::sampling::LaunchProposal;
 
 pub use crate::kernel::DEFAULT_KICK_FLOOR;
 
+/// Widest velocity window (`v_th`): `u' +- 6`, beyond the largest launch
+/// speed the point sets draw (6.8 `v_th`) from any `u'` within reach.
+pub const MAX_WINDOW: f64 = 12.0;
+
+/// Exactly two numbers `[min, max]` (a third was silently dropped).
+fn two_numbers<'de, D: serde::Deserializer<'de>>(deserializer: D) -> Result<[f64; 2], D::Error> {
+    use serde::de::Error;
+    let values = Vec::<f64>::deserialize(deserializer)?;
+    <[f64; 2]>::try_from(values.as_slice())
+        .map_err(|_| D::Error::invalid_length(values.len(), &"two numbers [min, max]"))
+}
+
 /// `[kernel]`.
 #[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, default)]
@@ -25,7 +37,8 @@ pub struct KernelConfig {
     pub launch_length: f64,
     /// Velocity changes up to this size (`v_th`) count as zero (engine error floor).
     pub kick_floor: f64,
-    /// Range of `|u - u'|` of the shape fit, `[min, max]`.
+    /// Range of `|u - u'|` of the shape fit, `[min, max]` (exactly two numbers).
+    #[serde(deserialize_with = "two_numbers")]
     pub fit_range: [f64; 2],
     /// Truncation half-widths `X` (`v_th`) added to the `moments` grid, e.g.
     /// the paper's `X = 0.04` (its Table I).
@@ -126,10 +139,12 @@ impl KernelConfig {
             format!("{} must be > 0", kernel.bin_width),
         )?;
         check(
-            kernel.window.is_finite() && kernel.window >= 3.0 * kernel.bin_width,
+            kernel.window.is_finite()
+                && kernel.window >= 3.0 * kernel.bin_width
+                && kernel.window <= MAX_WINDOW,
             "kernel.window",
             format!(
-                "{} must hold at least 3 bins of kernel.bin_width",
+                "{} must hold at least 3 bins of kernel.bin_width and be at most {MAX_WINDOW} (every velocity the launches reach)",
                 kernel.window
             ),
         )?;

@@ -39,7 +39,7 @@ use crate::physics::potential::Potential;
 use crate::physics::sampling::OffsetIntegration;
 use crate::physics::scene::EngineSettings;
 
-pub use check::MAX_LIST;
+pub use check::{MAX_LIST, compact};
 pub use collisions::{
     CollisionsConfig, CollisionsParams, LaunchesParams, MAX_PILOT_POINTS, MAX_RANDOMIZATIONS,
     MAX_SCENES, OffsetMethod,
@@ -57,7 +57,7 @@ pub use md::{
     MdSystemConfig,
 };
 pub use potentials::{MAX_EXPONENT, PotentialsConfig, THETA_RANGE};
-pub use publication::{AuthorConfig, PublicationConfig};
+pub use publication::{AuthorConfig, LICENSES, PublicationConfig, license_url};
 pub use scan::{
     MAX_SCAN_LAUNCHES, MAX_SCAN_POINTS, MAX_SCAN_SCENES, NamedLaunch, ScanConfig, ScanGrid,
     ScanGridOverride, ScanParams,
@@ -159,6 +159,21 @@ pub struct Study {
     convergence: Option<(ConvergenceParams, Vec<CollisionsParams>)>,
 }
 
+/// Largest configuration file read: a study of every key with hundreds of
+/// rings and gases is ~100 kB (a `/dev/zero` or a data file given by mistake
+/// must not be read without end).
+pub const MAX_CONFIG_BYTES: u64 = 1 << 20;
+
+/// The bytes of `file` if it holds at most `limit` of them, `None` if more.
+fn read_bounded(file: &Path, limit: u64) -> std::io::Result<Option<Vec<u8>>> {
+    use std::io::Read;
+    let mut bytes = Vec::new();
+    std::fs::File::open(file)?
+        .take(limit + 1)
+        .read_to_end(&mut bytes)?;
+    Ok((bytes.len() as u64 <= limit).then_some(bytes))
+}
+
 impl Study {
     /// Reads, parses and validates a configuration file.
     pub fn load(file: &Path) -> Result<Study, ConfigError> {
@@ -168,8 +183,14 @@ impl Study {
             line,
             message,
         };
-        let bytes =
-            std::fs::read(file).map_err(|e| error(None, format!("cannot read the file: {e}")))?;
+        let bytes = read_bounded(file, MAX_CONFIG_BYTES)
+            .map_err(|e| error(None, format!("cannot read the file: {e}")))?
+            .ok_or_else(|| {
+                error(
+                    None,
+                    format!("the file is larger than {MAX_CONFIG_BYTES} bytes: not a study configuration"),
+                )
+            })?;
         let text = String::from_utf8(bytes).map_err(|e| {
             let valid = e.utf8_error().valid_up_to();
             let bytes = e.as_bytes();
@@ -207,7 +228,7 @@ impl Study {
         })?;
         Study::resolve(file, config).map_err(|(key, message)| {
             let line = line_of_key(text, &key);
-            error(key, line, message)
+            error(key, line, check::compact_numbers(&message))
         })
     }
 

@@ -95,11 +95,16 @@ impl PublicationConfig {
                 self.name
             ),
         )?;
-        for (key, value) in [
-            ("title", &self.title),
-            ("version", &self.version),
-            ("license", &self.license),
-        ] {
+        check(
+            license_url(&self.license).is_some(),
+            "publication.license",
+            format!(
+                "`{}` is not an SPDX id of a data licence ternary knows: {}",
+                self.license,
+                LICENSES.map(|(id, _)| id).join(", ")
+            ),
+        )?;
+        for (key, value) in [("title", &self.title), ("version", &self.version)] {
             check(
                 !value.trim().is_empty(),
                 format!("publication.{key}"),
@@ -126,6 +131,60 @@ impl PublicationConfig {
         }
         Ok(())
     }
+}
+
+/// The SPDX licence ids a dataset may carry, with their canonical URLs: the
+/// open licences data repositories (Zenodo, the Data Package standard) offer
+/// for data, and the common ones for code.
+pub const LICENSES: [(&str, &str); 15] = [
+    ("CC-BY-4.0", "https://creativecommons.org/licenses/by/4.0/"),
+    (
+        "CC-BY-SA-4.0",
+        "https://creativecommons.org/licenses/by-sa/4.0/",
+    ),
+    (
+        "CC-BY-NC-4.0",
+        "https://creativecommons.org/licenses/by-nc/4.0/",
+    ),
+    (
+        "CC-BY-NC-SA-4.0",
+        "https://creativecommons.org/licenses/by-nc-sa/4.0/",
+    ),
+    (
+        "CC-BY-ND-4.0",
+        "https://creativecommons.org/licenses/by-nd/4.0/",
+    ),
+    (
+        "CC-BY-NC-ND-4.0",
+        "https://creativecommons.org/licenses/by-nc-nd/4.0/",
+    ),
+    (
+        "CC0-1.0",
+        "https://creativecommons.org/publicdomain/zero/1.0/",
+    ),
+    ("ODC-By-1.0", "https://opendatacommons.org/licenses/by/1-0/"),
+    ("ODbL-1.0", "https://opendatacommons.org/licenses/odbl/1-0/"),
+    ("PDDL-1.0", "https://opendatacommons.org/licenses/pddl/1-0/"),
+    ("MIT", "https://opensource.org/license/mit"),
+    ("Apache-2.0", "https://www.apache.org/licenses/LICENSE-2.0"),
+    (
+        "BSD-3-Clause",
+        "https://opensource.org/license/bsd-3-clause",
+    ),
+    (
+        "GPL-3.0-or-later",
+        "https://www.gnu.org/licenses/gpl-3.0.html",
+    ),
+    ("MPL-2.0", "https://www.mozilla.org/en-US/MPL/2.0/"),
+];
+
+/// The URL of the licence `id` (SPDX ids match without regard to case), or
+/// `None` for an id not in [`LICENSES`].
+pub fn license_url(id: &str) -> Option<&'static str> {
+    LICENSES
+        .iter()
+        .find(|(known, _)| known.eq_ignore_ascii_case(id))
+        .map(|(_, url)| *url)
 }
 
 /// `YYYY-MM-DD` with a plausible month and day.

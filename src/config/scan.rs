@@ -106,6 +106,14 @@ pub const MAX_SCAN_POINTS: u32 = 1 << 20;
 /// Largest scenes of one scan (offsets x launch pairs).
 pub const MAX_SCAN_SCENES: u64 = 1 << 22;
 
+/// Largest `|offset|` of a scan grid (`l/v_th`): collision times are of
+/// order `l/v_th`, so arrivals a thousand apart collide only in pairs.
+pub const MAX_SCAN_OFFSET: f64 = 1e3;
+
+/// Largest launch speed of a scan (`v_th`): no thermal particle is faster
+/// (the kernel's point sets reach 6.8).
+pub const MAX_LAUNCH_SPEED: f64 = 20.0;
+
 /// Largest number of scan launch pairs.
 pub const MAX_SCAN_LAUNCHES: usize = 64;
 
@@ -115,9 +123,11 @@ fn validate_grid(grid: &ScanGrid, prefix: &str) -> Result<(), Invalid> {
         ("offset_max", grid.offset_max),
     ] {
         check(
-            value.is_finite(),
+            value.is_finite() && value.abs() <= MAX_SCAN_OFFSET,
             format!("{prefix}{name}"),
-            format!("{value} must be a finite offset"),
+            format!(
+                "{value} is outside [-{MAX_SCAN_OFFSET}, {MAX_SCAN_OFFSET}] (arrivals farther apart never meet in one collision)"
+            ),
         )?;
     }
     check(
@@ -167,9 +177,11 @@ impl ScanConfig {
         for (k, launch) in scan.launch.iter().enumerate() {
             for (name, u) in [("u2", launch.u2), ("u3", launch.u3)] {
                 check(
-                    u.is_finite() && u != 0.0,
+                    u != 0.0 && u.abs() <= MAX_LAUNCH_SPEED,
                     format!("scan.launch[{k}].{name}"),
-                    format!("{u} must be finite and non-zero (a particle at rest never arrives)"),
+                    format!(
+                        "{u} must be non-zero (a particle at rest never arrives) and within +-{MAX_LAUNCH_SPEED} v_th"
+                    ),
                 )?;
             }
             check(

@@ -6,7 +6,7 @@ use serde::{Deserialize, Serialize};
 
 /// `[store]`.
 #[derive(Clone, Debug, Deserialize, Serialize)]
-#[serde(deny_unknown_fields)]
+#[serde(deny_unknown_fields, default)]
 pub struct StoreConfig {
     /// Artifact store directory, relative to the configuration file.
     pub path: PathBuf,

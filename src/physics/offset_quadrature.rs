@@ -21,7 +21,7 @@ use super::scene::{Collision, EngineSettings, collide};
 
 /// Nested trapezoid rule on `tau = T sinh(s)`, `|s| <= half_range`.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(deny_unknown_fields, default)]
 pub struct OffsetRule {
     /// Step in `s` of the coarsest rule.
     pub coarse_step: f64,

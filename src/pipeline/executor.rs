@@ -106,6 +106,9 @@ pub enum Action {
         seconds: f64,
         /// The problems of a damaged artifact under the same key that it replaced.
         repaired: Option<String>,
+        /// Where the artifact it replaced went, with the entries in it that
+        /// ternary did not write (kept, never deleted).
+        set_aside: Option<String>,
     },
     /// Not selected by `--only` (or not shardable in a shard task) and not fresh.
     Skipped,
@@ -343,8 +346,23 @@ pub fn run(
                         reason: reason.clone(),
                     });
                 }
-                let replace = !matches!(existing, Err(None));
+                let mut replace = !matches!(existing, Err(None));
                 let repaired = existing.err().flatten().map(|problems| problems.join("; "));
+                let foreign = if replace {
+                    store.foreign_in_artifact(&id.stage, &key, &output_files(stage.as_ref()))
+                } else {
+                    Vec::new()
+                };
+                let mut set_aside = None;
+                if !foreign.is_empty() && sharding.task.is_none() {
+                    let aside = store.set_aside(&id.stage, &key)?;
+                    set_aside = Some(format!(
+                        "moved it to {} with {}, which ternary did not write",
+                        aside.display(),
+                        foreign.join(", ")
+                    ));
+                    replace = false;
+                }
                 let job = Job {
                     store,
                     stage: stage.as_ref(),
@@ -360,7 +378,11 @@ pub fn run(
                     None => {
                         let (manifest, seconds) = job.compute(&entry, replace)?;
                         resolved.insert(id.clone(), manifest);
-                        Action::Computed { seconds, repaired }
+                        Action::Computed {
+                            seconds,
+                            repaired,
+                            set_aside,
+                        }
                     }
                 }
             }
@@ -396,12 +418,24 @@ fn report_line(id: &InstanceId, key: &str, action: &Action) -> String {
         Action::Fresh => "fresh".to_string(),
         Action::Computed {
             seconds,
-            repaired: None,
-        } => format!("computed in {seconds:.2} s"),
-        Action::Computed {
-            seconds,
-            repaired: Some(problems),
-        } => format!("computed in {seconds:.2} s (replaced a damaged artifact: {problems})"),
+            repaired,
+            set_aside,
+        } => {
+            let notes: Vec<String> = [
+                repaired
+                    .as_ref()
+                    .map(|problems| format!("replaced a damaged artifact: {problems}")),
+                set_aside.clone(),
+            ]
+            .into_iter()
+            .flatten()
+            .collect();
+            if notes.is_empty() {
+                format!("computed in {seconds:.2} s")
+            } else {
+                format!("computed in {seconds:.2} s ({})", notes.join("; "))
+            }
+        }
         Action::Skipped => "skipped (not selected, not fresh)".to_string(),
         Action::Shard {
             index,

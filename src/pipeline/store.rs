@@ -497,11 +497,8 @@ impl Store {
         match sorted_entries(&dir) {
             Err(error) => problems.push(error_chain(&error)),
             Ok(present) => {
-                for name in &present {
-                    if name != "manifest.json" && !listed.contains(&name.as_str()) {
-                        problems.push(format!("{name}: not listed in the manifest"));
-                    }
-                }
+                // Entries the manifest does not list are a user's: reported by
+                // `foreign_entries`, kept, and no damage to the listed files.
                 for name in &listed {
                     if !present.iter().any(|p| p == name) {
                         problems.push(format!("{name}: missing"));
@@ -597,20 +594,51 @@ impl Store {
         Ok(found)
     }
 
-    /// Entries under `artifacts/` and `tmp/` that ternary did not name: never
-    /// removed, only reported.
+    /// Entries of the artifact directory `key` of `stage` that ternary did
+    /// not write: not `manifest.json`, not listed in the manifest (none when
+    /// it cannot be read) and not among `outputs` (the files the stage
+    /// writes, when the caller knows them), sorted.
+    pub fn foreign_in_artifact(&self, stage: &str, key: &str, outputs: &[String]) -> Vec<String> {
+        let dir = self.artifact_dir(stage, key);
+        let listed: Vec<String> = read_json::<Manifest>(&dir.join("manifest.json"))
+            .map(|manifest| manifest.files.into_iter().map(|f| f.name).collect())
+            .unwrap_or_default();
+        sorted_entries(&dir)
+            .unwrap_or_default()
+            .into_iter()
+            .filter(|name| {
+                name != "manifest.json" && !listed.contains(name) && !outputs.contains(name)
+            })
+            .collect()
+    }
+
+    /// Moves the artifact directory `key` of `stage` aside, to
+    /// `<key>.kept-<n>` beside it: not a key, so a foreign entry that no
+    /// command removes. Returns where it went.
+    pub fn set_aside(&self, stage: &str, key: &str) -> Result<PathBuf, StoreError> {
+        let dir = self.artifact_dir(stage, key);
+        let aside = (1u32..)
+            .map(|n| dir.with_file_name(format!("{key}.kept-{n}")))
+            .find(|path| !path.exists())
+            .unwrap_or_else(|| dir.with_file_name(format!("{key}.kept")));
+        fs::rename(&dir, &aside).map_err(io_error(&dir))?;
+        Ok(aside)
+    }
+
+    /// Entries under `artifacts/`, `tmp/` and `refs/` that ternary did not
+    /// name: never removed, only reported.
     pub fn foreign_entries(&self) -> Result<Vec<PathBuf>, StoreError> {
         let mut foreign = Vec::new();
-        let artifacts = self.root.join("artifacts");
-        for stage in sorted_entries(&artifacts)? {
-            if !artifacts.join(&stage).is_dir() {
-                foreign.push(artifacts.join(&stage));
-                continue;
-            }
-            for key in sorted_entries(&artifacts.join(&stage))? {
+        for stage in stage_folders(&self.root.join("artifacts"), &mut foreign)? {
+            for key in sorted_entries(&self.root.join("artifacts").join(&stage))? {
                 let path = self.artifact_dir(&stage, &key);
                 if !is_key(&key) || !path.is_dir() {
                     foreign.push(path);
+                    continue;
+                }
+                if path.join("manifest.json").is_file() {
+                    let inside = self.foreign_in_artifact(&stage, &key, &[]);
+                    foreign.extend(inside.into_iter().map(|name| path.join(name)));
                 }
             }
         }
@@ -618,6 +646,16 @@ impl Store {
         for name in sorted_entries(&tmp)? {
             if !(is_staging_name(&name) && tmp.join(&name).is_dir()) {
                 foreign.push(tmp.join(name));
+            }
+        }
+        let refs = self.root.join("refs");
+        for stage in stage_folders(&refs, &mut foreign)? {
+            for name in sorted_entries(&refs.join(&stage))? {
+                let path = refs.join(&stage).join(&name);
+                let ours = (name.ends_with(".json") || is_json_temporary(&name)) && path.is_file();
+                if !ours {
+                    foreign.push(path);
+                }
             }
         }
         Ok(foreign)
@@ -982,11 +1020,31 @@ fn read_json<T: for<'de> Deserialize<'de>>(path: &Path) -> Result<T, StoreError>
     })
 }
 
+/// The per-stage folders in `top` (`artifacts/`, `refs/`), sorted; any
+/// other entry there is pushed to `foreign`.
+fn stage_folders(top: &Path, foreign: &mut Vec<PathBuf>) -> Result<Vec<String>, StoreError> {
+    let (folders, others): (Vec<String>, Vec<String>) = sorted_entries(top)?
+        .into_iter()
+        .partition(|name| top.join(name).is_dir());
+    foreign.extend(others.into_iter().map(|name| top.join(name)));
+    Ok(folders)
+}
+
 fn sorted_entries(dir: &Path) -> Result<Vec<String>, StoreError> {
     let mut names = Vec::new();
     let entries = match fs::read_dir(dir) {
         Ok(entries) => entries,
-        Err(error) if error.kind() == io::ErrorKind::NotFound => return Ok(names),
+        // Missing, or a file where ternary keeps a directory (a user's
+        // `artifacts/notes.txt`): nothing of ours inside; `foreign_entries`
+        // reports the file.
+        Err(error)
+            if matches!(
+                error.kind(),
+                io::ErrorKind::NotFound | io::ErrorKind::NotADirectory
+            ) =>
+        {
+            return Ok(names);
+        }
         Err(error) => return Err(io_error(dir)(error)),
     };
     for entry in entries {

@@ -180,7 +180,10 @@ pub fn figure_stages(study: &Study, plan: &[Box<dyn Stage>]) -> Vec<FiguresStage
         if let Some(figure) = md_times(&compared) {
             figures.push(FiguresStage::new(figure, vec![compare.clone()]));
         }
-        figures.push(FiguresStage::new(Figure::FiniteSize, vec![compare]));
+        // Finite size compares the rings at u' = 0: none, no figure.
+        if !compared.is_empty() {
+            figures.push(FiguresStage::new(Figure::FiniteSize, vec![compare]));
+        }
     }
     figures
 }
