@@ -7,7 +7,7 @@
 use std::collections::{BTreeMap, BTreeSet};
 use std::fmt::Write as _;
 use std::fs::File;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 use polars::prelude::{DataFrame, ParquetReader, SerReader};
@@ -15,7 +15,7 @@ use polars::prelude::{DataFrame, ParquetReader, SerReader};
 use crate::contract::{self, Col, Pair, TableSpec};
 use crate::pipeline::executor::{self, Audit, InstanceReport, Verbosity};
 use crate::pipeline::shards;
-use crate::pipeline::store::{Depth, Store, listing_problem};
+use crate::pipeline::store::{Depth, Store, is_live_staging, listing_problem};
 use crate::pipeline::table::{is_table_file, read_parquet};
 use crate::pipeline::{InstanceId, Stage};
 
@@ -715,11 +715,23 @@ pub fn verify(store: &Store, stages: &[Box<dyn Stage>]) -> Result<(String, usize
             path.display()
         )?;
     }
-    let debris = store.staging_debris()?.len();
-    if debris > 0 {
+    let (live, debris): (Vec<PathBuf>, Vec<PathBuf>) =
+        store.staging_debris()?.into_iter().partition(|path| {
+            path.file_name()
+                .is_some_and(|name| is_live_staging(&name.to_string_lossy()))
+        });
+    if !live.is_empty() {
         writeln!(
             out,
-            "{debris} staging entries from interrupted runs are ignored (the next run or gc removes them)"
+            "{} staging entries of runs in progress (not checked: not yet artifacts)",
+            live.len()
+        )?;
+    }
+    if !debris.is_empty() {
+        writeln!(
+            out,
+            "{} staging entries from interrupted runs are ignored (the next run or gc removes them)",
+            debris.len()
         )?;
     }
     writeln!(

@@ -42,6 +42,14 @@ fn status_of(config: &Path, instance: &str) -> String {
         .to_string()
 }
 
+/// The id in a store's marker.
+fn store_id(store: &Path) -> String {
+    let marker: serde_json::Value =
+        serde_json::from_str(&fs::read_to_string(store.join("ternary-store.json")).unwrap())
+            .unwrap();
+    marker["id"].as_str().expect("the marker's id").to_string()
+}
+
 /// A change to a manifest document.
 type ManifestEdit = fn(&mut serde_json::Value);
 
@@ -87,6 +95,97 @@ fn a_foreign_folder_is_refused_and_keeps_every_file() {
         assert_eq!(fs::read_to_string(project.join(file)).unwrap(), file);
     }
     assert!(!project.join("ternary-store.json").exists());
+}
+
+/// A folder is a store only when its marker is ours, a marker that is not
+/// ours is never written over, and `gc` removes only debris named with the
+/// store's id. Before: a `mine/` holding only
+/// `artifacts/collisions/<64 hex>/manifest.json` (any JSON) and a file beside
+/// it was accepted (verify called the manifest unreadable, gc deleted both);
+/// a user's `ternary-store.json` was overwritten by `run` and `store.lock`
+/// rewritten by `gc`; `gc` deleted `tmp/<64 hex>.123/thesis.tex` and
+/// `refs/kernel/.notes.json.42`.
+#[test]
+fn only_a_store_of_ours_is_adopted_and_only_its_debris_removed() {
+    let dir = workspace("adoption");
+    let key = "a".repeat(64);
+    let shaped = dir.join("mine");
+    let artifact = shaped.join("artifacts/collisions").join(&key);
+    let own = [
+        (shaped.join("ternary-store.json"), "my notes on the store"),
+        (shaped.join("store.lock"), "my lock"),
+        (artifact.join("manifest.json"), "{\"any\": \"json\"}"),
+        (artifact.join("thesis.txt"), "mine"),
+    ];
+    for (path, text) in &own {
+        fs::create_dir_all(path.parent().unwrap()).unwrap();
+        fs::write(path, text).unwrap();
+    }
+    let config = write_config(&dir, &small_study("mine"));
+    for command in [&["run"][..], &["verify"], &["gc"], &["status"]] {
+        let output = ternary(&config, command);
+        assert!(!output.status.success(), "{command:?} adopted the folder");
+        assert!(
+            stderr(&output).contains("is not a ternary store"),
+            "{}",
+            stderr(&output)
+        );
+    }
+    for (path, text) in &own {
+        assert_eq!(
+            fs::read_to_string(path).unwrap(),
+            *text,
+            "{}",
+            path.display()
+        );
+    }
+    // In a store of ours: a user's entries shaped like debris are kept, the
+    // store's own debris (named with its id) is removed.
+    let (config, store) = computed_study("adoption-debris");
+    let id = store_id(&store);
+    assert_eq!(id.len(), 16, "{id}");
+    let users = [
+        store
+            .join("tmp")
+            .join(format!("{key}.123"))
+            .join("thesis.tex"),
+        store.join("refs/kernel/.notes.json.42"),
+    ];
+    for path in &users {
+        fs::create_dir_all(path.parent().unwrap()).unwrap();
+        fs::write(path, "mine").unwrap();
+    }
+    let ours = [
+        store
+            .join("tmp")
+            .join(format!("{key}.{id}.77@node-1"))
+            .join("kernel.parquet"),
+        store
+            .join("refs/kernel")
+            .join(format!(".ipp-6.json.{id}.77")),
+    ];
+    for path in &ours {
+        fs::create_dir_all(path.parent().unwrap()).unwrap();
+        fs::write(path, "debris").unwrap();
+    }
+    let verify = stdout(&ternary(&config, &["verify"]));
+    assert!(
+        verify.contains(&format!("foreign  {}", users[1].display())),
+        "{verify}"
+    );
+    let gc = ternary(&config, &["gc"]);
+    assert!(gc.status.success(), "{}", stderr(&gc));
+    for path in &users {
+        assert_eq!(
+            fs::read_to_string(path).unwrap(),
+            "mine",
+            "{}",
+            path.display()
+        );
+    }
+    for path in &ours {
+        assert!(!path.exists(), "{}", path.display());
+    }
 }
 
 /// An empty or missing folder becomes a store with its marker.
@@ -347,7 +446,8 @@ fn a_lost_ref_is_rewritten_and_status_still_explains() {
     let refs = store.join("refs/scan");
     let reference = fs::read(refs.join("ipp-6.json")).unwrap();
     fs::remove_file(refs.join("ipp-6.json")).unwrap();
-    fs::write(refs.join(".ipp-6.json.4242"), "{").unwrap();
+    let temporary = format!(".ipp-6.json.{}.4242", store_id(&store));
+    fs::write(refs.join(&temporary), "{").unwrap();
     let dir = config.parent().unwrap();
     write_config(
         dir,
@@ -358,7 +458,7 @@ fn a_lost_ref_is_rewritten_and_status_still_explains() {
     write_config(dir, &small_study("data"));
     assert_eq!(run_counts(&config, &[]), (0, SMALL_STUDY_INSTANCES));
     assert_eq!(fs::read(refs.join("ipp-6.json")).unwrap(), reference);
-    assert!(!refs.join(".ipp-6.json.4242").exists());
+    assert!(!refs.join(&temporary).exists());
 }
 
 /// `verify` on a store that does not exist fails and creates nothing (today

@@ -3,10 +3,11 @@
 //! Layout under the store root:
 //!
 //! ```text
-//! ternary-store.json                  format marker: written when ternary creates the store
+//! ternary-store.json                  marker: format, layout version and this store's id,
+//!                                     written when ternary creates the store
 //! store.lock                          lock: shared by writing `run`s, exclusive for `gc`
-//! tmp/<key>.<pid>/                    staging directories (never trusted)
-//! tmp/<key>.<pid>.old/                an artifact being replaced (`--force`, repair)
+//! tmp/<key>.<id>.<pid>@<host>/        staging directories (never trusted)
+//! tmp/<key>.<id>.<pid>@<host>.old/    an artifact being replaced (`--force`, repair)
 //! artifacts/<stage>/<key>/            one directory per artifact:
 //!     manifest.json                   key, parameters, inputs, file hashes, provenance
 //!     <table>.parquet                 output tables
@@ -20,8 +21,11 @@
 //! the next locked run removes.
 //!
 //! The store never deletes what it did not create: a directory is opened as a
-//! store only when it carries the marker (or is empty, or is missing, and then
-//! gets one), and only names of the shapes above are ever removed. Every
+//! store only when it carries our marker (or is empty, or is missing, and then
+//! gets one; or its marker was damaged and everything else in it is provably
+//! ternary's: sealed manifests listing exactly their files), a marker that is
+//! not ours is never written over, and only debris named with this store's id
+//! is ever removed. Every
 //! artifact is checked before it is trusted ([`Store::inspect`]): its manifest
 //! must name its key, the key must follow from the manifest's parameters and
 //! inputs, the directory must hold exactly the listed files, and each file
@@ -43,8 +47,10 @@ use super::table::content_sha256_of_file;
 pub const MARKER: &str = "ternary-store.json";
 
 /// Store layout version written into the marker; a store with a higher one
-/// is refused (it was written by a newer ternary).
-pub const FORMAT_VERSION: u32 = 1;
+/// is refused (it was written by a newer ternary). 2: the marker carries the
+/// store's id, and debris is named with it (a version-1 marker, ours without
+/// an id, gets one at the next writing open).
+pub const FORMAT_VERSION: u32 = 2;
 
 /// The top-level entries a ternary store consists of.
 const LAYOUT: [&str; 6] = [MARKER, "store.lock", "artifacts", "refs", "tmp", "slurm"];
@@ -70,7 +76,7 @@ pub enum StoreError {
     },
     /// The directory holds files and is not a ternary store.
     #[error(
-        "{path} is not a ternary store: it has no {MARKER} and is not empty (it holds {found}); \
+        "{path} is not a ternary store: it has no {MARKER} of ternary's and is not empty (it holds {found}); \
          point `store.path` at a new or empty directory"
     )]
     NotAStore {
@@ -113,15 +119,40 @@ struct Marker {
     format: String,
     /// Layout version.
     version: u32,
+    /// The store's id (16 hex digits), in every name of its debris; absent in
+    /// version-1 markers.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    id: Option<String>,
 }
 
+/// The format field of our markers.
+const MARKER_FORMAT: &str = "ternary-store";
+
 impl Marker {
-    fn current() -> Marker {
+    /// A current marker for a new store at `root`: an id from the root, the
+    /// time and the process (two stores never share one).
+    fn new(root: &Path) -> Marker {
+        let nanos = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map_or(0, |d| d.as_nanos());
+        let seed = format!("{}|{nanos}|{}", root.display(), writer_name());
         Marker {
-            format: "ternary-store".to_string(),
+            format: MARKER_FORMAT.to_string(),
             version: FORMAT_VERSION,
+            id: Some(sha256_hex(seed.as_bytes())[..16].to_string()),
         }
     }
+}
+
+/// What the marker file says about a directory.
+enum MarkerState {
+    /// Our marker, with the store's id (`None`: a version-1 marker).
+    Ours(Option<String>),
+    /// No marker file.
+    Missing,
+    /// A file of that name that is not a marker of ours (a user's, or ours
+    /// damaged): never written over unless the rest proves the store ours.
+    NotOurs,
 }
 
 /// One output file as recorded in a manifest.
@@ -231,6 +262,9 @@ pub enum Depth {
 #[derive(Clone, Debug)]
 pub struct Store {
     root: PathBuf,
+    /// The id from the marker; `None` for a store read without one (a
+    /// version-1 marker, or a damaged one), which then names no debris its own.
+    id: Option<String>,
 }
 
 /// The exclusive store lock; released on drop.
@@ -243,21 +277,62 @@ pub fn is_key(name: &str) -> bool {
     name.len() == 64 && name.bytes().all(|b| matches!(b, b'0'..=b'9' | b'a'..=b'f'))
 }
 
-/// `true` for the staging names [`Store::begin`] creates: `<key>.<writer>`
-/// and `<key>.<writer>.old`, the writer `<pid>@<host>` (or `<pid>` from
-/// before hosts were named).
-fn is_staging_name(name: &str) -> bool {
+/// `true` for a store id: 16 lower-case hex digits.
+fn is_store_id(text: &str) -> bool {
+    text.len() == 16 && text.bytes().all(|b| matches!(b, b'0'..=b'9' | b'a'..=b'f'))
+}
+
+/// `true` for the staging names [`Store::begin`] of the store `id` creates:
+/// `<key>.<id>.<writer>` and `<key>.<id>.<writer>.old`, the writer
+/// `<pid>@<host>`. Names without the id (another store's, a user's, or
+/// ternary's before stores had ids) are not.
+fn is_staging_name(name: &str, id: &str) -> bool {
     let name = name.strip_suffix(".old").unwrap_or(name);
-    name.split_once('.').is_some_and(|(key, writer)| {
-        let (pid, host) = writer.split_once('@').unwrap_or((writer, "x"));
-        is_key(key)
-            && !pid.is_empty()
+    let Some((key, rest)) = name.split_once('.') else {
+        return false;
+    };
+    let Some(writer) = rest.strip_prefix(id).and_then(|w| w.strip_prefix('.')) else {
+        return false;
+    };
+    is_key(key) && is_writer_name(writer)
+}
+
+/// `true` for a [`writer_name`]: `<pid>@<host>`.
+fn is_writer_name(text: &str) -> bool {
+    text.split_once('@').is_some_and(|(pid, host)| {
+        !pid.is_empty()
             && pid.bytes().all(|b| b.is_ascii_digit())
             && !host.is_empty()
             && host
                 .bytes()
                 .all(|b| b.is_ascii_alphanumeric() || b == b'-' || b == b'.')
     })
+}
+
+/// `true` when the staging entry `name` (or a temporary file's name ending
+/// in `.<pid>`) was made by a process that still runs on this host: a run in
+/// progress, not debris of an interrupted one.
+pub fn is_live_staging(name: &str) -> bool {
+    let name = name.strip_suffix(".old").unwrap_or(name);
+    let ours = writer_name();
+    let this_host = ours.split_once('@').map_or("", |(_, host)| host);
+    let (pid, host) = match name.rsplit_once('@') {
+        Some((rest, host)) => (rest.rsplit('.').next().unwrap_or_default(), host),
+        None => (name.rsplit('.').next().unwrap_or_default(), this_host),
+    };
+    host == this_host
+        && !pid.is_empty()
+        && pid.bytes().all(|b| b.is_ascii_digit())
+        && Path::new("/proc").join(pid).exists()
+}
+
+/// `true` for a temporary marker of any store: `.ternary-store.json.<id>.<pid>`.
+fn is_marker_temporary(name: &str) -> bool {
+    name.strip_prefix(".ternary-store.json.")
+        .and_then(|tag| tag.split_once('.'))
+        .is_some_and(|(id, pid)| {
+            is_store_id(id) && !pid.is_empty() && pid.bytes().all(|b| b.is_ascii_digit())
+        })
 }
 
 /// `<pid>@<host>`: names this process among writers on many nodes sharing a store.
@@ -276,46 +351,51 @@ fn writer_name() -> String {
     format!("{}@{host}", std::process::id())
 }
 
-/// `true` for the temporary names [`write_atomically`] creates for refs and
-/// the marker: `.<name>.json.<pid>`.
-fn is_json_temporary(name: &str) -> bool {
+/// `true` for the temporary names [`write_atomically`] of the store `id`
+/// creates for refs and the marker: `.<name>.json.<id>.<pid>`.
+fn is_json_temporary(name: &str, id: &str) -> bool {
     name.strip_prefix('.')
         .and_then(|rest| rest.rsplit_once(".json."))
-        .is_some_and(|(instance, pid)| {
-            !instance.is_empty() && !pid.is_empty() && pid.bytes().all(|b| b.is_ascii_digit())
+        .and_then(|(file, tag)| Some((file, tag.strip_prefix(id)?.strip_prefix('.')?)))
+        .is_some_and(|(file, pid)| {
+            !file.is_empty() && !pid.is_empty() && pid.bytes().all(|b| b.is_ascii_digit())
         })
 }
 
 impl Store {
     /// Opens the store at `root` for writing: a missing or empty directory
     /// becomes a new store (with its marker); a directory with files must
-    /// carry the marker or is refused, so nothing of a user's is ever treated
-    /// as debris.
+    /// carry our marker (a version-1 marker gets an id), or be provably a
+    /// store whose marker was damaged ([`Store::is_damaged_store`]), or is
+    /// refused, so nothing of a user's is ever treated as debris.
     pub fn open(root: &Path) -> Result<Store, StoreError> {
-        let store = Store {
-            root: root.to_path_buf(),
-        };
-        if !store.check_marker()? {
-            let entries = sorted_entries(root)?;
-            if !entries.is_empty() && !store.is_unmarked_store(&entries)? {
-                return Err(StoreError::NotAStore {
-                    path: root.to_path_buf(),
-                    found: summarize(&entries),
-                });
-            }
+        let mut store = Store::view(root)?;
+        if store.id.is_none() {
             fs::create_dir_all(root).map_err(io_error(root))?;
             // Under the exclusive lock, which debris cleaning also takes: a
             // concurrent run never removes the marker's temporary file.
             let _lock = store.lock()?;
-            if !store.check_marker()? {
-                let marker = serde_json::to_vec_pretty(&Marker::current()).map_err(|source| {
-                    StoreError::Json {
-                        path: store.marker_path(),
-                        source,
+            store.id = match store.marker_state()? {
+                MarkerState::Ours(Some(id)) => Some(id),
+                _ => {
+                    for name in sorted_entries(root)? {
+                        if is_marker_temporary(&name) {
+                            let path = root.join(name);
+                            fs::remove_file(&path).map_err(io_error(&path))?;
+                        }
                     }
-                })?;
-                write_atomically(&store.marker_path(), &marker)?;
-            }
+                    let marker = Marker::new(root);
+                    let text =
+                        serde_json::to_vec_pretty(&marker).map_err(|source| StoreError::Json {
+                            path: store.marker_path(),
+                            source,
+                        })?;
+                    let id = marker.id.clone();
+                    store.id = id.clone();
+                    write_atomically(&store.marker_path(), &text, &store.temporary_tag())?;
+                    id
+                }
+            };
         }
         for dir in ["artifacts", "refs", "tmp"] {
             let path = root.join(dir);
@@ -325,7 +405,7 @@ impl Store {
     }
 
     /// Opens an existing store for reading: nothing is created, a missing
-    /// directory is an error, and a directory without the marker is refused
+    /// directory is an error, and a directory without our marker is refused
     /// as in [`Store::open`].
     pub fn open_existing(root: &Path) -> Result<Store, StoreError> {
         if !root.is_dir() {
@@ -337,16 +417,23 @@ impl Store {
     /// A store to read, where a missing directory reads as an empty store
     /// (`status` before the first run): nothing is created.
     pub fn view(root: &Path) -> Result<Store, StoreError> {
-        let store = Store {
+        let mut store = Store {
             root: root.to_path_buf(),
+            id: None,
         };
-        if root.exists() && !store.check_marker()? {
-            let entries = sorted_entries(root)?;
-            if !store.is_unmarked_store(&entries)? {
-                return Err(StoreError::NotAStore {
-                    path: root.to_path_buf(),
-                    found: summarize(&entries),
-                });
+        match store.marker_state()? {
+            MarkerState::Ours(id) => store.id = id,
+            MarkerState::Missing | MarkerState::NotOurs => {
+                let entries = sorted_entries(root)?;
+                let ours = entries.is_empty()
+                    || store.is_interrupted_creation(&entries)
+                    || store.is_damaged_store(&entries)?;
+                if !ours {
+                    return Err(StoreError::NotAStore {
+                        path: root.to_path_buf(),
+                        found: summarize(&entries),
+                    });
+                }
             }
         }
         Ok(store)
@@ -356,19 +443,18 @@ impl Store {
         self.root.join(MARKER)
     }
 
-    /// `true` when the marker is present and current; an error when it names
-    /// a newer layout version. A marker with other content (damaged) counts
-    /// as missing: the directory is then judged by its layout, and
-    /// [`Store::open`] rewrites the marker.
-    fn check_marker(&self) -> Result<bool, StoreError> {
+    /// What the marker says; an error when it names a newer layout version.
+    fn marker_state(&self) -> Result<MarkerState, StoreError> {
         let path = self.marker_path();
         let bytes = match fs::read(&path) {
             Ok(bytes) => bytes,
-            Err(error) if error.kind() == io::ErrorKind::NotFound => return Ok(false),
+            Err(error) if error.kind() == io::ErrorKind::NotFound => {
+                return Ok(MarkerState::Missing);
+            }
             Err(error) => return Err(io_error(&path)(error)),
         };
         match serde_json::from_slice::<Marker>(&bytes) {
-            Ok(marker) if marker.format == "ternary-store" && marker.version > FORMAT_VERSION => {
+            Ok(marker) if marker.format == MARKER_FORMAT && marker.version > FORMAT_VERSION => {
                 Err(StoreError::Marker {
                     path,
                     message: format!(
@@ -377,30 +463,65 @@ impl Store {
                     ),
                 })
             }
-            Ok(marker) => Ok(marker == Marker::current()),
-            Err(_) => Ok(false),
+            Ok(marker)
+                if marker.format == MARKER_FORMAT
+                    && marker.id.as_deref().is_none_or(is_store_id) =>
+            {
+                Ok(MarkerState::Ours(marker.id))
+            }
+            _ => Ok(MarkerState::NotOurs),
         }
     }
 
-    /// A store written before the marker existed: only the store's own
-    /// top-level entries, artifacts only under key names with a manifest,
-    /// and only staging names in `tmp/`. Anything else is a user's folder.
-    fn is_unmarked_store(&self, entries: &[String]) -> Result<bool, StoreError> {
-        let own = |e: &String| LAYOUT.contains(&e.as_str()) || is_json_temporary(e);
-        if entries.is_empty() || !entries.iter().all(own) {
-            return Ok(entries.is_empty());
+    /// A store whose creation was killed before its marker was in place:
+    /// only our lock file (empty or naming a writer `<pid>@<host>`) and
+    /// temporary markers (`.ternary-store.json.<16 hex>.<pid>`).
+    fn is_interrupted_creation(&self, entries: &[String]) -> bool {
+        entries.iter().all(|entry| {
+            if entry == "store.lock" {
+                let holder = fs::read_to_string(self.root.join(entry)).unwrap_or_default();
+                return holder.is_empty() || is_writer_name(&holder);
+            }
+            is_marker_temporary(entry)
+        })
+    }
+
+    /// A store whose marker is missing or damaged: only the store's own
+    /// top-level entries, at least one artifact, and every artifact under a
+    /// key name with a sealed manifest that names it and lists exactly the
+    /// files beside it. A user's folder shaped like a store (any JSON as a
+    /// manifest, a file beside it) is not one.
+    fn is_damaged_store(&self, entries: &[String]) -> Result<bool, StoreError> {
+        if !entries.iter().all(|e| LAYOUT.contains(&e.as_str())) {
+            return Ok(false);
         }
+        let mut artifacts = 0;
         for stage in sorted_entries(&self.root.join("artifacts"))? {
             for key in sorted_entries(&self.root.join("artifacts").join(&stage))? {
                 let dir = self.artifact_dir(&stage, &key);
-                if !is_key(&key) || !dir.join("manifest.json").is_file() {
+                let sealed = is_key(&key)
+                    && read_json::<Manifest>(&dir.join("manifest.json")).is_ok_and(|manifest| {
+                        manifest.manifest_sha256.as_ref() == Some(&manifest.seal())
+                            && manifest.key == key
+                            && manifest.stage == stage
+                            && self.foreign_in_artifact(&stage, &key, &[]).is_empty()
+                    });
+                if !sealed {
                     return Ok(false);
                 }
+                artifacts += 1;
             }
         }
-        Ok(sorted_entries(&self.root.join("tmp"))?
-            .iter()
-            .all(|name| is_staging_name(name)))
+        Ok(artifacts > 0)
+    }
+
+    /// `<id>.<pid>`: the tag of this process's temporary files.
+    fn temporary_tag(&self) -> String {
+        format!(
+            "{}.{}",
+            self.id.as_deref().unwrap_or("unknown"),
+            std::process::id()
+        )
     }
 
     /// The store root.
@@ -528,7 +649,8 @@ impl Store {
 
     /// [`Store::begin`] for the writer named `writer` (`<pid>@<host>`).
     fn begin_as(&self, stage: &str, key: &str, writer: &str) -> Result<Staging, StoreError> {
-        let dir = self.root.join("tmp").join(format!("{key}.{writer}"));
+        let id = self.id.as_deref().unwrap_or("unknown");
+        let dir = self.root.join("tmp").join(format!("{key}.{id}.{writer}"));
         if dir.exists() {
             fs::remove_dir_all(&dir).map_err(io_error(&dir))?;
         }
@@ -536,7 +658,10 @@ impl Store {
         Ok(Staging {
             dir,
             target: self.artifact_dir(stage, key),
-            trash: self.root.join("tmp").join(format!("{key}.{writer}.old")),
+            trash: self
+                .root
+                .join("tmp")
+                .join(format!("{key}.{id}.{writer}.old")),
             files: Vec::new(),
             committed: false,
         })
@@ -556,7 +681,7 @@ impl Store {
         })?;
         let dir = path.parent().unwrap_or(&self.root).to_path_buf();
         fs::create_dir_all(&dir).map_err(io_error(&dir))?;
-        write_atomically(&path, &text)
+        write_atomically(&path, &text, &self.temporary_tag())
     }
 
     /// The last computed key of a stage instance, if any.
@@ -642,9 +767,10 @@ impl Store {
                 }
             }
         }
+        let id = self.id.as_deref().unwrap_or_default();
         let tmp = self.root.join("tmp");
         for name in sorted_entries(&tmp)? {
-            if !(is_staging_name(&name) && tmp.join(&name).is_dir()) {
+            if !(is_staging_name(&name, id) && tmp.join(&name).is_dir()) {
                 foreign.push(tmp.join(name));
             }
         }
@@ -652,7 +778,8 @@ impl Store {
         for stage in stage_folders(&refs, &mut foreign)? {
             for name in sorted_entries(&refs.join(&stage))? {
                 let path = refs.join(&stage).join(&name);
-                let ours = (name.ends_with(".json") || is_json_temporary(&name)) && path.is_file();
+                let ours =
+                    (name.ends_with(".json") || is_json_temporary(&name, id)) && path.is_file();
                 if !ours {
                     foreign.push(path);
                 }
@@ -661,24 +788,28 @@ impl Store {
         Ok(foreign)
     }
 
-    /// Staging directories left by interrupted runs, and temporary refs.
+    /// Staging directories left by interrupted runs, and temporary refs: only
+    /// names with this store's id (none when it has no id).
     pub fn staging_debris(&self) -> Result<Vec<PathBuf>, StoreError> {
+        let Some(id) = self.id.as_deref() else {
+            return Ok(Vec::new());
+        };
         let tmp = self.root.join("tmp");
         let mut debris: Vec<PathBuf> = sorted_entries(&tmp)?
             .into_iter()
-            .filter(|name| is_staging_name(name))
+            .filter(|name| is_staging_name(name, id))
             .map(|name| tmp.join(name))
             .filter(|path| path.is_dir())
             .collect();
         for name in sorted_entries(&self.root)? {
-            if is_json_temporary(&name) {
+            if is_json_temporary(&name, id) {
                 debris.push(self.root.join(name));
             }
         }
         let refs = self.root.join("refs");
         for stage in sorted_entries(&refs)? {
             for name in sorted_entries(&refs.join(&stage))? {
-                if is_json_temporary(&name) {
+                if is_json_temporary(&name, id) {
                     debris.push(refs.join(&stage).join(name));
                 }
             }
@@ -992,15 +1123,15 @@ fn write_synced(path: &Path, bytes: &[u8]) -> Result<(), StoreError> {
     file.sync_all().map_err(io_error(path))
 }
 
-/// Writes `path` by a synced temporary file `.<name>.<pid>` renamed over it,
+/// Writes `path` by a synced temporary file `.<name>.<tag>` renamed over it,
 /// then syncs the directory: readers see the old or the new file, never a part.
-fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), StoreError> {
+fn write_atomically(path: &Path, bytes: &[u8], tag: &str) -> Result<(), StoreError> {
     let dir = path.parent().unwrap_or(Path::new(".")).to_path_buf();
     let name = path
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_default();
-    let temporary = dir.join(format!(".{name}.{}", std::process::id()));
+    let temporary = dir.join(format!(".{name}.{tag}"));
     write_synced(&temporary, bytes)?;
     fs::rename(&temporary, path).map_err(io_error(path))?;
     sync_dir(&dir)
@@ -1158,19 +1289,49 @@ mod tests {
         assert!(!problems.iter().any(|p| p.contains("do not give its key")));
     }
 
+    /// `verify` during a run called that run's staging "from interrupted
+    /// runs": a staging entry of a running process on this host is live.
+    #[test]
+    fn a_running_writers_staging_is_live_and_a_dead_ones_is_not() {
+        let key = "a".repeat(64);
+        let live = format!("{key}.0123456789abcdef.{}", writer_name());
+        assert!(is_live_staging(&live));
+        assert!(is_live_staging(&format!("{live}.old")));
+        let dead = (100_000..u32::MAX)
+            .find(|pid| !Path::new("/proc").join(pid.to_string()).exists())
+            .unwrap();
+        let host = writer_name().split_once('@').unwrap().1.to_string();
+        assert!(!is_live_staging(&format!(
+            "{key}.0123456789abcdef.{dead}@{host}"
+        )));
+        let elsewhere = format!("{key}.0123456789abcdef.{}@another-host", std::process::id());
+        assert!(!is_live_staging(&elsewhere));
+    }
+
     #[test]
     fn only_ternary_names_are_staging_or_ref_debris() {
         let key = "a".repeat(64);
-        assert!(is_staging_name(&format!("{key}.123@node-7.cluster")));
-        assert!(is_staging_name(&format!("{key}.123@node-7.old")));
-        assert!(!is_staging_name(&format!("{key}.123@node/7")));
-        assert!(is_staging_name(&format!("{key}.123")));
-        assert!(is_staging_name(&format!("{key}.123.old")));
-        assert!(!is_staging_name("my_project"));
-        assert!(!is_staging_name(&format!("{key}.x1")));
-        assert!(!is_staging_name(&format!("{}.123", "A".repeat(64))));
-        assert!(is_json_temporary(".ipp-6.json.77"));
-        assert!(!is_json_temporary("ipp-6.json"));
-        assert!(!is_json_temporary(".notes.json.bak"));
+        let id = "0123456789abcdef";
+        assert!(is_staging_name(
+            &format!("{key}.{id}.123@node-7.cluster"),
+            id
+        ));
+        assert!(is_staging_name(&format!("{key}.{id}.123@node-7.old"), id));
+        assert!(!is_staging_name(&format!("{key}.{id}.123@node/7"), id));
+        // Without this store's id: another store's, a user's, or from
+        // before stores had ids.
+        assert!(!is_staging_name(&format!("{key}.123@node-7"), id));
+        assert!(!is_staging_name(&format!("{key}.123"), id));
+        assert!(!is_staging_name(&format!("{key}.fedcba9876543210.1@n"), id));
+        assert!(!is_staging_name("my_project", id));
+        assert!(!is_staging_name(&format!("{key}.{id}.x1@n"), id));
+        assert!(!is_staging_name(
+            &format!("{}.{id}.123@n", "A".repeat(64)),
+            id
+        ));
+        assert!(is_json_temporary(&format!(".ipp-6.json.{id}.77"), id));
+        assert!(!is_json_temporary(".ipp-6.json.77", id));
+        assert!(!is_json_temporary("ipp-6.json", id));
+        assert!(!is_json_temporary(".notes.json.bak", id));
     }
 }
