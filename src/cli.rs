@@ -1,6 +1,7 @@
 //! Commands: argument parsing and the turning of library results into output
 //! and exit codes.
 
+use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -17,6 +18,7 @@ use ternary::config::{
 use ternary::export::{self, ExportOptions};
 use ternary::physics::potential::Potential;
 use ternary::physics::units::{Mass, PhysicalGas, ring_density_per_um};
+use ternary::pipeline::Stage;
 use ternary::pipeline::executor::{self, Action, Freshness, RunOptions, Verbosity};
 use ternary::pipeline::shards::Sharding;
 use ternary::pipeline::store::Store;
@@ -59,6 +61,10 @@ enum Command {
         /// (one task of a Slurm array).
         #[arg(long, value_name = "K", requires = "shards")]
         shard: Option<u32>,
+        /// Start even when the study's estimated CPU time or store size
+        /// exceeds `[limits]`.
+        #[arg(long)]
+        i_know: bool,
     },
     /// Show each stage instance as fresh, stale or missing, and why.
     Status {
@@ -136,6 +142,10 @@ enum SlurmCommand {
         /// Print the scripts instead of submitting them.
         #[arg(long)]
         dry_run: bool,
+        /// Submit even when the study's estimate exceeds `[limits]` (the
+        /// jobs' runs get `--i-know` too).
+        #[arg(long)]
+        i_know: bool,
     },
 }
 
@@ -363,14 +373,49 @@ enum Opening {
 
 fn load(config: &Path, opening: Opening) -> Result<(Study, Store)> {
     let study = Study::load(config)?;
+    let store = open(&study, opening)?;
+    Ok((study, store))
+}
+
+/// The study's store, opened as `opening` says.
+fn open(study: &Study, opening: Opening) -> Result<Store> {
     let root = study.store_path();
-    let store = match opening {
+    match opening {
         Opening::Write => Store::open(&root),
         Opening::Existing => Store::open_existing(&root),
         Opening::View => Store::view(&root),
     }
-    .with_context(|| format!("opening the store {}", root.display()))?;
-    Ok((study, store))
+    .with_context(|| format!("opening the store {}", root.display()))
+}
+
+/// Refuses a study whose estimated CPU time or store size exceeds `[limits]`
+/// (unless `i_know`), before anything is created.
+fn within_limits(study: &Study, plan: &[Box<dyn Stage>], i_know: bool) -> Result<()> {
+    let total = report::total_cost(&executor::estimate(plan));
+    let limits = &study.config.limits;
+    let mut beyond = Vec::new();
+    if total.cpu_seconds / 3600.0 > limits.cpu_hours {
+        beyond.push(format!(
+            "~{} CPU-hours > limits.cpu_hours = {}",
+            report::hours(total.cpu_seconds),
+            compact(limits.cpu_hours)
+        ));
+    }
+    if total.bytes / 1e9 > limits.store_gb {
+        beyond.push(format!(
+            "~{} of store > limits.store_gb = {}",
+            report::size(total.bytes),
+            compact(limits.store_gb)
+        ));
+    }
+    if !i_know && !beyond.is_empty() {
+        bail!(
+            "{}: the study is estimated beyond [limits]: {}; check the counts, or raise [limits] (or run with --i-know)",
+            study.file.display(),
+            beyond.join(", ")
+        );
+    }
+    Ok(())
 }
 
 /// Worker threads per core a run may start (`--threads`): enough to cover
@@ -387,6 +432,7 @@ fn dispatch(cli: Cli) -> Result<ExitCode> {
             quiet,
             shards,
             shard,
+            i_know,
         } => {
             if let Some(task) = shard.filter(|&task| task >= shards) {
                 bail!("--shard {task} is not below --shards {shards}");
@@ -403,8 +449,10 @@ fn dispatch(cli: Cli) -> Result<ExitCode> {
                     .num_threads(threads)
                     .build_global()?;
             }
-            let (study, store) = load(&cli.config, Opening::Write)?;
+            let study = Study::load(&cli.config)?;
             let plan = stages::plan(&study);
+            within_limits(&study, &plan, i_know)?;
+            let store = open(&study, Opening::Write)?;
             let verbosity = if quiet {
                 Verbosity::Quiet
             } else {
@@ -440,8 +488,13 @@ fn dispatch(cli: Cli) -> Result<ExitCode> {
         }
         Command::Status { shards } => {
             let (study, store) = load(&cli.config, Opening::View)?;
-            for line in executor::status(&store, &stages::plan(&study), shards)? {
+            let plan = stages::plan(&study);
+            let mut unfresh = BTreeSet::new();
+            for line in executor::status(&store, &plan, shards)? {
                 let id = line.id;
+                if line.freshness != Freshness::Fresh {
+                    unfresh.insert(id.clone());
+                }
                 let progress = line.shards.map_or(String::new(), |progress| {
                     format!(
                         " (shards: {} of {shards} done, missing {:?})",
@@ -461,6 +514,7 @@ fn dispatch(cli: Cli) -> Result<ExitCode> {
                 };
                 emit(&format!("{:<24} {line}{progress}\n", id.to_string()));
             }
+            emit(&report::cost_estimate(&executor::estimate(&plan), &unfresh));
             Ok(ExitCode::SUCCESS)
         }
         Command::Dag => {
@@ -539,15 +593,19 @@ fn dispatch(cli: Cli) -> Result<ExitCode> {
                     time,
                     max_parallel,
                     dry_run,
+                    i_know,
                 },
         } => {
-            let (study, store) = load(&cli.config, Opening::Write)?;
+            let study = Study::load(&cli.config)?;
+            within_limits(&study, &stages::plan(&study), i_know)?;
+            let store = open(&study, Opening::Write)?;
             let options = SubmitOptions {
                 shards,
                 partition,
                 time,
                 max_parallel,
                 dry_run,
+                i_know,
             };
             emit(&slurm::submit(
                 &cli.config,

@@ -17,7 +17,7 @@ use crate::pipeline::executor::{self, Audit, InstanceReport, Verbosity};
 use crate::pipeline::shards;
 use crate::pipeline::store::{Depth, Store, is_live_staging, listing_problem};
 use crate::pipeline::table::{is_table_file, read_parquet};
-use crate::pipeline::{InstanceId, Stage};
+use crate::pipeline::{Cost, InstanceId, Stage};
 
 /// Significant digits of a value printed without an error to round it to.
 const BARE_DIGITS: i32 = 6;
@@ -742,6 +742,56 @@ pub fn verify(store: &Store, stages: &[Box<dyn Stage>]) -> Result<(String, usize
         damaged
     )?;
     Ok((out, damaged))
+}
+
+/// The sum of `costs`.
+pub fn total_cost(costs: &[(InstanceId, Cost)]) -> Cost {
+    costs.iter().fold(Cost::default(), |sum, (_, cost)| Cost {
+        cpu_seconds: sum.cpu_seconds + cost.cpu_seconds,
+        bytes: sum.bytes + cost.bytes,
+        rows: sum.rows + cost.rows,
+    })
+}
+
+/// The closing line of `status`: the estimated CPU time and store size of
+/// the whole study and of the instances in `unfresh` (still to compute).
+pub fn cost_estimate(costs: &[(InstanceId, Cost)], unfresh: &BTreeSet<InstanceId>) -> String {
+    let whole = total_cost(costs);
+    let pending: Vec<(InstanceId, Cost)> = costs
+        .iter()
+        .filter(|(id, _)| unfresh.contains(id))
+        .cloned()
+        .collect();
+    let pending = total_cost(&pending);
+    format!(
+        "estimate: {} CPU-hours and {} of store for the whole study; {} CPU-hours of it still to compute (an order of magnitude, from the default study's speed on a 2-core VM)\n",
+        hours(whole.cpu_seconds),
+        size(whole.bytes),
+        hours(pending.cpu_seconds)
+    )
+}
+
+/// CPU-seconds as hours, two significant digits.
+pub fn hours(seconds: f64) -> String {
+    two_digits(seconds / 3600.0)
+}
+
+/// Bytes in MB or GB, two significant digits.
+pub fn size(bytes: f64) -> String {
+    if bytes >= 1e9 {
+        format!("{} GB", two_digits(bytes / 1e9))
+    } else {
+        format!("{} MB", two_digits(bytes / 1e6))
+    }
+}
+
+/// `value` rounded to two significant digits, in exponent form beyond 1e6.
+fn two_digits(value: f64) -> String {
+    let text = format!("{value:.1e}");
+    match text.parse::<f64>() {
+        Ok(rounded) if rounded.abs() < 1e6 => rounded.to_string(),
+        _ => text,
+    }
 }
 
 /// `verify --recompute`: every current artifact of the stages in `only` (all

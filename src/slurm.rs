@@ -42,6 +42,8 @@ pub struct SubmitOptions {
     pub max_parallel: Option<u32>,
     /// Print the scripts and commands instead of submitting.
     pub dry_run: bool,
+    /// The study was allowed beyond `[limits]`: its jobs' runs are too.
+    pub i_know: bool,
 }
 
 impl SubmitOptions {
@@ -152,6 +154,7 @@ fn scripts(
     tasks: &BTreeSet<u32>,
     options: &SubmitOptions,
 ) -> Result<(String, String)> {
+    let allowed = if options.i_know { " --i-know" } else { "" };
     let command = format!("{} --config {}", quoted(binary), quoted(config));
     let list: Vec<String> = tasks.iter().map(ToString::to_string).collect();
     let throttle = options
@@ -163,13 +166,13 @@ fn scripts(
     let _ = writeln!(array, "#SBATCH --array={}{throttle}", list.join(","));
     let _ = writeln!(
         array,
-        "set -euo pipefail\nexec {command} run --shards {} --shard \"$SLURM_ARRAY_TASK_ID\"",
+        "set -euo pipefail\nexec {command} run{allowed} --shards {} --shard \"$SLURM_ARRAY_TASK_ID\"",
         options.shards
     );
     let mut merge = header("ternary-merge", &merge_log, options);
     let _ = writeln!(
         merge,
-        "set -euo pipefail\nexec {command} run --shards {}",
+        "set -euo pipefail\nexec {command} run{allowed} --shards {}",
         options.shards
     );
     Ok((array, merge))

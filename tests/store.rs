@@ -11,8 +11,8 @@ use std::time::{Duration, Instant};
 mod common;
 
 use common::{
-    BINARY, SMALL_STUDY_INSTANCES, flip_byte, result_bytes, run_counts, small_study, stderr,
-    stdout, strace_works, ternary, workspace, write_config,
+    BINARY, REDUCED_STUDY, SMALL_STUDY_INSTANCES, flip_byte, result_bytes, run_counts, small_study,
+    stderr, stdout, strace_works, ternary, workspace, write_config,
 };
 
 /// A workspace with the small study, its store at `data/`, computed once.
@@ -725,4 +725,71 @@ fn concurrent_runs_agree_on_every_byte() {
         "{}",
         stdout(&gc)
     );
+}
+
+/// Products of bounded counts were unbounded: `md.runs = 65536` with
+/// `final_time_ns = 1.5e8` loaded (~60 CPU-years at the measured speed), and
+/// 256 u' x 256 densities with bins of 2.1e-7 loaded as 65 536 kernel
+/// instances (~2.8 TB). Now `run` and `slurm submit` refuse a study whose
+/// estimate exceeds `[limits]`, naming it and creating nothing; `status`
+/// shows the estimate; a raised limit or `--i-know` lets it start.
+#[test]
+fn a_study_beyond_the_limits_is_refused_unless_allowed() {
+    let dir = workspace("limits");
+    let years = REDUCED_STUDY
+        .replacen("runs = 4", "runs = 65536", 1)
+        .replacen("final_time_ns = 100.0", "final_time_ns = 1.5e8", 1);
+    let u_primes: Vec<String> = (0..256)
+        .map(|k| format!("{}", -3.0 + 6.0 * f64::from(k) / 255.0))
+        .collect();
+    let densities: Vec<String> = (0..256)
+        .map(|k| format!("{}", 0.1 * f64::from(k) / 255.0))
+        .collect();
+    let terabytes = small_study("data").replace(
+        "[sweep]",
+        &format!(
+            "[kernel]\nu_prime = [{}]\ndensity = [{}]\nbin_width = 2.1e-7\n\n[sweep]",
+            u_primes.join(", "),
+            densities.join(", ")
+        ),
+    );
+    for (name, study, beyond, within) in [
+        ("years", years, "limits.cpu_hours", Some("limits.store_gb")),
+        ("terabytes", terabytes, "limits.store_gb", None),
+    ] {
+        let config = write_config(&dir, &study);
+        for command in [&["run"][..], &["slurm", "submit", "--dry-run"]] {
+            let started = Instant::now();
+            let output = ternary(&config, command);
+            let message = stderr(&output);
+            assert!(!output.status.success(), "{name}: {command:?} started");
+            assert!(
+                message.contains("beyond [limits]") && message.contains(beyond),
+                "{message}"
+            );
+            assert!(within.is_none_or(|key| !message.contains(key)), "{message}");
+            assert!(
+                started.elapsed() < Duration::from_secs(10),
+                "{name}: slow refusal"
+            );
+        }
+        assert!(!dir.join("data").exists(), "{name}: a store was created");
+        let status = stdout(&ternary(&config, &["status"]));
+        let estimate = status.lines().last().unwrap();
+        assert!(estimate.starts_with("estimate: "), "{estimate}");
+    }
+    // A small study under a limit lowered below it: refused, then allowed.
+    let tiny = format!("{}\n[limits]\ncpu_hours = 1e-9\n", small_study("data"));
+    let config = write_config(&dir, &tiny);
+    assert!(!ternary(&config, &["run", "--quiet"]).status.success());
+    assert!(
+        ternary(&config, &["run", "--quiet", "--i-know"])
+            .status
+            .success()
+    );
+    let dry = stdout(&ternary(
+        &config,
+        &["slurm", "submit", "--dry-run", "--i-know"],
+    ));
+    assert!(dry.contains("run --i-know --shards"), "{dry}");
 }

@@ -1,5 +1,7 @@
 //! `[kernel]`: the kernel's targets `(u', density)`, bins and shape fit.
 
+use std::collections::BTreeSet;
+
 use serde::{Deserialize, Serialize};
 
 use super::check::{Invalid, MAX_LIST, check};
@@ -193,9 +195,11 @@ impl KernelConfig {
     /// defines `a_n`) always first.
     pub fn targets(&self) -> Vec<(f64, f64)> {
         let mut targets = vec![(0.0, 0.0)];
+        // Bit patterns of the pairs so far (`+ 0.0` makes -0 and 0 one).
+        let mut seen = BTreeSet::from([(0f64.to_bits(), 0f64.to_bits())]);
         for &u in &self.u_prime {
             for &density in &self.density {
-                if !targets.contains(&(u, density)) {
+                if seen.insert(((u + 0.0).to_bits(), (density + 0.0).to_bits())) {
                     targets.push((u, density));
                 }
             }

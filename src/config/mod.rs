@@ -23,6 +23,7 @@ mod evolve;
 mod figures;
 mod gas;
 mod kernel;
+mod limits;
 mod md;
 mod potentials;
 mod publication;
@@ -52,6 +53,7 @@ pub use gas::{GasConfig, GasParams, MAX_GAS_DENSITY, MAX_RING_PARTICLES};
 pub use kernel::{
     DEFAULT_KICK_FLOOR, FitParams, KernelConfig, KernelParams, MAX_BINS, PAPER_TRUNCATION,
 };
+pub use limits::LimitsConfig;
 pub use md::{
     MAX_MD_RUNS, MAX_MD_SAMPLES, MAX_NEIGHBOURS, MAX_RING_ENCOUNTERS, MdConfig, MdParams,
     MdSystemConfig,
@@ -137,6 +139,9 @@ pub struct Config {
     /// How an exported dataset describes and credits itself.
     #[serde(default)]
     pub publication: PublicationConfig,
+    /// The largest study started without `--i-know`.
+    #[serde(default)]
+    pub limits: LimitsConfig,
 }
 
 /// A loaded and validated study, with the parameters that needed lookups
@@ -260,6 +265,7 @@ impl Study {
         })?;
         let md = config.md.resolve(&config.gas, &gases)?;
         config.publication.validate()?;
+        config.limits.validate()?;
         Ok(Study {
             file: file.to_path_buf(),
             potentials,

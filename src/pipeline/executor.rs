@@ -7,7 +7,7 @@
 //! hashes) it is fresh, otherwise it is computed and committed atomically.
 
 use std::cell::RefCell;
-use std::collections::{BTreeMap, VecDeque};
+use std::collections::{BTreeMap, BTreeSet, VecDeque};
 use std::io::{ErrorKind, IsTerminal, Write};
 use std::ops::Range;
 use std::path::Path;
@@ -24,7 +24,7 @@ use super::store::{
     content_hashes, table_files,
 };
 use super::table::{PROVENANCE_KEYS, TableError, is_table_file, read_parquet_bytes};
-use super::{Input, InstanceId, Progress, Stage, StageError, Table};
+use super::{Cost, Input, InstanceId, Progress, Stage, StageError, Table};
 
 /// A run could not proceed.
 #[derive(Debug, thiserror::Error)]
@@ -156,7 +156,7 @@ pub enum Freshness {
 /// Checks that ids are unique, inputs precede their consumers, and stage names
 /// in `names` exist.
 pub fn check_plan(stages: &[Box<dyn Stage>], names: &[String]) -> Result<(), ExecError> {
-    let mut seen: Vec<InstanceId> = Vec::new();
+    let mut seen: BTreeSet<InstanceId> = BTreeSet::new();
     for stage in stages {
         let id = stage.id();
         if seen.contains(&id) {
@@ -171,13 +171,14 @@ pub fn check_plan(stages: &[Box<dyn Stage>], names: &[String]) -> Result<(), Exe
                 "{id} reads {input}, which is not defined before it"
             )));
         }
-        seen.push(id);
+        seen.insert(id);
     }
     for name in names {
         if !seen.iter().any(|id| &id.stage == name) {
+            let ids: Vec<InstanceId> = stages.iter().map(|stage| stage.id()).collect();
             return Err(ExecError::Plan(format!(
                 "unknown stage `{name}`; stages are: {}",
-                stage_names(&seen).join(", ")
+                stage_names(&ids).join(", ")
             )));
         }
     }
@@ -816,6 +817,24 @@ fn encoded_tables(
             })
         })
         .collect()
+}
+
+/// The expected cost of every instance of `stages` (in topological order),
+/// each from its inputs' costs.
+pub fn estimate(stages: &[Box<dyn Stage>]) -> Vec<(InstanceId, Cost)> {
+    let mut costs: BTreeMap<InstanceId, Cost> = BTreeMap::new();
+    let mut out = Vec::with_capacity(stages.len());
+    for stage in stages {
+        let inputs: Vec<Cost> = stage
+            .inputs()
+            .iter()
+            .map(|id| costs.get(id).copied().unwrap_or_default())
+            .collect();
+        let cost = stage.cost(&inputs);
+        costs.insert(stage.id(), cost);
+        out.push((stage.id(), cost));
+    }
+    out
 }
 
 /// What `verify --recompute` found for one instance.

@@ -16,9 +16,9 @@ use serde_json::Value;
 use crate::config::CollisionsParams;
 use crate::contract::{self, Rows};
 use crate::kernel::Event;
-use crate::physics::sampling::{SceneRecord, Stratum, leading_share};
+use crate::physics::sampling::{OffsetIntegration, SceneRecord, Stratum, leading_share};
 use crate::pipeline::code::{self, Code};
-use crate::pipeline::{Input, InstanceId, Progress, Stage, StageError, Table};
+use crate::pipeline::{Cost, Input, InstanceId, Progress, Stage, StageError, Table};
 use crate::stages::launches::{LaunchesStage, read_launches};
 
 /// The `collisions` stage for one potential.
@@ -55,6 +55,14 @@ impl CollisionsStage {
     }
 }
 
+/// CPU seconds per integrated scene: the default study's collisions, 970 CPU
+/// seconds for 19.6 million scenes of n = 2..12 and Lennard-Jones
+/// (2026-11-26, the 2-core VM; a Lennard-Jones scene costs more).
+const CPU_PER_SCENE: f64 = 5e-5;
+
+/// Bytes of one scene's row in the events table (the same study: 52.6).
+const BYTES_PER_SCENE: f64 = 53.0;
+
 /// The code this stage runs (fingerprinted by the build script).
 const CODE: &Code = code::of(file!());
 
@@ -82,6 +90,22 @@ impl Stage for CollisionsStage {
     /// The configured split's total; the launches' pilot may change it.
     fn work_units(&self) -> u64 {
         self.params.sampling.total()
+    }
+
+    /// Scenes (launch points, times the rule's nodes under the quadrature)
+    /// at [`CPU_PER_SCENE`], one events row of [`BYTES_PER_SCENE`] each.
+    fn cost(&self, _inputs: &[Cost]) -> Cost {
+        let nodes = match self.params.sampling.offsets {
+            OffsetIntegration::Quadrature(rule) => f64::from(rule.nodes()),
+            OffsetIntegration::Sampled => 1.0,
+        };
+        let share = self.params.launch_share.unwrap_or(1.0);
+        let scenes = self.params.sampling.total() as f64 * nodes * share;
+        Cost {
+            cpu_seconds: scenes * CPU_PER_SCENE,
+            bytes: scenes * BYTES_PER_SCENE,
+            rows: scenes,
+        }
     }
 
     fn run(&self, inputs: &[Input], progress: &Progress) -> Result<Vec<Table>, StageError> {

@@ -11,7 +11,7 @@ use crate::config::KernelParams;
 use crate::contract::{self, Rows};
 use crate::kernel::{Draws, Event, Histogram, Target, histograms};
 use crate::pipeline::code::{self, Code};
-use crate::pipeline::{Input, InstanceId, Progress, Stage, StageError, Table};
+use crate::pipeline::{Cost, Input, InstanceId, Progress, Stage, StageError, Table};
 use crate::stats::Estimate;
 
 /// The `kernel` stage for one potential, `u'` and density.
@@ -98,6 +98,14 @@ impl Stage for KernelStage {
 
     fn work_units(&self) -> u64 {
         1
+    }
+
+    /// Every event read; the kernel and its per-randomization table, one row
+    /// per bin and per bin and randomization (16, the default; 12 bytes a
+    /// row in the default study).
+    fn cost(&self, inputs: &[Cost]) -> Cost {
+        let bins = self.params.window / self.params.bin_width;
+        Cost::reading(inputs, 2.6e-6, bins * 17.0, 12.0)
     }
 
     fn run(&self, inputs: &[Input], progress: &Progress) -> Result<Vec<Table>, StageError> {

@@ -20,7 +20,7 @@ use crate::physics::md::{RunResult, RunSettings, ThermalLineages, run};
 use crate::physics::potential::{PairPotential, PotentialVisitor};
 use crate::physics::ring::{Reach, RingForces};
 use crate::pipeline::code::{self, Code};
-use crate::pipeline::{Input, InstanceId, Progress, Stage, StageError, Table};
+use crate::pipeline::{Cost, Input, InstanceId, Progress, Stage, StageError, Table};
 use crate::stats::Estimate;
 
 /// The `md` stage for one ring.
@@ -334,6 +334,11 @@ fn results_of(tables: &[Table], bins: usize) -> Result<Vec<RunResult>, StageErro
         .collect())
 }
 
+/// CPU seconds per neighbour encounter of a ring run: the default study's
+/// eleven rings, 527 CPU seconds for 1.3e7 encounters (2026-11-26, the 2-core
+/// VM); dense rings cost up to 3x, Lennard-Jones 30x (bound pairs).
+const CPU_PER_ENCOUNTER: f64 = 4e-5;
+
 /// The code this stage runs (fingerprinted by the build script).
 const CODE: &Code = code::of(file!());
 
@@ -366,6 +371,21 @@ impl Stage for MdStage {
 
     fn work_units(&self) -> u64 {
         u64::from(self.params.runs)
+    }
+
+    /// Runs times neighbour encounters per run (`N rho v_th t_f`) at
+    /// [`CPU_PER_ENCOUNTER`]; small tables.
+    fn cost(&self, _inputs: &[Cost]) -> Cost {
+        let gas = &self.params.gas;
+        let encounters = f64::from(self.params.particles)
+            * gas.density_per_um
+            * gas.thermal_speed_um_per_ns()
+            * self.params.final_time_ns;
+        Cost {
+            cpu_seconds: f64::from(self.params.runs) * encounters * CPU_PER_ENCOUNTER,
+            bytes: 3e4,
+            rows: 100.0,
+        }
     }
 
     fn run(&self, _inputs: &[Input], progress: &Progress) -> Result<Vec<Table>, StageError> {
