@@ -35,6 +35,17 @@ const CONCISE_DIGITS: i32 = 8;
 /// `undefined`, which says why; a zero error prints as `± 0` after six
 /// significant digits, a missing one as `(no error estimate)`.
 pub fn with_error(value: f64, error: f64, undefined: &str) -> String {
+    written(value, error, undefined, CONCISE_DIGITS)
+}
+
+/// `value(error)` as [`with_error`] writes values known to many digits,
+/// whatever their digits: the short form of a table cell.
+fn concise(value: f64, error: f64, undefined: &str) -> String {
+    written(value, error, undefined, 0)
+}
+
+/// [`with_error`], in the form `m(ee)` from `concise_digits` digits on.
+fn written(value: f64, error: f64, undefined: &str, concise_digits: i32) -> String {
     if !value.is_finite() {
         return undefined.to_string();
     }
@@ -54,7 +65,7 @@ pub fn with_error(value: f64, error: f64, undefined: &str) -> String {
     let digits = (error / 10f64.powi(last)).round();
     let rounded = digits * 10f64.powi(last);
     let magnitude = libm::log10(value.abs().max(rounded)).floor() as i32;
-    let concise = magnitude - last + 1 > CONCISE_DIGITS;
+    let concise = magnitude - last + 1 > concise_digits;
     if (-4..=5).contains(&magnitude) {
         // Errors of 100 and more round the value to tens, hundreds, ...
         let value = if last > 0 {
@@ -246,39 +257,127 @@ fn paper_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
         out,
         "\nthe paper (Phys. Rev. E 110, 014114): published against ours under its definition (+- standard errors; published: +- as printed, else rounding); converged: ours under our definition where it differs"
     )?;
+    let table_i: Vec<usize> = (0..frame.height())
+        .filter(|&row| number(&frame, row, TABLE_I_N).is_ok_and(f64::is_finite))
+        .collect();
+    out.push_str(&table_i_matrix(&frame, &table_i)?);
+    let rest: Vec<usize> = (0..frame.height())
+        .filter(|row| !table_i.contains(row))
+        .collect();
     writeln!(
         out,
         "{:<4} {:<26} {:<28} {:>9} {:>7}  {:<28} {:<14} quantity [source]",
         "", "published", "ours", "ours/pub", "z", "converged", "unit"
     )?;
-    for row in 0..frame.height() {
-        // No value of ours (nothing to compute it from): no converged one either.
-        let converged_undefined = if number(&frame, row, OURS.value)?.is_nan() {
-            "-"
-        } else {
-            "same"
-        };
+    for &row in &rest {
+        let converged_undefined = text(&frame, row, CONVERGED)?;
         writeln!(
             out,
-            "{:<4} {:<26} {:<28} {:>9} {:>7.2}  {:<28} {:<14} {} [{}]",
+            "{:<4} {:<26} {:<28} {:>9} {:>7}  {:<28} {:<14} {} [{}]",
             row + 1,
             estimate(&frame, row, PUBLISHED, "-")?,
             estimate(&frame, row, OURS, "-")?,
             format!("{:.4}", 1.0 + number(&frame, row, RELATIVE_DIFFERENCE)?),
-            number(&frame, row, Z)?,
-            estimate(&frame, row, OURS_CONVERGED, converged_undefined)?,
+            or_why(number(&frame, row, Z)?, |z| format!("{z:.2}"), "-"),
+            estimate(&frame, row, OURS_CONVERGED, &converged_undefined)?,
             text(&frame, row, UNIT)?,
             text(&frame, row, QUANTITY)?,
             text(&frame, row, SOURCE)?,
         )?;
     }
-    for row in 0..frame.height() {
+    for &row in &rest {
         writeln!(
             out,
             "{:<4} {}",
             format!("{}.", row + 1),
             text(&frame, row, NOTE)?
         )?;
+    }
+    Ok(out)
+}
+
+/// Table I as the paper prints it, rows `rows` of the `paper` table: one
+/// line per `n`, each cell `published | ours z` (ours under the paper's
+/// definition; the table's rows and notes have the rest).
+fn table_i_matrix(frame: &DataFrame, rows: &[usize]) -> Result<String> {
+    use contract::paper::*;
+    let mut out = String::new();
+    if rows.is_empty() {
+        return Ok(out);
+    }
+    let mut columns: Vec<String> = Vec::new();
+    let mut exponents: Vec<f64> = Vec::new();
+    for &row in rows {
+        let column = text(frame, row, TABLE_I_COLUMN)?;
+        if !columns.contains(&column) {
+            columns.push(column);
+        }
+        let n = number(frame, row, TABLE_I_N)?;
+        if !exponents.contains(&n) {
+            exponents.push(n);
+        }
+    }
+    exponents.sort_by(f64::total_cmp);
+    let cell = |n: f64, column: &String| -> Result<String> {
+        let Some(&row) = rows.iter().find(|&&row| {
+            number(frame, row, TABLE_I_N).is_ok_and(|m| m == n)
+                && text(frame, row, TABLE_I_COLUMN).is_ok_and(|c| &c == column)
+        }) else {
+            return Ok("-".to_string());
+        };
+        let (value, error) = (
+            number(frame, row, OURS.value)?,
+            number(frame, row, OURS.stderr)?,
+        );
+        // Errors below a part in 1e6 (the scan's bounds) add no digit a
+        // reader compares.
+        let ours = if error < 1e-6 * value.abs() {
+            significant(value)
+        } else {
+            concise(value, error, "-")
+        };
+        let z = or_why(number(frame, row, Z)?, |z| format!(" ({z:+.1})"), "");
+        Ok(format!(
+            "{} | {ours}{z}",
+            significant(number(frame, row, PUBLISHED.value)?)
+        ))
+    };
+    let mut cells = Vec::new();
+    for &n in &exponents {
+        cells.push(
+            columns
+                .iter()
+                .map(|column| cell(n, column))
+                .collect::<Result<Vec<_>>>()?,
+        );
+    }
+    let widths: Vec<usize> = (0..columns.len())
+        .map(|k| {
+            cells
+                .iter()
+                .map(|line| line[k].len())
+                .chain([columns[k].len()])
+                .max()
+                .unwrap_or(0)
+        })
+        .collect();
+    writeln!(
+        out,
+        "Table I, published | ours (z) (rows {}-{} of the table; a_n at |u - u'| <= 0.04; shape: our fit, statistical errors only; |u1f,max| to 6 digits, its error bound below 1e-6)",
+        rows[0] + 1,
+        rows[rows.len() - 1] + 1
+    )?;
+    write!(out, "{:>4}", "n")?;
+    for (column, width) in columns.iter().zip(&widths) {
+        write!(out, "  {column:<width$}")?;
+    }
+    writeln!(out)?;
+    for (n, line) in exponents.iter().zip(&cells) {
+        write!(out, "{n:>4}")?;
+        for (shown, width) in line.iter().zip(&widths) {
+            write!(out, "  {shown:<width$}")?;
+        }
+        writeln!(out)?;
     }
     Ok(out)
 }

@@ -3,7 +3,7 @@
 //! at its configured size with every series' colour on it, and every SVG
 //! parses as XML with one legend entry per series.
 
-use std::collections::BTreeSet;
+use std::collections::{BTreeMap, BTreeSet};
 use std::fs;
 use std::path::{Path, PathBuf};
 
@@ -104,9 +104,6 @@ fn pair_rows(batch: &RecordBatch, panel: &str, series: &str, x: &[f64], pair: &P
     rows(panel, series, x, &pair.read(batch).unwrap())
 }
 
-/// A kernel bin: `du`, `G` and its standard error.
-type Bin = (f64, f64, f64);
-
 /// The rows of one ring of a comparison table as a series against `du`.
 fn ring_rows(
     compare: &RecordBatch,
@@ -125,14 +122,21 @@ fn ring_rows(
         .collect()
 }
 
-/// `G(0 -> u)` at `du > 0` averaged over groups of 20 bins per decade of
-/// `du`, in order: mean `du`, mean `G`, and `sqrt(sum stderr^2) / count`.
+/// A group of bins: the `x` of each, and per randomization the sum of `G`
+/// and the count.
+type Group = (Vec<f64>, BTreeMap<u32, (f64, f64)>);
+
+/// `G(0 -> u)` at `du > 0` averaged over groups of 1/20 decade of `du`,
+/// in order ([`grouped_side`]).
 fn grouped_kernel(kernel: &Artifact, panel: &str, series: &str) -> Vec<Row> {
     grouped_side(kernel, panel, series, 1.0, 20.0)
 }
 
-/// [`grouped_kernel`] of the bins at `sign du > 0`, against `|du|`, in
-/// groups of `per_decade` per decade.
+/// The bins at `sign du > 0`, against `x = |du|`, in groups of 1/`per_decade`
+/// decade counted down from the largest `x` (bin in group `ceil(per_decade
+/// log10(x / x_max))`), ascending: mean `x`, and the mean and standard error
+/// of the randomizations' own group means of `G` (from
+/// `kernel_replicates.parquet`).
 fn grouped_side(
     kernel: &Artifact,
     panel: &str,
@@ -140,30 +144,40 @@ fn grouped_side(
     sign: f64,
     per_decade: f64,
 ) -> Vec<Row> {
-    use contract::kernel::{DU, G};
-    let batch = kernel.table("kernel");
-    let du: Vec<f64> = DU.read(&batch).unwrap().iter().map(|d| sign * d).collect();
-    let g = G.read(&batch).unwrap();
-    let mut groups: Vec<(f64, Vec<Bin>)> = Vec::new();
-    for (du, g) in du.iter().zip(&g).filter(|(du, _)| **du > 0.0) {
-        let group = (libm::log10(*du) * per_decade).floor();
-        match groups.iter_mut().find(|(key, _)| *key == group) {
-            Some((_, members)) => members.push((*du, g.mean, g.stderr)),
-            None => groups.push((group, vec![(*du, g.mean, g.stderr)])),
+    use contract::kernel::DU;
+    use contract::kernel::replicates::{G, RANDOMIZATION};
+    let batch = kernel.table("kernel_replicates");
+    let du = DU.read(&batch).unwrap();
+    let (randomization, g) = (RANDOMIZATION.read(&batch).unwrap(), G.read(&batch).unwrap());
+    let largest = du.iter().map(|d| sign * d).fold(0.0, f64::max);
+    let mut groups: BTreeMap<i64, Group> = BTreeMap::new();
+    for k in 0..du.len() {
+        let x = sign * du[k];
+        if x <= 0.0 {
+            continue;
         }
+        let group = (per_decade * libm::log10(x / largest)).ceil() as i64;
+        let (xs, sums) = groups.entry(group).or_default();
+        if randomization[k] == 0 {
+            xs.push(x);
+        }
+        let (sum, count) = sums.entry(randomization[k]).or_default();
+        *sum += g[k];
+        *count += 1.0;
     }
     groups
-        .iter()
-        .map(|(_, members)| {
-            let n = members.len() as f64;
-            let mean = |f: fn(&Bin) -> f64| members.iter().map(f).sum::<f64>() / n;
-            let error = members.iter().map(|m| m.2 * m.2).sum::<f64>().sqrt() / n;
+        .values()
+        .map(|(xs, sums)| {
+            let means: Vec<f64> = sums.values().map(|(sum, count)| sum / count).collect();
+            let r = means.len() as f64;
+            let mean = means.iter().sum::<f64>() / r;
+            let variance = means.iter().map(|m| (m - mean).powi(2)).sum::<f64>() / (r - 1.0);
             (
                 panel.into(),
                 series.into(),
-                mean(|m| m.0),
-                mean(|m| m.1),
-                error,
+                xs.iter().sum::<f64>() / xs.len() as f64,
+                mean,
+                (variance / r).sqrt(),
             )
         })
         .collect()

@@ -121,9 +121,10 @@ fn changing_one_potentials_scan_setting_reruns_only_that_instance() {
     );
     let output = ternary(&path, &["run"]);
     let text = stdout(&output);
-    // The changed scan, the table and the kicks figure that read it; nothing else.
+    // The changed scan, the table, the paper table (Table I's |u1f,max|) and
+    // the kicks figure that read it; nothing else.
     assert!(
-        text.contains(&format!("run: 3 computed, {} fresh", INSTANCES - 3)),
+        text.contains(&format!("run: 4 computed, {} fresh", INSTANCES - 4)),
         "{text}"
     );
     let computed = |prefix: &str| {
@@ -131,14 +132,17 @@ fn changing_one_potentials_scan_setting_reruns_only_that_instance() {
             .any(|l| l.starts_with(prefix) && l.contains("computed"))
     };
     assert!(
-        computed("scan[ipp-6]") && computed("table[study]") && computed("figures[kicks_ipp-6]"),
+        computed("scan[ipp-6]")
+            && computed("table[study]")
+            && computed("paper[study]")
+            && computed("figures[kicks_ipp-6]"),
         "{text}"
     );
-    // The old ipp-6 scan, table and kicks figure are no longer referenced: gc
-    // removes exactly them.
+    // The old ipp-6 scan, table, paper table and kicks figure are no longer
+    // referenced: gc removes exactly them.
     assert_eq!(artifact_dirs(&dir.join("data")).len(), 3);
     let gc = stdout(&ternary(&path, &["gc"]));
-    assert!(gc.contains("removed 3 artifacts"), "{gc}");
+    assert!(gc.contains("removed 4 artifacts"), "{gc}");
     assert_eq!(artifact_dirs(&dir.join("data")).len(), 2);
     assert_eq!(run_counts(&path, &[]), (0, INSTANCES));
 }

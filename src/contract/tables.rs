@@ -299,6 +299,7 @@ pub mod kernel {
     pub mod replicates {
         pub use super::super::collisions::RANDOMIZATION;
         use super::*;
+        use crate::pipeline::{Input, StageError};
 
         /// The table.
         pub const TABLE: TableSpec = TableSpec {
@@ -312,6 +313,37 @@ pub mod kernel {
             G_UNIT,
             "kernel G(u' -> u) of this randomization alone: self plus bath",
         );
+
+        /// The kernel of every randomization (`[randomization][bin]`) from
+        /// a `kernel` input's replicates table, and the bins' centres
+        /// relative to `u'`.
+        pub fn read(input: &Input) -> Result<(Vec<Vec<f64>>, Vec<f64>), StageError> {
+            let batch = TABLE.of(input)?;
+            let (du, randomization, g) = (
+                super::DU.read(batch)?,
+                RANDOMIZATION.read(batch)?,
+                G.read(batch)?,
+            );
+            let mut kernels: Vec<Vec<f64>> = Vec::new();
+            let mut offsets = Vec::new();
+            for k in 0..batch.num_rows() {
+                let r = randomization[k] as usize;
+                if r >= kernels.len() {
+                    kernels.resize(r + 1, Vec::new());
+                }
+                kernels[r].push(g[k]);
+                if r == 0 {
+                    offsets.push(du[k]);
+                }
+            }
+            if kernels.iter().any(|kernel| kernel.len() != offsets.len()) {
+                return Err(StageError::Input(format!(
+                    "{}: randomizations with different bins",
+                    input.id
+                )));
+            }
+            Ok((kernels, offsets))
+        }
     }
 }
 
@@ -1465,6 +1497,17 @@ pub mod paper {
     pub const SOURCE: Col<String> = Col::text("source", "where the paper gives it");
     /// Unit of the published value and ours.
     pub const UNIT: Col<String> = Col::text("unit", "unit of the value columns of this row");
+    /// The row's `n` in Table I.
+    pub const TABLE_I_N: Col<f64> = Col::f64(
+        "table_i_n",
+        "1",
+        "exponent n of the row's Table I cell (null: not in Table I)",
+    );
+    /// The row's column in Table I.
+    pub const TABLE_I_COLUMN: Col<String> = Col::text(
+        "table_i_column",
+        "column of the row's Table I cell: a_n, alpha, beta, sigma or |u1f,max| (empty: not in Table I)",
+    );
     /// The published value.
     pub const PUBLISHED: Pair = pair!(
         "published",
@@ -1486,14 +1529,19 @@ pub mod paper {
     pub const Z: Col<f64> = Col::f64(
         "z",
         "1",
-        "(ours - published) / sqrt(ours_stderr^2 + published_stderr^2)",
+        "(ours - published) / sqrt(ours_stderr^2 + published_stderr^2) (null: ours holds by construction, no measurement)",
     );
     /// Ours under our (converged) definition, where it differs.
     pub const OURS_CONVERGED: Pair = pair!(
         "ours_converged",
         "see unit",
-        "ours under our definition where it differs from the paper's (NaN: the same)",
+        "ours under our definition where it differs from the paper's (null: see converged)",
         "standard error"
+    );
+    /// Whether ours under our definition differs.
+    pub const CONVERGED: Col<String> = Col::text(
+        "converged",
+        "differs (ours_converged holds it), same (our definition is the paper's), not converged (ours has no converged value yet) or missing",
     );
     /// Where the definitions differ, and how to read the row.
     pub const NOTE: Col<String> = Col::text("note", "where the definitions differ");

@@ -1,9 +1,7 @@
 //! The figures `ternary` draws: which artifacts each reads, how polars turns
 //! their tables into the figure table, and how it is laid out.
 
-use polars::prelude::{
-    ChunkCompareEq, ChunkCompareIneq, DataFrame, Float64Chunked, IntoColumn, IntoSeries,
-};
+use polars::prelude::{ChunkCompareEq, ChunkCompareIneq, DataFrame, Float64Chunked};
 use serde::Serialize;
 
 use super::frames::{failed, frame, log_groups, numbers, series, series_by, series_of, stack};
@@ -371,22 +369,15 @@ impl Figure {
 const GROUPS_PER_DECADE: f64 = 20.0;
 
 /// `G` at `du > 0` of a kernel artifact as a series, averaged over
-/// log-spaced groups of bins.
+/// log-spaced groups of bins (errors from the randomizations).
 fn positive_kernel(
     input: &Input,
     panel: &str,
     label: &str,
     per_decade: f64,
 ) -> Result<DataFrame, StageError> {
-    use contract::kernel::{DU, G, TABLE};
-    let all = frame(TABLE.of(input)?)?;
-    let long = series(
-        &all,
-        panel,
-        label,
-        (DU.name, G.value.name, Some(G.stderr.name)),
-    )?;
-    log_groups(&long, per_decade)
+    let (replicates, du) = contract::kernel::replicates::read(input)?;
+    log_groups((panel, label), &du, &replicates, per_decade)
 }
 
 /// Kernel groups per decade of the ratios to the dilute kernel: the ratio
@@ -447,29 +438,19 @@ fn kernels_at_density(inputs: &[Input], labels: &[String]) -> Result<DataFrame, 
 /// `G(u' -> u)` of a kernel artifact above and below `u'`, each averaged
 /// over log-spaced groups of `|u - u'|` and left with its resolved groups.
 fn kernel_sides(input: &Input, u_prime: f64) -> Result<Vec<DataFrame>, StageError> {
-    use contract::figures::points::X;
-    use contract::kernel::{DU, G, TABLE};
-    let all = frame(TABLE.of(input)?)?;
-    let columns = (DU.name, G.value.name, Some(G.stderr.name));
-    let above = series(&all, "kernels", &format!("u' = {u_prime}, u > u'"), columns)?;
-    let mut below = series(&all, "kernels", &format!("u' = {u_prime}, u < u'"), columns)?;
-    let distance = below
-        .column(X.name)
-        .map_err(failed)?
-        .f64()
-        .map_err(failed)?
-        * -1.0;
-    below
-        .with_column(
-            distance
-                .into_series()
-                .with_name(X.name.into())
-                .into_column(),
-        )
-        .map_err(failed)?;
-    [above, below]
+    let (replicates, du) = contract::kernel::replicates::read(input)?;
+    let below: Vec<f64> = du.iter().map(|d| -d).collect();
+    [("u > u'", du), ("u < u'", below)]
         .iter()
-        .map(|side| resolved(&log_groups(side, GROUPS_PER_DECADE)?))
+        .map(|(side, x)| {
+            let name = format!("u' = {u_prime}, {side}");
+            resolved(&log_groups(
+                ("kernels", &name),
+                x,
+                &replicates,
+                GROUPS_PER_DECADE,
+            )?)
+        })
         .collect()
 }
 

@@ -6,7 +6,7 @@
 
 use serde_json::Value;
 
-use super::kernel::{read_replicates, target_instance};
+use super::kernel::target_instance;
 use crate::config::{FitParams, KernelParams};
 use crate::contract::{self, Rows};
 use crate::kernel::fit::{FIT_GROUPS, KernelFit, Shape, fit_kernel};
@@ -66,7 +66,7 @@ impl Stage for FitStage {
         let input = inputs
             .first()
             .ok_or_else(|| StageError::Input("no kernel input".into()))?;
-        let (fine, offsets) = read_replicates(input)?;
+        let (fine, offsets) = contract::kernel::replicates::read(input)?;
         let (low, high) = (self.params.range_min, self.params.range_max);
         let fit = fit_kernel(&fine, &offsets, (low, high), FIT_GROUPS);
         progress.advance(1);

@@ -147,34 +147,3 @@ fn replicates_table(replicates: &[Histogram], bins: &Bins) -> Result<Table, Stag
         })
         .table(&TABLE)?)
 }
-
-/// The kernel of every randomization from a `kernel` input's replicates
-/// table, and the bins' centres relative to `u'`.
-pub fn read_replicates(input: &Input) -> Result<(Vec<Vec<f64>>, Vec<f64>), StageError> {
-    use contract::kernel::replicates::*;
-    let batch = TABLE.of(input)?;
-    let (du, randomization, g) = (
-        contract::kernel::DU.read(batch)?,
-        RANDOMIZATION.read(batch)?,
-        G.read(batch)?,
-    );
-    let mut kernels: Vec<Vec<f64>> = Vec::new();
-    let mut offsets = Vec::new();
-    for k in 0..batch.num_rows() {
-        let r = randomization[k] as usize;
-        if r >= kernels.len() {
-            kernels.resize(r + 1, Vec::new());
-        }
-        kernels[r].push(g[k]);
-        if r == 0 {
-            offsets.push(du[k]);
-        }
-    }
-    if kernels.iter().any(|kernel| kernel.len() != offsets.len()) {
-        return Err(StageError::Input(format!(
-            "{}: randomizations with different bins",
-            input.id
-        )));
-    }
-    Ok((kernels, offsets))
-}

@@ -8,13 +8,17 @@
 //! (`X = window / 2`), where the self variance rate has converged; `Gamma =
 //! a_n rho^2 l v_th` follows whichever `a_n` is used.
 
+use std::borrow::Cow;
+
 use serde::Serialize;
 use serde_json::Value;
 
 use super::collisions::CollisionsStage;
 use super::compare::CompareStage;
+use super::fit::FitStage;
 use super::kernel::{collision_events, target_of};
 use super::moments::{MomentsStage, self_variance_at};
+use super::scan::ScanStage;
 use crate::binning::Bins;
 use crate::config::{CollisionsParams, KernelParams, MdParams, PAPER_TRUNCATION, Study};
 use crate::contract::{self, Rows};
@@ -27,12 +31,12 @@ use crate::pipeline::{Input, InstanceId, Progress, Stage, StageError, Table};
 use crate::stats::Estimate;
 
 /// A number as the paper prints it.
-#[derive(Clone, Copy, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize)]
 pub struct Published {
     /// What it is.
-    pub quantity: &'static str,
+    pub quantity: Cow<'static, str>,
     /// Where the paper gives it.
-    pub source: &'static str,
+    pub source: Cow<'static, str>,
     /// Unit.
     pub unit: &'static str,
     /// Value.
@@ -41,77 +45,219 @@ pub struct Published {
     pub uncertainty: f64,
     /// Whether the paper prints the uncertainty.
     pub printed_uncertainty: bool,
+    /// Its cell of Table I, if it is one.
+    pub table_i: Option<Cell>,
 }
 
-/// `a_6`, Table I.
-pub const A_6: Published = Published {
-    quantity: "a_6: self variance rate, n = 6, u' = 0, dilute",
-    source: "Table I",
-    unit: "rho^2 l v_th",
-    value: 2.58e-4,
-    uncertainty: 0.005e-4,
-    printed_uncertainty: false,
-};
+/// A cell of Table I: the exponent `n` and the column.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Cell {
+    /// The exponent of the inverse power law.
+    pub n: u32,
+    /// The column.
+    pub column: Column,
+}
+
+/// The columns of Table I.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Column {
+    /// `a_n`, the self variance rate at `X = 0.04`.
+    RateConstant,
+    /// The shape fit's amplitude `alpha`.
+    Alpha,
+    /// The shape fit's exponent `beta`.
+    Beta,
+    /// The shape fit's cut-off `sigma`.
+    Sigma,
+    /// `|u1f,max|` of the symmetric launch.
+    KickMax,
+}
+
+impl Column {
+    /// The column's name in the `paper` table and the summary.
+    pub fn name(self) -> &'static str {
+        match self {
+            Column::RateConstant => "a_n",
+            Column::Alpha => "alpha",
+            Column::Beta => "beta",
+            Column::Sigma => "sigma",
+            Column::KickMax => "|u1f,max|",
+        }
+    }
+}
+
+/// One row of Table I as printed: `(value, uncertainty)` per column, `None`
+/// where the cell is blank. Uncertainties: the caption's +-0.001 for the
+/// shape, else half a unit of the last printed digit.
+struct TableIRow {
+    n: u32,
+    rate_constant: (f64, f64),
+    shape: Option<[f64; 3]>,
+    kick_max: (f64, f64),
+}
+
+/// The caption's uncertainty of `alpha`, `beta` and `sigma`.
+const SHAPE_UNCERTAINTY: f64 = 0.001;
+
+/// Table I of the paper ("Rate constants a_n and fitting parameters for
+/// different potential powers n"), transcribed from the paper's text. `n = 2`
+/// prints `a_2 = 0`, `alpha = 0.000`, blank `beta` and `sigma`, and
+/// `|u1f,max| = 1e-7`, which the paper says is zero within its integrator's
+/// errors (the `n = 2` problem is integrable), so that cell is read as an
+/// upper bound: `0 +- 1e-7`.
+const TABLE_I: [TableIRow; 6] = [
+    TableIRow {
+        n: 2,
+        rate_constant: (0.0, 0.0),
+        shape: None,
+        kick_max: (0.0, 1e-7),
+    },
+    TableIRow {
+        n: 4,
+        rate_constant: (3.49e-4, 0.005e-4),
+        shape: Some([0.237, 1.182, 0.022]),
+        kick_max: (2.69e-2, 0.005e-2),
+    },
+    TableIRow {
+        n: 6,
+        rate_constant: (2.58e-4, 0.005e-4),
+        shape: Some([0.182, 1.117, 0.027]),
+        kick_max: (3.06e-2, 0.005e-2),
+    },
+    TableIRow {
+        n: 8,
+        rate_constant: (1.62e-4, 0.005e-4),
+        shape: Some([0.148, 1.076, 0.025]),
+        kick_max: (2.76e-2, 0.005e-2),
+    },
+    TableIRow {
+        n: 10,
+        rate_constant: (1.02e-4, 0.005e-4),
+        shape: Some([0.129, 1.046, 0.021]),
+        kick_max: (2.37e-2, 0.005e-2),
+    },
+    TableIRow {
+        n: 12,
+        rate_constant: (6.55e-5, 0.005e-5),
+        shape: Some([0.115, 1.023, 0.018]),
+        kick_max: (2.04e-2, 0.005e-2),
+    },
+];
+
+impl TableIRow {
+    /// The cell of `column`, as a published number (`None`: blank).
+    fn published(&self, column: Column) -> Option<Published> {
+        let n = self.n;
+        let (quantity, unit, (value, uncertainty), printed) = match column {
+            Column::RateConstant => (
+                format!("a_{n}: self variance rate, n = {n}, u' = 0, dilute, |u - u'| <= 0.04"),
+                "rho^2 l v_th",
+                self.rate_constant,
+                false,
+            ),
+            Column::Alpha | Column::Beta | Column::Sigma => {
+                let k = [Column::Alpha, Column::Beta, Column::Sigma]
+                    .iter()
+                    .position(|c| *c == column)?;
+                let unit = ["rho^2 l v_th (v_th)^(beta-1)", "1", "v_th"][k];
+                (
+                    format!("{}: shape fit, n = {n}", column.name()),
+                    unit,
+                    (self.shape?[k], SHAPE_UNCERTAINTY),
+                    true,
+                )
+            }
+            Column::KickMax => (
+                format!("|u1f,max|, n = {n}: largest kick, symmetric launch u2 = 1, u3 = -1"),
+                "v_th",
+                self.kick_max,
+                n == 2,
+            ),
+        };
+        Some(Published {
+            quantity: Cow::Owned(quantity),
+            source: Cow::Borrowed("Table I"),
+            unit,
+            value,
+            uncertainty,
+            printed_uncertainty: printed,
+            table_i: Some(Cell { n, column }),
+        })
+    }
+}
 
 /// The Lennard-Jones rate at `kT = 0.1 eps`.
 pub const A_LJ: Published = Published {
-    quantity: "a: self variance rate, Lennard-Jones theta = kT/eps = 0.1, u' = 0, dilute",
-    source: "Lennard-Jones section (16% above n = 6)",
+    quantity: Cow::Borrowed(
+        "a: self variance rate, Lennard-Jones theta = kT/eps = 0.1, u' = 0, dilute",
+    ),
+    source: Cow::Borrowed("Lennard-Jones section (16% above n = 6)"),
     unit: "rho^2 l v_th",
     value: 3.00e-4,
     uncertainty: 0.005e-4,
     printed_uncertainty: false,
+    table_i: None,
 };
 
 /// The detailed-balance ratio at `u' = -3`.
 pub const BALANCE: Published = Published {
-    quantity: "G(-3.00 -> -2.96) / G(-2.96 -> -3.00), n = 6",
-    source: "detailed-balance check",
+    quantity: Cow::Borrowed("G(-3.00 -> -2.96) / G(-2.96 -> -3.00), n = 6"),
+    source: Cow::Borrowed("detailed-balance check"),
     unit: "1",
     value: 1.12,
     uncertainty: 0.04,
     printed_uncertainty: true,
+    table_i: None,
 };
 
 /// The MD rings' final time in units of `1 / Gamma`.
 pub const RING_TIME: Published = Published {
-    quantity: "Gamma t_f of the MD rings, n = 6",
-    source: "MD section: t_f = 1.6e-4 / Gamma",
+    quantity: Cow::Borrowed("Gamma t_f of the MD rings, n = 6"),
+    source: Cow::Borrowed("MD section: t_f = 1.6e-4 / Gamma"),
     unit: "1",
     value: 1.6e-4,
     uncertainty: 0.05e-4,
     printed_uncertainty: false,
+    table_i: None,
 };
 
 /// The nitrogen example's thermalization time.
 pub const NITROGEN: Published = Published {
-    quantity: "1/Gamma of 1D N2, one molecule per 10 um at 10 K",
-    source: "N2 example: about 10 s to thermalize",
+    quantity: Cow::Borrowed("1/Gamma of 1D N2, one molecule per 10 um at 10 K"),
+    source: Cow::Borrowed("N2 example: about 10 s to thermalize"),
     unit: "s",
     value: 10.0,
     uncertainty: 5.0,
     printed_uncertainty: false,
+    table_i: None,
 };
 
 /// `Gamma ~ rho^2 T^(1/2 - 1/n)` checked from the kernels: the ring at
 /// `(2 rho, 800 meV)` against the one at `(2 rho, 100 meV)`, `n = 6`.
 pub const SCALING_KERNEL: Published = Published {
-    quantity: "Gamma(2 rho, 800 meV) / Gamma(2 rho, 100 meV), n = 6, kernels at each ring's own rho l",
-    source: "rho^2 T^(1/2 - 1/n) scaling checked from kernels at two temperatures: 8^(1/2 - 1/6) = 2",
+    quantity: Cow::Borrowed(
+        "Gamma(2 rho, 800 meV) / Gamma(2 rho, 100 meV), n = 6, scaled kernel (dilute)",
+    ),
+    source: Cow::Borrowed(
+        "rho^2 T^(1/2 - 1/n) scaling checked from kernels at two temperatures: 8^(1/2 - 1/6) = 2",
+    ),
     unit: "1",
     value: 2.0,
     uncertainty: 0.0,
     printed_uncertainty: false,
+    table_i: None,
 };
 
 /// The same ratio measured by MD, which does not assume the scaling.
 pub const SCALING_MD: Published = Published {
-    quantity: "Gamma(2 rho, 800 meV) / Gamma(2 rho, 100 meV), n = 6, MD",
-    source: "rho^2 T^(1/2 - 1/n) scaling (MD collapse): 8^(1/2 - 1/6) = 2",
+    quantity: Cow::Borrowed("Gamma(2 rho, 800 meV) / Gamma(2 rho, 100 meV), n = 6, MD"),
+    source: Cow::Borrowed("rho^2 T^(1/2 - 1/n) scaling (MD collapse): 8^(1/2 - 1/6) = 2"),
     unit: "1",
     value: 2.0,
     uncertainty: 0.0,
     printed_uncertainty: false,
+    table_i: None,
 };
 
 /// The temperature ratio of the paper's two rings at `2 rho` (800 / 100 meV).
@@ -130,6 +276,22 @@ pub enum Check {
         published: Published,
         /// The `u' = 0`, dilute moments.
         moments: KernelParams,
+    },
+    /// A parameter of the shape fit of the `u' = 0`, dilute kernel.
+    Shape {
+        /// The published number.
+        published: Published,
+        /// The fitted kernel.
+        kernel: KernelParams,
+        /// `alpha`, `beta` or `sigma`.
+        column: Column,
+    },
+    /// `|u1f,max|` of the symmetric launch (`u2 = 1`, `u3 = -1`) from the scan.
+    KickMax {
+        /// The published number.
+        published: Published,
+        /// The scanned potential.
+        potential: Potential,
     },
     /// The detailed-balance ratio `G(a -> b) / G(b -> a)` from launches
     /// drawn for `u' = a` (the sweep's own row, from its launch mixture, in
@@ -207,17 +369,55 @@ pub struct ScalingRing {
 struct PaperRow {
     published: Published,
     ours: Estimate,
-    converged: Estimate,
+    converged: Converged,
     note: String,
+    /// Whether ours is a measurement of the published number (else it
+    /// holds by construction, and the row has no z).
+    comparable: bool,
 }
 
-/// An estimate that does not exist under our definition (the same as the paper's).
-const SAME: Estimate = Estimate {
-    mean: f64::NAN,
-    stderr: f64::NAN,
-};
+/// Ours under our own definition.
+#[derive(Clone, Copy, Debug)]
+enum Converged {
+    /// Our definition is the paper's.
+    Same,
+    /// Ours, where the definitions differ.
+    Differs(Estimate),
+    /// Our definition has no converged value yet (Lennard-Jones).
+    NotYet,
+    /// What it is computed from is not in the study.
+    Missing,
+}
 
-/// No estimate: what it is computed from is not in the study.
+impl Converged {
+    /// The estimate, when there is one, else NaN.
+    fn estimate(self) -> Estimate {
+        match self {
+            Converged::Differs(estimate) => estimate,
+            _ => MISSING,
+        }
+    }
+
+    /// The estimate transformed by `f`.
+    fn map(self, f: impl Fn(Estimate) -> Estimate) -> Converged {
+        match self {
+            Converged::Differs(estimate) => Converged::Differs(f(estimate)),
+            other => other,
+        }
+    }
+
+    /// How the `paper` table states it.
+    fn state(self) -> &'static str {
+        match self {
+            Converged::Same => "same",
+            Converged::Differs(_) => "differs",
+            Converged::NotYet => "not converged",
+            Converged::Missing => "missing",
+        }
+    }
+}
+
+/// No estimate.
 const MISSING: Estimate = Estimate {
     mean: f64::NAN,
     stderr: f64::NAN,
@@ -241,14 +441,12 @@ pub fn paper_stage(study: &Study, plan: &[Box<dyn Stage>]) -> Option<PaperStage>
     let present = |id: &InstanceId| plan.iter().any(|stage| stage.id() == *id);
     let dilute = |p: Potential| study.kernel_params(p, 0.0, 0.0);
     let has = |p: Potential| present(&MomentsStage::instance(&dilute(p)));
-    let mut checks = Vec::new();
-    for (published, potential) in [(A_6, IPP_6), (A_LJ, LJ_0_1)] {
-        if has(potential) {
-            checks.push(Check::Rate {
-                published,
-                moments: dilute(potential),
-            });
-        }
+    let mut checks = table_i_checks(study, plan);
+    if has(LJ_0_1) {
+        checks.push(Check::Rate {
+            published: A_LJ,
+            moments: dilute(LJ_0_1),
+        });
     }
     if let Some((collisions, _)) = balance_collisions(study) {
         let (a, b) = BALANCE_PAIR;
@@ -292,6 +490,60 @@ pub fn paper_stage(study: &Study, plan: &[Box<dyn Stage>]) -> Option<PaperStage>
         });
     }
     (!checks.is_empty()).then_some(PaperStage { checks })
+}
+
+/// The symmetric launch of Table I's `|u1f,max|`.
+const SYMMETRIC_LAUNCH: (f64, f64) = (1.0, -1.0);
+
+/// Every Table I cell whose inputs `plan` computes, column by column.
+fn table_i_checks(study: &Study, plan: &[Box<dyn Stage>]) -> Vec<Check> {
+    let present = |id: &InstanceId| plan.iter().any(|stage| stage.id() == *id);
+    let scans_symmetric = study
+        .config
+        .scan
+        .launch
+        .iter()
+        .any(|launch| (launch.u2, launch.u3) == SYMMETRIC_LAUNCH);
+    let mut checks = Vec::new();
+    for column in [
+        Column::RateConstant,
+        Column::Alpha,
+        Column::Beta,
+        Column::Sigma,
+        Column::KickMax,
+    ] {
+        for row in &TABLE_I {
+            let potential = Potential::InversePower {
+                n: f64::from(row.n),
+            };
+            let kernel = study.kernel_params(potential, 0.0, 0.0);
+            let Some(published) = row.published(column) else {
+                continue;
+            };
+            let check = match column {
+                Column::RateConstant => {
+                    present(&MomentsStage::instance(&kernel)).then_some(Check::Rate {
+                        published,
+                        moments: kernel,
+                    })
+                }
+                Column::Alpha | Column::Beta | Column::Sigma => {
+                    present(&FitStage::instance(&kernel)).then_some(Check::Shape {
+                        published,
+                        kernel,
+                        column,
+                    })
+                }
+                Column::KickMax => (scans_symmetric && present(&ScanStage::instance(&potential)))
+                    .then_some(Check::KickMax {
+                        published,
+                        potential,
+                    }),
+            };
+            checks.extend(check);
+        }
+    }
+    checks
 }
 
 /// The collisions the paper's detailed-balance pair is computed from, when
@@ -341,13 +593,34 @@ fn scaling_rings(study: &Study) -> Option<(ScalingRing, ScalingRing)> {
     })
 }
 
-/// `a_n` at the paper's truncation and at the window edge (ours).
-fn rates(inputs: &[Input], params: &KernelParams) -> Result<(Estimate, Estimate), StageError> {
+/// `a_n` at the paper's truncation; ours converged (the window edge; for
+/// Lennard-Jones, whose rate has not converged there, none); and a note
+/// saying which.
+fn rates(
+    inputs: &[Input],
+    params: &KernelParams,
+) -> Result<(Estimate, Converged, String), StageError> {
     let moments = contract::moments::TABLE.find(inputs, &MomentsStage::instance(params))?;
-    Ok((
-        self_variance_at(moments, PAPER_TRUNCATION)?,
-        self_variance_at(moments, 0.5 * params.window)?,
-    ))
+    let paper = self_variance_at(moments, PAPER_TRUNCATION)?;
+    let window = self_variance_at(moments, 0.5 * params.window)?;
+    let truncated = "ours counts |u - u'| <= 0.04 like the paper";
+    if matches!(params.potential, Potential::LennardJones { .. }) {
+        let untruncated = self_variance_at(moments, f64::INFINITY)?;
+        let note = format!(
+            "{truncated}; converged: none yet, since for Lennard-Jones the rate has not converged at the window edge (X = {}: {:.4e} +- {:.1e}; without truncation {:.4e} +- {:.1e}): bound-pair events (recombination, break-up) kick beyond any window",
+            0.5 * params.window,
+            window.mean,
+            window.stderr,
+            untruncated.mean,
+            untruncated.stderr
+        );
+        return Ok((paper, Converged::NotYet, note));
+    }
+    let note = format!(
+        "{truncated}; converged: the whole window (X = {}), our a_n",
+        0.5 * params.window
+    );
+    Ok((paper, Converged::Differs(window), note))
 }
 
 fn scaled(estimate: Estimate, factor: f64) -> Estimate {
@@ -358,14 +631,16 @@ fn scaled(estimate: Estimate, factor: f64) -> Estimate {
 }
 
 impl Check {
-    fn published(&self) -> Published {
+    fn published(&self) -> &Published {
         match self {
             Check::Rate { published, .. }
+            | Check::Shape { published, .. }
+            | Check::KickMax { published, .. }
             | Check::Balance { published, .. }
             | Check::RingTime { published, .. }
             | Check::ScalingKernel { published, .. }
             | Check::ScalingMd { published, .. }
-            | Check::GasTime { published, .. } => *published,
+            | Check::GasTime { published, .. } => published,
         }
     }
 
@@ -373,6 +648,8 @@ impl Check {
     fn inputs(&self) -> Vec<InstanceId> {
         match self {
             Check::Rate { moments, .. } => vec![MomentsStage::instance(moments)],
+            Check::Shape { kernel, .. } => vec![FitStage::instance(kernel)],
+            Check::KickMax { potential, .. } => vec![ScanStage::instance(potential)],
             Check::Balance {
                 sweep, collisions, ..
             } => vec![
@@ -394,12 +671,41 @@ impl Check {
     }
 
     fn row(&self, inputs: &[Input]) -> Result<PaperRow, StageError> {
-        let published = self.published();
-        let truncated = "ours counts |u - u'| <= 0.04 like the paper; converged: the whole window (X = 0.1), our a_n";
+        let published = self.published().clone();
         let (ours, converged, note) = match self {
-            Check::Rate { moments, .. } => {
-                let (paper, window) = rates(inputs, moments)?;
-                (paper, window, truncated.to_string())
+            Check::Rate { moments, .. } => rates(inputs, moments)?,
+            Check::Shape { kernel, column, .. } => {
+                use contract::fit::{ALPHA, BETA, CHI2_PER_DOF, RANGE_MAX, RANGE_MIN, STATUS};
+                let fit = contract::fit::TABLE.find(inputs, &FitStage::instance(kernel))?;
+                let pair = match column {
+                    Column::Alpha => ALPHA,
+                    Column::Beta => BETA,
+                    _ => contract::fit::SIGMA,
+                };
+                let note = format!(
+                    "our fit of g = alpha |x|^-beta exp(-x^2 / 2 sigma^2) to the mean kernel over {} <= |x| <= {} ({}, chi2/dof = {:.1}); the paper does not state its fit range or weights; ours: statistical error only (refits of each randomization)",
+                    RANGE_MIN.read(fit)?[0],
+                    RANGE_MAX.read(fit)?[0],
+                    STATUS.read(fit)?[0],
+                    CHI2_PER_DOF.read(fit)?[0]
+                );
+                (pair.read(fit)?[0], Converged::Same, note)
+            }
+            Check::KickMax { potential, .. } => {
+                use contract::scan::U3;
+                use contract::scan::peak::{TABLE, U1_FINAL_MAX_ABS, U2};
+                let id = ScanStage::instance(potential);
+                let peaks = TABLE.find(inputs, &id)?;
+                let row = U2
+                    .read(peaks)?
+                    .iter()
+                    .zip(U3.read(peaks)?)
+                    .position(|(&u2, u3)| (u2, u3) == SYMMETRIC_LAUNCH)
+                    .ok_or_else(|| {
+                        StageError::Input(format!("{id} has no symmetric launch u2 = 1, u3 = -1"))
+                    })?;
+                let note = "ours: the largest |u1f| of the scan's offset grid, refined between grid points; its error is a bound (tolerance sensitivity plus bracket spread), not a standard error".to_string();
+                (U1_FINAL_MAX_ABS.read(peaks)?[row], Converged::Same, note)
             }
             Check::Balance {
                 sweep,
@@ -446,19 +752,20 @@ impl Check {
                     "launches drawn for u' = {a} ({id}), bins of {bin_width}, error paired over the randomizations; the sweep's own row (its launch mixture): {:.3} +- {:.3}; f0(b)/f0(a) = {:.4} (detailed balance)",
                     grid.mean, grid.stderr, balance.expected_ratio
                 );
-                (balance.ratio, SAME, note)
+                (balance.ratio, Converged::Same, note)
             }
             Check::RingTime { moments, .. } => {
                 use contract::compare::finite_size::{SCALED_TIME, TABLE};
-                let (paper, window) = rates(inputs, moments)?;
+                let (paper, window, truncated) = rates(inputs, moments)?;
                 let times = SCALED_TIME.read(TABLE.find(inputs, &CompareStage::instance())?)?;
                 let Some(&time) = times.first() else {
                     let note = "no ring: no [[md.system]] of the first ring's potential is at u' = 0, which this row compares";
                     return Ok(PaperRow {
                         published,
                         ours: MISSING,
-                        converged: MISSING,
+                        converged: Converged::Missing,
                         note: note.to_string(),
+                        comparable: true,
                     });
                 };
                 let sharing = times
@@ -469,7 +776,7 @@ impl Check {
                     "rho^2 l v_th t_f = {time:.5} of the first ring ({sharing} of {} compared rings end there); {truncated}",
                     times.len()
                 );
-                (scaled(paper, time), scaled(window, time), note)
+                (scaled(paper, time), window.map(|w| scaled(w, time)), note)
             }
             Check::ScalingKernel { cold, hot, .. } => {
                 let collisions = CollisionsStage::instance(&cold.moments.potential.id());
@@ -485,18 +792,26 @@ impl Check {
                 let units = hot.rate_unit_per_ns / cold.rate_unit_per_ns;
                 let at_density = scaled(Estimate::paired_ratio(&rate(hot), &rate(cold)), units);
                 let note = format!(
-                    "{} over {}: the dilute limit gives exactly {units:.6} (converged column: the same a_6, the scaled kernel, so this is the scaling by construction); ours differs by the paper's launch-rule finite-density factor exp(-r |delay|) at rho l = {:.4e} and {:.4e} (L = {}): an artifact of that algorithm, not the gas's; error paired over the randomizations (both from one set of scenes)",
+                    "by construction, so no z: {} over {} from the scaled kernel (the same a_6 times each gas's rho^2 l v_th) gives exactly {units:.6}; the kernels at each ring's own rho l ({:.4e} and {:.4e}) give {:.7} +- {:.1e} (paired over the randomizations), the paper's launch-rule finite-density factor exp(-r |delay|) in a box of L = {}: an artifact of that algorithm, not the gas's (the MD row measures the ratio independently)",
                     hot.name,
                     cold.name,
                     hot.moments.density,
                     cold.moments.density,
+                    at_density.mean,
+                    at_density.stderr,
                     hot.moments.launch_length
                 );
                 let dilute = Estimate {
                     mean: units,
                     stderr: 0.0,
                 };
-                (at_density, dilute, note)
+                return Ok(PaperRow {
+                    published,
+                    ours: dilute,
+                    converged: Converged::Same,
+                    note: format!("published: an exact prediction; {note}"),
+                    comparable: false,
+                });
             }
             Check::ScalingMd { cold, hot, .. } => {
                 use contract::compare::finite_size::{MD_VARIANCE, RING, TABLE};
@@ -512,7 +827,7 @@ impl Check {
                     "tagged MD window variance at t_f over t_f: {} ({} ns) over {} ({} ns), independent runs; MD does not assume the scaling, and includes whatever its rings' own rho l does",
                     hot.name, hot.final_time_ns, cold.name, cold.final_time_ns
                 );
-                (ratio, SAME, note)
+                (ratio, Converged::Same, note)
             }
             Check::GasTime { gas, moments, .. } => {
                 use contract::gases::{A_N, GAMMA, GAS, TABLE};
@@ -527,7 +842,7 @@ impl Check {
                     })?;
                 // Gamma / a_n = rho^2 l v_th (1/ns), exact.
                 let rate_unit = GAMMA.value.read(table)?[row] / A_N.value.read(table)?[row];
-                let (paper, window) = rates(inputs, moments)?;
+                let (paper, window, truncated) = rates(inputs, moments)?;
                 let seconds = |a: Estimate| {
                     let time = 1e-9 / (a.mean * rate_unit);
                     Estimate {
@@ -538,11 +853,16 @@ impl Check {
                 let note = format!(
                     "gas `{gas}` of the study (its comment cites the Lennard-Jones table); the paper says 'about', read as one significant digit; {truncated}"
                 );
-                (seconds(paper), seconds(window), note)
+                (seconds(paper), window.map(seconds), note)
             }
         };
         let note = if published.uncertainty == 0.0 {
             format!("published: an exact prediction; {note}")
+        } else if published.value == 0.0 {
+            format!(
+                "published: zero within the paper's integrator errors (printed as {:e}, read as 0 +- that); {note}",
+                published.uncertainty
+            )
         } else if published.printed_uncertainty {
             note
         } else {
@@ -553,6 +873,7 @@ impl Check {
             ours,
             converged,
             note,
+            comparable: true,
         })
     }
 }
@@ -602,6 +923,16 @@ impl Stage for PaperStage {
         let table = Rows::new(&rows)
             .with(QUANTITY, |r| r.published.quantity.to_string())
             .with(SOURCE, |r| r.published.source.to_string())
+            .with(TABLE_I_N, |r| {
+                r.published
+                    .table_i
+                    .map_or(f64::NAN, |cell| f64::from(cell.n))
+            })
+            .with(TABLE_I_COLUMN, |r| {
+                r.published
+                    .table_i
+                    .map_or(String::new(), |cell| cell.column.name().to_string())
+            })
             .with(UNIT, |r| r.published.unit.to_string())
             .estimate(PUBLISHED, |r| Estimate {
                 mean: r.published.value,
@@ -611,15 +942,27 @@ impl Stage for PaperStage {
             .with(RELATIVE_DIFFERENCE, |r| {
                 r.ours.mean / r.published.value - 1.0
             })
-            .with(Z, |r| z_score(r.ours, r.published))
-            .estimate(OURS_CONVERGED, |r| r.converged)
+            .with(Z, |r| {
+                if r.comparable {
+                    z_score(r.ours, &r.published)
+                } else {
+                    f64::NAN
+                }
+            })
+            .estimate(OURS_CONVERGED, |r| r.converged.estimate())
+            .with(CONVERGED, |r| r.converged.state().to_string())
             .with(NOTE, |r| r.note.clone())
             .table(&TABLE)?;
         Ok(vec![table])
     }
 }
 
-/// `(ours - published) / sqrt(ours_stderr^2 + published_uncertainty^2)`.
-fn z_score(ours: Estimate, published: Published) -> f64 {
-    (ours.mean - published.value) / libm::hypot(ours.stderr, published.uncertainty)
+/// `(ours - published) / sqrt(ours_stderr^2 + published_uncertainty^2)`;
+/// zero when both are exact and equal.
+fn z_score(ours: Estimate, published: &Published) -> f64 {
+    let difference = ours.mean - published.value;
+    if difference == 0.0 {
+        return 0.0;
+    }
+    difference / libm::hypot(ours.stderr, published.uncertainty)
 }
