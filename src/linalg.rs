@@ -1,8 +1,10 @@
 //! Dense linear algebra the physics needs and no crate of ours provides: the
 //! symmetric eigenproblem (cyclic Jacobi), used for the dissipative projection
 //! of collision generators and for the Lax matrix of the Sutherland ring;
-//! and the composite Simpson weights of the quadratures (bound-pair length,
-//! averages over thermal starts). Pure math: no IO.
+//! the composite Simpson weights of the quadratures (bound-pair length,
+//! averages over thermal starts); and the node slopes of the not-a-knot cubic
+//! spline (a tridiagonal solve), the derivative of measured rates on a grid.
+//! Pure math: no IO.
 
 /// Eigenvalues and orthonormal eigenvectors of a symmetric matrix.
 #[derive(Clone, Debug, PartialEq)]
@@ -79,6 +81,88 @@ pub fn simpson_weight(k: usize, intervals: usize) -> f64 {
     }
 }
 
+/// Slopes `S'(x_k)` at the nodes of the not-a-knot cubic spline `S` through
+/// `(x_k, y_k)` (`x` strictly ascending, at least three nodes), in units of
+/// `y` per unit of `x`: the derivative of the smooth interpolant of all the
+/// nodes. Exact for cubics; on a uniform grid of step `h` the error is
+/// `h^4 y^(5) / 180` away from the ends (the slopes solve `s_(k-1) + 4 s_k +
+/// s_(k+1) = 3 (y_(k+1) - y_(k-1)) / h`, a fourth-order compact difference)
+/// and `O(h^3)` at them, where the not-a-knot condition (`S'''` continuous at
+/// the second and the last but one node) assumes nothing about `y''`, unlike
+/// the natural spline's `S'' = 0` (de Boor, A Practical Guide to Splines,
+/// ch. IV). Three nodes give the parabola through them.
+pub fn spline_slopes(x: &[f64], y: &[f64]) -> Vec<f64> {
+    assert!(
+        x.len() >= 3 && y.len() == x.len(),
+        "a spline needs at least three nodes and one value per node"
+    );
+    let step: Vec<f64> = x.windows(2).map(|pair| pair[1] - pair[0]).collect();
+    let secant: Vec<f64> = y
+        .windows(2)
+        .zip(&step)
+        .map(|(pair, h)| (pair[1] - pair[0]) / h)
+        .collect();
+    let last = step.len() - 1;
+    let parabola = x.len() == 3;
+    let [end, neighbour, rhs] =
+        spline_end_row(parabola, [step[0], step[1]], [secant[0], secant[1]]);
+    let mut rows = vec![[0.0, end, neighbour, rhs]];
+    rows.extend((1..=last).map(|k| {
+        let (left, right) = (step[k - 1], step[k]);
+        [
+            right,
+            2.0 * (left + right),
+            left,
+            3.0 * (right * secant[k - 1] + left * secant[k]),
+        ]
+    }));
+    let [end, neighbour, rhs] = spline_end_row(
+        parabola,
+        [step[last], step[last - 1]],
+        [secant[last], secant[last - 1]],
+    );
+    rows.push([neighbour, end, 0.0, rhs]);
+    solve_tridiagonal(rows)
+}
+
+/// The end condition of [`spline_slopes`] at one end, as the coefficients of
+/// the end node's slope and its neighbour's and the right-hand side, from the
+/// steps and secants of the interval at the end (`near`) and the next one
+/// (`far`): not-a-knot, or the parabola through three nodes (`s_end +
+/// s_neighbour = 2 secant_near`: with the middle node's equation, the slopes
+/// of the one parabola).
+fn spline_end_row(
+    parabola: bool,
+    [near, far]: [f64; 2],
+    [near_secant, far_secant]: [f64; 2],
+) -> [f64; 3] {
+    if parabola {
+        return [1.0, 1.0, 2.0 * near_secant];
+    }
+    let rhs =
+        ((3.0 * near + 2.0 * far) * far * near_secant + near * near * far_secant) / (near + far);
+    [far, near + far, rhs]
+}
+
+/// Solves the tridiagonal system whose rows are `[lower, diagonal, upper,
+/// rhs]` (the first row's `lower` and the last's `upper` unused) by
+/// elimination without pivoting (the Thomas algorithm): the pivots must stay
+/// away from zero, as they do for diagonally dominant rows and for the
+/// spline's (positive on uniform grids).
+fn solve_tridiagonal(mut rows: Vec<[f64; 4]>) -> Vec<f64> {
+    for k in 1..rows.len() {
+        let factor = rows[k][0] / rows[k - 1][1];
+        rows[k][1] -= factor * rows[k - 1][2];
+        rows[k][3] -= factor * rows[k - 1][3];
+    }
+    let mut solution = vec![0.0; rows.len()];
+    for k in (0..rows.len()).rev() {
+        let next = solution.get(k + 1).copied().unwrap_or(0.0);
+        solution[k] = (rows[k][3] - rows[k][2] * next) / rows[k][1];
+    }
+    solution
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -98,6 +182,40 @@ mod tests {
                 let av: f64 = (0..n).map(|j| a[i * n + j] * v[j]).sum();
                 assert!((av - l * v[i]).abs() < 1e-13, "{av} vs {}", l * v[i]);
             }
+        }
+    }
+
+    /// Rounding of slopes of O(1) values on steps of ~0.2 after a tridiagonal solve.
+    const SLOPE_ROUNDING: f64 = 1e-12;
+
+    /// A cubic is its own not-a-knot spline: its slopes come out exact at
+    /// every node, ends included, on uniform and uneven grids; three nodes
+    /// reproduce a parabola.
+    #[test]
+    fn spline_slopes_are_exact_for_cubics() {
+        let cubic = |x: f64| 0.5 - x + 0.75 * x * x - 0.3 * x * x * x;
+        let cubic_slope = |x: f64| -1.0 + 1.5 * x - 0.9 * x * x;
+        let uniform: Vec<f64> = (0..13).map(|k| -1.5 + 0.25 * f64::from(k)).collect();
+        let uneven: Vec<f64> = (0..9)
+            .map(|k| -1.0 + 0.2 * f64::from(k) + 0.03 * f64::from(k * k % 5))
+            .collect();
+        for x in [&uniform, &uneven] {
+            let y: Vec<f64> = x.iter().map(|&x| cubic(x)).collect();
+            for (slope, &x) in spline_slopes(x, &y).iter().zip(x) {
+                assert!(
+                    (slope - cubic_slope(x)).abs() < SLOPE_ROUNDING,
+                    "x = {x}: {slope}"
+                );
+            }
+        }
+        let three = [-0.4, 0.1, 0.9];
+        let parabola = |x: f64| 2.0 - 3.0 * x + 1.25 * x * x;
+        let y = three.map(parabola);
+        for (slope, x) in spline_slopes(&three, &y).iter().zip(three) {
+            assert!(
+                (slope - (-3.0 + 2.5 * x)).abs() < SLOPE_ROUNDING,
+                "x = {x}: {slope}"
+            );
         }
     }
 }
