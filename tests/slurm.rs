@@ -226,8 +226,21 @@ fn a_slurm_array_with_a_cancelled_task_resubmits_only_what_is_missing() {
     wait_for_queue_to_empty();
     assert_eq!(merged_bytes(&dir.join("data")), single_process());
     let status = stdout(&ternary(&config, &["status"]));
+    // Every instance fresh, then the estimate with nothing left to compute.
+    let (estimate, instances) = status
+        .trim_end()
+        .lines()
+        .collect::<Vec<_>>()
+        .split_last()
+        .map(|(last, rest)| (*last, rest.to_vec()))
+        .unwrap();
     assert!(
-        status.lines().all(|line| line.contains("fresh")),
+        instances.iter().all(|line| line.contains("fresh")),
+        "{status}"
+    );
+    assert!(
+        estimate.starts_with("estimate: ")
+            && estimate.contains("; 0 CPU-hours of it still to compute"),
         "{status}"
     );
 }
