@@ -292,7 +292,7 @@ fn expected(store: &Path, figure: &Artifact) -> Vec<Row> {
             rows
         }
         "evolution" => {
-            use contract::evolve::{TIME_GAMMA, early_summary, evolution};
+            use contract::evolve::{TIME_GAMMA, early_evolution, early_summary, evolution};
             let input = figure.input(store, 0);
             let h = input.table("evolution");
             let (time, u) = (TIME_GAMMA.read(&h).unwrap(), evolution::U.read(&h).unwrap());
@@ -338,6 +338,39 @@ fn expected(store: &Path, figure: &Artifact) -> Vec<Row> {
                 &t,
                 &early_summary::VARIANCE_CLOSED_FORM,
             ));
+            // Panel (c): each early h scaled to unit variance within 5 of
+            // its standard deviations, then the standard normal density.
+            let fine = input.table("early_evolution");
+            let (at, du, values) = (
+                TIME_GAMMA.read(&fine).unwrap(),
+                early_evolution::DU.read(&fine).unwrap(),
+                early_evolution::H.read(&fine).unwrap(),
+            );
+            let variances = early_summary::VARIANCE.read(&early).unwrap();
+            for (time, variance) in t.iter().zip(&variances) {
+                let s = variance.mean.sqrt();
+                let shown: f64 = format!("{time:.2e}").parse().unwrap();
+                let label = format!("t = {shown} / Γ");
+                rows.extend(
+                    (0..du.len())
+                        .filter(|&k| at[k] == *time && (du[k] / s).abs() <= 5.0)
+                        .map(|k| {
+                            let h = values[k];
+                            (
+                                "early".into(),
+                                label.clone(),
+                                du[k] / s,
+                                h.mean * s,
+                                h.stderr * s,
+                            )
+                        }),
+                );
+            }
+            rows.extend((-100..=100).map(|k| {
+                let x = 5.0 * f64::from(k) / 100.0;
+                let density = libm::exp(-0.5 * x * x) / libm::sqrt(2.0 * std::f64::consts::PI);
+                ("early".into(), "standard normal".into(), x, density, 0.0)
+            }));
             rows
         }
         "finite_size" => {

@@ -177,7 +177,7 @@ impl Figure {
                 "tagged h(u, t_f) of rings with one N at different rho and T and the same rho^2 l v_th t_f (the rho^2 T^(1/2 - 1/n) collapse), with the Boltzmann h"
             }
             Figure::Evolution { .. } => {
-                "tagged particle's h(u, t) relaxing to f0 (a, log scale) and the early variance of h with its closed form t kappa_2 (b)"
+                "tagged particle's h(u, t) relaxing to f0 (a, log scale), the early variance of h with its closed form t kappa_2 (b), and the early h at each of evolve.early_times scaled to unit variance against the standard normal (c): a cusp from the kernel at first, the central limit's Gaussian by t ~ 1e-2 / Gamma"
             }
             Figure::FiniteSize => {
                 "MD / Boltzmann window variance at t_f against rho l, one series per N (drawn side by side: N = 41, 81, 161 at one rho l are moved apart by 1.2% of the axis), tagged (a) and thermal (b) estimators; the rings at the study's common rho^2 l v_th t_f (others, such as a ring's earlier time, are in the table, not drawn)"
@@ -281,6 +281,12 @@ impl Figure {
                     log("t [1 / Γ]"),
                     log("variance of h [v_th²]"),
                     vec![("t κ₂", Style::Line)],
+                ),
+                panel(
+                    "early",
+                    linear("(u − u') / s, s² = variance of h"),
+                    log("s h(u, t)"),
+                    vec![(STANDARD_NORMAL, Style::Line), ("", Style::Band)],
                 ),
             ],
             Figure::KernelsAtDensity { .. } => vec![
@@ -640,8 +646,67 @@ fn evolution(input: &Input, times: &[f64]) -> Result<DataFrame, StageError> {
         "t κ₂",
         variance(&early_summary::VARIANCE_CLOSED_FORM),
     )?);
+    parts.extend(early_shapes(input)?);
     stack(parts)
 }
+
+/// Reach of the early panel, in standard deviations of `h`.
+const EARLY_REACH: f64 = 5.0;
+
+/// Panel (c): the early `h(u, t)` at each of `evolve.early_times`, scaled to
+/// unit variance (`x = (u - u') / s`, `y = s h`, `s^2` its variance at `t`),
+/// against the standard normal density: a cusp inherited from the kernel at
+/// the earliest times, the central limit's Gaussian by `t ~ 1e-2 / Gamma`
+/// (physics.md §4).
+fn early_shapes(input: &Input) -> Result<Vec<DataFrame>, StageError> {
+    use contract::evolve::{TIME_GAMMA, early_evolution, early_summary};
+    let summary = early_summary::TABLE.of(input)?;
+    let h = early_evolution::TABLE.of(input)?;
+    let (times, variances) = (
+        TIME_GAMMA.read(summary)?,
+        early_summary::VARIANCE.read(summary)?,
+    );
+    let (at, du, values) = (
+        TIME_GAMMA.read(h)?,
+        early_evolution::DU.read(h)?,
+        early_evolution::H.read(h)?,
+    );
+    let mut parts = Vec::new();
+    for (&t, variance) in times.iter().zip(&variances) {
+        let scale = variance.mean.sqrt();
+        let (mut xs, mut ys, mut errors) = (Vec::new(), Vec::new(), Vec::new());
+        for k in (0..du.len()).filter(|&k| at[k] == t) {
+            let x = du[k] / scale;
+            if x.abs() <= EARLY_REACH {
+                xs.push(x);
+                ys.push(values[k].mean * scale);
+                errors.push(values[k].stderr * scale);
+            }
+        }
+        // Three significant digits: a ring's time converted to 1/Gamma
+        // carries seventeen.
+        let t: f64 = format!("{t:.2e}").parse().map_err(failed)?;
+        parts.push(series_of(
+            "early",
+            &format!("t = {t} / Γ"),
+            xs,
+            ys,
+            Some(errors),
+        )?);
+    }
+    let xs: Vec<f64> = (-100..=100)
+        .map(|k| EARLY_REACH * f64::from(k) / 100.0)
+        .collect();
+    let normal: Vec<f64> = xs
+        .iter()
+        .map(|x| libm::exp(-0.5 * x * x) / libm::sqrt(2.0 * std::f64::consts::PI))
+        .collect();
+    parts.push(series_of("early", STANDARD_NORMAL, xs, normal, None)?);
+    Ok(parts)
+}
+
+/// The reference series of the early panel.
+const STANDARD_NORMAL: &str = "standard normal";
 
 fn finite_size(input: &Input) -> Result<DataFrame, StageError> {
     use contract::compare::finite_size::{
