@@ -425,6 +425,12 @@ impl Store {
             MarkerState::Ours(id) => store.id = id,
             MarkerState::Missing | MarkerState::NotOurs => {
                 let entries = sorted_entries(root)?;
+                // A concurrent run creating the store may have renamed its
+                // marker into place between the read and the listing.
+                if let MarkerState::Ours(id) = store.marker_state()? {
+                    store.id = id;
+                    return Ok(store);
+                }
                 let ours = entries.is_empty()
                     || store.is_interrupted_creation(&entries)
                     || store.is_damaged_store(&entries)?;
