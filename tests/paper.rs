@@ -211,6 +211,16 @@ fn paper_rows_recompute_from_their_sources() {
                 (expected.mean, expected.stderr)
             );
             assert_eq!(converged_state[k], "same");
+            // The goodness of the fit beside it: chi2/dof with its p-value.
+            let dof = contract::fit::BINS.read(&fit).unwrap()[0] - 3;
+            let per_dof = contract::fit::CHI2_PER_DOF.read(&fit).unwrap()[0];
+            assert!(
+                notes[k].contains(&format!(
+                    "chi2/dof = {per_dof:.1} with {dof} degrees of freedom, p = "
+                )),
+                "{}",
+                notes[k]
+            );
         }
     }
     // |u1f,max| of the symmetric launch (u2 = 1, u3 = -1) from the scan.

@@ -28,7 +28,7 @@ use crate::physics::potential::Potential;
 use crate::physics::units::PhysicalGas;
 use crate::pipeline::code::{self, Code};
 use crate::pipeline::{Input, InstanceId, Progress, Stage, StageError, Table};
-use crate::stats::Estimate;
+use crate::stats::{ChiSquare, Estimate};
 
 /// A number as the paper prints it.
 #[derive(Clone, Debug, Serialize)]
@@ -675,19 +675,28 @@ impl Check {
         let (ours, converged, note) = match self {
             Check::Rate { moments, .. } => rates(inputs, moments)?,
             Check::Shape { kernel, column, .. } => {
-                use contract::fit::{ALPHA, BETA, CHI2_PER_DOF, RANGE_MAX, RANGE_MIN, STATUS};
+                use contract::fit::{
+                    ALPHA, BETA, BINS, CHI2_PER_DOF, RANGE_MAX, RANGE_MIN, STATUS,
+                };
                 let fit = contract::fit::TABLE.find(inputs, &FitStage::instance(kernel))?;
                 let pair = match column {
                     Column::Alpha => ALPHA,
                     Column::Beta => BETA,
                     _ => contract::fit::SIGMA,
                 };
+                // Three parameters fitted to the groups.
+                let dof = (BINS.read(fit)?[0] as usize).saturating_sub(3);
+                let per_dof = CHI2_PER_DOF.read(fit)?[0];
+                let goodness = ChiSquare {
+                    chi2: per_dof * dof as f64,
+                    dof,
+                };
                 let note = format!(
-                    "our fit of g = alpha |x|^-beta exp(-x^2 / 2 sigma^2) to the mean kernel over {} <= |x| <= {} ({}, chi2/dof = {:.1}); the paper does not state its fit range or weights; ours: statistical error only (refits of each randomization)",
+                    "our fit of g = alpha |x|^-beta exp(-x^2 / 2 sigma^2) to the mean kernel over {} <= |x| <= {} ({}, chi2/dof = {per_dof:.1} with {dof} degrees of freedom, p = {:.1e}, groups treated as independent); the paper does not state its fit range or weights; ours: statistical error only (refits of each randomization)",
                     RANGE_MIN.read(fit)?[0],
                     RANGE_MAX.read(fit)?[0],
                     STATUS.read(fit)?[0],
-                    CHI2_PER_DOF.read(fit)?[0]
+                    goodness.p_value()
                 );
                 (pair.read(fit)?[0], Converged::Same, note)
             }
