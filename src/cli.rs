@@ -391,7 +391,8 @@ fn open(study: &Study, opening: Opening) -> Result<Store> {
 /// Refuses a study whose estimated CPU time or store size exceeds `[limits]`
 /// (unless `i_know`), before anything is created.
 fn within_limits(study: &Study, plan: &[Box<dyn Stage>], i_know: bool) -> Result<()> {
-    let total = report::total_cost(&executor::estimate(plan));
+    let costs = executor::estimate(plan);
+    let total = report::total_cost(costs.iter().map(|(_, cost)| cost));
     let limits = &study.config.limits;
     let mut beyond = Vec::new();
     if total.cpu_seconds / 3600.0 > limits.cpu_hours {

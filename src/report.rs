@@ -844,8 +844,8 @@ pub fn verify(store: &Store, stages: &[Box<dyn Stage>]) -> Result<(String, usize
 }
 
 /// The sum of `costs`.
-pub fn total_cost(costs: &[(InstanceId, Cost)]) -> Cost {
-    costs.iter().fold(Cost::default(), |sum, (_, cost)| Cost {
+pub fn total_cost<'a>(costs: impl IntoIterator<Item = &'a Cost>) -> Cost {
+    costs.into_iter().fold(Cost::default(), |sum, cost| Cost {
         cpu_seconds: sum.cpu_seconds + cost.cpu_seconds,
         bytes: sum.bytes + cost.bytes,
         rows: sum.rows + cost.rows,
@@ -855,13 +855,13 @@ pub fn total_cost(costs: &[(InstanceId, Cost)]) -> Cost {
 /// The closing line of `status`: the estimated CPU time and store size of
 /// the whole study and of the instances in `unfresh` (still to compute).
 pub fn cost_estimate(costs: &[(InstanceId, Cost)], unfresh: &BTreeSet<InstanceId>) -> String {
-    let whole = total_cost(costs);
-    let pending: Vec<(InstanceId, Cost)> = costs
-        .iter()
-        .filter(|(id, _)| unfresh.contains(id))
-        .cloned()
-        .collect();
-    let pending = total_cost(&pending);
+    let whole = total_cost(costs.iter().map(|(_, cost)| cost));
+    let pending = total_cost(
+        costs
+            .iter()
+            .filter(|(id, _)| unfresh.contains(id))
+            .map(|(_, cost)| cost),
+    );
     format!(
         "estimate: {} CPU-hours and {} of store for the whole study; {} CPU-hours of it still to compute (an order of magnitude, from the default study's speed on a 2-core VM)\n",
         hours(whole.cpu_seconds),
