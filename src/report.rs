@@ -363,7 +363,7 @@ fn table_i_matrix(frame: &DataFrame, rows: &[usize]) -> Result<String> {
         .collect();
     writeln!(
         out,
-        "Table I, published | ours (z) (rows {}-{} of the table; a_n at |u - u'| <= 0.04; shape: our fit, statistical errors only; |u1f,max| to 6 digits, its error bound below 1e-6)",
+        "Table I, published | ours (z) (rows {}-{} of the table; a_n at |u - u'| <= 0.04; shape: our fit up to 0.04, statistical and protocol errors combined; |u1f,max| to 6 digits, its error bound below 1e-6)",
         rows[0] + 1,
         rows[rows.len() - 1] + 1
     )?;

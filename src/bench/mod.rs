@@ -15,7 +15,7 @@ use rayon::prelude::*;
 use ternary::binning::Bins;
 use ternary::config::{KernelConfig, Study};
 use ternary::figures::{Axis, Layout, Panel, Point, Style, render};
-use ternary::kernel::fit::{FIT_GROUPS, Shape, fit_kernel};
+use ternary::kernel::fit::{Protocol, Shape, Weighting, fit_kernel};
 use ternary::kernel::{Draws, Event, Histogram, Target, histograms, moments};
 use ternary::physics::offset_quadrature::{OffsetIntegral, OffsetRule};
 use ternary::physics::potential::Potential;
@@ -433,7 +433,11 @@ fn shape_errors(replicates: &[Histogram], bins: &Bins, study: &StudySettings) ->
         .collect();
     let offsets: Vec<f64> = (0..bins.len()).map(|k| bins.centre(k)).collect();
     let [low, high] = study.fit_range;
-    let fit = fit_kernel(&fine, &offsets, (low, high), FIT_GROUPS);
+    let protocol = Protocol {
+        range: (low, high),
+        weighting: Weighting::Statistical,
+    };
+    let fit = fit_kernel(&fine, &offsets, protocol);
     let Some(mean) = fit.mean else {
         return ([f64::NAN; 3], f64::NAN);
     };

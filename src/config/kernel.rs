@@ -74,6 +74,8 @@ pub struct FitParams {
     pub range_min: f64,
     /// Largest `|u - u'|` fitted.
     pub range_max: f64,
+    /// Largest `|u - u'|` of the fit under the paper's protocol: its truncation.
+    pub paper_range_max: f64,
 }
 
 /// Resolved parameters of a `kernel` or `moments` instance.
@@ -185,9 +187,11 @@ impl KernelConfig {
         )?;
         let [low, high] = kernel.fit_range;
         check(
-            low > 0.0 && low < high && high <= 0.5 * kernel.window,
+            low > 0.0 && low < high && high <= 0.5 * kernel.window && low < PAPER_TRUNCATION,
             "kernel.fit_range",
-            format!("[{low}, {high}] must satisfy 0 < min < max <= window/2"),
+            format!(
+                "[{low}, {high}] must satisfy 0 < min < max <= window/2 and min < {PAPER_TRUNCATION} (the paper's truncation, where its protocol's fit ends)"
+            ),
         )
     }
 
@@ -227,6 +231,7 @@ impl KernelConfig {
             kernel,
             range_min,
             range_max,
+            paper_range_max: PAPER_TRUNCATION,
         }
     }
 }

@@ -428,12 +428,31 @@ pub mod fit {
     const REFITS: &str =
         "standard error: spread of per-randomization refits times the scale factor";
 
-    /// The table.
+    /// Systematic error of every parameter.
+    const SPREAD: &str = "systematic error from the fit protocol: half the spread (largest minus smallest) of the parameter over every row's protocol, the same on every row";
+
+    /// The table: one row per fit protocol, the study's first.
     pub const TABLE: TableSpec = TableSpec {
         stage: STAGE,
         name: "fit",
-        description: "kernel shape fit near u'",
+        description: "kernel shape fit near u', one row per fit protocol (the study's first)",
     };
+    /// The row of the study's protocol (always the first row).
+    pub const STUDY_PROTOCOL: &str = "study";
+    /// The row of the paper's protocol, as far as the paper states it.
+    pub const PAPER_PROTOCOL: &str = "paper";
+    /// The rows varied for the systematic error.
+    pub const VARIED_PROTOCOL: &str = "varied";
+    /// What the row's protocol is for.
+    pub const PROTOCOL: Col<String> = Col::text(
+        "protocol",
+        "study (the configured range, statistical weights), paper (the same up to the paper's truncation |x| <= 0.04) or varied (ranges and weights varied for the systematic error)",
+    );
+    /// Weights of the fit.
+    pub const WEIGHTS: Col<String> = Col::text(
+        "weights",
+        "statistical (1 / stderr^2 of the group means) or relative (1 / G^2: least squares in ln G; its chi2 is not a goodness of fit)",
+    );
     /// Amplitude (its error's unit is written `as alpha`).
     pub const ALPHA: Pair = Pair {
         value: Col::f64(
@@ -443,6 +462,12 @@ pub mod fit {
         ),
         stderr: Col::f64("alpha_stderr", "as alpha", REFITS),
     };
+    /// Systematic error of alpha.
+    pub const ALPHA_SYSTEMATIC: Col<f64> = Col::f64("alpha_systematic", "as alpha", SPREAD);
+    /// Systematic error of beta.
+    pub const BETA_SYSTEMATIC: Col<f64> = Col::f64("beta_systematic", "1", SPREAD);
+    /// Systematic error of sigma.
+    pub const SIGMA_SYSTEMATIC: Col<f64> = Col::f64("sigma_systematic", "v_th", SPREAD);
     /// Power-law exponent.
     pub const BETA: Pair = Pair {
         value: Col::f64(super::BETA, "1", "power-law exponent near u'"),

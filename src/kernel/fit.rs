@@ -15,7 +15,9 @@
 //! independent replicate and taking the spread; the chi-square of the mean fit
 //! measures the goodness of fit. At high precision the three-parameter shape
 //! does not describe the kernel exactly (chi2/dof of 20 at 1.2e6 scenes for
-//! n = 6): the `fit` stage then scales the errors by sqrt(chi2/dof).
+//! n = 6): the errors are then scaled by sqrt(chi2/dof), and the parameters
+//! depend on the fit's [`Protocol`] (range and weights) by more than their
+//! statistical errors; [`systematic`] measures that over [`varied_protocols`].
 
 use crate::stats::Estimate;
 
@@ -225,9 +227,106 @@ pub fn fit_shape(data: &FitData) -> Option<ShapeFit> {
     })
 }
 
-/// Log-spaced groups of bins in the fit range (about 14 per decade over the
-/// default range 2e-4..0.05).
-pub const FIT_GROUPS: usize = 36;
+/// Log-spaced groups of bins per decade of `|x|` (36 over the default range
+/// 2e-4..0.05).
+pub const GROUPS_PER_DECADE: f64 = 15.0;
+
+/// Groups over `low <= |x| <= high`: [`GROUPS_PER_DECADE`] per decade, at least 4.
+pub fn group_count((low, high): (f64, f64)) -> usize {
+    ((GROUPS_PER_DECADE * libm::log10(high / low)).round() as usize).max(4)
+}
+
+/// How the groups are weighted in a fit.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Weighting {
+    /// `1 / stderr^2` from the randomizations: the best fit were the shape exact.
+    Statistical,
+    /// Equal relative weights, `1 / G^2` (up to one common factor): least
+    /// squares in `ln G`, as a fit drawn on log axes weights the points. Its
+    /// chi-square is not a goodness of fit.
+    Relative,
+}
+
+impl Weighting {
+    /// Name in tables.
+    pub fn name(self) -> &'static str {
+        match self {
+            Weighting::Statistical => "statistical",
+            Weighting::Relative => "relative",
+        }
+    }
+
+    /// Errors that weight the points: the statistical ones, or each value's
+    /// size times the median relative error (so chi-squares stay comparable).
+    fn errors(self, values: &[f64], errors: &[f64]) -> Vec<f64> {
+        match self {
+            Weighting::Statistical => errors.to_vec(),
+            Weighting::Relative => {
+                let mut relative: Vec<f64> = values
+                    .iter()
+                    .zip(errors)
+                    .filter(|&(v, e)| *v > 0.0 && *e > 0.0)
+                    .map(|(v, e)| e / v)
+                    .collect();
+                relative.sort_by(f64::total_cmp);
+                let typical = relative.get(relative.len() / 2).copied().unwrap_or(0.0);
+                values.iter().map(|v| v.max(0.0) * typical).collect()
+            }
+        }
+    }
+}
+
+/// A fit protocol: the range of `|x|` fitted and the weights.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Protocol {
+    /// Smallest and largest `|x|` fitted, `v_th`.
+    pub range: (f64, f64),
+    /// Weights of the groups.
+    pub weighting: Weighting,
+}
+
+/// Lower ends of the fit range varied for the systematic error, `v_th`: 2 to
+/// 10 bins of the default width from `u'`.
+pub const VARIED_LOWER: [f64; 3] = [1e-4, 2e-4, 5e-4];
+/// Upper ends varied: the kernel's half-width at half the paper's truncation,
+/// the truncation 0.04, and the default range's end, `v_th`.
+pub const VARIED_UPPER: [f64; 3] = [0.02, 0.04, 0.05];
+
+/// Every protocol of the systematic variation: [`VARIED_LOWER`] x
+/// [`VARIED_UPPER`] x both weightings (18 fits).
+pub fn varied_protocols() -> Vec<Protocol> {
+    let mut protocols = Vec::new();
+    for weighting in [Weighting::Statistical, Weighting::Relative] {
+        for low in VARIED_LOWER {
+            for high in VARIED_UPPER {
+                protocols.push(Protocol {
+                    range: (low, high),
+                    weighting,
+                });
+            }
+        }
+    }
+    protocols
+}
+
+/// Systematic error of one parameter from the choice of protocol: half the
+/// spread (largest minus smallest) of its mean fits over `fits`; NaN when
+/// none converged.
+pub fn systematic(fits: &[KernelFit], parameter: fn(&Shape) -> f64) -> f64 {
+    let values: Vec<f64> = fits
+        .iter()
+        .filter_map(|f| f.mean.map(|m| parameter(&m.shape)))
+        .collect();
+    if values.is_empty() {
+        return f64::NAN;
+    }
+    let (low, high) = values
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &v| {
+            (l.min(v), h.max(v))
+        });
+    0.5 * (high - low)
+}
 
 /// A kernel's shape fit: to the mean over the replicates, and to each one.
 #[derive(Clone, Debug, PartialEq)]
@@ -272,16 +371,12 @@ impl KernelFit {
 }
 
 /// Fits the shape to the per-replicate kernels `fine` (`G` per bin at bin
-/// centres `offsets`) over `low <= |x| <= high`, in `groups` log-spaced
-/// groups of bins: the mean fit weighted by the group means' replicate
-/// errors, and each replicate alone weighted by `sqrt(R)` times them.
-pub fn fit_kernel(
-    fine: &[Vec<f64>],
-    offsets: &[f64],
-    (low, high): (f64, f64),
-    groups: usize,
-) -> KernelFit {
-    let groups = log_groups(offsets, low, high, groups);
+/// centres `offsets`) under `protocol`, in [`group_count`] log-spaced groups
+/// of bins: the mean fit weighted by the protocol's errors of the group
+/// means, and each replicate alone weighted by `sqrt(R)` times them.
+pub fn fit_kernel(fine: &[Vec<f64>], offsets: &[f64], protocol: Protocol) -> KernelFit {
+    let (low, high) = protocol.range;
+    let groups = log_groups(offsets, low, high, group_count(protocol.range));
     let members: Vec<Vec<f64>> = groups
         .iter()
         .map(|g| g.iter().map(|&k| offsets[k]).collect())
@@ -300,8 +395,9 @@ pub fn fit_kernel(
         .map(|j| Estimate::from_replicates(&replicates.iter().map(|r| r[j]).collect::<Vec<_>>()))
         .collect();
     let values: Vec<f64> = estimates.iter().map(|e| e.mean).collect();
-    let errors: Vec<f64> = estimates.iter().map(|e| e.stderr).collect();
-    let measured = errors.iter().filter(|&&e| e > 0.0).count();
+    let statistical: Vec<f64> = estimates.iter().map(|e| e.stderr).collect();
+    let measured = statistical.iter().filter(|&&e| e > 0.0).count();
+    let errors = protocol.weighting.errors(&values, &statistical);
     let Some(mean) = fit_shape(&FitData {
         members: &members,
         values: &values,
@@ -360,5 +456,54 @@ mod tests {
         assert!((fit.shape.beta - 1.17).abs() < 1e-8, "{fit:?}");
         assert!((fit.shape.sigma / 0.02 - 1.0).abs() < 1e-8, "{fit:?}");
         assert!(fit.chi2_per_dof < 1e-10);
+    }
+
+    /// Replicates of a shape on bins of 5e-5 out to 0.1, each a multiple of
+    /// `g` times `1 + distortion |x| / 0.01` (no noise in the shape itself).
+    fn replicates_of(truth: &Coordinates, distortion: f64) -> (Vec<Vec<f64>>, Vec<f64>) {
+        let offsets: Vec<f64> = (-2000..2000).map(|k| (f64::from(k) + 0.5) * 5e-5).collect();
+        let fine = [0.98, 1.01, 0.99, 1.02]
+            .iter()
+            .map(|scale| {
+                offsets
+                    .iter()
+                    .map(|&x| scale * model(truth, x) * (1.0 + distortion * x.abs() / 0.01))
+                    .collect()
+            })
+            .collect();
+        (fine, offsets)
+    }
+
+    fn systematics(fine: &[Vec<f64>], offsets: &[f64]) -> [f64; 3] {
+        let fits: Vec<KernelFit> = varied_protocols()
+            .into_iter()
+            .map(|p| fit_kernel(fine, offsets, p))
+            .collect();
+        assert!(fits.iter().all(|f| f.mean.is_some()));
+        [
+            systematic(&fits, |s| s.alpha),
+            systematic(&fits, |s| s.beta),
+            systematic(&fits, |s| s.sigma),
+        ]
+    }
+
+    /// An exact shape is the same under every protocol, so its systematic
+    /// error vanishes; a shape the model misses (a linear factor in `|x|`)
+    /// moves the parameters with the range and weights.
+    #[test]
+    fn only_a_misfitting_shape_has_a_systematic_error() {
+        let truth: Coordinates = [libm::log(0.2f64), 1.1, 1.0 / (0.02f64 * 0.02)];
+        let (fine, offsets) = replicates_of(&truth, 0.0);
+        let [alpha, beta, sigma] = systematics(&fine, &offsets);
+        assert!(
+            alpha < 1e-9 * 0.2 && beta < 1e-9 && sigma < 1e-9 * 0.02,
+            "{alpha} {beta} {sigma}"
+        );
+        let (fine, offsets) = replicates_of(&truth, 0.1);
+        let [alpha, beta, sigma] = systematics(&fine, &offsets);
+        assert!(
+            alpha > 1e-3 * 0.2 && beta > 1e-3 && sigma > 1e-3 * 0.02,
+            "{alpha} {beta} {sigma}"
+        );
     }
 }

@@ -1,15 +1,20 @@
 //! `fit`: the shape `g(x) = alpha |x|^-beta exp(-x^2 / 2 sigma^2)` of the kernel
 //! near `u'` (physics.md §5) at one `u'` and density, fitted to the mean kernel
-//! with weights `1 / G_stderr^2` over a configurable range of `|u - u'|`;
-//! standard errors and covariance from refitting every randomization alone
-//! (the `kernel` stage's `kernel_replicates` table).
+//! under several protocols, one row each: the study's (weights
+//! `1 / G_stderr^2` over the configured range of `|u - u'|`), the paper's as far
+//! as it states it (the same up to its truncation `|x| <= 0.04`), and the
+//! variations of range and weights whose half-spread is every row's systematic
+//! error. Standard errors and covariance from refitting every randomization
+//! alone (the `kernel` stage's `kernel_replicates` table).
 
 use serde_json::Value;
 
 use super::kernel::target_instance;
 use crate::config::{FitParams, KernelParams};
 use crate::contract::{self, Rows};
-use crate::kernel::fit::{FIT_GROUPS, KernelFit, Shape, fit_kernel};
+use crate::kernel::fit::{
+    KernelFit, Protocol, Shape, Weighting, fit_kernel, systematic, varied_protocols,
+};
 use crate::pipeline::code::{self, Code};
 use crate::pipeline::{Input, InstanceId, Progress, Stage, StageError, Table};
 use crate::stats::Estimate;
@@ -67,46 +72,103 @@ impl Stage for FitStage {
             .first()
             .ok_or_else(|| StageError::Input("no kernel input".into()))?;
         let (fine, offsets) = contract::kernel::replicates::read(input)?;
-        let (low, high) = (self.params.range_min, self.params.range_max);
-        let fit = fit_kernel(&fine, &offsets, (low, high), FIT_GROUPS);
+        let fits: Vec<ProtocolFit> = self
+            .protocols()
+            .into_iter()
+            .map(|(role, protocol)| ProtocolFit {
+                role,
+                protocol,
+                fit: fit_kernel(&fine, &offsets, protocol),
+            })
+            .collect();
         progress.advance(1);
-        let status = match (&fit.mean, fit.replicates.len()) {
-            // Nothing to fit (e.g. the integrable n = 2 kernel vanishes): say so.
-            (None, _) if fit.measured == 0 => "kernel vanishes in the fit range",
-            (None, _) => "too few measured groups",
-            (Some(_), fitted) if fitted < 2 => "replicates could not be fitted: no standard errors",
-            (Some(_), _) => "fitted",
-        };
-        Ok(vec![fit_table(&fit, status, (low, high))?])
+        Ok(vec![fit_table(&fits)?])
     }
 }
 
-/// The one-row fit table; NaN where nothing could be fitted.
-fn fit_table(fit: &KernelFit, status: &str, (low, high): (f64, f64)) -> Result<Table, StageError> {
+impl FitStage {
+    /// The study's protocol, the paper's, then the systematic variations.
+    fn protocols(&self) -> Vec<(&'static str, Protocol)> {
+        use contract::fit::{PAPER_PROTOCOL, STUDY_PROTOCOL, VARIED_PROTOCOL};
+        let statistical = |range| Protocol {
+            range,
+            weighting: Weighting::Statistical,
+        };
+        let low = self.params.range_min;
+        let mut protocols = vec![
+            (STUDY_PROTOCOL, statistical((low, self.params.range_max))),
+            (
+                PAPER_PROTOCOL,
+                statistical((low, self.params.paper_range_max)),
+            ),
+        ];
+        // The variations not already fitted above.
+        let varied: Vec<Protocol> = varied_protocols()
+            .into_iter()
+            .filter(|v| protocols.iter().all(|(_, p)| p != v))
+            .collect();
+        protocols.extend(varied.into_iter().map(|p| (VARIED_PROTOCOL, p)));
+        protocols
+    }
+}
+
+/// One protocol's fit.
+struct ProtocolFit {
+    role: &'static str,
+    protocol: Protocol,
+    fit: KernelFit,
+}
+
+impl ProtocolFit {
+    /// Fitted, or why not.
+    fn status(&self) -> &'static str {
+        match (&self.fit.mean, self.fit.replicates.len()) {
+            // Nothing to fit (e.g. the integrable n = 2 kernel vanishes): say so.
+            (None, _) if self.fit.measured == 0 => "kernel vanishes in the fit range",
+            (None, _) => "too few measured groups",
+            (Some(_), fitted) if fitted < 2 => "replicates could not be fitted: no standard errors",
+            (Some(_), _) => "fitted",
+        }
+    }
+}
+
+/// The fit table, one row per protocol; NaN where nothing could be fitted.
+fn fit_table(fits: &[ProtocolFit]) -> Result<Table, StageError> {
     use contract::fit::*;
     let [alpha, beta, sigma]: [fn(&Shape) -> f64; 3] = [|s| s.alpha, |s| s.beta, |s| s.sigma];
     let parameter = |f: fn(&Shape) -> f64| {
-        move |_: &()| Estimate {
-            mean: fit.mean.map_or(f64::NAN, |m| f(&m.shape)),
-            stderr: fit.stderr(f),
+        move |row: &ProtocolFit| Estimate {
+            mean: row.fit.mean.map_or(f64::NAN, |m| f(&m.shape)),
+            stderr: row.fit.stderr(f),
         }
     };
-    let bins = fit.mean.map_or(fit.measured, |m| m.bins);
-    Ok(Rows::new(&[()])
+    let all: Vec<KernelFit> = fits.iter().map(|f| f.fit.clone()).collect();
+    let spread = |f: fn(&Shape) -> f64| {
+        let value = systematic(&all, f);
+        move |_: &ProtocolFit| value
+    };
+    Ok(Rows::new(fits)
+        .with(PROTOCOL, |row| row.role.to_string())
+        .with(WEIGHTS, |row| row.protocol.weighting.name().to_string())
+        .with(RANGE_MIN, |row| row.protocol.range.0)
+        .with(RANGE_MAX, |row| row.protocol.range.1)
         .estimate(ALPHA, parameter(alpha))
         .estimate(BETA, parameter(beta))
         .estimate(SIGMA, parameter(sigma))
-        .with(COV_ALPHA_BETA, |_| fit.covariance(alpha, beta))
-        .with(COV_ALPHA_SIGMA, |_| fit.covariance(alpha, sigma))
-        .with(COV_BETA_SIGMA, |_| fit.covariance(beta, sigma))
-        .with(SCALE_FACTOR, |_| fit.scale().sqrt())
-        .with(CHI2_PER_DOF, |_| {
-            fit.mean.map_or(f64::NAN, |f| f.chi2_per_dof)
+        .with(ALPHA_SYSTEMATIC, spread(alpha))
+        .with(BETA_SYSTEMATIC, spread(beta))
+        .with(SIGMA_SYSTEMATIC, spread(sigma))
+        .with(COV_ALPHA_BETA, |row| row.fit.covariance(alpha, beta))
+        .with(COV_ALPHA_SIGMA, |row| row.fit.covariance(alpha, sigma))
+        .with(COV_BETA_SIGMA, |row| row.fit.covariance(beta, sigma))
+        .with(SCALE_FACTOR, |row| row.fit.scale().sqrt())
+        .with(CHI2_PER_DOF, |row| {
+            row.fit.mean.map_or(f64::NAN, |f| f.chi2_per_dof)
         })
-        .with(BINS, |_| bins as u32)
-        .with(REPLICATES_FITTED, |_| fit.replicates.len() as u32)
-        .with(RANGE_MIN, |_| low)
-        .with(RANGE_MAX, |_| high)
-        .with(STATUS, |_| status.to_string())
+        .with(BINS, |row| {
+            row.fit.mean.map_or(row.fit.measured, |m| m.bins) as u32
+        })
+        .with(REPLICATES_FITTED, |row| row.fit.replicates.len() as u32)
+        .with(STATUS, |row| row.status().to_string())
         .table(&TABLE)?)
 }

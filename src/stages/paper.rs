@@ -10,6 +10,7 @@
 
 use std::borrow::Cow;
 
+use arrow::array::RecordBatch;
 use serde::Serialize;
 use serde_json::Value;
 
@@ -623,6 +624,66 @@ fn rates(
     Ok((paper, Converged::Differs(window), note))
 }
 
+/// A shape parameter under the paper's protocol with its statistical and
+/// systematic errors combined; ours converged: the study's protocol; a note
+/// with both fits' goodness and the errors apart.
+fn shape_row(
+    fit: &RecordBatch,
+    column: Column,
+) -> Result<(Estimate, Converged, String), StageError> {
+    use contract::fit::*;
+    let (pair, systematic) = match column {
+        Column::Alpha => (ALPHA, ALPHA_SYSTEMATIC),
+        Column::Beta => (BETA, BETA_SYSTEMATIC),
+        _ => (SIGMA, SIGMA_SYSTEMATIC),
+    };
+    let paper = PROTOCOL.row_of(fit, PAPER_PROTOCOL)?;
+    let study = PROTOCOL.row_of(fit, STUDY_PROTOCOL)?;
+    let values = pair.read(fit)?;
+    let systematic = systematic.read(fit)?[paper];
+    let (ranges, bins, chi2) = (
+        RANGE_MAX.read(fit)?,
+        BINS.read(fit)?,
+        CHI2_PER_DOF.read(fit)?,
+    );
+    // Three parameters fitted to the groups.
+    let goodness = |row: usize| {
+        let dof = (bins[row] as usize).saturating_sub(3);
+        let test = ChiSquare {
+            chi2: chi2[row] * dof as f64,
+            dof,
+        };
+        format!(
+            "chi2/dof = {:.1} with {dof} degrees of freedom, p = {:.1e}",
+            chi2[row],
+            test.p_value()
+        )
+    };
+    let varied = PROTOCOL
+        .read(fit)?
+        .iter()
+        .filter(|p| *p == VARIED_PROTOCOL)
+        .count();
+    let note = format!(
+        "ours: g = alpha |x|^-beta exp(-x^2 / 2 sigma^2) fitted to the mean kernel over {} <= |x| <= {} with statistical weights (the paper states only its truncation 0.04, not its fit's range or weights; {}, groups treated as independent); error: statistical {:.1e} (refits of each randomization) and systematic {systematic:.1e} (half the spread over the {varied} protocols of the fit table varying range and weights) combined; converged: the study's range up to {} ({})",
+        RANGE_MIN.read(fit)?[paper],
+        ranges[paper],
+        goodness(paper),
+        values[paper].stderr,
+        ranges[study],
+        goodness(study),
+    );
+    let ours = Estimate {
+        mean: values[paper].mean,
+        stderr: libm::hypot(values[paper].stderr, systematic),
+    };
+    let study = Estimate {
+        mean: values[study].mean,
+        stderr: libm::hypot(values[study].stderr, systematic),
+    };
+    Ok((ours, Converged::Differs(study), note))
+}
+
 fn scaled(estimate: Estimate, factor: f64) -> Estimate {
     Estimate {
         mean: estimate.mean * factor,
@@ -675,30 +736,8 @@ impl Check {
         let (ours, converged, note) = match self {
             Check::Rate { moments, .. } => rates(inputs, moments)?,
             Check::Shape { kernel, column, .. } => {
-                use contract::fit::{
-                    ALPHA, BETA, BINS, CHI2_PER_DOF, RANGE_MAX, RANGE_MIN, STATUS,
-                };
                 let fit = contract::fit::TABLE.find(inputs, &FitStage::instance(kernel))?;
-                let pair = match column {
-                    Column::Alpha => ALPHA,
-                    Column::Beta => BETA,
-                    _ => contract::fit::SIGMA,
-                };
-                // Three parameters fitted to the groups.
-                let dof = (BINS.read(fit)?[0] as usize).saturating_sub(3);
-                let per_dof = CHI2_PER_DOF.read(fit)?[0];
-                let goodness = ChiSquare {
-                    chi2: per_dof * dof as f64,
-                    dof,
-                };
-                let note = format!(
-                    "our fit of g = alpha |x|^-beta exp(-x^2 / 2 sigma^2) to the mean kernel over {} <= |x| <= {} ({}, chi2/dof = {per_dof:.1} with {dof} degrees of freedom, p = {:.1e}, groups treated as independent); the paper does not state its fit range or weights; ours: statistical error only (refits of each randomization)",
-                    RANGE_MIN.read(fit)?[0],
-                    RANGE_MAX.read(fit)?[0],
-                    STATUS.read(fit)?[0],
-                    goodness.p_value()
-                );
-                (pair.read(fit)?[0], Converged::Same, note)
+                shape_row(fit, *column)?
             }
             Check::KickMax { potential, .. } => {
                 use contract::scan::U3;
