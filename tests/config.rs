@@ -663,6 +663,34 @@ fn sweep_points_share_sizes_only_the_sweep_set() {
     assert_eq!(wide.expect("own set").points, 128);
 }
 
+/// `sweep.randomizations` splits only the sweep's own scene set, and the
+/// sweep's quadrature takes one halving more than the kernel's.
+#[test]
+fn sweep_randomizations_and_halvings_set_only_the_sweep_set() {
+    use ternary::physics::sampling::OffsetIntegration;
+    let text = STUDY
+        .replace(
+            "launch_spread = 2.0",
+            "launch_spread = 2.0\nrandomizations = 12",
+        )
+        .replace(
+            "[collisions.points_per_potential]",
+            "[collisions.method_per_potential]\n\"ipp-6\" = \"quadrature\"\n\n[collisions.points_per_potential]",
+        );
+    let study = Study::parse(std::path::Path::new("pipeline.toml"), &text).expect("valid");
+    let potential = Potential::InversePower { n: 6.0 };
+    let wide = study.wide_collisions(potential).1.expect("own set");
+    let kernel = study.collisions_params(potential);
+    assert_eq!(wide.sampling.randomizations, 12);
+    assert_eq!(kernel.sampling.randomizations, 4);
+    let halvings = |offsets: &OffsetIntegration| match offsets {
+        OffsetIntegration::Quadrature(rule) => rule.halvings,
+        _ => panic!("ipp-6 is integrated by quadrature"),
+    };
+    assert_eq!(halvings(&kernel.sampling.offsets), 3);
+    assert_eq!(halvings(&wide.sampling.offsets), 4);
+}
+
 #[test]
 fn kernel_section_rejects_bad_values() {
     rejects(&[
@@ -785,6 +813,16 @@ fn sweep_section_rejects_bad_values() {
             "launch_spread = 2.0",
             "launch_spread = 2.0\npoints_share = 1.5",
             "sweep.points_share",
+        ),
+        (
+            "launch_spread = 2.0",
+            "launch_spread = 2.0\nrandomizations = 1",
+            "sweep.randomizations",
+        ),
+        (
+            "launch_spread = 2.0",
+            "launch_spread = 0.0\nrandomizations = 32",
+            "sweep.randomizations",
         ),
         (
             "balance_bin_width = 0.005",

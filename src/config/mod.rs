@@ -316,7 +316,12 @@ impl Study {
 
     /// The collisions instance that reaches every `u'` of the sweep and of the
     /// evolution grid: its name and, when it is not the main set, its
-    /// parameters (the main set with the sweep's launch spread).
+    /// parameters (the main set with the sweep's launch spread, share of
+    /// points and randomizations, and under the offset quadrature one halving
+    /// more: its balance bins lie in the collision's core, where the nodes
+    /// are point masses; at the kernel's step the pairs `a -> a + 0.02` at
+    /// `|a| >= 2` fell 3.5-4 errors short of `f0(b)/f0(a)` for n = 6, and
+    /// within 1.7 with one halving more; docs/benchmarks.md).
     pub fn wide_collisions(&self, potential: Potential) -> (String, Option<CollisionsParams>) {
         let name = self.config.sweep.wide_collisions(potential);
         let spread = self.config.sweep.launch_spread;
@@ -327,6 +332,10 @@ impl Study {
                 self.config.sweep.points_share,
             );
             params.sampling.launch.spread = spread;
+            if let Some(randomizations) = self.config.sweep.randomizations {
+                params.sampling.randomizations = randomizations;
+            }
+            one_halving_finer(&mut params);
             params
         });
         (name, params)
@@ -348,9 +357,7 @@ impl Study {
         let mut params = self.collisions_params(potential);
         params.sampling.launch.shift = u_prime;
         params.sampling.launch.spread = 0.0;
-        if let OffsetIntegration::Quadrature(rule) = &mut params.sampling.offsets {
-            rule.halvings = (rule.halvings + 1).min(8);
-        }
+        one_halving_finer(&mut params);
         (format!("{}_u{u_prime}", potential.id()), params)
     }
 
@@ -456,6 +463,13 @@ fn line_of_key(text: &str, key: &str) -> Option<usize> {
         rest = rest.strip_prefix('.').unwrap_or(rest);
     }
     line_of_span(text, Some(current.span()))
+}
+
+/// Under the offset quadrature, one halving more than `params` have (at most 8).
+fn one_halving_finer(params: &mut CollisionsParams) {
+    if let OffsetIntegration::Quadrature(rule) = &mut params.sampling.offsets {
+        rule.halvings = (rule.halvings + 1).min(8);
+    }
 }
 
 #[cfg(test)]

@@ -653,12 +653,16 @@ pub mod sweep {
         /// `b - a`.
         pub const SEPARATION: Col<f64> = Col::f64("separation", "v_th", "b - a of the pairs");
         /// Pairs of the separation.
-        pub const PAIRS: Col<u32> = Col::u32("pairs", "1", "pairs (a, b) on the u' grid");
+        pub const PAIRS: Col<u32> = Col::u32(
+            "pairs",
+            "1",
+            "independent pairs (a, b) on the u' grid: those with a <= 0 (every scene enters with its mirror image, so a pair at a > 0 repeats its mirror's evidence)",
+        );
         /// Pairs counted in the joint test.
         pub const COUNTED: Col<u32> = Col::u32(
             "counted",
             "1",
-            "pairs with a <= 0 (every scene enters with its mirror image, so a pair at a > 0 repeats its mirror's evidence) whose error is not carried by one randomization (largest_share <= 0.5)",
+            "independent pairs whose error is not carried by one randomization (largest_share <= 0.5)",
         );
         /// The joint statistic.
         pub const JOINT_IMBALANCE: Pair = pair!(

@@ -149,19 +149,15 @@ impl SweepStage {
             .iter()
             .map(|&separation| {
                 let distance = (separation / width).round() * width;
-                let pairs: Vec<&Balance> = rows
-                    .iter()
-                    .filter(|(a, b, _)| ((b - a) - distance).abs() < 0.5 * width)
-                    .map(|(.., balance)| balance)
-                    .collect();
                 // Every scene enters with its mirror image, so a pair at a > 0
                 // repeats the evidence of its mirror at -a: one half counts.
-                let counted: Vec<&Balance> = rows
+                let pairs: Vec<&Balance> = rows
                     .iter()
                     .filter(|(a, b, _)| *a <= 0.0 && ((b - a) - distance).abs() < 0.5 * width)
                     .map(|(.., balance)| balance)
-                    .filter(|p| !p.dominated())
                     .collect();
+                let counted: Vec<&Balance> =
+                    pairs.iter().copied().filter(|p| !p.dominated()).collect();
                 let joint = joint_balance(counted.iter().copied());
                 (distance, pairs.len() as u32, counted.len() as u32, joint)
             })
