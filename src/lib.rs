@@ -34,6 +34,7 @@ pub mod linalg;
 pub mod physics;
 pub mod pipeline;
 pub mod report;
+pub mod scaling;
 pub mod slurm;
 pub mod stages;
 pub mod stats;

@@ -163,6 +163,29 @@ fn solve_tridiagonal(mut rows: Vec<[f64; 4]>) -> Vec<f64> {
     solution
 }
 
+/// Solves the 3x3 system `a z = b` (Cramer's rule; `None` if singular):
+/// the normal equations of three-parameter least squares.
+pub fn solve3(a: &[[f64; 3]; 3], b: &[f64; 3]) -> Option<[f64; 3]> {
+    let det = |m: &[[f64; 3]; 3]| {
+        m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
+            - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
+            + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
+    };
+    let d = det(a);
+    if !d.is_normal() {
+        return None;
+    }
+    let mut z = [0.0; 3];
+    for (k, slot) in z.iter_mut().enumerate() {
+        let mut m = *a;
+        for row in 0..3 {
+            m[row][k] = b[row];
+        }
+        *slot = det(&m) / d;
+    }
+    Some(z)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

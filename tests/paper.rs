@@ -128,7 +128,7 @@ fn paper_rows_recompute_from_their_sources() {
             (6.0, "|u1f,max|")
         ]
     );
-    assert_eq!(quantities.len(), 13, "{quantities:?}");
+    assert_eq!(quantities.len(), 15, "{quantities:?}");
     // Exact predictions: the scaling rows (8^(1/2 - 1/6) = 2) and a_2 = 0.
     let exact = |k: usize| published[k].stderr == 0.0;
     let by_construction = |q: &str| q.ends_with("scaled kernel (dilute)");
@@ -366,6 +366,46 @@ fn paper_rows_recompute_from_their_sources() {
         let k = row("Gamma(2 rho, 800 meV) / Gamma(2 rho, 100 meV), n = 6, MD");
         assert!(close(ours[k].mean, ratio) && close(ours[k].stderr, error));
         assert!(converged[k].mean.is_nan(), "one definition");
+    }
+    // The exponents of Gamma ~ rho^p T^q from the thermal MD rates V(t_f)/t_f
+    // of ring6 (rho, T), ring6_dense (2 rho, T), ring6_dense_hot (2 rho, 8 T):
+    // three rates fix them, p from the first two, q from the last two.
+    {
+        use contract::compare::finite_size::{RING, THERMAL_MD_VARIANCE};
+        let rings = table(&store, "compare", "study", "finite_size");
+        let names = RING.read(&rings).unwrap();
+        let rate = |ring: &str| {
+            let v = THERMAL_MD_VARIANCE.read(&rings).unwrap()
+                [names.iter().position(|n| n == ring).unwrap()];
+            let time = md_params(&store, ring)["final_time_ns"].as_f64().unwrap();
+            (v.mean / time, v.stderr / v.mean)
+        };
+        let gas = |ring: &str, key: &str| md_params(&store, ring)["gas"][key].as_f64().unwrap();
+        let exponent = |a: &str, b: &str, key: &str| {
+            let ((rate_a, relative_a), (rate_b, relative_b)) = (rate(a), rate(b));
+            let lever = libm::log(gas(b, key) / gas(a, key));
+            (
+                libm::log(rate_b / rate_a) / lever,
+                libm::hypot(relative_a, relative_b) / lever.abs(),
+            )
+        };
+        for (quantity, (value, error), published) in [
+            ("p in Gamma", exponent("ring6", cold, "density_per_um"), 2.0),
+            ("q in Gamma", exponent(cold, hot, "kt_ev"), 1.0 / 3.0),
+        ] {
+            let k = row(quantity);
+            assert!(
+                (ours[k].mean - value).abs() < 1e-9 && (ours[k].stderr / error - 1.0).abs() < 1e-9,
+                "{quantity}: {:?} against {value} +- {error}",
+                ours[k]
+            );
+            assert!(
+                (z[k] - (value - published) / error).abs() < 1e-6,
+                "{}",
+                z[k]
+            );
+            assert!(notes[k].contains("no chi-square"), "{}", notes[k]);
+        }
     }
     // 1/Gamma of N2 in seconds, Gamma = a(0.04) rho^2 l v_th from the gas's own units.
     {

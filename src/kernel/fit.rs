@@ -19,6 +19,7 @@
 //! depend on the fit's [`Protocol`] (range and weights) by more than their
 //! statistical errors; [`systematic`] measures that over [`varied_protocols`].
 
+use crate::linalg::solve3;
 use crate::stats::Estimate;
 
 /// Fitted shape parameters.
@@ -104,28 +105,6 @@ fn point_gradient(p: &Coordinates, members: &[f64]) -> [f64; 3] {
 /// Geometric mean of `|x|` over a point's bins (for the log-linear start).
 fn representative(members: &[f64]) -> f64 {
     libm::exp(members.iter().map(|x| libm::log(x.abs())).sum::<f64>() / members.len() as f64)
-}
-
-/// Solves the 3x3 symmetric system `a z = b` (Cramer's rule; `None` if singular).
-fn solve3(a: &[[f64; 3]; 3], b: &[f64; 3]) -> Option<[f64; 3]> {
-    let det = |m: &[[f64; 3]; 3]| {
-        m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
-            - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
-            + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
-    };
-    let d = det(a);
-    if !d.is_normal() {
-        return None;
-    }
-    let mut z = [0.0; 3];
-    for (k, slot) in z.iter_mut().enumerate() {
-        let mut m = *a;
-        for row in 0..3 {
-            m[row][k] = b[row];
-        }
-        *slot = det(&m) / d;
-    }
-    Some(z)
 }
 
 /// Indices of the points with a positive error.

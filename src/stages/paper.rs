@@ -29,6 +29,7 @@ use crate::physics::potential::Potential;
 use crate::physics::units::PhysicalGas;
 use crate::pipeline::code::{self, Code};
 use crate::pipeline::{Input, InstanceId, Progress, Stage, StageError, Table};
+use crate::scaling::{MeasuredRate, fit_power_law};
 use crate::stats::{ChiSquare, Estimate};
 
 /// A number as the paper prints it.
@@ -261,6 +262,32 @@ pub const SCALING_MD: Published = Published {
     table_i: None,
 };
 
+/// The density exponent of `Gamma ~ rho^2 T^(1/2 - 1/n)` measured by MD.
+pub const DENSITY_EXPONENT: Published = Published {
+    quantity: Cow::Borrowed(
+        "p in Gamma ~ rho^p T^q, n = 6, MD (thermal estimator): density exponent",
+    ),
+    source: Cow::Borrowed("rho^2 T^(1/2 - 1/n) scaling: three-body collisions, p = 2"),
+    unit: "1",
+    value: 2.0,
+    uncertainty: 0.0,
+    printed_uncertainty: false,
+    table_i: None,
+};
+
+/// The temperature exponent, `1/2 - 1/6` for `n = 6`.
+pub const TEMPERATURE_EXPONENT: Published = Published {
+    quantity: Cow::Borrowed(
+        "q in Gamma ~ rho^p T^q, n = 6, MD (thermal estimator): temperature exponent",
+    ),
+    source: Cow::Borrowed("rho^2 T^(1/2 - 1/n) scaling: q = 1/2 - 1/6 = 1/3"),
+    unit: "1",
+    value: 1.0 / 3.0,
+    uncertainty: 0.0,
+    printed_uncertainty: false,
+    table_i: None,
+};
+
 /// The temperature ratio of the paper's two rings at `2 rho` (800 / 100 meV).
 const SCALING_TEMPERATURES: f64 = 8.0;
 
@@ -342,6 +369,16 @@ pub enum Check {
         /// The hotter ring.
         hot: ScalingRing,
     },
+    /// An exponent of `Gamma ~ rho^p T^q` fitted to the MD rings' thermal
+    /// window variance rates (`scaling::fit_power_law`).
+    ScalingExponent {
+        /// The published number.
+        published: Published,
+        /// The density exponent (else the temperature exponent).
+        density: bool,
+        /// The rings: at least two densities and two temperatures.
+        rings: Vec<ScalingRing>,
+    },
     /// `1 / Gamma` of a gas, in seconds.
     GasTime {
         /// The published number.
@@ -362,6 +399,10 @@ pub struct ScalingRing {
     final_time_ns: f64,
     /// `rho^2 l v_th` of its gas, 1/ns.
     rate_unit_per_ns: f64,
+    /// Its gas's density `rho`, 1/um.
+    density_per_um: f64,
+    /// Its gas's `kT`, eV.
+    kt_ev: f64,
     /// The `u' = 0` moments at its `rho l`.
     moments: KernelParams,
 }
@@ -483,6 +524,15 @@ pub fn paper_stage(study: &Study, plan: &[Box<dyn Stage>]) -> Option<PaperStage>
             });
         }
     }
+    if let Some(rings) = exponent_rings(study).filter(|_| present(&CompareStage::instance())) {
+        for (published, density) in [(DENSITY_EXPONENT, true), (TEMPERATURE_EXPONENT, false)] {
+            checks.push(Check::ScalingExponent {
+                published,
+                density,
+                rings: rings.clone(),
+            });
+        }
+    }
     if let Some(gas) = study.gases().into_iter().find(|g| g.name == NITROGEN_GAS) {
         checks.push(Check::GasTime {
             published: NITROGEN,
@@ -568,14 +618,37 @@ pub fn balance_collisions(study: &Study) -> Option<(String, CollisionsParams)> {
 /// The first two collapse rings of `n = 6` at one density whose
 /// temperatures differ by the paper's factor 8 (the rest of the gas equal),
 /// colder first.
-fn scaling_rings(study: &Study) -> Option<(ScalingRing, ScalingRing)> {
-    let rings = study.collapse_rings();
-    let ring = |r: &MdParams| ScalingRing {
+fn scaling_ring(study: &Study, r: &MdParams) -> ScalingRing {
+    ScalingRing {
         name: r.name.clone(),
         final_time_ns: r.final_time_ns,
         rate_unit_per_ns: r.gas.rate_per_ns(1.0, r.potential.length_exponent()),
+        density_per_um: r.gas.density_per_um,
+        kt_ev: r.gas.kt_ev,
         moments: study.kernel_params(r.potential, 0.0, r.scaled_density()),
+    }
+}
+
+/// The `n = 6` rings of the scaling collapse (the same `N` and
+/// `rho^2 l v_th t_f`) when they span two densities and two temperatures.
+fn exponent_rings(study: &Study) -> Option<Vec<ScalingRing>> {
+    let rings: Vec<MdParams> = study
+        .collapse_rings()
+        .into_iter()
+        .filter(|r| r.potential == IPP_6)
+        .collect();
+    let distinct = |value: fn(&MdParams) -> f64| {
+        rings
+            .iter()
+            .any(|r| (value(r) / value(&rings[0]) - 1.0).abs() > 1e-9)
     };
+    (rings.len() >= 3 && distinct(|r| r.gas.density_per_um) && distinct(|r| r.gas.kt_ev))
+        .then(|| rings.iter().map(|r| scaling_ring(study, r)).collect())
+}
+
+fn scaling_rings(study: &Study) -> Option<(ScalingRing, ScalingRing)> {
+    let rings = study.collapse_rings();
+    let ring = |r: &MdParams| scaling_ring(study, r);
     let pair = |cold: &MdParams, hot: &MdParams| {
         let apart_from_temperature = PhysicalGas {
             kt_ev: hot.gas.kt_ev,
@@ -684,6 +757,65 @@ fn shape_row(
     Ok((ours, Converged::Differs(study), note))
 }
 
+/// An exponent of `Gamma ~ rho^p T^q` from the rings' thermal window
+/// variance rates `V(t_f) / t_f` (1/ns; independent runs per ring), with the
+/// fit's chi-square in the note.
+fn exponent_row(
+    inputs: &[Input],
+    rings: &[ScalingRing],
+    density: bool,
+) -> Result<(Estimate, Converged, String), StageError> {
+    use contract::compare::finite_size::{RING, TABLE, THERMAL_MD_VARIANCE};
+    let table = TABLE.find(inputs, &CompareStage::instance())?;
+    let variances = THERMAL_MD_VARIANCE.read(table)?;
+    let rates = rings
+        .iter()
+        .map(|ring| {
+            Ok(MeasuredRate {
+                density: ring.density_per_um,
+                temperature: ring.kt_ev,
+                rate: scaled(
+                    variances[RING.row_of(table, &ring.name)?],
+                    1.0 / ring.final_time_ns,
+                ),
+            })
+        })
+        .collect::<Result<Vec<_>, StageError>>()?;
+    let law = fit_power_law(&rates).ok_or_else(|| {
+        StageError::Input("the rings' thermal variances admit no power-law fit".into())
+    })?;
+    let described: Vec<String> = rings
+        .iter()
+        .zip(&rates)
+        .map(|(ring, rate)| {
+            format!(
+                "{} (rho = {:.4e}/um, kT = {} eV: {:.3e} +- {:.1e}/ns)",
+                ring.name, ring.density_per_um, ring.kt_ev, rate.rate.mean, rate.rate.stderr
+            )
+        })
+        .collect();
+    let fit = if law.goodness.dof == 0 {
+        "three rates fix the three parameters (no chi-square)".to_string()
+    } else {
+        format!(
+            "chi2/dof = {:.2} with {} degrees of freedom, p = {:.2}",
+            law.goodness.chi2 / law.goodness.dof as f64,
+            law.goodness.dof,
+            law.goodness.p_value()
+        )
+    };
+    let note = format!(
+        "ln Gamma = c + p ln rho + q ln T fitted to the thermal MD window variance rate V(t_f)/t_f of {} (independent runs; weights from their errors); {fit}; MD assumes no scaling",
+        described.join(", ")
+    );
+    let exponent = if density {
+        law.density_exponent
+    } else {
+        law.temperature_exponent
+    };
+    Ok((exponent, Converged::Same, note))
+}
+
 fn scaled(estimate: Estimate, factor: f64) -> Estimate {
     Estimate {
         mean: estimate.mean * factor,
@@ -701,6 +833,7 @@ impl Check {
             | Check::RingTime { published, .. }
             | Check::ScalingKernel { published, .. }
             | Check::ScalingMd { published, .. }
+            | Check::ScalingExponent { published, .. }
             | Check::GasTime { published, .. } => published,
         }
     }
@@ -723,7 +856,9 @@ impl Check {
             Check::ScalingKernel { cold, .. } => {
                 vec![CollisionsStage::instance(&cold.moments.potential.id())]
             }
-            Check::ScalingMd { .. } => vec![CompareStage::instance()],
+            Check::ScalingMd { .. } | Check::ScalingExponent { .. } => {
+                vec![CompareStage::instance()]
+            }
             Check::GasTime { moments, .. } => vec![
                 MomentsStage::instance(moments),
                 InstanceId::new(contract::gases::STAGE, "study"),
@@ -877,6 +1012,7 @@ impl Check {
                 );
                 (ratio, Converged::Same, note)
             }
+            Check::ScalingExponent { density, rings, .. } => exponent_row(inputs, rings, *density)?,
             Check::GasTime { gas, moments, .. } => {
                 use contract::gases::{A_N, GAMMA, GAS, TABLE};
                 let table =
