@@ -3,8 +3,9 @@
 //! of collision generators and for the Lax matrix of the Sutherland ring;
 //! the composite Simpson weights of the quadratures (bound-pair length,
 //! averages over thermal starts); and the node slopes of the not-a-knot cubic
-//! spline (a tridiagonal solve), the derivative of measured rates on a grid.
-//! Pure math: no IO.
+//! spline (a tridiagonal solve), the derivative of measured rates on a grid;
+//! the quadratic form of an inverse covariance (Cholesky), for chi-squares
+//! with correlated entries. Pure math: no IO.
 
 /// Eigenvalues and orthonormal eigenvectors of a symmetric matrix.
 #[derive(Clone, Debug, PartialEq)]
@@ -64,6 +65,37 @@ pub fn symmetric_eigen(a: &[f64], n: usize) -> SymmetricEigen {
             .map(|k| (0..n).map(|i| v[i * n + k]).collect())
             .collect(),
     }
+}
+
+/// `d^T A^(-1) d` for a symmetric positive-definite `A` (row-major, `n x n`
+/// with `n = d.len()`): with the Cholesky factor `A = L L^T` (Golub & Van
+/// Loan, Matrix Computations, §4.2), `|y|^2` where `L y = d`. `None` when a
+/// pivot is not positive (`A` not positive definite to rounding). Units: those
+/// of `d^2 / A`.
+pub fn inverse_quadratic_form(a: &[f64], d: &[f64]) -> Option<f64> {
+    let n = d.len();
+    assert_eq!(a.len(), n * n, "a matrix of {n} x {n} entries");
+    let mut factor = vec![0.0; n * n];
+    for i in 0..n {
+        for j in 0..=i {
+            let dot: f64 = (0..j).map(|k| factor[i * n + k] * factor[j * n + k]).sum();
+            let entry = a[i * n + j] - dot;
+            if i == j {
+                if entry.is_nan() || entry <= 0.0 {
+                    return None;
+                }
+                factor[i * n + i] = entry.sqrt();
+            } else {
+                factor[i * n + j] = entry / factor[j * n + j];
+            }
+        }
+    }
+    let mut y = vec![0.0; n];
+    for i in 0..n {
+        let dot: f64 = (0..i).map(|k| factor[i * n + k] * y[k]).sum();
+        y[i] = (d[i] - dot) / factor[i * n + i];
+    }
+    Some(y.iter().map(|v| v * v).sum())
 }
 
 /// Weight of node `k` of the composite Simpson rule over `intervals` (even)
@@ -206,6 +238,22 @@ mod tests {
                 assert!((av - l * v[i]).abs() < 1e-13, "{av} vs {}", l * v[i]);
             }
         }
+    }
+
+    /// `A = [[4, 2], [2, 3]]` has inverse `[[3, -2], [-2, 4]] / 8`: for `d =
+    /// (1, 2)`, `d^T A^-1 d = (3 - 8 + 16) / 8 = 11/8`; a diagonal matrix
+    /// gives the sum of squared pulls; a singular one (rank 1) has none.
+    #[test]
+    fn inverse_quadratic_form_matches_the_closed_forms() {
+        let form = inverse_quadratic_form(&[4.0, 2.0, 2.0, 3.0], &[1.0, 2.0]).unwrap();
+        assert!((form - 11.0 / 8.0).abs() < 1e-15, "{form}");
+        let diagonal = [2.0, 0.0, 0.0, 0.0, 0.5, 0.0, 0.0, 0.0, 4.0];
+        let form = inverse_quadratic_form(&diagonal, &[1.0, 1.0, 2.0]).unwrap();
+        assert!((form - (0.5 + 2.0 + 1.0)).abs() < 1e-15, "{form}");
+        assert_eq!(
+            inverse_quadratic_form(&[1.0, 1.0, 1.0, 1.0], &[1.0, 0.0]),
+            None
+        );
     }
 
     /// Rounding of slopes of O(1) values on steps of ~0.2 after a tridiagonal solve.

@@ -1342,14 +1342,14 @@ pub mod compare {
         pub const BOLTZMANN: &str = "boltzmann";
         /// MD estimator ([`estimator`](super::super::estimator)).
         pub const ESTIMATOR: Col<String> = Col::text("estimator", "MD estimator");
-        /// Chi-square with the reference's variance.
+        /// Chi-square with the covariance MD would have if it followed the reference.
         pub const CHI2: Col<f64> = Col::f64(
             "chi2",
             "1",
-            "sum over bins of difference^2 / (variance of the MD estimate if MD followed the reference + the reference's squared standard error)",
+            "d^T (C + S)^-1 d over groups of bins of at least 10 expected counts, the largest cell left out: d the group masses of MD minus the reference's, C their covariance if MD followed the reference (multinomial counts), S the reference's squared standard errors",
         );
         /// Degrees of freedom.
-        pub const DOF: Col<u32> = Col::u32("dof", "1", "bins with a nonzero variance");
+        pub const DOF: Col<u32> = Col::u32("dof", "1", "groups of bins kept");
         /// Reduced chi-square.
         pub const CHI2_PER_DOF: Col<f64> = Col::f64(
             "chi2_per_dof",

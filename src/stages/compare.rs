@@ -15,20 +15,16 @@ use super::collisions::CollisionsStage;
 use super::kernel::{collision_events, target_of};
 use super::md::MdStage;
 use crate::analysis::{
-    FiniteSize, RingBins, boltzmann_on_bins, finite_size, thermal_window_variance_rates,
+    FiniteSize, Goodness, RingBins, RingH, boltzmann_on_bins, collapse, finite_size, goodness,
+    thermal_window_variance_rates,
 };
 use crate::binning::Bins;
 use crate::config::{KernelParams, MdParams};
 use crate::contract::{self, Rows};
 use crate::evolve::convolution;
-use crate::physics::md::{
-    published_reference_variance, tagged_expected_counts, tagged_reference_variance,
-};
 use crate::pipeline::code::{self, Code};
 use crate::pipeline::{Input, InstanceId, Progress, Stage, StageError, Table};
-use crate::stats::{
-    ChiSquare, Estimate, MINIMUM_EXPECTED_COUNT, Replicated, chi_square, grouped_chi_square,
-};
+use crate::stats::{Estimate, Replicated};
 
 /// Resolved parameters of the `compare` stage.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -93,63 +89,24 @@ fn ring_bins<'a>(system: &MdParams, ring: &'a MdEstimates) -> RingBins<'a> {
     }
 }
 
-/// One goodness-of-fit row: chi-square with the reference's variance, and
-/// with the MD runs' own spread.
+/// A ring's estimates as the goodness of fit takes them.
+fn ring_h<'a>(system: &MdParams, ring: &'a MdEstimates) -> RingH<'a> {
+    RingH {
+        bins: Bins::for_window(system.window, system.bin_width),
+        u_prime: system.u_prime,
+        particles: system.particles as usize,
+        published: &ring.published,
+        tagged: &ring.tagged,
+        lineages: &ring.lineages,
+    }
+}
+
+/// One goodness-of-fit row.
 struct Fit {
     ring: String,
     reference: String,
     estimator: String,
-    chi: ChiSquare,
-    sample: ChiSquare,
-}
-
-/// A ring's estimator under the reference: the variance of each bin if MD
-/// followed the prediction, and the counts behind each bin (`physics::md`).
-struct Model {
-    variance: Vec<f64>,
-    expected: Vec<f64>,
-}
-
-impl Model {
-    /// Chi-square of `md` against `reference` over bins grouped to at least
-    /// [`MINIMUM_EXPECTED_COUNT`] expected counts.
-    fn chi_square(&self, md: &[Estimate], reference: &[Estimate]) -> ChiSquare {
-        grouped_chi_square(
-            md,
-            reference,
-            &self.variance,
-            &self.expected,
-            MINIMUM_EXPECTED_COUNT,
-        )
-    }
-}
-
-/// The models of a ring's tagged and published estimators if MD followed
-/// `predicted`.
-fn reference_models(system: &MdParams, ring: &MdEstimates, predicted: &[Estimate]) -> [Model; 2] {
-    let reference: Vec<f64> = predicted.iter().map(|e| e.mean).collect();
-    let bins = Bins::for_window(system.window, system.bin_width);
-    let runs = ring.lineages.len();
-    let published = published_reference_variance(
-        &bins,
-        system.u_prime,
-        system.particles as usize,
-        &reference,
-        runs,
-    );
-    // The published variance is the expected count per run over runs w^2.
-    let scale = (runs * runs) as f64 * bins.width * bins.width;
-    let expected = published.iter().map(|v| v * scale).collect();
-    [
-        Model {
-            variance: tagged_reference_variance(&reference, system.bin_width, &ring.lineages),
-            expected: tagged_expected_counts(&reference, system.bin_width, &ring.lineages),
-        },
-        Model {
-            variance: published,
-            expected,
-        },
-    ]
+    goodness: Goodness,
 }
 
 impl CompareStage {
@@ -279,8 +236,8 @@ impl CompareStage {
     }
 
     /// Chi-square of both MD estimators against Boltzmann per ring, and of
-    /// every later ring's tagged `h` against the first ring's on the same
-    /// bins (the scaling collapse).
+    /// every later ring's tagged `h` against the first one's on the same
+    /// bins at the same scaled time (the scaling collapse).
     fn goodness(
         &self,
         rings: &[MdEstimates],
@@ -289,75 +246,33 @@ impl CompareStage {
         use contract::compare::goodness::*;
         use contract::estimator::{PUBLISHED, TAGGED};
         let mut fits: Vec<Fit> = Vec::new();
-        let mut record = |ring: &str, reference: &str, estimator: &str, chi, sample| {
+        let mut record = |ring: &str, reference: &str, estimator: &str, goodness| {
             fits.push(Fit {
                 ring: ring.to_string(),
                 reference: reference.to_string(),
                 estimator: estimator.to_string(),
-                chi,
-                sample,
+                goodness,
             });
         };
         let systems = &self.params.systems;
-        let first_tagged = match (systems.first(), rings.first(), boltzmann.first()) {
-            (Some(system), Some(ring), Some(predicted)) => {
-                let [tagged, _] = reference_models(system, ring, predicted);
-                Some((system, ring, tagged))
-            }
-            _ => None,
-        };
+        let first = systems.first().zip(rings.first()).zip(boltzmann.first());
         for ((system, ring), predicted) in systems.iter().zip(rings).zip(boltzmann) {
             let name = system.name.as_str();
-            let [tagged, published] = reference_models(system, ring, predicted);
-            record(
-                name,
-                BOLTZMANN,
-                PUBLISHED,
-                published.chi_square(&ring.published, predicted),
-                chi_square(&ring.published, predicted),
-            );
-            record(
-                name,
-                BOLTZMANN,
-                TAGGED,
-                tagged.chi_square(&ring.tagged, predicted),
-                chi_square(&ring.tagged, predicted),
-            );
-            if let Some((reference, first, first_model)) = &first_tagged
+            let h = ring_h(system, ring);
+            let [published, tagged] = goodness(&h, predicted);
+            record(name, BOLTZMANN, PUBLISHED, published);
+            record(name, BOLTZMANN, TAGGED, tagged);
+            if let Some(((reference, first), first_predicted)) = first
                 && reference.name != system.name
                 && first.du == ring.du
                 && (system.scaled_final_time() / reference.scaled_final_time() - 1.0).abs() < 1e-9
             {
-                // Both rings' variances; the first ring's h taken as exact;
-                // the fewer expected counts of the two.
-                let both = Model {
-                    variance: tagged
-                        .variance
-                        .iter()
-                        .zip(&first_model.variance)
-                        .map(|(a, b)| a + b)
-                        .collect(),
-                    expected: tagged
-                        .expected
-                        .iter()
-                        .zip(&first_model.expected)
-                        .map(|(a, b)| a.min(*b))
-                        .collect(),
-                };
-                let exact: Vec<Estimate> = first
-                    .tagged
-                    .iter()
-                    .map(|e| Estimate {
-                        mean: e.mean,
-                        stderr: 0.0,
-                    })
-                    .collect();
+                let against = ring_h(reference, first);
                 record(
                     name,
                     &reference.name,
                     TAGGED,
-                    both.chi_square(&ring.tagged, &exact),
-                    chi_square(&ring.tagged, &first.tagged),
+                    collapse(&h, predicted, &against, first_predicted),
                 );
             }
         }
@@ -365,12 +280,12 @@ impl CompareStage {
             .with(RING, |f| f.ring.clone())
             .with(REFERENCE, |f| f.reference.clone())
             .with(ESTIMATOR, |f| f.estimator.clone())
-            .with(CHI2, |f| f.chi.chi2)
-            .with(DOF, |f| f.chi.dof as u32)
-            .with(CHI2_PER_DOF, |f| f.chi.per_dof())
-            .with(P_VALUE, |f| f.chi.p_value())
-            .with(SAMPLE_CHI2_PER_DOF, |f| f.sample.per_dof())
-            .with(SAMPLE_DOF, |f| f.sample.dof as u32)
+            .with(CHI2, |f| f.goodness.model.chi2)
+            .with(DOF, |f| f.goodness.model.dof as u32)
+            .with(CHI2_PER_DOF, |f| f.goodness.model.per_dof())
+            .with(P_VALUE, |f| f.goodness.model.p_value())
+            .with(SAMPLE_CHI2_PER_DOF, |f| f.goodness.sample.per_dof())
+            .with(SAMPLE_DOF, |f| f.goodness.sample.dof as u32)
             .table(&TABLE)?)
     }
 }
