@@ -385,6 +385,22 @@ impl Study {
             .collect()
     }
 
+    /// The rings `compare` also sets against the Boltzmann evolution of
+    /// their own potential's kernel (`h` and the goodness of fit only): those
+    /// at `u' = 0` of another potential than the first ring's that kicks
+    /// (e.g. Lennard-Jones; not the integrable `n = 2`), in file order.
+    pub fn other_compared_rings(&self) -> Vec<MdParams> {
+        let Some(first) = self.md.first() else {
+            return Vec::new();
+        };
+        self.md
+            .iter()
+            .filter(|r| r.potential != first.potential && r.u_prime == 0.0)
+            .filter(|r| !r.potential.is_integrable())
+            .cloned()
+            .collect()
+    }
+
     /// The compared rings sharing the first ring's `N` and `rho^2 l v_th t_f`
     /// (different `rho` and `T`, the same dilute physics: the `rho^2
     /// T^(1/2 - 1/n)` collapse), the first ring first.

@@ -6,7 +6,13 @@
 //! chi-square of both MD estimators against it. The scaling collapse: the
 //! tagged `h` of every ring against the first one's. The finite-size and
 //! density study: the tagged window variance of every ring against
-//! Boltzmann's, with the ring's `N` and `rho l`.
+//! Boltzmann's, with the ring's `N` and `rho l`. Rings of other potentials
+//! that kick (Lennard-Jones) are set against their own potential's kernel:
+//! `h` and the goodness of fit only. A Lennard-Jones kernel holds three-body
+//! recombination (a pair leaving bound) among its outcomes, while the ring's
+//! lineages of bound pairs swing through the window as they oscillate: its
+//! chi-square measures how far the dilute kernel describes such a ring, not
+//! a check it must pass.
 
 use serde::Serialize;
 use serde_json::Value;
@@ -34,8 +40,13 @@ pub struct CompareParams {
     /// The collisions instance that reweights to every thermal start
     /// (`|u'| <= 3`): the thermal estimator's reference.
     pub thermal_collisions: String,
-    /// The rings compared.
+    /// The rings compared (the kernel's potential, `u' = 0`).
     pub systems: Vec<MdParams>,
+    /// Dilute kernels at `u' = 0` of other potentials, one per potential.
+    pub other_kernels: Vec<KernelParams>,
+    /// Rings of those potentials at `u' = 0`, each against its potential's
+    /// kernel: `h` and the goodness of fit against Boltzmann only.
+    pub other_systems: Vec<MdParams>,
 }
 
 /// The `compare` stage.
@@ -101,6 +112,9 @@ fn ring_h<'a>(system: &MdParams, ring: &'a MdEstimates) -> RingH<'a> {
     }
 }
 
+/// A ring, its MD estimates and its Boltzmann `h` (jackknife estimates).
+type Compared<'a> = (&'a MdParams, &'a MdEstimates, Vec<Estimate>);
+
 /// One goodness-of-fit row.
 struct Fit {
     ring: String,
@@ -110,12 +124,20 @@ struct Fit {
 }
 
 impl CompareStage {
-    /// The kernel's collisions, then the thermal reference's when they differ.
+    /// The kernel's collisions, then the thermal reference's when they
+    /// differ, then those of each other kernel.
     fn collision_inputs(&self) -> Vec<InstanceId> {
-        CollisionsStage::instances(
+        let mut ids = CollisionsStage::instances(
             &self.params.kernel.potential.id(),
             &self.params.thermal_collisions,
-        )
+        );
+        ids.extend(
+            self.params
+                .other_kernels
+                .iter()
+                .map(|kernel| CollisionsStage::instance(&kernel.potential.id())),
+        );
+        ids
     }
 
     /// A compare stage with resolved parameters.
@@ -123,27 +145,47 @@ impl CompareStage {
         CompareStage { params }
     }
 
-    /// Boltzmann `h` of every ring on its MD bins, on all kernel replicates
-    /// and with each left out (jackknife).
+    /// Boltzmann `h` of `rings` under `kernel` (from its `collisions`) on
+    /// their MD bins, on all kernel replicates and with each left out
+    /// (jackknife).
     fn boltzmann(
-        &self,
         collisions: &Input,
-        rings: &[MdEstimates],
+        kernel: &KernelParams,
+        rings: &[(&MdParams, &MdEstimates)],
     ) -> Result<Vec<Replicated<Vec<f64>>>, StageError> {
         let (events, draws, _) = collision_events(collisions)?;
-        let kernel = &self.params.kernel;
         let bins = Bins::for_window(kernel.window, kernel.bin_width);
         let rates = convolution::replicated_kernel(&events, &draws, &target_of(kernel), &bins);
-        Ok(self
-            .params
-            .systems
+        Ok(rings
             .iter()
-            .zip(rings)
             .map(|(system, ring)| {
                 let time = system.scaled_final_time();
                 boltzmann_on_bins(&rates, bins.width, time, ring_bins(system, ring))
             })
             .collect())
+    }
+
+    /// Boltzmann `h` (jackknife estimates) of every other ring under its
+    /// potential's kernel, in ring order; `collisions` those of the other
+    /// kernels, in kernel order.
+    fn other_boltzmann(
+        &self,
+        collisions: &[Input],
+        rings: &[MdEstimates],
+    ) -> Result<Vec<Vec<Estimate>>, StageError> {
+        let systems = &self.params.other_systems;
+        let mut predicted = vec![Vec::new(); systems.len()];
+        for (kernel, input) in self.params.other_kernels.iter().zip(collisions) {
+            let members: Vec<usize> = (0..systems.len())
+                .filter(|&k| systems[k].potential == kernel.potential)
+                .collect();
+            let pairs: Vec<(&MdParams, &MdEstimates)> =
+                members.iter().map(|&k| (&systems[k], &rings[k])).collect();
+            for (k, h) in members.iter().zip(Self::boltzmann(input, kernel, &pairs)?) {
+                predicted[*k] = h.values();
+            }
+        }
+        Ok(predicted)
     }
 
     /// Per ring, per kernel replicate: the self kernel's window variance rate
@@ -207,23 +249,15 @@ impl CompareStage {
     }
 
     /// `h` of every ring, MD against Boltzmann, bin by bin.
-    fn comparison(
-        &self,
-        rings: &[MdEstimates],
-        boltzmann: &[Vec<Estimate>],
-    ) -> Result<Table, StageError> {
+    fn comparison(compared: &[Compared]) -> Result<Table, StageError> {
         use contract::compare::comparison::*;
-        let rows: Vec<(&str, &MdEstimates, usize, Estimate)> = self
-            .params
-            .systems
+        let rows: Vec<(&str, &MdEstimates, usize, Estimate)> = compared
             .iter()
-            .zip(rings)
-            .zip(boltzmann)
-            .flat_map(|((system, ring), predicted)| {
+            .flat_map(|(system, ring, predicted)| {
                 predicted
                     .iter()
                     .enumerate()
-                    .map(move |(k, h)| (system.name.as_str(), ring, k, *h))
+                    .map(move |(k, h)| (system.name.as_str(), *ring, k, *h))
             })
             .collect();
         Ok(Rows::new(&rows)
@@ -238,11 +272,7 @@ impl CompareStage {
     /// Chi-square of both MD estimators against Boltzmann per ring, and of
     /// every later ring's tagged `h` against the first one's on the same
     /// bins at the same scaled time (the scaling collapse).
-    fn goodness(
-        &self,
-        rings: &[MdEstimates],
-        boltzmann: &[Vec<Estimate>],
-    ) -> Result<Table, StageError> {
+    fn goodness(compared: &[Compared]) -> Result<Table, StageError> {
         use contract::compare::goodness::*;
         use contract::estimator::{PUBLISHED, TAGGED};
         let mut fits: Vec<Fit> = Vec::new();
@@ -254,16 +284,16 @@ impl CompareStage {
                 goodness,
             });
         };
-        let systems = &self.params.systems;
-        let first = systems.first().zip(rings.first()).zip(boltzmann.first());
-        for ((system, ring), predicted) in systems.iter().zip(rings).zip(boltzmann) {
+        let first = compared.first();
+        for (system, ring, predicted) in compared {
             let name = system.name.as_str();
             let h = ring_h(system, ring);
             let [published, tagged] = goodness(&h, predicted);
             record(name, BOLTZMANN, PUBLISHED, published);
             record(name, BOLTZMANN, TAGGED, tagged);
-            if let Some(((reference, first), first_predicted)) = first
+            if let Some((reference, first, first_predicted)) = first
                 && reference.name != system.name
+                && reference.potential == system.potential
                 && first.du == ring.du
                 && (system.scaled_final_time() / reference.scaled_final_time() - 1.0).abs() < 1e-9
             {
@@ -328,6 +358,7 @@ impl Stage for CompareStage {
             self.params
                 .systems
                 .iter()
+                .chain(&self.params.other_systems)
                 .map(|s| MdStage::instance(&s.name)),
         );
         ids
@@ -338,17 +369,36 @@ impl Stage for CompareStage {
     }
 
     fn run(&self, inputs: &[Input], progress: &Progress) -> Result<Vec<Table>, StageError> {
+        let main = CollisionsStage::instances(
+            &self.params.kernel.potential.id(),
+            &self.params.thermal_collisions,
+        )
+        .len();
         let collisions = self.collision_inputs().len();
-        let rings: Vec<MdEstimates> = inputs[collisions..]
+        let read = |inputs: &[Input]| inputs.iter().map(read_md).collect::<Result<Vec<_>, _>>();
+        let (rings, other_rings) = inputs[collisions..].split_at(self.params.systems.len());
+        let (rings, other_rings) = (read(rings)?, read(other_rings)?);
+        let pairs: Vec<(&MdParams, &MdEstimates)> =
+            self.params.systems.iter().zip(&rings).collect();
+        let replicated = Self::boltzmann(&inputs[0], &self.params.kernel, &pairs)?;
+        let other_predicted = self.other_boltzmann(&inputs[main..collisions], &other_rings)?;
+        let compared: Vec<Compared> = pairs
             .iter()
-            .map(read_md)
-            .collect::<Result<_, _>>()?;
-        let replicated = self.boltzmann(&inputs[0], &rings)?;
-        let boltzmann: Vec<Vec<Estimate>> = replicated.iter().map(Replicated::values).collect();
-        let comparison = self.comparison(&rings, &boltzmann)?;
-        let goodness = self.goodness(&rings, &boltzmann)?;
+            .zip(&replicated)
+            .map(|((system, ring), h)| (*system, *ring, h.values()))
+            .chain(
+                self.params
+                    .other_systems
+                    .iter()
+                    .zip(&other_rings)
+                    .zip(other_predicted)
+                    .map(|((system, ring), h)| (system, ring, h)),
+            )
+            .collect();
+        let comparison = Self::comparison(&compared)?;
+        let goodness = Self::goodness(&compared)?;
         progress.advance(1);
-        let thermal_rates = self.thermal_rates(&inputs[collisions - 1])?;
+        let thermal_rates = self.thermal_rates(&inputs[main - 1])?;
         let finite_size = self.finite_size(&rings, &replicated, &thermal_rates)?;
         Ok(vec![comparison, goodness, finite_size])
     }

@@ -137,11 +137,21 @@ pub fn plan(study: &Study) -> Vec<Box<dyn Stage>> {
         let kernel = study.kernel_params(first.potential, 0.0, 0.0);
         let systems = study.compared_rings();
         let (thermal_collisions, _) = study.wide_collisions(first.potential);
+        let other_systems = study.other_compared_rings();
+        let mut other_kernels: Vec<_> = Vec::new();
+        for ring in &other_systems {
+            let kernel = study.kernel_params(ring.potential, 0.0, 0.0);
+            if !other_kernels.contains(&kernel) {
+                other_kernels.push(kernel);
+            }
+        }
         stages.push(Box::new(compare::CompareStage::new(
             compare::CompareParams {
                 kernel,
                 thermal_collisions,
                 systems,
+                other_kernels,
+                other_systems,
             },
         )));
     }
