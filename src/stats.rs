@@ -384,7 +384,9 @@ impl CountModel {
     /// lineages stay in the window). On the `G` groups kept, with `d_g =
     /// width sum_(k in g) (md_k - reference_k)`,
     ///
-    ///     chi2 = d^T (C + S)^(-1) d,   dof = G,
+    /// ```text
+    /// chi2 = d^T (C + S)^(-1) d,   dof = G,
+    /// ```
     ///
     /// `C` the model's covariance of the group masses and `S` the diagonal of
     /// `width^2 sum_(k in g) s_k^2` of the reference. Asymptotically
