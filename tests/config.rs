@@ -579,6 +579,16 @@ fn collisions_section_rejects_bad_values() {
         ),
         (
             "halvings = 3",
+            "halvings = 3\nend_kick = 0.0",
+            "collisions.quadrature.end_kick",
+        ),
+        (
+            "halvings = 3",
+            "halvings = 3\nend_kick = 0.01",
+            "collisions.quadrature.end_kick",
+        ),
+        (
+            "halvings = 3",
             "halvings = 9",
             "collisions.quadrature.halvings",
         ),

@@ -309,6 +309,14 @@ impl CollisionsConfig {
                 "{} is outside [1, 8] (the last halving's change is each pair's error bound; 8: 256x the coarse nodes)",
                 rule.halvings
             ),
+        )?;
+        check(
+            rule.end_kick.is_finite() && rule.end_kick > 0.0 && rule.end_kick <= 1e-3,
+            "collisions.quadrature.end_kick",
+            format!(
+                "{} is outside (0, 1e-3] (the largest kick left at a pair's range ends, v_th; keep it below half the kernel's bin)",
+                rule.end_kick
+            ),
         )
     }
 

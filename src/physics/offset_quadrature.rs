@@ -30,6 +30,11 @@ pub struct OffsetRule {
     /// Halvings of `coarse_step` (every pair the same, at least one: the
     /// last one's change is the pair's error bound).
     pub halvings: u32,
+    /// Largest kick left at the ends, `v_th`: while any of the three kicks at
+    /// an end node exceeds it, the pair's range grows by one finest step at
+    /// that end (at most another `half_range`), so that what lies beyond
+    /// stays in the kernel's centre bin however slowly the potential decays.
+    pub end_kick: f64,
 }
 
 impl Default for OffsetRule {
@@ -46,6 +51,7 @@ impl Default for OffsetRule {
             coarse_step: 0.5,
             half_range: 3.3,
             halvings: 2,
+            end_kick: DEFAULT_END_KICK,
         }
     }
 }
@@ -77,12 +83,19 @@ pub struct OffsetIntegral {
     pub error: f64,
 }
 
+/// Default largest kick at the ends of a pair's range, `v_th`: a fifth of the
+/// default kernel bin (5e-5), so beyond the range every kick stays in the
+/// centre bin. For n = 4 the fixed range `|s| <= 3.3` left kicks up to 2.4e-4
+/// at its ends (99th percentile 4e-5; docs/benchmarks.md).
+pub const DEFAULT_END_KICK: f64 = 1e-5;
+
 /// Velocity changes below this (`v_th`) are the engine's error floor
 /// (`kernel::DEFAULT_KICK_FLOOR`): an integral made only of them is zero.
 const KICK_FLOOR: f64 = 1e-10;
 
 impl OffsetRule {
-    /// Nodes (scenes) of one launch pair.
+    /// Nodes (scenes) of one launch pair within the range (a pair whose kicks
+    /// at the ends exceed [`OffsetRule::end_kick`] takes more).
     pub fn nodes(&self) -> u32 {
         let coarse_intervals = 2 * (self.half_range / self.coarse_step).floor() as u32;
         (coarse_intervals << self.halvings) + 1
@@ -137,6 +150,8 @@ impl OffsetRule {
             error = (refined - integral).abs();
             integral = refined;
         }
+        let scenes = self.extend(scenes, step, scene);
+        let integral = self.sum(&scenes, step, time);
         let at = |node: &(f64, Collision)| integrand(node, time);
         let ends = scenes.len().saturating_sub(2);
         let tails = tail_estimate(at(&scenes[1]), at(&scenes[0]), step, self.half_range)
@@ -158,6 +173,38 @@ impl OffsetRule {
             self_variance: integral,
             error: error + tails,
         }
+    }
+
+    /// `scenes` (ascending in `s`, `step` apart) grown at each end by one
+    /// `step` at a time while a kick at that end exceeds `end_kick`, by at
+    /// most `half_range` in `s` per end. The range then depends on the pair,
+    /// but only through its own outer kicks: what stays beyond is below
+    /// `end_kick` (the trapezoid sum over the grown nodes keeps the grid's move).
+    fn extend(
+        &self,
+        scenes: Vec<(f64, Collision)>,
+        step: f64,
+        scene: impl Fn(f64) -> (f64, Collision),
+    ) -> Vec<(f64, Collision)> {
+        let limit = (self.half_range / step).round() as usize;
+        let grow = |from: &(f64, Collision), direction: f64| {
+            let mut added = Vec::new();
+            let mut last = *from;
+            while added.len() < limit && largest_kick(&last.1) > self.end_kick {
+                last = scene(last.0 + direction * step);
+                added.push(last);
+            }
+            added
+        };
+        let (Some(first), Some(last)) = (scenes.first(), scenes.last()) else {
+            return scenes;
+        };
+        let mut below = grow(first, -1.0);
+        let above = grow(last, 1.0);
+        below.reverse();
+        below.extend(scenes);
+        below.extend(above);
+        below
     }
 
     /// Trapezoid sum of `kick^2 dtau/ds` over `scenes` with step `step`.
@@ -186,6 +233,17 @@ fn tail_estimate(inner: f64, outer: f64, step: f64, half_range: f64) -> f64 {
     } else {
         half_range * outer
     }
+}
+
+/// The largest of a scene's three velocity changes, `v_th` (0 for a failed
+/// scene: its outgoing velocities mean nothing).
+fn largest_kick(collision: &Collision) -> f64 {
+    if collision.outcome.is_failure() {
+        return 0.0;
+    }
+    (0..3)
+        .map(|k| (collision.outgoing[k] - collision.incoming[k]).abs())
+        .fold(0.0, f64::max)
 }
 
 /// `kick^2` of the special particle (zero for failed scenes and below the floor).
@@ -277,6 +335,64 @@ mod tests {
             assert!((mean - (high - low)).abs() < 1e-4, "{halvings}: {mean}");
         }
         assert!((indicator_sum(0.5, 0) - (high - low)).abs() > 0.2);
+    }
+
+    /// Beyond a pair's grown range no kick leaves the kernel's centre bin: n =
+    /// 4 pairs whose kicks at `|s| = 3.3` exceed `end_kick` grow, and their
+    /// nodes that kick by more than `end_kick` (the only ones a bin other than
+    /// the centre one sees, for bins of 2e-5 and wider) are those of a range
+    /// wider by one in `s`; the self variance integrals agree within their
+    /// bounds. The fixed range (no growth) misses such nodes.
+    #[test]
+    fn the_range_follows_the_decay_of_the_kicks() {
+        let potential = Potential::InversePower { n: 4.0 };
+        let rule = OffsetRule::default();
+        let wide = OffsetRule {
+            half_range: rule.half_range + 1.0,
+            ..rule
+        };
+        let fixed = OffsetRule {
+            end_kick: f64::INFINITY,
+            ..rule
+        };
+        let kicked = |integral: &OffsetIntegral| -> Vec<(f64, f64)> {
+            integral
+                .nodes
+                .iter()
+                .filter(|n| largest_kick(&n.collision) > rule.end_kick)
+                .map(|n| (n.offset, n.collision.self_kick(0.0)))
+                .collect()
+        };
+        let same = |a: &[(f64, f64)], b: &[(f64, f64)]| {
+            a.len() == b.len()
+                && a.iter().zip(b).all(|(x, y)| {
+                    (x.0 - y.0).abs() <= 1e-12 * x.0.abs().max(1.0)
+                        && (x.1 - y.1).abs() <= 1e-9 * x.1.abs().max(1e-12)
+                })
+        };
+        let mut grown = 0;
+        for (u2, u3) in [
+            (0.3, -0.2),
+            (1.0, -1.0),
+            (0.15, 2.0),
+            (0.2, 0.5),
+            (2.5, -0.1),
+        ] {
+            let launch = LaunchPair { u2, u3 };
+            let [ours, wider, old] =
+                [rule, wide, fixed].map(|r| r.integrate(&potential, &engine(), launch, 0.3));
+            assert!(same(&kicked(&ours), &kicked(&wider)), "({u2}, {u3})");
+            assert!(
+                (ours.self_variance - wider.self_variance).abs() <= ours.error + wider.error,
+                "({u2}, {u3}): {} vs {}",
+                ours.self_variance,
+                wider.self_variance
+            );
+            if !same(&kicked(&old), &kicked(&wider)) {
+                grown += 1;
+            }
+        }
+        assert!(grown >= 2, "{grown} of the pairs kick beyond |s| = 3.3");
     }
 
     /// The integrable n = 2: every kick is zero, and so are the integral and
