@@ -649,6 +649,55 @@ fn shipped_studies_are_valid() {
     }
 }
 
+/// `publication.toml` integrates by quadrature every potential the
+/// quadrature supports: each potential it samples is one that the study
+/// refuses to integrate by quadrature (naming the key), and it gives every
+/// estimate at least 3x smaller errors than `pipeline.toml` (9x the launch
+/// pairs or scenes, 9x the MD runs).
+#[test]
+fn the_publication_study_integrates_by_quadrature_wherever_it_can() {
+    use ternary::physics::sampling::OffsetIntegration;
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let path = root.join("publication.toml");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let publication = Study::parse(&path, &text).expect("valid");
+    let default = Study::load(&root.join("pipeline.toml")).expect("valid");
+    let mut sampled = 0;
+    for potential in publication.potentials() {
+        let id = potential.id();
+        let params = publication.collisions_params(potential);
+        let base = default.collisions_params(potential);
+        let scenes = |p: &ternary::config::CollisionsParams| {
+            f64::from(p.points) * f64::from(p.sampling.randomizations)
+        };
+        assert!(
+            scenes(&params) >= 9.0 * scenes(&base),
+            "{id}: fewer than 9x"
+        );
+        if let OffsetIntegration::Sampled = params.sampling.offsets {
+            sampled += 1;
+            let quadrature = text.replace(
+                &format!("\"{id}\" = \"sampled\""),
+                &format!("\"{id}\" = \"quadrature\""),
+            );
+            let error = Study::parse(&path, &quadrature)
+                .err()
+                .unwrap_or_else(|| panic!("{id} is sampled though the quadrature takes it"));
+            assert!(
+                error
+                    .to_string()
+                    .contains(&format!("collisions.method_per_potential.{id}")),
+                "{error}"
+            );
+        }
+    }
+    assert!(sampled > 0 && sampled < publication.potentials().len());
+    for (ring, base) in publication.md_params().iter().zip(default.md_params()) {
+        assert_eq!(ring.name, base.name);
+        assert!(ring.runs >= 9 * base.runs, "{}", ring.name);
+    }
+}
+
 /// `sweep.points_share` sizes the sweep's own scene set and leaves the
 /// kernel's (256 points, the same-side share rounded to a power of two).
 #[test]
