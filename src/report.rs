@@ -413,7 +413,7 @@ fn study_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
     };
     writeln!(
         out,
-        "\nthermalization constants a_n = self variance rate at u' = 0, dilute limit [rho^2 l v_th]; kernel shape near u' (+- standard errors)"
+        "\nthermalization constants a_n = self variance rate at u' = 0, dilute limit [rho^2 l v_th]; kernel shape near u' (+- standard errors; shape: statistical and fit-protocol errors combined)"
     )?;
     writeln!(
         out,

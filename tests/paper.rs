@@ -209,7 +209,11 @@ fn paper_rows_recompute_from_their_sources() {
         let paper = protocols.iter().position(|p| p == "paper").unwrap();
         assert_eq!(protocols[0], "study");
         assert_eq!(RANGE_MAX.read(&fit).unwrap()[paper], 0.04);
-        for (start, pair) in [("alpha", ALPHA), ("beta", BETA), ("sigma", SIGMA)] {
+        for (start, pair, summary_pair) in [
+            ("alpha", ALPHA, contract::table::ALPHA),
+            ("beta", BETA, contract::table::BETA),
+            ("sigma", SIGMA, contract::table::SIGMA),
+        ] {
             let k = row(&format!("{start}: shape fit, n = 6"));
             let values = pair.read(&fit).unwrap();
             let means: Vec<f64> = values.iter().map(|e| e.mean).collect();
@@ -221,6 +225,13 @@ fn paper_rows_recompute_from_their_sources() {
             assert_eq!(ours[k].stderr, libm::hypot(values[paper].stderr, spread));
             assert_eq!(converged[k].mean, values[0].mean);
             assert_eq!(converged_state[k], "differs");
+            // The summary table carries the study's fit with both errors.
+            let summary = table(&store, "table", "study", "table");
+            let potentials = contract::table::POTENTIAL.read(&summary).unwrap();
+            let n6 = potentials.iter().position(|p| p == "ipp-6").unwrap();
+            let summarized = summary_pair.read(&summary).unwrap()[n6];
+            assert_eq!(summarized.mean, values[0].mean);
+            assert_eq!(summarized.stderr, libm::hypot(values[0].stderr, spread));
             // The goodness of both fits beside them: chi2/dof with p-values.
             for row in [paper, 0] {
                 let dof = contract::fit::BINS.read(&fit).unwrap()[row] - 3;

@@ -1586,7 +1586,7 @@ pub mod table {
     use crate::pipeline::Column;
 
     /// Error of a shape parameter.
-    const REFITS: &str = "standard error from refitting each randomization";
+    const REFITS: &str = "the study's fit: its standard error from refitting each randomization and its systematic error over the fit protocols (the fit table's half-spread) combined";
 
     /// The table.
     pub const TABLE: TableSpec = TableSpec {

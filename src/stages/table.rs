@@ -10,7 +10,7 @@ use super::fit::FitStage;
 use super::moments::{MomentsStage, self_variance_at};
 use super::scan::ScanStage;
 use crate::config::KernelParams;
-use crate::contract::{self, Pair, Rows, table};
+use crate::contract::{self, Col, Pair, Rows, table};
 use crate::physics::potential::Potential;
 use crate::pipeline::code::{self, Code};
 use crate::pipeline::{Column, Input, InstanceId, Progress, Stage, StageError, Table};
@@ -49,7 +49,15 @@ impl TableStage {
         let fit = contract::fit::TABLE.find(inputs, &FitStage::instance(params))?;
         let peaks =
             contract::scan::peak::TABLE.find(inputs, &ScanStage::instance(&params.potential))?;
-        let first = |pair: Pair| -> Result<Estimate, StageError> { Ok(pair.read(fit)?[0]) };
+        // The study's fit (the first row), its refit error and the spread
+        // over the fit protocols combined.
+        let first = |pair: Pair, systematic: Col<f64>| -> Result<Estimate, StageError> {
+            let estimate = pair.read(fit)?[0];
+            Ok(Estimate {
+                mean: estimate.mean,
+                stderr: libm::hypot(estimate.stderr, systematic.read(fit)?[0]),
+            })
+        };
         let launches = contract::scan::LAUNCH.read(peaks)?;
         let maxima = contract::scan::peak::U1_FINAL_MAX_ABS.read(peaks)?;
         Ok(PotentialRow {
@@ -57,9 +65,9 @@ impl TableStage {
             a_n: self_variance_at(moments, 0.5 * params.window)?,
             a_n_untruncated: self_variance_at(moments, f64::INFINITY)?,
             shape: [
-                first(contract::fit::ALPHA)?,
-                first(contract::fit::BETA)?,
-                first(contract::fit::SIGMA)?,
+                first(contract::fit::ALPHA, contract::fit::ALPHA_SYSTEMATIC)?,
+                first(contract::fit::BETA, contract::fit::BETA_SYSTEMATIC)?,
+                first(contract::fit::SIGMA, contract::fit::SIGMA_SYSTEMATIC)?,
             ],
             maxima: launches.into_iter().zip(maxima).collect(),
             events: contract::moments::EVENTS.read(moments)?[0],
