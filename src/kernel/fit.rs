@@ -291,9 +291,12 @@ pub fn varied_protocols() -> Vec<Protocol> {
 /// Systematic error of one parameter from the choice of protocol: half the
 /// spread (largest minus smallest) of its mean fits over `fits`; NaN when
 /// none converged.
-pub fn systematic(fits: &[KernelFit], parameter: fn(&Shape) -> f64) -> f64 {
+pub fn systematic<'a>(
+    fits: impl IntoIterator<Item = &'a KernelFit>,
+    parameter: fn(&Shape) -> f64,
+) -> f64 {
     let values: Vec<f64> = fits
-        .iter()
+        .into_iter()
         .filter_map(|f| f.mean.map(|m| parameter(&m.shape)))
         .collect();
     if values.is_empty() {

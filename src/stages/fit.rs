@@ -142,9 +142,8 @@ fn fit_table(fits: &[ProtocolFit]) -> Result<Table, StageError> {
             stderr: row.fit.stderr(f),
         }
     };
-    let all: Vec<KernelFit> = fits.iter().map(|f| f.fit.clone()).collect();
     let spread = |f: fn(&Shape) -> f64| {
-        let value = systematic(&all, f);
+        let value = systematic(fits.iter().map(|row| &row.fit), f);
         move |_: &ProtocolFit| value
     };
     Ok(Rows::new(fits)

@@ -799,7 +799,7 @@ fn exponent_row(
     } else {
         format!(
             "chi2/dof = {:.2} with {} degrees of freedom, p = {:.2}",
-            law.goodness.chi2 / law.goodness.dof as f64,
+            law.goodness.per_dof(),
             law.goodness.dof,
             law.goodness.p_value()
         )
