@@ -136,9 +136,9 @@ fn a_bundle_passes_tools_that_are_not_ours() {
             .unwrap();
     let resources = descriptor["resources"].as_array().unwrap();
     let count = |format: &str| resources.iter().filter(|r| r["format"] == format).count();
-    assert_eq!(count("parquet"), 12, "8 result tables and 4 figure tables");
+    assert_eq!(count("parquet"), 13, "9 result tables and 4 figure tables");
     assert_eq!((count("svg"), count("png")), (8, 8), "4 figures at 2 sizes");
-    assert_eq!(resources.len(), 12 + 16 + 4, "and 4 documents");
+    assert_eq!(resources.len(), 13 + 16 + 4, "and 4 documents");
     for resource in resources.iter().filter(|r| r["type"] == "table") {
         let path = resource["path"].as_str().unwrap();
         let (rows, column, sum) = shown_rows_and_sum(&config, &bundle.join(path));
@@ -221,6 +221,7 @@ fn export_options_and_refusals() {
         paths,
         [
             PathBuf::from("kernel/ipp-6_u0_rho0/kernel.parquet"),
+            PathBuf::from("kernel/ipp-6_u0_rho0/kernel_log.parquet"),
             PathBuf::from("kernel/ipp-6_u0_rho0/kernel_replicates.parquet")
         ]
     );

@@ -534,6 +534,76 @@ fn every_figure_table_holds_its_sources_numbers() {
             assert!(close, "{}: {g:?} != {w:?}", figure.name());
         }
     }
+    let kernels = fs::read_dir(store.join("artifacts").join("kernel")).unwrap();
+    for dir in kernels {
+        log_table_holds_the_groups(&artifact(&dir.unwrap().path()));
+    }
+}
+
+/// A kernel's `kernel_log` table: below `u'` then above, the groups the
+/// figures draw (recomputed here from the replicates), each as wide as its
+/// fine bins together; the groups hold the fine bins' whole measure, the
+/// centre bin aside.
+fn log_table_holds_the_groups(kernel: &Artifact) {
+    use contract::kernel::log::{BINS, DU, DU_INNER, DU_OUTER, TABLE, WIDTH};
+    let batch = kernel.table(TABLE.name);
+    let (du, inner, outer, width, bins) = (
+        DU.read(&batch).unwrap(),
+        DU_INNER.read(&batch).unwrap(),
+        DU_OUTER.read(&batch).unwrap(),
+        WIDTH.read(&batch).unwrap(),
+        BINS.read(&batch).unwrap(),
+    );
+    let g = contract::kernel::G.value.read(&batch).unwrap();
+    let errors = contract::kernel::G.stderr.read(&batch).unwrap();
+    let mut below = grouped_side(kernel, "", "", -1.0, 20.0);
+    below.reverse();
+    let above = grouped_side(kernel, "", "", 1.0, 20.0);
+    let expected: Vec<(f64, Row)> = below
+        .into_iter()
+        .map(|row| (-1.0, row))
+        .chain(above.into_iter().map(|row| (1.0, row)))
+        .collect();
+    assert_eq!(du.len(), expected.len(), "{}", kernel.name());
+    let fine = kernel.table(contract::kernel::TABLE.name);
+    let fine_du = contract::kernel::DU.read(&fine).unwrap();
+    let bin_width = fine_du[1] - fine_du[0];
+    for (k, (side, row)) in expected.iter().enumerate() {
+        assert!(
+            same(du[k], side * row.2),
+            "{}: {} vs {}",
+            kernel.name(),
+            du[k],
+            row.2
+        );
+        assert!(
+            same(g[k], row.3) && same(errors[k], row.4),
+            "{}: row {k}",
+            kernel.name()
+        );
+        assert!((width[k] - f64::from(bins[k]) * bin_width).abs() < 1e-9 * width[k]);
+        assert!((outer[k] - inner[k] - side * width[k]).abs() < 1e-12);
+        assert!(side * inner[k] >= 0.5 * bin_width - 1e-12 && side * du[k] > side * inner[k]);
+    }
+    let measure = |values: &[f64], widths: &[f64]| -> f64 {
+        values.iter().zip(widths).map(|(v, w)| v * w).sum()
+    };
+    let fine_g = contract::kernel::G.value.read(&fine).unwrap();
+    let off_centre: Vec<f64> = fine_du
+        .iter()
+        .zip(&fine_g)
+        .map(|(d, v)| if d.abs() < 0.5 * bin_width { 0.0 } else { *v })
+        .collect();
+    let (grouped, all) = (
+        measure(&g, &width),
+        measure(&off_centre, &vec![bin_width; off_centre.len()]),
+    );
+    let scale: f64 = off_centre.iter().map(|v| (v * bin_width).abs()).sum();
+    assert!(
+        (grouped - all).abs() <= 1e-9 * scale,
+        "{}: {grouped} vs {all}",
+        kernel.name()
+    );
 }
 
 /// The colours a figure's panels must show: one per series, or one per

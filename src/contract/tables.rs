@@ -345,6 +345,42 @@ pub mod kernel {
             Ok((kernels, offsets))
         }
     }
+
+    /// `kernel_log.parquet`: the kernel averaged over log-spaced groups of
+    /// bins on either side of `u'` (`kernel::tail`), one row per group.
+    pub mod log {
+        use super::*;
+
+        /// The table.
+        pub const TABLE: TableSpec = TableSpec {
+            stage: STAGE,
+            name: "kernel_log",
+            description: "collision kernel G(u' -> u) averaged over groups of bins a twentieth of a decade of |u - u'| wide, in units of rho^2 l v_th per v_th",
+        };
+        /// Mean bin centre of the group.
+        pub const DU: Col<f64> = Col::f64(
+            "du",
+            "v_th",
+            "mean of the group's bin centres relative to u'",
+        );
+        /// Inner edge.
+        pub const DU_INNER: Col<f64> = Col::f64(
+            "du_inner",
+            "v_th",
+            "edge of the group nearest u', relative to u'",
+        );
+        /// Outer edge.
+        pub const DU_OUTER: Col<f64> = Col::f64(
+            "du_outer",
+            "v_th",
+            "edge of the group farthest from u', relative to u'",
+        );
+        /// Width.
+        pub const WIDTH: Col<f64> =
+            Col::f64("width", "v_th", "width of the group, |du_outer - du_inner|");
+        /// Fine bins in the group.
+        pub const BINS: Col<u32> = Col::u32("bins", "1", "fine bins of kernel.parquet averaged");
+    }
 }
 
 /// Scenes drawn (moments and study tables).

@@ -2,7 +2,6 @@
 //! their columns renamed into the long form of a figure (panel, series, `x`,
 //! `y`, `y_error`), stacked and sorted, and read back for drawing.
 
-use std::collections::BTreeMap;
 use std::io::Cursor;
 
 use arrow::array::RecordBatch;
@@ -12,8 +11,8 @@ use polars::prelude::{
 
 use crate::contract::figures::points::{PANEL, SERIES, X, Y, Y_ERROR};
 use crate::contract::{Rows, TableSpec};
+use crate::kernel::tail;
 use crate::pipeline::{StageError, Table};
-use crate::stats::Estimate;
 
 /// One plotted point of a figure table.
 #[derive(Clone, Debug, PartialEq)]
@@ -176,37 +175,22 @@ pub fn stack(parts: Vec<DataFrame>) -> Result<DataFrame, StageError> {
     Ok(all)
 }
 
-/// A kernel's bins at `x > 0` averaged over log-spaced groups, `per_decade`
-/// per decade counted down from the largest `x` (bin `k` joins group
-/// `ceil(per_decade log10(x_k / x_max))`, so the outermost group is as wide
-/// as the others rather than a lone bin on a decade's boundary), as the
-/// series `name` of `panel`: each group's mean `x`, its mean kernel and that
-/// mean's standard error from the spread of the randomizations' own group
-/// means (`replicates[randomization][bin]`). Neighbouring bins share scenes
-/// (one slow launch feeds many), so their errors do not add like those of
-/// independent bins. Fine bins far out in a kernel's tail hold few events;
-/// the groups show the trend with errors a reader can trust.
+/// A kernel's bins at `x > 0` averaged over log-spaced groups
+/// ([`tail::log_groups`], `per_decade` per decade counted down from the
+/// largest `x`), as the series `name` of `panel`: each group's mean `x`, its
+/// mean kernel and that mean's standard error from the spread of the
+/// randomizations' own group means ([`tail::group_mean`],
+/// `replicates[randomization][bin]`).
 pub fn log_groups(
     (panel, name): (&str, &str),
     x: &[f64],
     replicates: &[Vec<f64>],
     per_decade: f64,
 ) -> Result<DataFrame, StageError> {
-    let largest = x.iter().copied().fold(0.0, f64::max);
-    let mut groups: BTreeMap<i64, Vec<usize>> = BTreeMap::new();
-    for (k, &x_k) in x.iter().enumerate().filter(|(_, x_k)| **x_k > 0.0) {
-        let group = (per_decade * libm::log10(x_k / largest)).ceil() as i64;
-        groups.entry(group).or_default().push(k);
-    }
     let (mut xs, mut ys, mut errors) = (Vec::new(), Vec::new(), Vec::new());
-    for members in groups.values() {
-        let count = members.len() as f64;
-        let means: Vec<f64> = replicates
-            .iter()
-            .map(|kernel| members.iter().map(|&k| kernel[k]).sum::<f64>() / count)
-            .collect();
-        let mean = Estimate::from_replicates(&means);
-        xs.push(members.iter().map(|&k| x[k]).sum::<f64>() / count);
+    for members in tail::log_groups(x, per_decade) {
+        let mean = tail::group_mean(replicates, &members);
+        xs.push(members.iter().map(|&k| x[k]).sum::<f64>() / members.len() as f64);
         ys.push(mean.mean);
         errors.push(mean.stderr);
     }
@@ -262,65 +246,5 @@ impl FigureRows {
             Y.read(batch)?,
             Y_ERROR.read(batch)?,
         ))
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// Bin centres of a kernel window's positive side: `k w`, `k = 1..=500`,
-    /// `w = 2e-4`, up to the edge at 0.1.
-    fn window() -> Vec<f64> {
-        (1..=500).map(|k| f64::from(k) * 2e-4).collect()
-    }
-
-    /// The outermost group spans the top 1/20 of a decade, `(0.1 10^(-1/20),
-    /// 0.1]`, like every other group. Before, groups were cut at multiples of
-    /// 1/20 decade from 1, so the bin at 0.1 (on a boundary) was a group of
-    /// its own: one bin's noise drawn as the kernel's end.
-    #[test]
-    fn the_outermost_group_is_as_wide_as_the_rest() {
-        let x = window();
-        let replicates = vec![vec![1.0; x.len()]; 2];
-        let groups = log_groups(("kernels", "G"), &x, &replicates, 20.0).unwrap();
-        let lower = 0.1 * libm::pow(10.0, -1.0 / 20.0);
-        let top: Vec<f64> = x.iter().copied().filter(|&v| v > lower).collect();
-        let mean = top.iter().sum::<f64>() / top.len() as f64;
-        let centres = numbers(&groups, X.name).unwrap();
-        assert!(top.len() > 50, "{}", top.len());
-        assert!(
-            (centres[centres.len() - 1] - mean).abs() < 1e-12,
-            "{centres:?}"
-        );
-    }
-
-    /// Bins that move together over the randomizations (one slow launch
-    /// feeds them all): the error of a group's mean is the spread of the
-    /// randomizations' group means, `s / sqrt(R)` of the common shifts,
-    /// whatever the number of bins; independent bins' errors added in
-    /// quadrature would give `sqrt(n)` times less.
-    #[test]
-    fn a_group_of_correlated_bins_has_the_error_of_its_randomizations() {
-        let x = window();
-        let shifts = [0.3, -0.1, -0.4, 0.2, 0.0, 0.5, -0.3, -0.2];
-        let replicates: Vec<Vec<f64>> = shifts.iter().map(|c| vec![1.0 + c; x.len()]).collect();
-        let count = shifts.len() as f64;
-        let mean = shifts.iter().sum::<f64>() / count;
-        let variance = shifts.iter().map(|c| (c - mean).powi(2)).sum::<f64>() / (count - 1.0);
-        let expected = (variance / count).sqrt();
-        let groups = log_groups(("kernels", "G"), &x, &replicates, 20.0).unwrap();
-        let (values, errors) = (
-            numbers(&groups, Y.name).unwrap(),
-            numbers(&groups, Y_ERROR.name).unwrap(),
-        );
-        assert!(errors.len() > 10);
-        for (value, error) in values.iter().zip(errors) {
-            assert!((value - (1.0 + mean)).abs() < 1e-12, "{value}");
-            assert!(
-                (error / expected - 1.0).abs() < 1e-12,
-                "{error} vs {expected}"
-            );
-        }
     }
 }

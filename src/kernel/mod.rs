@@ -12,6 +12,7 @@
 pub mod equilibrium;
 pub mod fit;
 pub mod segments;
+pub mod tail;
 
 use rayon::prelude::*;
 

@@ -9,7 +9,7 @@ use super::collisions::{CollisionsStage, read_events};
 use crate::binning::Bins;
 use crate::config::KernelParams;
 use crate::contract::{self, Rows};
-use crate::kernel::{Draws, Event, Histogram, Target, histograms};
+use crate::kernel::{Draws, Event, Histogram, Target, histograms, tail};
 use crate::pipeline::code::{self, Code};
 use crate::pipeline::{Cost, Input, InstanceId, Progress, Stage, StageError, Table};
 use crate::stats::Estimate;
@@ -89,6 +89,7 @@ impl Stage for KernelStage {
         &[
             contract::kernel::TABLE.name,
             contract::kernel::replicates::TABLE.name,
+            contract::kernel::log::TABLE.name,
         ]
     }
 
@@ -113,8 +114,9 @@ impl Stage for KernelStage {
         let (events, draws, failed) = input_events(inputs)?;
         let bins = Bins::for_window(self.params.window, self.params.bin_width);
         let replicates = histograms(&events, &target_of(&self.params), &bins, &draws);
-        let per_bin = |k: usize, part: fn(&Histogram, usize) -> f64| {
-            let values: Vec<f64> = replicates.iter().map(|h| part(h, k) / bins.width).collect();
+        let parts = Parts::of(&replicates, &bins);
+        let per_bin = |k: usize, part: &[Vec<f64>]| {
+            let values: Vec<f64> = part.iter().map(|values| values[k]).collect();
             Estimate::from_replicates(&values)
         };
         let rows: Vec<usize> = (0..bins.len()).collect();
@@ -122,28 +124,94 @@ impl Stage for KernelStage {
         let table = Rows::new(&rows)
             .with(U, |&k| self.params.u_prime + bins.centre(k))
             .with(DU, |&k| bins.centre(k))
-            .estimate(G, |&k| per_bin(k, |h, k| h.self_part[k] + h.bath_part[k]))
-            .estimate(G_SELF, |&k| per_bin(k, |h, k| h.self_part[k]))
-            .estimate(G_BATH, |&k| per_bin(k, |h, k| h.bath_part[k]))
+            .estimate(G, |&k| per_bin(k, &parts.total))
+            .estimate(G_SELF, |&k| per_bin(k, &parts.self_part))
+            .estimate(G_BATH, |&k| per_bin(k, &parts.bath_part))
             .table(&TABLE)?
             .with_metadata("ternary.events", events.len().to_string())
             .with_metadata("ternary.failed_events", failed.to_string());
-        Ok(vec![table, replicates_table(&replicates, &bins)?])
+        Ok(vec![
+            table,
+            replicates_table(&parts.total, &bins)?,
+            log_table(&parts, &bins)?,
+        ])
+    }
+}
+
+/// The kernel of every randomization per bin (`[randomization][bin]`,
+/// `rho^2 l v_th / v_th`): the whole and its self and bath parts.
+struct Parts {
+    total: Vec<Vec<f64>>,
+    self_part: Vec<Vec<f64>>,
+    bath_part: Vec<Vec<f64>>,
+}
+
+impl Parts {
+    fn of(replicates: &[Histogram], bins: &Bins) -> Parts {
+        let per_bin = |part: fn(&Histogram, usize) -> f64| -> Vec<Vec<f64>> {
+            replicates
+                .iter()
+                .map(|h| (0..bins.len()).map(|k| part(h, k) / bins.width).collect())
+                .collect()
+        };
+        Parts {
+            total: per_bin(|h, k| h.self_part[k] + h.bath_part[k]),
+            self_part: per_bin(|h, k| h.self_part[k]),
+            bath_part: per_bin(|h, k| h.bath_part[k]),
+        }
     }
 }
 
 /// `G` of every randomization alone: one row per randomization and bin.
-fn replicates_table(replicates: &[Histogram], bins: &Bins) -> Result<Table, StageError> {
+fn replicates_table(total: &[Vec<f64>], bins: &Bins) -> Result<Table, StageError> {
     use contract::kernel::replicates::*;
-    let rows: Vec<(u32, usize)> = (0..replicates.len() as u32)
+    let rows: Vec<(u32, usize)> = (0..total.len() as u32)
         .flat_map(|r| (0..bins.len()).map(move |k| (r, k)))
         .collect();
     Ok(Rows::new(&rows)
         .with(contract::kernel::DU, |&(_, k)| bins.centre(k))
         .with(RANDOMIZATION, |&(r, _)| r)
-        .with(G, |&(r, k)| {
-            let histogram = &replicates[r as usize];
-            (histogram.self_part[k] + histogram.bath_part[k]) / bins.width
+        .with(G, |&(r, k)| total[r as usize][k])
+        .table(&TABLE)?)
+}
+
+/// A log-spaced group of bins on one side of `u'` (`-1` below, `+1` above):
+/// the side and the members' bin indices, nearest `u'` first.
+type Group = (f64, Vec<usize>);
+
+/// The kernel on log-spaced groups of bins ([`tail::log_groups`]), below
+/// `u'` then above in ascending `du`: each group's edges, width and mean
+/// parts, with errors from the spread of the randomizations' group means.
+fn log_table(parts: &Parts, bins: &Bins) -> Result<Table, StageError> {
+    use contract::kernel::log::*;
+    let centres: Vec<f64> = (0..bins.len()).map(|k| bins.centre(k)).collect();
+    let mut groups: Vec<Group> = Vec::new();
+    for side in [-1.0, 1.0] {
+        let distance: Vec<f64> = centres.iter().map(|c| side * c).collect();
+        let mut sided = tail::log_groups(&distance, tail::GROUPS_PER_DECADE);
+        if side < 0.0 {
+            sided.reverse();
+        }
+        groups.extend(sided.into_iter().map(|members| (side, members)));
+    }
+    let edge = |side: f64, k: usize| centres[k] + side * 0.5 * bins.width;
+    let inner = |(side, members): &Group| edge(-side, members[0]);
+    let outer = |(side, members): &Group| edge(*side, members[members.len() - 1]);
+    let mean = |part: &[Vec<f64>], (_, members): &Group| tail::group_mean(part, members);
+    Ok(Rows::new(&groups)
+        .with(DU, |(_, members)| {
+            members.iter().map(|&k| centres[k]).sum::<f64>() / members.len() as f64
+        })
+        .with(DU_INNER, inner)
+        .with(DU_OUTER, outer)
+        .with(WIDTH, |group| (outer(group) - inner(group)).abs())
+        .with(BINS, |(_, members)| members.len() as u32)
+        .estimate(contract::kernel::G, |group| mean(&parts.total, group))
+        .estimate(contract::kernel::G_SELF, |group| {
+            mean(&parts.self_part, group)
+        })
+        .estimate(contract::kernel::G_BATH, |group| {
+            mean(&parts.bath_part, group)
         })
         .table(&TABLE)?)
 }
