@@ -139,6 +139,39 @@ impl VelocityGrid {
         self.deposit(column, self.position(u), [1.0, 0.0, 0.0], scale);
     }
 
+    /// `exp(-(u_i - centre)^2)` at every node `i`, with one `exp` per node
+    /// replaced by two multiplications: outward from the node `k` nearest to
+    /// `centre`, `g_(i+1) = g_i q_i` with `q_(i+1) = q_i exp(-2 h^2)` (and the
+    /// mirror recurrence below `k`), exact Gaussian ratios on a uniform grid
+    /// of step `h`. Rounding grows like the square of the distance from `k`
+    /// in nodes: below 1e-12 relative over 200 nodes (unit test). Starting at
+    /// the peak, an underflow to zero happens only where the Gaussian is
+    /// below the smallest double anyway.
+    pub fn gaussian(&self, centre: f64) -> Vec<f64> {
+        let h = self.step;
+        let peak = self
+            .position(centre)
+            .round()
+            .clamp(0.0, (self.len() - 1) as f64) as usize;
+        let x = self.velocity(peak) - centre;
+        let curvature = libm::exp(-2.0 * h * h);
+        let mut values = vec![0.0; self.len()];
+        values[peak] = libm::exp(-x * x);
+        let (mut value, mut ratio) = (values[peak], libm::exp(-2.0 * x * h - h * h));
+        for slot in &mut values[peak + 1..] {
+            value *= ratio;
+            ratio *= curvature;
+            *slot = value;
+        }
+        let (mut value, mut ratio) = (values[peak], libm::exp(2.0 * x * h - h * h));
+        for slot in values[..peak].iter_mut().rev() {
+            value *= ratio;
+            ratio *= curvature;
+            *slot = value;
+        }
+        values
+    }
+
     /// Node masses of `f0` (density times step), the stationary state of the
     /// special particle's own (tagged) evolution.
     pub fn maxwellian(&self) -> Vec<f64> {
@@ -182,6 +215,30 @@ impl VelocityGrid {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The Gaussian by recurrence agrees with `exp` node by node to 1e-12
+    /// relative wherever it is a normal double, on and off the grid's nodes
+    /// and with its peak inside, at or beyond the grid's ends.
+    #[test]
+    fn the_gaussian_by_recurrence_is_the_exponential() {
+        let grid = VelocityGrid::covering(4.0, 0.02);
+        for centre in [0.0, 0.013, -1.2345, 3.99, 4.0, -4.3, 9.7, -25.0] {
+            let values = grid.gaussian(centre);
+            for (i, value) in values.iter().enumerate() {
+                let x = grid.velocity(i) - centre;
+                let exact = libm::exp(-x * x);
+                if exact > 1e-290 {
+                    let error = (value - exact).abs() / exact;
+                    assert!(
+                        error < 1e-12,
+                        "centre {centre}, node {i}: {value} vs {exact}"
+                    );
+                } else {
+                    assert!(*value < 1e-280, "centre {centre}, node {i}: {value}");
+                }
+            }
+        }
+    }
 
     /// Deposited points keep number, momentum and energy exactly away from
     /// the grid's ends.

@@ -27,16 +27,17 @@ pub struct Generators {
     pub tagged: Generator,
 }
 
-/// Events are placed in blocks of this many (memory stays bounded).
-const BLOCK: usize = 1 << 16;
+/// Events are placed in blocks of this many (memory stays bounded: each
+/// placed image holds a weight per node).
+const BLOCK: usize = 1 << 13;
 
-/// An event image with its `u'`-independent weight factor.
+/// An event image with its launch weight at every node's `u'`.
 struct Placed {
     replicate: usize,
-    /// `weight * |u2| |u3| / (2 pi)`: the launch weight at `u'` is this times
-    /// `exp(-((u' + u2)^2 + (u' + u3)^2) / 2)`.
-    factor: f64,
-    launches: [f64; 2],
+    /// The launch weight at `u' = u_j` for every node `j`: `weight |u2| |u3| /
+    /// (2 pi) exp(-((u' + u2)^2 + (u' + u3)^2) / 2)`, written as the Gaussian
+    /// `exp(-(u2 - u3)^2 / 4) exp(-(u' + (u2 + u3) / 2)^2)` of `u'`.
+    weights: Vec<f64>,
     /// Per sorted rank, where its incoming and outgoing velocities (relative
     /// to `u'`) are deposited; `None` when the rank's velocity is unchanged.
     moves: [Option<[Stencil; 2]>; 3],
@@ -44,20 +45,32 @@ struct Placed {
 }
 
 impl Placed {
-    fn new(image: &Contribution, replicate: usize, scale: f64, grid: &VelocityGrid) -> Placed {
+    /// The image placed on `grid`, or `None` when it moves no velocity.
+    fn new(
+        image: &Contribution,
+        replicate: usize,
+        scale: f64,
+        grid: &VelocityGrid,
+    ) -> Option<Placed> {
         let [_, u2, u3] = image.incoming;
         let incoming = image.sorted_incoming();
-        let moves = std::array::from_fn(|rank| {
+        let moves: [Option<[Stencil; 2]>; 3] = std::array::from_fn(|rank| {
             let (from, to) = (incoming[rank], image.outgoing[rank]);
             (from != to).then(|| [grid.stencil(from), grid.stencil(to)])
         });
-        Placed {
+        if moves.iter().all(Option::is_none) {
+            return None;
+        }
+        let factor = image.weight * scale * (u2 * u3).abs() / (2.0 * std::f64::consts::PI)
+            * libm::exp(-0.25 * (u2 - u3).powi(2));
+        let mut weights = grid.gaussian(-0.5 * (u2 + u3));
+        weights.iter_mut().for_each(|w| *w *= factor);
+        Some(Placed {
             replicate,
-            factor: image.weight * scale * (u2 * u3).abs() / (2.0 * std::f64::consts::PI),
-            launches: [u2, u3],
+            weights,
             moves,
             self_rank: image.self_rank,
-        }
+        })
     }
 }
 
@@ -69,9 +82,7 @@ struct ColumnSums {
 
 impl ColumnSums {
     fn add(&mut self, grid: &VelocityGrid, node: usize, placed: &Placed) {
-        let u = grid.velocity(node);
-        let [u2, u3] = placed.launches;
-        let weight = placed.factor * libm::exp(-0.5 * ((u + u2).powi(2) + (u + u3).powi(2)));
+        let weight = placed.weights[node];
         if weight == 0.0 {
             return;
         }
@@ -115,7 +126,7 @@ pub fn kernel_generators(
             .flat_map_iter(|event| {
                 let (replicate, scale) = (event.randomization as usize, draws.scale(event));
                 images(event, kick_floor)
-                    .map(move |image| Placed::new(&image, replicate, scale, grid))
+                    .filter_map(move |image| Placed::new(&image, replicate, scale, grid))
             })
             .collect();
         columns
