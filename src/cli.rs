@@ -1,7 +1,6 @@
 //! Commands: argument parsing and the turning of library results into output
 //! and exit codes.
 
-use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -22,6 +21,7 @@ use ternary::pipeline::Stage;
 use ternary::pipeline::executor::{self, Action, Freshness, RunOptions, Verbosity};
 use ternary::pipeline::shards::Sharding;
 use ternary::pipeline::store::Store;
+use ternary::report::DagFormat;
 use ternary::slurm::{self, SubmitOptions};
 use ternary::{report, stages};
 
@@ -39,7 +39,8 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Execute the stale part of the DAG and print the result tables.
+    /// Execute the stale part of the DAG and print a_n, the paper table and
+    /// where the figures are (`--details`: every instance and every table).
     Run {
         /// Run only instances of this stage (repeatable).
         #[arg(long, value_name = "STAGE")]
@@ -53,6 +54,10 @@ enum Command {
         /// Print only errors.
         #[arg(long)]
         quiet: bool,
+        /// Also print a line for every fresh instance and, after the summary,
+        /// the per-stage tables (gases, convergence, evolution, MD, scans, balance).
+        #[arg(long, conflicts_with = "quiet")]
+        details: bool,
         /// Split shardable stages (collisions) into N shards, computing
         /// missing shards and merging them (same bytes as unsharded).
         #[arg(long, value_name = "N", default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=4096))]
@@ -66,14 +71,32 @@ enum Command {
         #[arg(long)]
         i_know: bool,
     },
-    /// Show each stage instance as fresh, stale or missing, and why.
+    /// Show each stage instance as fresh, stale, damaged or missing, and why,
+    /// after a one-line count of each.
     Status {
         /// Also show which of N shards of each shardable instance are done.
         #[arg(long, value_name = "N", default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=4096))]
         shards: u32,
+        /// List only the instances that are not fresh (what `run` would compute).
+        #[arg(long)]
+        changed: bool,
+        /// Exit with status 1 when any instance is not fresh (0 when all are),
+        /// as `dvc status` does in scripts.
+        #[arg(long)]
+        check: bool,
     },
-    /// Print the DAG of stage instances.
-    Dag,
+    /// Print the DAG of stage instances (or of stages), as text, Graphviz or Mermaid.
+    Dag {
+        /// Graphviz `digraph` (draw it with `dot -Tsvg`).
+        #[arg(long, conflicts_with = "mermaid")]
+        dot: bool,
+        /// Mermaid flowchart (renders in Markdown on GitHub and GitLab).
+        #[arg(long)]
+        mermaid: bool,
+        /// One node per stage with its instance count, instead of one per instance.
+        #[arg(long)]
+        stages: bool,
+    },
     /// Check every artifact to the bottom (or an exported bundle); exit non-zero on any problem.
     Verify {
         /// Check the exported bundle in this directory instead of the store.
@@ -103,9 +126,11 @@ enum Command {
     },
     /// Remove artifacts that no stage instance of the current study references.
     Gc,
-    /// Show an artifact (key or key prefix) or a Parquet file: metadata and first rows.
+    /// Show a stage's instances and files, or an artifact or Parquet file: metadata and first rows.
     Show {
-        /// Artifact key (or a unique prefix of at least 6 characters) or a path.
+        /// A stage (lists its current instances with keys and files), an
+        /// instance `stage[instance]` as `status` names it, an artifact key (or
+        /// a unique prefix of at least 6 characters) or a path.
         target: String,
         /// Rows to print per table.
         #[arg(long, default_value_t = 10)]
@@ -431,6 +456,7 @@ fn dispatch(cli: Cli) -> Result<ExitCode> {
             force,
             threads,
             quiet,
+            details,
             shards,
             shard,
             i_know,
@@ -456,6 +482,8 @@ fn dispatch(cli: Cli) -> Result<ExitCode> {
             let store = open(&study, Opening::Write)?;
             let verbosity = if quiet {
                 Verbosity::Quiet
+            } else if details {
+                Verbosity::Detailed
             } else {
                 Verbosity::Normal
             };
@@ -483,44 +511,41 @@ fn dispatch(cli: Cli) -> Result<ExitCode> {
                     "run: {computed} computed, {fresh} fresh, {skipped} skipped (store {})\n",
                     store.root().display()
                 ));
-                emit(&report::summary(&store, &reports)?);
+                emit(&report::summary(&store, &reports, details)?);
             }
             Ok(ExitCode::SUCCESS)
         }
-        Command::Status { shards } => {
+        Command::Status {
+            shards,
+            changed,
+            check,
+        } => {
             let (study, store) = load(&cli.config, Opening::View)?;
             let plan = stages::plan(&study);
-            let mut unfresh = BTreeSet::new();
-            for line in executor::status(&store, &plan, shards)? {
-                let id = line.id;
-                if line.freshness != Freshness::Fresh {
-                    unfresh.insert(id.clone());
-                }
-                let progress = line.shards.map_or(String::new(), |progress| {
-                    format!(
-                        " (shards: {} of {shards} done, missing {:?})",
-                        progress.done.len(),
-                        progress.missing
-                    )
-                });
-                let key = line.key.as_deref().map_or("", |key| &key[..12]);
-                let line = match line.freshness {
-                    Freshness::Fresh => format!("fresh (key {key})"),
-                    Freshness::Stale(reasons) => format!("stale: {}", reasons.join("; ")),
-                    Freshness::Damaged(problems) => format!(
-                        "damaged (key {key}): {} (the next run recomputes it)",
-                        problems.join("; ")
-                    ),
-                    Freshness::Missing(reason) => format!("missing: {reason}"),
-                };
-                emit(&format!("{:<24} {line}{progress}\n", id.to_string()));
-            }
-            emit(&report::cost_estimate(&executor::estimate(&plan), &unfresh));
-            Ok(ExitCode::SUCCESS)
+            let lines = executor::status(&store, &plan, shards)?;
+            emit(&report::status(&lines, shards, changed));
+            emit(&report::cost_estimate(&executor::estimate(&plan), &lines));
+            let all_fresh = lines.iter().all(|line| line.freshness == Freshness::Fresh);
+            Ok(if check && !all_fresh {
+                ExitCode::FAILURE
+            } else {
+                ExitCode::SUCCESS
+            })
         }
-        Command::Dag => {
+        Command::Dag {
+            dot,
+            mermaid,
+            stages: by_stage,
+        } => {
             let study = Study::load(&cli.config)?;
-            emit(&report::dag(&stages::plan(&study)));
+            let format = if dot {
+                DagFormat::Dot
+            } else if mermaid {
+                DagFormat::Mermaid
+            } else {
+                DagFormat::Text
+            };
+            emit(&report::dag(&stages::plan(&study), by_stage, format));
             Ok(ExitCode::SUCCESS)
         }
         Command::Verify {
@@ -573,12 +598,13 @@ fn dispatch(cli: Cli) -> Result<ExitCode> {
             Ok(ExitCode::SUCCESS)
         }
         Command::Show { target, rows } => {
-            let store = if Path::new(&target).exists() {
-                None
+            let (store, plan) = if Path::new(&target).exists() {
+                (None, Vec::new())
             } else {
-                Some(load(&cli.config, Opening::Existing)?.1)
+                let (study, store) = load(&cli.config, Opening::Existing)?;
+                (Some(store), stages::plan(&study))
             };
-            let (text, problems) = report::show(store.as_ref(), &target, rows)?;
+            let (text, problems) = report::show(store.as_ref(), &plan, &target, rows)?;
             emit(&text);
             Ok(if problems == 0 {
                 ExitCode::SUCCESS

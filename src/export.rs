@@ -227,15 +227,7 @@ fn selected_entries(
     plan: &[Box<dyn Stage>],
     options: &ExportOptions,
 ) -> Result<Vec<Entry>> {
-    let known_stages: Vec<String> = plan.iter().map(|s| s.id().stage).collect();
-    if let Some(unknown) = options.stages.iter().find(|s| !known_stages.contains(s)) {
-        let mut known = known_stages.clone();
-        known.dedup();
-        bail!(
-            "unknown stage `{unknown}`; stages are: {}",
-            known.join(", ")
-        );
-    }
+    executor::check_stage_names(plan, &options.stages).map_err(anyhow::Error::msg)?;
     let potential_of = |instance: &str| -> Option<String> {
         let id = instance.split('_').next().unwrap_or(instance);
         (id.starts_with("ipp-") || id.starts_with("lj-")).then(|| id.to_string())

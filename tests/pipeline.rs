@@ -9,7 +9,10 @@ use std::time::{Duration, Instant};
 
 mod common;
 
-use common::{BINARY, run_counts, stderr, stdout, ternary, workspace, write_config};
+use common::{
+    BINARY, SMALL_STUDY_INSTANCES, run_counts, small_study, stderr, stdout, ternary, workspace,
+    write_config,
+};
 
 fn config(points: u32, extra: &str) -> String {
     format!(
@@ -92,6 +95,17 @@ fn all_artifact_dirs(store: &Path) -> Vec<PathBuf> {
     .collect()
 }
 
+/// The line of `status` output for instance `id` (padded to the id column).
+fn status_line<'a>(status: &'a str, id: &str) -> &'a str {
+    status
+        .lines()
+        .find(|line| {
+            line.strip_prefix(id)
+                .is_some_and(|rest| rest.starts_with(' '))
+        })
+        .unwrap_or_else(|| panic!("no {id} in {status}"))
+}
+
 #[test]
 fn second_run_recomputes_nothing() {
     let dir = workspace("cache");
@@ -101,7 +115,11 @@ fn second_run_recomputes_nothing() {
     // Recomputed scans reproduce their data: the table downstream stays fresh.
     assert_eq!(run_counts(&path, &["--force", "scan"]), (2, INSTANCES - 2));
     let status = stdout(&ternary(&path, &["status"]));
-    assert_eq!(status.matches("fresh").count(), INSTANCES, "{status}");
+    assert_eq!(
+        status.lines().filter(|l| l.contains("fresh (key ")).count(),
+        INSTANCES,
+        "{status}"
+    );
 }
 
 #[test]
@@ -112,7 +130,7 @@ fn changing_one_potentials_scan_setting_reruns_only_that_instance() {
     write_config(&dir, &config(7, "[scan.overrides.ipp-6]\npoints = 9\n"));
     let status = stdout(&ternary(&path, &["status"]));
     assert!(
-        status.contains("scan[ipp-2]              fresh (key "),
+        status_line(&status, "scan[ipp-2]").contains("fresh (key "),
         "{status}"
     );
     assert!(
@@ -189,7 +207,7 @@ fn killed_run_leaves_nothing_trusted_and_next_run_completes() {
     assert!(stdout(&verify).contains("staging entries from interrupted runs are ignored"));
     let status = stdout(&ternary(&path, &["status"]));
     assert!(
-        status.contains("scan[ipp-2]              missing"),
+        status_line(&status, "scan[ipp-2]").contains("missing"),
         "{status}"
     );
     // Finish with a smaller grid: the run cleans the debris and completes.
@@ -753,4 +771,208 @@ assert abs(mean) < 4 * error, (mean, error)
 print("ok", start, end, dilute)
 "#;
     python_check(script, artifact);
+}
+
+/// `status` leads with the count of instances by freshness; `--check` exits
+/// 1 while any instance is not fresh and 0 once all are; `--changed` lists
+/// only what a run would compute.
+#[test]
+fn status_counts_instances_and_check_fails_until_all_are_fresh() {
+    let dir = workspace("status-check");
+    let config = write_config(&dir, &small_study("data"));
+    let n = SMALL_STUDY_INSTANCES;
+    let empty = ternary(&config, &["status", "--check"]);
+    assert_eq!(empty.status.code(), Some(1), "{}", stderr(&empty));
+    let text = stdout(&empty);
+    assert_eq!(
+        text.lines().next(),
+        Some(format!("{n} instances: 0 fresh, 0 stale, {n} missing").as_str()),
+        "{text}"
+    );
+    assert!(ternary(&config, &["status"]).status.success());
+    assert_eq!(run_counts(&config, &[]), (n, 0));
+    let complete = ternary(&config, &["status", "--check", "--changed"]);
+    assert_eq!(complete.status.code(), Some(0), "{}", stderr(&complete));
+    let text = stdout(&complete);
+    let lines: Vec<&str> = text.lines().collect();
+    assert_eq!(
+        lines[0],
+        format!("{n} instances: {n} fresh, 0 stale, 0 missing"),
+        "{text}"
+    );
+    // Nothing to list between the count and the estimate.
+    assert!(
+        lines.len() == 2 && lines[1].starts_with("estimate: "),
+        "{text}"
+    );
+    let finer = small_study("data").replace("points = 7", "points = 9");
+    write_config(&dir, &finer);
+    let changed = ternary(&config, &["status", "--changed", "--check"]);
+    assert_eq!(changed.status.code(), Some(1));
+    let text = stdout(&changed);
+    assert!(text.lines().next().unwrap().contains(" stale"), "{text}");
+    assert!(
+        status_line(&text, "scan[ipp-6]").contains("stale: "),
+        "{text}"
+    );
+    assert!(!text.contains("fresh (key"), "{text}");
+}
+
+/// `dag --stages` draws one node per stage with its instance count and the
+/// edges between stages; `--dot` is a Graphviz digraph with every instance a
+/// node, `--mermaid` a flowchart.
+#[test]
+fn dag_draws_stages_and_graphviz() {
+    let dir = workspace("dag");
+    let config = write_config(&dir, &small_study("data"));
+    let stages = stdout(&ternary(&config, &["dag", "--stages"]));
+    let expected = [
+        "scan (1)        (source)",
+        "launches (1)    (source)",
+        "collisions (1)  <- launches",
+        "kernel (1)      <- collisions",
+        "moments (1)     <- collisions",
+        "fit (1)         <- kernel",
+        "table (1)       <- moments, fit, scan",
+        "paper (1)       <- moments, fit, scan",
+        "figures (4)     <- kernel, fit, moments, scan",
+    ];
+    assert_eq!(stages.lines().collect::<Vec<_>>(), expected, "{stages}");
+    let instances: Vec<String> = stdout(&ternary(&config, &["dag"]))
+        .lines()
+        .map(|line| line.split_whitespace().next().unwrap().to_string())
+        .collect();
+    assert_eq!(instances.len(), SMALL_STUDY_INSTANCES);
+    let dot = stdout(&ternary(&config, &["dag", "--dot"]));
+    let body = dot
+        .trim_end()
+        .strip_prefix("digraph ternary {")
+        .and_then(|rest| rest.strip_suffix('}'))
+        .unwrap_or_else(|| panic!("not a digraph: {dot}"));
+    for line in body.lines().map(str::trim).filter(|l| !l.is_empty()) {
+        assert!(line.ends_with(';'), "{line}");
+    }
+    for id in &instances {
+        assert!(
+            body.contains(&format!("\n  \"{id}\" [label=\"{id}\"];")),
+            "{id} in {dot}"
+        );
+    }
+    let edges = body.matches(" -> ").count();
+    assert_eq!(edges, count_inputs(&config), "{dot}");
+    let mermaid = stdout(&ternary(&config, &["dag", "--stages", "--mermaid"]));
+    assert!(mermaid.starts_with("flowchart LR\n"), "{mermaid}");
+    assert!(mermaid.contains("n2[\"collisions (1)\"]"), "{mermaid}");
+    assert!(mermaid.contains("n1 --> n2"), "{mermaid}");
+}
+
+/// Edges of the instance DAG: the inputs the text `dag` lists.
+fn count_inputs(config: &Path) -> usize {
+    stdout(&ternary(config, &["dag"]))
+        .lines()
+        .filter_map(|line| line.split_once("<- "))
+        .map(|(_, inputs)| inputs.split(", ").count())
+        .sum()
+}
+
+/// `show` takes a stage (listing its instances with keys and files) and an
+/// instance as `status` names it, besides keys and paths.
+#[test]
+fn show_takes_stage_names_and_instance_ids() {
+    let dir = workspace("show-names");
+    let config = write_config(&dir, &small_study("data"));
+    let missing = ternary(&config, &["show", "kernel[ipp-6_u0_rho0]"]);
+    assert!(!missing.status.success());
+    run_counts(&config, &[]);
+    let figures = ternary(&config, &["show", "figures"]);
+    assert!(figures.status.success(), "{}", stderr(&figures));
+    let text = stdout(&figures);
+    assert!(text.starts_with("figures: 4 instances"), "{text}");
+    assert_eq!(text.matches("  fresh  key ").count(), 4, "{text}");
+    assert!(text.contains(".svg ("), "{text}");
+    let kernel_line = stdout(&ternary(&config, &["status"]))
+        .lines()
+        .find(|line| line.starts_with("kernel["))
+        .unwrap()
+        .to_string();
+    let id = kernel_line.split_whitespace().next().unwrap();
+    let key = kernel_line
+        .split("key ")
+        .nth(1)
+        .unwrap()
+        .trim_end_matches(')');
+    let shown = ternary(&config, &["show", id]);
+    assert!(shown.status.success(), "{}", stderr(&shown));
+    assert!(
+        stdout(&shown).contains(&format!("\"key\": \"{key}")),
+        "{}",
+        stdout(&shown)
+    );
+    let unknown = ternary(&config, &["show", "kernel[ipp-9]"]);
+    assert!(
+        stderr(&unknown).contains("no instance `kernel[ipp-9]`"),
+        "{}",
+        stderr(&unknown)
+    );
+}
+
+/// A mistyped stage in any option that takes one is answered with each stage
+/// once and the nearest name.
+#[test]
+fn a_mistyped_stage_is_answered_with_the_nearest() {
+    let dir = workspace("did-you-mean");
+    let config = write_config(&dir, &small_study("data"));
+    for args in [
+        &["run", "--only", "kernl"][..],
+        &["run", "--force", "kernl"],
+        &["show", "kernl[ipp-6]"],
+    ] {
+        let output = ternary(&config, args);
+        assert!(!output.status.success(), "{args:?}");
+        let error = stderr(&output);
+        assert!(
+            error.contains("unknown stage `kernl`; did you mean `kernel`?"),
+            "{args:?}: {error}"
+        );
+        assert_eq!(error.matches("collisions").count(), 1, "{error}");
+    }
+    assert!(ternary(&config, &["run", "--quiet"]).status.success());
+    let error = stderr(&ternary(
+        &config,
+        &["verify", "--recompute", "--only", "kernl"],
+    ));
+    assert!(error.contains("did you mean `kernel`?"), "{error}");
+}
+
+/// `run` leads with its count, `a_n` and the paper table and where the
+/// figures are; fresh instances and per-stage tables only with `--details`.
+#[test]
+fn run_leads_with_the_summary() {
+    let dir = workspace("run-summary");
+    let config = write_config(&dir, &small_study("data"));
+    assert!(ternary(&config, &["run", "--quiet"]).status.success());
+    let text = stdout(&ternary(&config, &["run"]));
+    let lines: Vec<&str> = text.lines().collect();
+    assert!(lines[0].starts_with("run: 0 computed, "), "{text}");
+    assert!(
+        lines[2].starts_with("thermalization constants a_n"),
+        "{text}"
+    );
+    assert!(text.contains("\nthe paper (Phys. Rev. E"), "{text}");
+    assert!(
+        text.contains("\nfigures: 4, one artifact each under "),
+        "{text}"
+    );
+    assert!(text.contains("`ternary run --details`"), "{text}");
+    assert!(!text.contains("mono-energetic scans"), "{text}");
+    let details = stdout(&ternary(&config, &["run", "--details"]));
+    assert_eq!(
+        details
+            .lines()
+            .filter(|l| l.contains("  fresh  key "))
+            .count(),
+        SMALL_STUDY_INSTANCES,
+        "{details}"
+    );
+    assert!(details.contains("mono-energetic scans"), "{details}");
 }

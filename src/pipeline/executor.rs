@@ -76,8 +76,11 @@ pub enum ExecError {
 /// How a run reports progress.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Verbosity {
-    /// Progress bars on a terminal, one line per instance otherwise.
+    /// Progress bars on a terminal, and a line per instance that was not
+    /// already fresh (computed, skipped, a shard).
     Normal,
+    /// As [`Verbosity::Normal`], with a line for every fresh instance too.
+    Detailed,
     /// Only errors.
     Quiet,
 }
@@ -153,6 +156,18 @@ pub enum Freshness {
     Missing(String),
 }
 
+impl Freshness {
+    /// `fresh`, `stale`, `damaged` or `missing`.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Freshness::Fresh => "fresh",
+            Freshness::Stale(_) => "stale",
+            Freshness::Damaged(_) => "damaged",
+            Freshness::Missing(_) => "missing",
+        }
+    }
+}
+
 /// Checks that ids are unique, inputs precede their consumers, and stage names
 /// in `names` exist.
 pub fn check_plan(stages: &[Box<dyn Stage>], names: &[String]) -> Result<(), ExecError> {
@@ -173,16 +188,32 @@ pub fn check_plan(stages: &[Box<dyn Stage>], names: &[String]) -> Result<(), Exe
         }
         seen.insert(id);
     }
-    for name in names {
-        if !seen.iter().any(|id| &id.stage == name) {
-            let ids: Vec<InstanceId> = stages.iter().map(|stage| stage.id()).collect();
-            return Err(ExecError::Plan(format!(
-                "unknown stage `{name}`; stages are: {}",
-                stage_names(&ids).join(", ")
-            )));
-        }
+    check_stage_names(stages, names).map_err(ExecError::Plan)
+}
+
+/// Checks that every name in `names` is a stage of `stages`; otherwise says
+/// which is not, listing the stages and suggesting the nearest.
+pub fn check_stage_names(stages: &[Box<dyn Stage>], names: &[String]) -> Result<(), String> {
+    let ids: Vec<InstanceId> = stages.iter().map(|stage| stage.id()).collect();
+    match names
+        .iter()
+        .find(|name| !ids.iter().any(|id| &id.stage == *name))
+    {
+        Some(name) => Err(unknown_stage(name, &ids)),
+        None => Ok(()),
     }
-    Ok(())
+}
+
+/// Why `name` names no stage of `ids`: each stage once, in order of first
+/// appearance, and the nearest one when `name` looks like a typo of it.
+fn unknown_stage(name: &str, ids: &[InstanceId]) -> String {
+    let names = stage_names(ids);
+    let hint =
+        nearest(name, &names).map_or(String::new(), |near| format!("; did you mean `{near}`?"));
+    format!(
+        "unknown stage `{name}`{hint} (stages are: {})",
+        names.join(", ")
+    )
 }
 
 /// The stages of `ids`, each once, in order of first appearance.
@@ -194,6 +225,37 @@ fn stage_names(ids: &[InstanceId]) -> Vec<&str> {
         }
     }
     names
+}
+
+/// The candidate closest to `typed` by edit distance, when at most a third
+/// of the typed characters (at least one) must change to reach it: further
+/// away, a suggestion is a guess.
+fn nearest<'a>(typed: &str, candidates: &[&'a str]) -> Option<&'a str> {
+    let allowed = (typed.chars().count() / 3).max(1);
+    candidates
+        .iter()
+        .map(|&candidate| (edit_distance(typed, candidate), candidate))
+        .filter(|&(distance, _)| distance <= allowed)
+        .min_by_key(|&(distance, _)| distance)
+        .map(|(_, candidate)| candidate)
+}
+
+/// Levenshtein distance: the fewest insertions, deletions and substitutions
+/// of characters that turn `a` into `b`.
+fn edit_distance(a: &str, b: &str) -> usize {
+    let b: Vec<char> = b.chars().collect();
+    // `row[j]`: distance from the prefix of `a` read so far to `b[..j]`.
+    let mut row: Vec<usize> = (0..=b.len()).collect();
+    for (i, a_char) in a.chars().enumerate() {
+        let mut diagonal = row[0];
+        row[0] = i + 1;
+        for (j, &b_char) in b.iter().enumerate() {
+            let substitution = diagonal + usize::from(a_char != b_char);
+            diagonal = row[j + 1];
+            row[j + 1] = substitution.min(row[j] + 1).min(diagonal + 1);
+        }
+    }
+    row[b.len()]
 }
 
 /// Input records of `stage` from the manifests resolved so far; `None` while an
@@ -300,6 +362,7 @@ pub fn run(
     let mut reports = Vec::new();
     let sharding = options.sharding;
     let decoded = DecodedTables::default();
+    let width = id_width(stages);
     for stage in stages {
         let id = stage.id();
         let shardable = stage.shard_units() > 0;
@@ -388,12 +451,17 @@ pub fn run(
                 }
             }
         };
-        if options.verbosity == Verbosity::Normal {
+        let shown = match options.verbosity {
+            Verbosity::Quiet => false,
+            Verbosity::Normal => action != Action::Fresh,
+            Verbosity::Detailed => true,
+        };
+        if shown {
             // A closed stdout must not abort a run: the line is only a log.
             let _ = writeln!(
                 std::io::stdout().lock(),
                 "{}",
-                report_line(&id, &key, &action)
+                report_line(&id, width, &key, &action)
             );
         }
         reports.push(InstanceReport {
@@ -414,7 +482,18 @@ fn heal_ref(store: &Store, id: &InstanceId, entry: &InstanceRef) -> Result<(), E
     Ok(())
 }
 
-fn report_line(id: &InstanceId, key: &str, action: &Action) -> String {
+/// Characters of the longest instance id of `stages`: the width of the id
+/// column of a run's lines.
+fn id_width(stages: &[Box<dyn Stage>]) -> usize {
+    stages
+        .iter()
+        .map(|stage| stage.id().to_string().chars().count())
+        .max()
+        .unwrap_or(0)
+}
+
+/// One line of a run: the instance (padded to `width`), what was done, the key.
+fn report_line(id: &InstanceId, width: usize, key: &str, action: &Action) -> String {
     let what = match action {
         Action::Fresh => "fresh".to_string(),
         Action::Computed {
@@ -447,7 +526,7 @@ fn report_line(id: &InstanceId, key: &str, action: &Action) -> String {
             seconds: None,
         } => format!("shard {index} present"),
     };
-    format!("{:<24} {:<28} key {}", id.to_string(), what, &key[..12])
+    format!("{:<width$}  {what}  key {}", id.to_string(), &key[..12])
 }
 
 fn progress_for(stage: &dyn Stage, verbosity: Verbosity) -> Progress {
@@ -899,7 +978,7 @@ pub fn recompute(
                     None => "an input is not fresh".to_string(),
                 };
                 let audit = Audit::NotFresh(reason);
-                if verbosity == Verbosity::Normal {
+                if verbosity != Verbosity::Quiet {
                     let _ = writeln!(std::io::stdout().lock(), "{}", audit_line(&id, &audit));
                 }
                 audits.push((id, audit));
@@ -917,7 +996,7 @@ pub fn recompute(
             let started = Instant::now();
             let files = job.recomputed_files(&entry)?;
             let audit = compare_files(manifest, files, started.elapsed().as_secs_f64());
-            if verbosity == Verbosity::Normal {
+            if verbosity != Verbosity::Quiet {
                 let _ = writeln!(std::io::stdout().lock(), "{}", audit_line(&id, &audit));
             }
             audits.push((id.clone(), audit));
@@ -1342,5 +1421,24 @@ mod tests {
             InstanceId::new("kernel", "b"),
         ];
         assert_eq!(stage_names(&ids), ["scan", "kernel"]);
+    }
+
+    /// A typo one or two characters off a stage name is answered with that
+    /// name; a word far from every stage gets no guess.
+    #[test]
+    fn a_mistyped_stage_gets_the_nearest_name() {
+        let ids = [
+            InstanceId::new("collisions", "ipp-6"),
+            InstanceId::new("kernel", "ipp-6"),
+            InstanceId::new("figures", "ipp-6_kernels"),
+        ];
+        assert_eq!(edit_distance("kernl", "kernel"), 1);
+        assert_eq!(edit_distance("kitten", "sitting"), 3);
+        assert_eq!(
+            unknown_stage("kernl", &ids),
+            "unknown stage `kernl`; did you mean `kernel`? (stages are: collisions, kernel, figures)"
+        );
+        assert!(unknown_stage("colisons", &ids).contains("did you mean `collisions`?"));
+        assert!(!unknown_stage("paper", &ids).contains("did you mean"));
     }
 }

@@ -4,6 +4,13 @@
 //! (`contract`). Numbers are printed to the digits their errors justify
 //! ([`with_error`]); a number that does not exist says why.
 
+mod dag;
+mod layout;
+mod numbers;
+
+pub use dag::{DagFormat, dag};
+pub use numbers::with_error;
+
 use std::collections::{BTreeMap, BTreeSet};
 use std::fmt::Write as _;
 use std::fs::File;
@@ -13,144 +20,44 @@ use anyhow::{Context, Result, bail};
 use polars::prelude::{DataFrame, ParquetReader, SerReader};
 
 use crate::contract::{self, Col, Pair, TableSpec};
-use crate::pipeline::executor::{self, Audit, InstanceReport, Verbosity};
+use crate::pipeline::executor::{self, Audit, Freshness, InstanceReport, StatusLine, Verbosity};
 use crate::pipeline::shards;
 use crate::pipeline::store::{Depth, Store, is_live_staging, listing_problem};
 use crate::pipeline::table::{is_table_file, read_parquet};
 use crate::pipeline::{Cost, InstanceId, Stage};
-
-/// Significant digits of a value printed without an error to round it to.
-const BARE_DIGITS: i32 = 6;
-
-/// Significant digits of a value above which its error is written in the
-/// concise form `1.23456789(12)` rather than as `± 0.00000012`.
-const CONCISE_DIGITS: i32 = 8;
-
-/// `value ± error` to the digits the error justifies: the error with two
-/// significant digits, the value to the same decimal place; in fixed
-/// notation for magnitudes from `1e-4` to `1e6`, otherwise as
-/// `(m ± e)e<exponent>` with one shared exponent. A value known to more than
-/// [`CONCISE_DIGITS`] digits is written `m(ee)`, the error in units of the
-/// last digit. A value that is not a number (NaN, infinite) prints
-/// `undefined`, which says why; a zero error prints as `± 0` after six
-/// significant digits, a missing one as `(no error estimate)`.
-pub fn with_error(value: f64, error: f64, undefined: &str) -> String {
-    written(value, error, undefined, CONCISE_DIGITS)
-}
-
-/// `value(error)` as [`with_error`] writes values known to many digits,
-/// whatever their digits: the short form of a table cell.
-fn concise(value: f64, error: f64, undefined: &str) -> String {
-    written(value, error, undefined, 0)
-}
-
-/// [`with_error`], in the form `m(ee)` from `concise_digits` digits on.
-fn written(value: f64, error: f64, undefined: &str, concise_digits: i32) -> String {
-    if !value.is_finite() {
-        return undefined.to_string();
-    }
-    if !error.is_finite() {
-        return format!("{} (no error estimate)", significant(value));
-    }
-    if error == 0.0 {
-        return format!("{} ± 0", significant(value));
-    }
-    let error = error.abs();
-    // Decimal exponent of the error's second significant digit, after
-    // rounding it to two digits (9.96 rounds to 10: one place up).
-    let mut last = libm::log10(error).floor() as i32 - 1;
-    if (error / 10f64.powi(last)).round() >= 100.0 {
-        last += 1;
-    }
-    let digits = (error / 10f64.powi(last)).round();
-    let rounded = digits * 10f64.powi(last);
-    let magnitude = libm::log10(value.abs().max(rounded)).floor() as i32;
-    let concise = magnitude - last + 1 > concise_digits;
-    if (-4..=5).contains(&magnitude) {
-        // Errors of 100 and more round the value to tens, hundreds, ...
-        let value = if last > 0 {
-            (value / 10f64.powi(last)).round() * 10f64.powi(last)
-        } else {
-            value
-        };
-        let decimals = (-last).max(0) as usize;
-        if concise {
-            format!("{}({digits})", fixed(value, decimals))
-        } else {
-            format!("{} ± {}", fixed(value, decimals), fixed(rounded, decimals))
-        }
-    } else {
-        let scale = 10f64.powi(magnitude);
-        let decimals = (magnitude - last) as usize;
-        if concise {
-            format!("{}({digits})e{magnitude}", fixed(value / scale, decimals))
-        } else {
-            format!(
-                "({} ± {})e{magnitude}",
-                fixed(value / scale, decimals),
-                fixed(rounded / scale, decimals)
-            )
-        }
-    }
-}
-
-/// `x` with `decimals` decimals; a value that rounds to zero has no sign.
-fn fixed(x: f64, decimals: usize) -> String {
-    let text = format!("{x:.decimals$}");
-    match text.strip_prefix('-') {
-        Some(unsigned) if unsigned.chars().all(|c| c == '0' || c == '.') => unsigned.to_string(),
-        _ => text,
-    }
-}
-
-/// `x` to [`BARE_DIGITS`] significant digits without trailing zeros, in
-/// fixed notation for magnitudes from `1e-4` to `1e6`.
-fn significant(x: f64) -> String {
-    if x == 0.0 {
-        return "0".to_string();
-    }
-    let magnitude = libm::log10(x.abs()).floor() as i32;
-    let trim = |digits: &str| -> String {
-        if digits.contains('.') {
-            digits
-                .trim_end_matches('0')
-                .trim_end_matches('.')
-                .to_string()
-        } else {
-            digits.to_string()
-        }
-    };
-    if (-4..=5).contains(&magnitude) {
-        let decimals = (BARE_DIGITS - 1 - magnitude).max(0) as usize;
-        trim(&fixed(x, decimals))
-    } else {
-        let text = format!("{x:.*e}", (BARE_DIGITS - 1) as usize);
-        let (mantissa, exponent) = text.split_once('e').unwrap_or((&text, "0"));
-        format!("{}e{exponent}", trim(mantissa))
-    }
-}
-
-/// `x` as `format` shows it, or `undefined` when it is not a number.
-fn or_why(x: f64, format: impl Fn(f64) -> String, undefined: &str) -> String {
-    if x.is_finite() {
-        format(x)
-    } else {
-        undefined.to_string()
-    }
-}
+use layout::{Align, Cell, Columns};
+use numbers::{Notation, fixed, natural_notation, or_why, significant, written};
 
 /// Cell `col` of `row` as a number (NaN when null).
 fn number(frame: &DataFrame, row: usize, col: Col<f64>) -> Result<f64> {
     Ok(frame.column(col.name)?.f64()?.get(row).unwrap_or(f64::NAN))
 }
 
-/// Cells `pair` of `row` as `value ± error` ([`with_error`]).
-fn estimate(frame: &DataFrame, row: usize, pair: Pair, undefined: &str) -> Result<String> {
-    Ok(with_error(
+/// Cells `pair` of `row` as a `value ± error` cell (`undefined` when the
+/// value is not a number).
+fn estimate(frame: &DataFrame, row: usize, pair: Pair, undefined: &str) -> Result<Cell> {
+    Ok(Cell::estimate(
         number(frame, row, pair.value)?,
         number(frame, row, pair.stderr)?,
         undefined,
     ))
+}
+
+/// Cells `pair` of `row`, a variance of velocities `[v_th^2]`: one whose
+/// value and error are both below the square of the kick floor (1000x the
+/// engine's velocity error) is the integrator's rounding, not a spread (the
+/// integrable n = 2 ring printed `(3.83 ± 0.72)e-23`), and says so.
+fn variance(frame: &DataFrame, row: usize, pair: Pair) -> Result<Cell> {
+    let floor = crate::kernel::DEFAULT_KICK_FLOOR.powi(2);
+    let (value, error) = (
+        number(frame, row, pair.value)?,
+        number(frame, row, pair.stderr)?,
+    );
+    Ok(if value != 0.0 && value.abs() + error < floor {
+        Cell::text(format!("< {floor:e} (engine floor)"))
+    } else {
+        Cell::estimate(value, error, "-")
+    })
 }
 
 /// Cell `col` of `row` as a count (0 when null).
@@ -182,10 +89,21 @@ fn read_frame(path: &Path) -> Result<DataFrame> {
         .with_context(|| format!("reading {}", path.display()))
 }
 
-/// The study table (when computed), the convergence study and the scan peaks
-/// of a run, readable.
-pub fn summary(store: &Store, reports: &[InstanceReport]) -> Result<String> {
+/// What a run computed, readable: `a_n` and the kernel shape, the paper
+/// table and where the figures are; with `details`, then every stage's
+/// table (rates of gases, convergence, evolution, MD and its comparison,
+/// scans, detailed balance), else a line saying how to get them.
+pub fn summary(store: &Store, reports: &[InstanceReport], details: bool) -> Result<String> {
     let mut out = study_table(store, reports)?;
+    out.push_str(&paper_table(store, reports)?);
+    out.push_str(&figures_line(store, reports)?);
+    if !details {
+        writeln!(
+            out,
+            "\nper-stage tables (gases, convergence, evolution, MD, scans, detailed balance): `ternary run --details`"
+        )?;
+        return Ok(out);
+    }
     out.push_str(&gases_table(store, reports)?);
     out.push_str(&convergence_table(store, reports)?);
     out.push_str(&evolve_table(store, reports)?);
@@ -193,7 +111,24 @@ pub fn summary(store: &Store, reports: &[InstanceReport]) -> Result<String> {
     out.push_str(&compare_table(store, reports)?);
     out.push_str(&scan_table(store, reports)?);
     out.push_str(&balance_table(store, reports)?);
-    out.push_str(&paper_table(store, reports)?);
+    Ok(out)
+}
+
+/// How many figures the run's store holds and where (empty when none).
+fn figures_line(store: &Store, reports: &[InstanceReport]) -> Result<String> {
+    let stage = contract::figures::STAGE;
+    let drawn = reports
+        .iter()
+        .filter(|report| report.id.stage == stage && report.action.has_artifact())
+        .count();
+    let mut out = String::new();
+    if drawn > 0 {
+        writeln!(
+            out,
+            "\nfigures: {drawn}, one artifact each under {} (`ternary show {stage}` lists their files)",
+            store.artifact_dir(stage, "").display()
+        )?;
+    }
     Ok(out)
 }
 
@@ -210,39 +145,43 @@ fn balance_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
         out,
         "\ndetailed balance, joint over the pairs of each separation (sum of relative imbalances, correlations from the randomizations; pairs whose error one randomization carries left out)"
     )?;
-    writeln!(
-        out,
-        "{:<10} {:>10} {:>13} {:<26} {:>7}",
-        "potential", "b - a", "pairs counted", "joint imbalance", "z"
-    )?;
+    let mut table = Columns::new(&[
+        ("potential", Align::Left),
+        ("b - a", Align::Right),
+        ("pairs counted", Align::Right),
+        ("joint imbalance", Align::Left),
+        ("z", Align::Right),
+        ("", Align::Left),
+    ]);
     for (instance, frame) in frames {
         for row in 0..frame.height() {
             let share = number(&frame, row, JOINT_LARGEST_SHARE)?;
-            let z = number(&frame, row, JOINT_Z)?;
+            let z = or_why(number(&frame, row, JOINT_Z)?, |z| fixed(z, 2), "-");
             let verdict = if share <= DOMINATED_SHARE {
-                format!("{z:>7.2}")
+                String::new()
             } else if share.is_nan() {
                 "no evidence: no kicks or no pairs".to_string()
             } else {
                 format!(
-                    "{z:>7.2}  no evidence: one randomization carries {:.0}% of the spread",
+                    "no evidence: one randomization carries {:.0}% of the spread",
                     100.0 * share
                 )
             };
-            writeln!(
-                out,
-                "{:<10} {:>10.3} {:>13} {:<26} {verdict}",
-                instance,
-                number(&frame, row, SEPARATION)?,
-                format!(
+            table.push(vec![
+                Cell::text(instance.as_str()),
+                Cell::text(fixed(number(&frame, row, SEPARATION)?, 3)),
+                Cell::text(format!(
                     "{}/{}",
                     count(&frame, row, COUNTED)?,
                     count(&frame, row, PAIRS)?
-                ),
+                )),
                 estimate(&frame, row, JOINT_IMBALANCE, "-")?,
-            )?;
+                Cell::text(z),
+                Cell::text(verdict),
+            ]);
         }
     }
+    out.push_str(&table.render());
     Ok(out)
 }
 
@@ -264,27 +203,38 @@ fn paper_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
     let rest: Vec<usize> = (0..frame.height())
         .filter(|row| !table_i.contains(row))
         .collect();
-    writeln!(
-        out,
-        "{:<4} {:<26} {:<28} {:>9} {:>7}  {:<28} {:<14} quantity [source]",
-        "", "published", "ours", "ours/pub", "z", "converged", "unit"
-    )?;
+    let mut table = Columns::new(&[
+        ("", Align::Right),
+        ("published", Align::Left),
+        ("ours", Align::Left),
+        ("ours/pub", Align::Right),
+        ("z", Align::Right),
+        ("converged", Align::Left),
+        ("unit", Align::Left),
+        ("quantity [source]", Align::Left),
+    ]);
     for &row in &rest {
         let converged_undefined = text(&frame, row, CONVERGED)?;
-        writeln!(
-            out,
-            "{:<4} {:<26} {:<28} {:>9} {:>7}  {:<28} {:<14} {} [{}]",
-            row + 1,
+        table.push(vec![
+            Cell::text((row + 1).to_string()),
             estimate(&frame, row, PUBLISHED, "-")?,
             estimate(&frame, row, OURS, "-")?,
-            format!("{:.4}", 1.0 + number(&frame, row, RELATIVE_DIFFERENCE)?),
-            or_why(number(&frame, row, Z)?, |z| format!("{z:.2}"), "-"),
+            Cell::text(or_why(
+                1.0 + number(&frame, row, RELATIVE_DIFFERENCE)?,
+                |ratio| fixed(ratio, 4),
+                "-",
+            )),
+            Cell::text(or_why(number(&frame, row, Z)?, |z| fixed(z, 2), "-")),
             estimate(&frame, row, OURS_CONVERGED, &converged_undefined)?,
-            text(&frame, row, UNIT)?,
-            text(&frame, row, QUANTITY)?,
-            text(&frame, row, SOURCE)?,
-        )?;
+            Cell::text(text(&frame, row, UNIT)?),
+            Cell::text(format!(
+                "{} [{}]",
+                text(&frame, row, QUANTITY)?,
+                text(&frame, row, SOURCE)?
+            )),
+        ]);
     }
+    out.push_str(&table.render());
     for &row in &rest {
         writeln!(
             out,
@@ -334,7 +284,16 @@ fn table_i_matrix(frame: &DataFrame, rows: &[usize]) -> Result<String> {
         let ours = if error < 1e-6 * value.abs() {
             significant(value)
         } else {
-            concise(value, error, "-")
+            let notation = natural_notation(value, error);
+            written(
+                value,
+                error,
+                "-",
+                Notation {
+                    concise: true,
+                    ..notation
+                },
+            )
         };
         let z = or_why(number(frame, row, Z)?, |z| format!(" ({z:+.1})"), "");
         Ok(format!(
@@ -415,17 +374,15 @@ fn study_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
         out,
         "\nthermalization constants a_n = self variance rate at u' = 0, dilute limit [rho^2 l v_th]; kernel shape near u' (+- standard errors; shape: statistical and fit-protocol errors combined)"
     )?;
-    writeln!(
-        out,
-        "{:<10} {:<26} {:>8} {:<26} {:<20} {:<22} {:>13}",
-        POTENTIAL.name,
-        "a_n (|u-u'| <= window/2)",
-        "rel.err",
-        "a_n untruncated",
-        BETA.value.name,
-        "sigma [v_th]",
-        "failed"
-    )?;
+    let mut table = Columns::new(&[
+        (POTENTIAL.name, Align::Left),
+        ("a_n (|u-u'| <= window/2)", Align::Left),
+        ("rel.err", Align::Right),
+        ("a_n untruncated", Align::Left),
+        (BETA.value.name, Align::Left),
+        ("sigma [v_th]", Align::Left),
+        ("failed", Align::Right),
+    ]);
     for row in 0..frame.height() {
         let (a, a_err) = (
             number(&frame, row, A_N.value)?,
@@ -442,22 +399,21 @@ fn study_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
         } else {
             "no fit"
         };
-        writeln!(
-            out,
-            "{:<10} {:<26} {:>8} {:<26} {:<20} {:<22} {:>13}",
-            text(&frame, row, POTENTIAL)?,
-            with_error(a, a_err, "-"),
-            relative,
+        table.push(vec![
+            Cell::text(text(&frame, row, POTENTIAL)?),
+            Cell::estimate(a, a_err, "-"),
+            Cell::text(relative),
             estimate(&frame, row, A_N_UNTRUNCATED, "-")?,
             estimate(&frame, row, BETA, no_shape)?,
             estimate(&frame, row, SIGMA, no_shape)?,
-            format!(
+            Cell::text(format!(
                 "{}/{}",
                 count(&frame, row, FAILED_EVENTS)?,
                 count(&frame, row, EVENTS)?
-            ),
-        )?;
+            )),
+        ]);
     }
+    out.push_str(&table.render());
     Ok(out)
 }
 
@@ -472,30 +428,27 @@ fn gases_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
         out,
         "\nthermalization rates in physical units (Gamma = a_n rho^2 l v_th, +- standard error)"
     )?;
-    writeln!(
-        out,
-        "{:<22} {:<8} {:>9} {:>11} {:<26} {:<26} {:<24}",
-        GAS.name,
-        POTENTIAL.name,
-        "kT [eV]",
-        "rho l",
-        "Gamma [1/ns] (dilute)",
-        "paper's rule at rho l *",
-        "1/Gamma [ns]"
-    )?;
+    let mut table = Columns::new(&[
+        (GAS.name, Align::Left),
+        (POTENTIAL.name, Align::Left),
+        ("kT [eV]", Align::Right),
+        ("rho l", Align::Right),
+        ("Gamma [1/ns] (dilute)", Align::Left),
+        ("paper's rule at rho l *", Align::Left),
+        ("1/Gamma [ns]", Align::Left),
+    ]);
     for row in 0..frame.height() {
-        writeln!(
-            out,
-            "{:<22} {:<8} {:>9.3e} {:>11.3e} {:<26} {:<26} {:<24}",
-            text(&frame, row, GAS)?,
-            text(&frame, row, POTENTIAL)?,
-            number(&frame, row, KT)?,
-            number(&frame, row, RHO_L)?,
+        table.push(vec![
+            Cell::text(text(&frame, row, GAS)?),
+            Cell::text(text(&frame, row, POTENTIAL)?),
+            Cell::text(format!("{:.3e}", number(&frame, row, KT)?)),
+            Cell::text(format!("{:.3e}", number(&frame, row, RHO_L)?)),
             estimate(&frame, row, GAMMA, "-")?,
             estimate(&frame, row, GAMMA_AT_DENSITY, "-")?,
             estimate(&frame, row, RELAXATION_TIME, "never: no kicks")?,
-        )?;
+        ]);
     }
+    out.push_str(&table.render());
     writeln!(
         out,
         "* Gamma times the paper's launch rule's finite-density factor exp(-r |delay|) in a box of L = kernel.launch_length: an artifact of that algorithm (it depends on L), not the gas's rate at rho l; MD's finite-density change has the opposite sign (finite_size table)"
@@ -513,27 +466,32 @@ fn convergence_table(store: &Store, reports: &[InstanceReport]) -> Result<String
             "\nconvergence of a_n for {} (shift = a_n - default, paired over randomizations)",
             instance
         )?;
-        writeln!(
-            out,
-            "{:<14} {:>10} {:<30} {:<28} {:>16}",
-            PARAMETER.name, VALUE.name, A_N.value.name, SHIFT.value.name, "shift / a_n error"
-        )?;
+        let mut table = Columns::new(&[
+            (PARAMETER.name, Align::Left),
+            (VALUE.name, Align::Right),
+            (A_N.value.name, Align::Left),
+            (SHIFT.value.name, Align::Left),
+            ("shift / a_n error", Align::Right),
+        ]);
         for row in 0..frame.height() {
-            writeln!(
-                out,
-                "{:<14} {:>10} {:<30} {:<28} {:>16}",
-                text(&frame, row, PARAMETER)?,
+            table.push(vec![
+                Cell::text(text(&frame, row, PARAMETER)?),
                 // The default row has no value: it is the configuration itself.
-                or_why(number(&frame, row, VALUE)?, |v| format!("{v:.3e}"), "-"),
+                Cell::text(or_why(
+                    number(&frame, row, VALUE)?,
+                    |v| format!("{v:.3e}"),
+                    "-",
+                )),
                 estimate(&frame, row, A_N, "-")?,
                 estimate(&frame, row, SHIFT, "-")?,
-                or_why(
+                Cell::text(or_why(
                     number(&frame, row, SHIFT_OVER_ERROR)?,
-                    |z| format!("{z:.3}"),
-                    "-"
-                ),
-            )?;
+                    |z| fixed(z, 3),
+                    "-",
+                )),
+            ]);
         }
+        out.push_str(&table.render());
     }
     Ok(out)
 }
@@ -547,29 +505,26 @@ fn evolve_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
             out,
             "\nevolution of h from delta(u - u') for {instance}: full = linearized operator, tagged = special particle, fokker_planck (+- jackknife errors)"
         )?;
-        writeln!(
-            out,
-            "{:<14} {:>10} {:>9} {:<28} {:<26} {:<26}",
-            PROCESS.name,
-            "t Gamma",
-            "t [ns]",
-            "<(u-u')^2>, |u-u'|<=X",
-            "<(u-u')^2>",
-            "L1 distance to equilibrium"
-        )?;
+        let mut table = Columns::new(&[
+            (PROCESS.name, Align::Left),
+            ("t Gamma", Align::Right),
+            ("t [ns]", Align::Right),
+            ("<(u-u')^2>, |u-u'|<=X", Align::Left),
+            ("<(u-u')^2>", Align::Left),
+            ("L1 distance to equilibrium", Align::Left),
+        ]);
         for row in 0..frame.height() {
-            writeln!(
-                out,
-                "{:<14} {:>10.3e} {:>9} {:<28} {:<26} {:<26}",
-                text(&frame, row, PROCESS)?,
-                number(&frame, row, TIME_GAMMA)?,
+            table.push(vec![
+                Cell::text(text(&frame, row, PROCESS)?),
+                Cell::text(format!("{:.3e}", number(&frame, row, TIME_GAMMA)?)),
                 // Times given in 1/Gamma have no time in ns.
-                or_why(number(&frame, row, TIME_NS)?, |t| format!("{t:.0}"), "-"),
+                Cell::text(or_why(number(&frame, row, TIME_NS)?, |t| fixed(t, 0), "-")),
                 estimate(&frame, row, WINDOW_VARIANCE, "-")?,
                 estimate(&frame, row, VARIANCE, "-")?,
                 estimate(&frame, row, DISTANCE_TO_EQUILIBRIUM, "-")?,
-            )?;
+            ]);
         }
+        out.push_str(&table.render());
     }
     Ok(out)
 }
@@ -586,26 +541,23 @@ fn md_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
         out,
         "\nring molecular dynamics: h(u, t_f) within the window (+- standard errors over runs)"
     )?;
-    writeln!(
-        out,
-        "{:<22} {:<10} {:<24} {:<28}",
-        contract::compare::RING.name,
-        ESTIMATOR.name,
-        "sum h du",
-        "<(u-u')^2>_window [v_th^2]"
-    )?;
+    let mut table = Columns::new(&[
+        (contract::compare::RING.name, Align::Left),
+        (ESTIMATOR.name, Align::Left),
+        ("sum h du", Align::Left),
+        ("<(u-u')^2>_window [v_th^2]", Align::Left),
+    ]);
     for (instance, frame) in frames {
         for row in 0..frame.height() {
-            writeln!(
-                out,
-                "{:<22} {:<10} {:<24} {:<28}",
-                instance,
-                text(&frame, row, ESTIMATOR)?,
+            table.push(vec![
+                Cell::text(instance.as_str()),
+                Cell::text(text(&frame, row, ESTIMATOR)?),
                 estimate(&frame, row, NUMBER, "-")?,
-                estimate(&frame, row, WINDOW_VARIANCE, "-")?,
-            )?;
+                variance(&frame, row, WINDOW_VARIANCE)?,
+            ]);
         }
     }
+    out.push_str(&table.render());
     out.push_str(&bound_pairs_table(store, reports)?);
     Ok(out)
 }
@@ -621,74 +573,74 @@ fn compare_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
             out,
             "\nMD against Boltzmann and the scaling collapse: chi2 per degree of freedom with the variance MD would have if it followed the reference, its p-value, and (sample) with the runs' own errors"
         )?;
-        writeln!(
-            out,
-            "{:<22} {:<22} {:<10} {:>8} {:>5} {:>9} {:>15}",
-            goodness::RING.name,
-            goodness::REFERENCE.name,
-            goodness::ESTIMATOR.name,
-            "chi2/dof",
-            goodness::DOF.name,
-            "p",
-            "sample chi2/dof"
-        )?;
+        let mut table = Columns::new(&[
+            (goodness::RING.name, Align::Left),
+            (goodness::REFERENCE.name, Align::Left),
+            (goodness::ESTIMATOR.name, Align::Left),
+            ("chi2/dof", Align::Right),
+            (goodness::DOF.name, Align::Right),
+            ("p", Align::Right),
+            ("sample chi2/dof", Align::Right),
+        ]);
         for row in 0..frame.height() {
             // No bin with a variance: nothing to compare.
             let reduced = |col| -> Result<String> {
                 Ok(or_why(
                     number(&frame, row, col)?,
-                    |c| format!("{c:.2}"),
+                    |c| fixed(c, 2),
                     "no bins",
                 ))
             };
-            writeln!(
-                out,
-                "{:<22} {:<22} {:<10} {:>8} {:>5} {:>9} {:>15}",
-                text(&frame, row, goodness::RING)?,
-                text(&frame, row, goodness::REFERENCE)?,
-                text(&frame, row, goodness::ESTIMATOR)?,
-                reduced(goodness::CHI2_PER_DOF)?,
-                count(&frame, row, goodness::DOF)?,
-                or_why(
+            table.push(vec![
+                Cell::text(text(&frame, row, goodness::RING)?),
+                Cell::text(text(&frame, row, goodness::REFERENCE)?),
+                Cell::text(text(&frame, row, goodness::ESTIMATOR)?),
+                Cell::text(reduced(goodness::CHI2_PER_DOF)?),
+                Cell::text(count(&frame, row, goodness::DOF)?.to_string()),
+                Cell::text(or_why(
                     number(&frame, row, goodness::P_VALUE)?,
                     |p| format!("{p:.2e}"),
-                    "-"
-                ),
-                format!(
+                    "-",
+                )),
+                Cell::text(format!(
                     "{} ({})",
                     reduced(goodness::SAMPLE_CHI2_PER_DOF)?,
                     count(&frame, row, goodness::SAMPLE_DOF)?
-                ),
-            )?;
+                )),
+            ]);
         }
+        out.push_str(&table.render());
     }
     for (_, frame) in table_frames(store, reports, &finite_size::TABLE)? {
         writeln!(
             out,
             "\nfinite size and density: window variance at t_f, MD / Boltzmann (+- standard errors); tagged: starts near u', thermal: every start"
         )?;
-        writeln!(
-            out,
-            "{:<22} {:>5} {:>10} {:>16} {:<24} {:<24}",
-            finite_size::RING.name,
-            "N",
-            "rho l",
-            "rho^2 l v_th t_f",
-            estimator::TAGGED,
-            estimator::THERMAL
-        )?;
+        let mut table = Columns::new(&[
+            (finite_size::RING.name, Align::Left),
+            ("N", Align::Right),
+            ("rho l", Align::Right),
+            ("rho^2 l v_th t_f", Align::Right),
+            (estimator::TAGGED, Align::Left),
+            (estimator::THERMAL, Align::Left),
+        ]);
         for row in 0..frame.height() {
-            writeln!(
-                out,
-                "{:<22} {:>5} {:>10.3e} {:>16.4e} {:<24} {:<24}",
-                text(&frame, row, finite_size::RING)?,
-                count(&frame, row, finite_size::PARTICLES)?,
-                number(&frame, row, finite_size::DENSITY)?,
-                number(&frame, row, finite_size::SCALED_TIME)?,
+            table.push(vec![
+                Cell::text(text(&frame, row, finite_size::RING)?),
+                Cell::text(count(&frame, row, finite_size::PARTICLES)?.to_string()),
+                Cell::text(format!(
+                    "{:.3e}",
+                    number(&frame, row, finite_size::DENSITY)?
+                )),
+                Cell::text(format!(
+                    "{:.4e}",
+                    number(&frame, row, finite_size::SCALED_TIME)?
+                )),
                 estimate(&frame, row, finite_size::RATIO, "0/0: no spread")?,
                 estimate(&frame, row, finite_size::THERMAL_RATIO, "0/0: no spread")?,
-            )?;
+            ]);
         }
+        out.push_str(&table.render());
     }
     Ok(out)
 }
@@ -697,39 +649,35 @@ fn compare_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
 fn scan_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
     use contract::scan::{LAUNCH, peak::*};
     let mut out = String::new();
-    for (k, (instance, frame)) in table_frames(store, reports, &TABLE)?
-        .into_iter()
-        .enumerate()
-    {
-        if k == 0 {
-            writeln!(
-                out,
-                "\nmono-energetic scans: largest |u1f| (error bound) and its arrival offset"
-            )?;
-            writeln!(
-                out,
-                "{:<10} {:<12} {:<34} {:<30} {:>6} {:>12}",
-                contract::POTENTIAL.name,
-                LAUNCH.name,
-                "|u1f,max| [v_th]",
-                "offset [l/v_th]",
-                "failed",
-                "max |dE/E|"
-            )?;
-        }
+    let frames = table_frames(store, reports, &TABLE)?;
+    if frames.is_empty() {
+        return Ok(out);
+    }
+    writeln!(
+        out,
+        "\nmono-energetic scans: largest |u1f| (error bound) and its arrival offset"
+    )?;
+    let mut table = Columns::new(&[
+        (contract::POTENTIAL.name, Align::Left),
+        (LAUNCH.name, Align::Left),
+        ("|u1f,max| [v_th]", Align::Left),
+        ("offset [l/v_th]", Align::Left),
+        ("failed", Align::Right),
+        ("max |dE/E|", Align::Right),
+    ]);
+    for (instance, frame) in frames {
         for row in 0..frame.height() {
-            writeln!(
-                out,
-                "{:<10} {:<12} {:<34} {:<30} {:>6} {:>12.1e}",
-                instance,
-                text(&frame, row, LAUNCH)?,
+            table.push(vec![
+                Cell::text(instance.as_str()),
+                Cell::text(text(&frame, row, LAUNCH)?),
                 estimate(&frame, row, U1_FINAL_MAX_ABS, "-")?,
                 estimate(&frame, row, ARRIVAL_OFFSET_AT_MAX, "no peak")?,
-                count(&frame, row, FAILED_SCENES)?,
-                number(&frame, row, WORST_ENERGY_ERROR)?,
-            )?;
+                Cell::text(count(&frame, row, FAILED_SCENES)?.to_string()),
+                Cell::text(format!("{:.1e}", number(&frame, row, WORST_ENERGY_ERROR)?)),
+            ]);
         }
     }
+    out.push_str(&table.render());
     Ok(out)
 }
 
@@ -739,7 +687,7 @@ fn bound_pairs_table(store: &Store, reports: &[InstanceReport]) -> Result<String
     use contract::md::pairs::*;
     let mut out = String::new();
     for (instance, frame) in table_frames(store, reports, &TABLE)? {
-        let bound = |state: &str| -> Result<String> {
+        let bound = |state: &str| -> Result<Cell> {
             estimate(&frame, row_of(&frame, STATE, state)?, BOUND_FRACTION, "-")
         };
         let dilute = number(
@@ -758,21 +706,6 @@ fn bound_pairs_table(store: &Store, reports: &[InstanceReport]) -> Result<String
         }
     }
     Ok(out)
-}
-
-/// The DAG as text: one line per instance with its inputs.
-pub fn dag(stages: &[Box<dyn Stage>]) -> String {
-    let mut out = String::new();
-    for stage in stages {
-        let inputs: Vec<String> = stage.inputs().iter().map(ToString::to_string).collect();
-        let from = if inputs.is_empty() {
-            "(source)".to_string()
-        } else {
-            format!("<- {}", inputs.join(", "))
-        };
-        let _ = writeln!(out, "{:<24} {from}", stage.id().to_string());
-    }
-    out
 }
 
 /// Checks every artifact down to its tables' content hashes (and, for stages
@@ -852,9 +785,74 @@ pub fn total_cost<'a>(costs: impl IntoIterator<Item = &'a Cost>) -> Cost {
     })
 }
 
+/// `status` before its estimate: the count of instances by freshness, then
+/// one line per instance (only those not fresh when `changed`) with why, and
+/// with `shards > 1` which shards of a shardable one are done.
+pub fn status(lines: &[StatusLine], shards: u32, changed: bool) -> String {
+    let shown: Vec<&StatusLine> = lines
+        .iter()
+        .filter(|line| !changed || line.freshness != Freshness::Fresh)
+        .collect();
+    let width = shown
+        .iter()
+        .map(|line| line.id.to_string().chars().count())
+        .max()
+        .unwrap_or(0);
+    let mut out = status_summary(lines);
+    for line in shown {
+        let key = line.key.as_deref().map_or("", |key| &key[..12]);
+        let state = match &line.freshness {
+            Freshness::Fresh => format!("fresh (key {key})"),
+            Freshness::Stale(reasons) => format!("stale: {}", reasons.join("; ")),
+            Freshness::Damaged(problems) => format!(
+                "damaged (key {key}): {} (the next run recomputes it)",
+                problems.join("; ")
+            ),
+            Freshness::Missing(reason) => format!("missing: {reason}"),
+        };
+        let progress = line.shards.as_ref().map_or(String::new(), |progress| {
+            format!(
+                " (shards: {} of {shards} done, missing {:?})",
+                progress.done.len(),
+                progress.missing
+            )
+        });
+        let _ = writeln!(out, "{:<width$}  {state}{progress}", line.id.to_string());
+    }
+    out
+}
+
+/// The first line of `status`: `N instances: F fresh, S stale, M missing`,
+/// and the damaged ones when there are any.
+fn status_summary(lines: &[StatusLine]) -> String {
+    let count = |name: &str| {
+        lines
+            .iter()
+            .filter(|line| line.freshness.name() == name)
+            .count()
+    };
+    let damaged = match count("damaged") {
+        0 => String::new(),
+        damaged => format!(", {damaged} damaged"),
+    };
+    format!(
+        "{} instances: {} fresh, {} stale, {} missing{damaged}\n",
+        lines.len(),
+        count("fresh"),
+        count("stale"),
+        count("missing"),
+    )
+}
+
 /// The closing line of `status`: the estimated CPU time and store size of
-/// the whole study and of the instances in `unfresh` (still to compute).
-pub fn cost_estimate(costs: &[(InstanceId, Cost)], unfresh: &BTreeSet<InstanceId>) -> String {
+/// the whole study and of its instances in `lines` that are not fresh
+/// (still to compute).
+pub fn cost_estimate(costs: &[(InstanceId, Cost)], lines: &[StatusLine]) -> String {
+    let unfresh: BTreeSet<&InstanceId> = lines
+        .iter()
+        .filter(|line| line.freshness != Freshness::Fresh)
+        .map(|line| &line.id)
+        .collect();
     let whole = total_cost(costs.iter().map(|(_, cost)| cost));
     let pending = total_cost(
         costs
@@ -1003,45 +1001,137 @@ fn show_file(path: &Path, rows: usize) -> Result<String> {
     Ok(out)
 }
 
-/// An artifact (by key or unique key prefix, or its directory) or a Parquet
-/// file, and the number of problems of an artifact looked up by key (checked
-/// to its file hashes; a damaged one is shown under a warning).
-pub fn show(store: Option<&Store>, target: &str, rows: usize) -> Result<(String, usize)> {
+/// What `ternary show` shows, and the number of problems of an artifact
+/// looked up in the store (checked to its file hashes; a damaged one is shown
+/// under a warning). `target` is a Parquet file or an artifact directory; a
+/// stage of `plan` (its current instances, their keys and files); an
+/// instance `stage[instance]` (its current artifact); or an artifact key or
+/// unique key prefix of at least 6 characters.
+pub fn show(
+    store: Option<&Store>,
+    plan: &[Box<dyn Stage>],
+    target: &str,
+    rows: usize,
+) -> Result<(String, usize)> {
     let path = Path::new(target);
     if path.is_file() {
         return Ok((show_file(path, rows)?, 0));
     }
-    let mut problems = Vec::new();
-    let dir = if path.is_dir() {
-        path.to_path_buf()
-    } else {
-        let Some(store) = store else {
-            bail!(
-                "`{target}` is neither a file nor a directory, and no store is open to look up keys"
-            )
-        };
-        if target.len() < 6 {
-            bail!("`{target}`: give at least 6 characters of a key, or a path");
-        }
-        let matches: Vec<(String, String)> = store
-            .artifacts()?
-            .into_iter()
-            .filter(|(_, key)| key.starts_with(target))
-            .collect();
-        match matches.as_slice() {
-            [(stage, key)] => {
-                if let Err(found) = store.inspect(stage, key, None, Depth::Hashes) {
-                    problems = found;
-                }
-                store.artifact_dir(stage, key)
-            }
-            [] => bail!(
-                "no artifact key starts with `{target}` in {}",
-                store.root().display()
-            ),
-            _ => bail!("`{target}` is ambiguous: {} artifacts match", matches.len()),
-        }
+    if path.is_dir() {
+        return Ok((show_artifact(path, &[], rows)?, 0));
+    }
+    let Some(store) = store else {
+        bail!("`{target}` is neither a file nor a directory, and no store is open to look up keys")
     };
+    if plan.iter().any(|stage| stage.id().stage == target) {
+        return Ok((show_stage(store, plan, target)?, 0));
+    }
+    let (stage, key) = match target.strip_suffix(']').and_then(|t| t.split_once('[')) {
+        Some((stage, instance)) => {
+            current_artifact(store, plan, &InstanceId::new(stage, instance))?
+        }
+        None => artifact_by_prefix(store, target)?,
+    };
+    let problems = store
+        .inspect(&stage, &key, None, Depth::Hashes)
+        .err()
+        .unwrap_or_default();
+    let text = show_artifact(&store.artifact_dir(&stage, &key), &problems, rows)?;
+    Ok((text, problems.len()))
+}
+
+/// The current instances of `stage`: freshness and key of each, and the
+/// files of those with an artifact under their current key.
+fn show_stage(store: &Store, plan: &[Box<dyn Stage>], stage: &str) -> Result<String> {
+    let lines: Vec<StatusLine> = executor::status(store, plan, 1)?
+        .into_iter()
+        .filter(|line| line.id.stage == stage)
+        .collect();
+    let mut out = String::new();
+    writeln!(
+        out,
+        "{stage}: {} instances (`ternary show '{stage}[<instance>]'` shows one)",
+        lines.len()
+    )?;
+    for line in &lines {
+        let key = line.key.as_deref().unwrap_or("(inputs not computed)");
+        writeln!(out, "{}  {}  key {key}", line.id, line.freshness.name())?;
+        let Some(key) = line
+            .key
+            .as_deref()
+            .filter(|_| matches!(line.freshness, Freshness::Fresh | Freshness::Damaged(_)))
+        else {
+            continue;
+        };
+        let dir = store.artifact_dir(stage, key);
+        if let Ok(manifest) = store.inspect(stage, key, None, Depth::Sizes) {
+            for file in &manifest.files {
+                writeln!(
+                    out,
+                    "    {} ({})",
+                    dir.join(&file.name).display(),
+                    size(file.bytes as f64)
+                )?;
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// The stage and current key of instance `id` of `plan` when its artifact
+/// exists (intact or damaged); otherwise why there is none.
+fn current_artifact(
+    store: &Store,
+    plan: &[Box<dyn Stage>],
+    id: &InstanceId,
+) -> Result<(String, String)> {
+    executor::check_stage_names(plan, std::slice::from_ref(&id.stage))
+        .map_err(anyhow::Error::msg)?;
+    let line = executor::status(store, plan, 1)?
+        .into_iter()
+        .find(|line| &line.id == id)
+        .with_context(|| {
+            format!(
+                "no instance `{id}` in the study (`ternary show {}` lists them)",
+                id.stage
+            )
+        })?;
+    let why = match line.freshness {
+        Freshness::Fresh | Freshness::Damaged(_) => {
+            let key = line.key.with_context(|| format!("{id} has no key"))?;
+            return Ok((id.stage.clone(), key));
+        }
+        Freshness::Stale(reasons) => format!("stale: {}", reasons.join("; ")),
+        Freshness::Missing(reason) => format!("missing: {reason}"),
+    };
+    bail!("{id} has no artifact under its current key ({why}); `ternary run` computes it")
+}
+
+/// The artifact whose key starts with `prefix` (at least 6 characters).
+fn artifact_by_prefix(store: &Store, prefix: &str) -> Result<(String, String)> {
+    if prefix.len() < 6 {
+        bail!(
+            "`{prefix}` is not a stage, an instance `stage[instance]` or a path; give at least 6 characters of a key"
+        );
+    }
+    let mut matches: Vec<(String, String)> = store
+        .artifacts()?
+        .into_iter()
+        .filter(|(_, key)| key.starts_with(prefix))
+        .collect();
+    match matches.len() {
+        1 => Ok(matches.remove(0)),
+        0 => bail!(
+            "no stage, instance or artifact key `{prefix}` in {} (`ternary dag --stages` lists the stages)",
+            store.root().display()
+        ),
+        n => bail!("`{prefix}` is ambiguous: {n} artifacts match"),
+    }
+}
+
+/// The artifact in `dir`: its manifest, under a warning naming `problems`
+/// when it has any, then each table ([`show_file`]) and other file.
+fn show_artifact(dir: &Path, problems: &[String], rows: usize) -> Result<String> {
     let manifest_path = dir.join("manifest.json");
     let manifest = std::fs::read_to_string(&manifest_path)
         .with_context(|| format!("reading {}", manifest_path.display()))?;
@@ -1069,71 +1159,5 @@ pub fn show(store: Option<&Store>, target: &str, rows: usize) -> Result<(String,
             )?;
         }
     }
-    Ok((out, problems.len()))
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// Two significant digits of the error, the value to the same place.
-    #[test]
-    fn values_are_rounded_to_the_error() {
-        assert_eq!(
-            with_error(3.1234e-4, 1.234e-6, "-"),
-            "0.0003123 ± 0.0000012"
-        );
-        assert_eq!(with_error(1.23456, 0.0123, "-"), "1.235 ± 0.012");
-        assert_eq!(with_error(12345.0, 234.0, "-"), "12350 ± 230");
-    }
-
-    /// A value known to more digits than fit a line gives its error in units
-    /// of its last digit.
-    #[test]
-    fn precise_values_are_concise() {
-        assert_eq!(
-            with_error(-0.51370614225, 7.7e-10, "-"),
-            "-0.51370614225(77)"
-        );
-        assert_eq!(
-            with_error(3.0787446190007e7, 6.0e-2, "-"),
-            "3.0787446190(60)e7"
-        );
-        assert_eq!(
-            with_error(0.012345678, 1.2e-8, "-"),
-            "0.012345678 ± 0.000000012"
-        );
-    }
-
-    /// An error that rounds up to the next power of ten keeps two digits.
-    #[test]
-    fn an_error_rounding_up_keeps_two_digits() {
-        assert_eq!(with_error(0.5, 0.00996, "-"), "0.500 ± 0.010");
-    }
-
-    /// Very small or large magnitudes share one exponent.
-    #[test]
-    fn small_and_large_magnitudes_share_an_exponent() {
-        assert_eq!(with_error(2.5e-9, 1.2e-11, "-"), "(2.500 ± 0.012)e-9");
-        assert_eq!(with_error(4.14864e6, 6.6e4, "-"), "(4.149 ± 0.066)e6");
-        assert_eq!(with_error(-1.85e-17, 1.8e-15, "-"), "(0.0 ± 1.8)e-15");
-    }
-
-    /// A value that rounds to zero carries no sign.
-    #[test]
-    fn a_value_rounding_to_zero_has_no_sign() {
-        assert_eq!(with_error(-1e-9, 1e-3, "-"), "0.0000 ± 0.0010");
-    }
-
-    /// Zero and missing errors, and values that are not numbers, say so.
-    #[test]
-    fn missing_numbers_say_why() {
-        assert_eq!(with_error(0.0, 0.0, "-"), "0 ± 0");
-        assert_eq!(with_error(1.1637580872059066, 0.0, "-"), "1.16376 ± 0");
-        assert_eq!(with_error(2.0, f64::NAN, "-"), "2 (no error estimate)");
-        assert_eq!(with_error(f64::NAN, f64::NAN, "no fit"), "no fit");
-        assert_eq!(with_error(f64::INFINITY, f64::NAN, "never"), "never");
-        assert_eq!(significant(4.14864123e7), "4.14864e7");
-        assert_eq!(significant(0.0154299), "0.0154299");
-    }
+    Ok(out)
 }
