@@ -136,15 +136,15 @@ fn figures_line(store: &Store, reports: &[InstanceReport]) -> Result<String> {
 fn balance_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
     use crate::kernel::equilibrium::DOMINATED_SHARE;
     use contract::sweep::balance_tests::*;
-    let frames = table_frames(store, reports, &TABLE)?;
-    let mut out = String::new();
-    if frames.is_empty() {
-        return Ok(out);
-    }
-    writeln!(
-        out,
-        "\ndetailed balance, joint over the pairs of each separation (sum of relative imbalances, correlations from the randomizations; pairs whose error one randomization carries left out)"
-    )?;
+    let Some((mut out, frames)) = titled_frames(
+        store,
+        reports,
+        &TABLE,
+        "detailed balance, joint over the pairs of each separation (sum of relative imbalances, correlations from the randomizations; pairs whose error one randomization carries left out)",
+    )?
+    else {
+        return Ok(String::new());
+    };
     let mut table = Columns::new(&[
         ("potential", Align::Left),
         ("b - a", Align::Right),
@@ -341,6 +341,18 @@ fn table_i_matrix(frame: &DataFrame, rows: &[usize]) -> Result<String> {
     Ok(out)
 }
 
+/// The frames of `spec`'s table with the output opened by the line `title`,
+/// or `None` when no instance has the table.
+fn titled_frames(
+    store: &Store,
+    reports: &[InstanceReport],
+    spec: &TableSpec,
+    title: &str,
+) -> Result<Option<(String, Vec<(String, DataFrame)>)>> {
+    let frames = table_frames(store, reports, spec)?;
+    Ok((!frames.is_empty()).then(|| (format!("\n{title}\n"), frames)))
+}
+
 /// The table `spec` of every intact artifact of its stage in a run.
 fn table_frames(
     store: &Store,
@@ -532,15 +544,15 @@ fn evolve_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
 /// The `md` stage's summaries: moments of `h(u, t_f)` by both estimators.
 fn md_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
     use contract::md::summary::*;
-    let mut out = String::new();
-    let frames = table_frames(store, reports, &TABLE)?;
-    if frames.is_empty() {
-        return Ok(out);
-    }
-    writeln!(
-        out,
-        "\nring molecular dynamics: h(u, t_f) within the window (+- standard errors over runs)"
-    )?;
+    let Some((mut out, frames)) = titled_frames(
+        store,
+        reports,
+        &TABLE,
+        "ring molecular dynamics: h(u, t_f) within the window (+- standard errors over runs)",
+    )?
+    else {
+        return Ok(String::new());
+    };
     let mut table = Columns::new(&[
         (contract::compare::RING.name, Align::Left),
         (ESTIMATOR.name, Align::Left),
@@ -648,15 +660,15 @@ fn compare_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
 /// The `scan` stages' peaks: largest `|u1f|` per launch pair.
 fn scan_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
     use contract::scan::{LAUNCH, peak::*};
-    let mut out = String::new();
-    let frames = table_frames(store, reports, &TABLE)?;
-    if frames.is_empty() {
-        return Ok(out);
-    }
-    writeln!(
-        out,
-        "\nmono-energetic scans: largest |u1f| (error bound) and its arrival offset"
-    )?;
+    let Some((mut out, frames)) = titled_frames(
+        store,
+        reports,
+        &TABLE,
+        "mono-energetic scans: largest |u1f| (error bound) and its arrival offset",
+    )?
+    else {
+        return Ok(String::new());
+    };
     let mut table = Columns::new(&[
         (contract::POTENTIAL.name, Align::Left),
         (LAUNCH.name, Align::Left),
