@@ -286,8 +286,8 @@ fn expected(store: &Path, figure: &Artifact) -> Vec<Row> {
             };
             let rings = texts(&params["rings"]);
             let mut rows = of(rings[0], "Boltzmann", &H_BOLTZMANN);
-            for ring in &rings {
-                rows.extend(of(ring, ring, &H_TAGGED));
+            for (ring, label) in rings.iter().zip(texts(&params["labels"])) {
+                rows.extend(of(ring, label, &H_TAGGED));
             }
             rows
         }
@@ -647,26 +647,43 @@ fn series_per_panel(figure: &Artifact) -> Vec<Vec<String>> {
     panels.into_iter().map(|(_, names)| names).collect()
 }
 
+/// A journal column, cm: the printed width of a column figure.
+const COLUMN_CM: f64 = 8.6;
+
+/// The resolution a PNG's `pHYs` chunk states: px per metre along x and y.
+fn stated_resolution(reader: &png::Reader<std::io::BufReader<fs::File>>) -> (u32, u32) {
+    let dims = reader.info().pixel_dims.expect("a pHYs chunk");
+    assert_eq!(dims.unit, png::Unit::Meter);
+    (dims.xppu, dims.yppu)
+}
+
 #[test]
-fn every_png_decodes_at_its_size_with_every_series_drawn() {
+fn every_png_decodes_at_its_size_and_resolution_with_every_series_drawn() {
     let store = reduced_study("figures-png");
     for figure in figures(&store) {
         let colours: BTreeSet<[u8; 3]> = colours_per_panel(&figure).into_iter().flatten().collect();
-        for size in [Size::COLUMN_PNG, Size::SCREEN] {
+        // 600 dpi on paper, 96 on a screen: 600 / 0.0254 m and 96 / 0.0254 m.
+        for (size, per_metre) in [(Size::COLUMN_PNG, 23622), (Size::SCREEN, 3780)] {
             let file = figure
                 .dir
                 .join(format!("{}{}.png", figure.name(), size.suffix));
             let decoder =
                 png::Decoder::new(std::io::BufReader::new(fs::File::open(&file).unwrap()));
             let mut reader = decoder.read_info().unwrap();
+            let what = file.display();
+            assert_eq!(stated_resolution(&reader), (per_metre, per_metre), "{what}");
             let mut pixels = vec![0; reader.output_buffer_size()];
             let frame = reader.next_frame(&mut pixels).unwrap();
-            let what = file.display();
             assert_eq!(
                 (frame.width, frame.height),
                 (size.width, size.panel_height * figure.panels()),
                 "{what}"
             );
+            if size == Size::COLUMN_PNG {
+                // Width over resolution: the printed width, within 0.1 mm.
+                let width_cm = 100.0 * f64::from(frame.width) / f64::from(per_metre);
+                assert!((width_cm - COLUMN_CM).abs() < 0.01, "{what}: {width_cm} cm");
+            }
             assert_eq!(frame.color_type, png::ColorType::Rgb, "{what}");
             let rgb: Vec<[u8; 3]> = pixels.chunks(3).map(|p| [p[0], p[1], p[2]]).collect();
             let inked = rgb.iter().filter(|p| **p != [255, 255, 255]).count();
@@ -685,9 +702,64 @@ fn every_png_decodes_at_its_size_with_every_series_drawn() {
     }
 }
 
+/// The vertices of an SVG `points` attribute scaled by `px_per_unit`.
+fn vertices(points: &str, px_per_unit: f64) -> Vec<(f64, f64)> {
+    points
+        .split_whitespace()
+        .map(|pair| {
+            let (x, y) = pair.split_once(',').unwrap();
+            let coordinate = |v: &str| v.parse::<f64>().unwrap() * px_per_unit;
+            (coordinate(x), coordinate(y))
+        })
+        .collect()
+}
+
+/// A column SVG's long lines (100 vertices or more) keep their shape: in
+/// pixels of the figure, their vertices carry fractions of a pixel and are
+/// distinct (not snapped onto a staircase); returns how many it has.
+fn long_lines_are_smooth(root: roxmltree::Node, what: &str) -> usize {
+    let view_width: f64 = root
+        .attribute("viewBox")
+        .unwrap()
+        .split_whitespace()
+        .nth(2)
+        .unwrap()
+        .parse()
+        .unwrap();
+    let px_per_unit = root.attribute("width").unwrap().parse::<f64>().unwrap() / view_width;
+    let lines: Vec<Vec<(f64, f64)>> = root
+        .descendants()
+        .filter(|node| node.has_tag_name("polyline"))
+        .map(|node| vertices(node.attribute("points").unwrap(), px_per_unit))
+        .filter(|line| line.len() >= 100)
+        .collect();
+    for line in &lines {
+        let fractional = line
+            .iter()
+            .filter(|(x, y)| x.fract() != 0.0 || y.fract() != 0.0)
+            .count();
+        assert!(
+            fractional * 2 > line.len(),
+            "{what}: {fractional} of {} vertices off whole pixels",
+            line.len()
+        );
+        let mut distinct: Vec<(f64, f64)> = line.clone();
+        distinct.sort_by(|a, b| a.partial_cmp(b).unwrap());
+        distinct.dedup();
+        assert!(
+            distinct.len() * 100 >= line.len() * 98,
+            "{what}: {} distinct of {} vertices",
+            distinct.len(),
+            line.len()
+        );
+    }
+    lines.len()
+}
+
 #[test]
-fn every_svg_parses_with_one_legend_entry_per_series() {
+fn every_svg_parses_with_one_legend_entry_per_series_in_dejavu_sans_and_smooth_lines() {
     let store = reduced_study("figures-svg");
+    let mut long_lines = 0;
     for figure in figures(&store) {
         let panels = series_per_panel(&figure);
         for size in [Size::COLUMN_SVG, Size::SCREEN] {
@@ -706,6 +778,14 @@ fn every_svg_parses_with_one_legend_entry_per_series() {
                 "{what}"
             );
             assert_eq!(root.attribute("height"), Some(height.as_str()), "{what}");
+            for text in root.descendants().filter(|node| node.has_tag_name("text")) {
+                let family = text.attribute("font-family").unwrap();
+                assert!(family.starts_with("'DejaVu Sans', "), "{what}: {family}");
+                assert!(family.ends_with(", sans-serif"), "{what}: {family}");
+            }
+            if size == Size::COLUMN_SVG {
+                long_lines += long_lines_are_smooth(root, &what.to_string());
+            }
             let labels: Vec<String> = root
                 .descendants()
                 .filter(|node| node.has_tag_name("text"))
@@ -729,6 +809,7 @@ fn every_svg_parses_with_one_legend_entry_per_series() {
             }
         }
     }
+    assert!(long_lines > 0, "no long line to check");
 }
 
 #[test]

@@ -63,18 +63,11 @@ fn work_precision_panel(
     style: Style,
 ) -> Panel {
     // Errors span up to ten decades (integrator tolerances 1e-5..1e-14).
-    Panel {
-        name,
-        x: Axis::log(x),
-        y: Axis {
-            decades: 12,
-            ..Axis::log(y)
-        },
-        marks: Vec::new(),
-        styles: vec![("", style)],
-        paired: false,
-        dodge: false,
-    }
+    let y = Axis {
+        decades: 12,
+        ..Axis::log(y)
+    };
+    Panel::new(name, Axis::log(x), y, vec![("", style)])
 }
 
 /// A point of `series` in `panel`; only positive errors can be drawn on log axes.

@@ -68,6 +68,8 @@ pub enum Figure {
     Collapse {
         /// The rings (rows of the comparison table), the first also gives Boltzmann.
         rings: Vec<String>,
+        /// The legend label of each ring (`N = 161, R = 51.2 mm, 100 meV`).
+        labels: Vec<String>,
     },
     /// The tagged particle's `h(u, t)` approaching `f0` (a) and the early
     /// variance growing as `t kappa_2` (b).
@@ -159,7 +161,7 @@ impl Figure {
                 "G(0 -> u) of every Lennard-Jones theta = kT/eps (u' = 0, dilute, units of l = l0 (eps/kT)^(1/6)) against u - u' > 0, log axes, +- standard error; bins grouped 20 per decade, groups with relative error above 0.5 left out"
             }
             Figure::KernelFit { .. } => {
-                "G(0 -> u) against u - u' > 0 with the fitted shape alpha x^-beta exp(-x^2 / 2 sigma^2)"
+                "G(0 -> u) against u - u' > 0, +- standard error, with the fitted shape alpha x^-beta exp(-x^2 / 2 sigma^2); bars whose lower end is at or below zero are drawn open downward (an arrow to the frame's bottom)"
             }
             Figure::Rates { .. } => {
                 "self variance rate D2 (a) and drift D1 with the Fokker-Planck drift (D2' - u D2)/2 (b) against u'"
@@ -177,7 +179,7 @@ impl Figure {
                 "tagged h(u, t_f) of rings with one N at different rho and T and the same rho^2 l v_th t_f (the rho^2 T^(1/2 - 1/n) collapse), with the Boltzmann h"
             }
             Figure::Evolution { .. } => {
-                "tagged particle's h(u, t) relaxing to f0 (a, log scale), the early variance of h with its closed form t kappa_2 (b), and the early h at each of evolve.early_times scaled to unit variance against the standard normal (c): a cusp from the kernel at first, the central limit's Gaussian by t ~ 1e-2 / Gamma"
+                "tagged particle's h(u, t) relaxing to f0 (a, log scale), the early variance of h with its closed form t kappa_2 (b), and the early h at each of evolve.early_times scaled to unit variance against the standard normal (c): a cusp from the kernel at first, the central limit's Gaussian by t ~ 1e-2 / Gamma; bars and bands whose lower end is at or below zero are drawn open downward (to the frame's bottom)"
             }
             Figure::FiniteSize => {
                 "MD / Boltzmann window variance at t_f against rho l, one series per N (drawn side by side: N = 41, 81, 161 at one rho l are moved apart by 1.2% of the axis), tagged (a) and thermal (b) estimators; the rings at the study's common rho^2 l v_th t_f (others, such as a ring's earlier time, are in the table, not drawn)"
@@ -198,15 +200,7 @@ impl Figure {
     pub fn layout(&self) -> Layout {
         let linear = Axis::linear;
         let log = Axis::log;
-        let panel = |name, x, y, styles: Vec<(&'static str, Style)>| Panel {
-            name,
-            x,
-            y,
-            marks: Vec::new(),
-            styles,
-            paired: false,
-            dodge: false,
-        };
+        let panel = Panel::new;
         let panels = match self {
             Figure::KernelsEveryN { .. } | Figure::KernelsLennardJones { .. } => vec![panel(
                 "kernels",
@@ -303,12 +297,15 @@ impl Figure {
                     vec![(DILUTE, Style::Line)],
                 ),
             ],
-            Figure::KernelsAtUPrime { .. } => vec![panel(
-                "kernels",
-                log("|u − u'| [v_th]"),
-                log(G_AXIS),
-                vec![("", Style::Band)],
-            )],
+            Figure::KernelsAtUPrime { .. } => vec![Panel {
+                dashed: true,
+                ..panel(
+                    "kernels",
+                    log("|u − u'| [v_th]"),
+                    log(G_AXIS),
+                    vec![("", Style::Band)],
+                )
+            }],
             Figure::MdTimes { .. } => vec![Panel {
                 paired: true,
                 ..panel(
@@ -318,13 +315,18 @@ impl Figure {
                     vec![("Boltzmann", Style::Band)],
                 )
             }],
-            Figure::FiniteSize => ["tagged", "thermal"]
-                .into_iter()
-                .map(|name| Panel {
-                    dodge: true,
-                    ..panel(name, linear("ρ l"), linear("MD / Boltzmann"), Vec::new())
-                })
-                .collect(),
+            Figure::FiniteSize => [
+                ("tagged", "tagged particles"),
+                ("thermal", "thermal estimator"),
+            ]
+            .into_iter()
+            .map(|(name, title)| Panel {
+                dodge: true,
+                title,
+                level: Some(1.0),
+                ..panel(name, linear("ρ l"), linear("MD / Boltzmann"), Vec::new())
+            })
+            .collect(),
         };
         Layout { panels }
     }
@@ -353,7 +355,7 @@ impl Figure {
             Figure::MdBoltzmann { ring } => md_boltzmann(&inputs[0], ring),
             Figure::Truncation { label, .. } => truncation(&inputs[0], label),
             Figure::Kicks { .. } => kicks(&inputs[0]),
-            Figure::Collapse { rings } => collapse(&inputs[0], rings),
+            Figure::Collapse { rings, labels } => collapse(&inputs[0], rings, labels),
             Figure::Evolution { times, .. } => evolution(&inputs[0], times),
             Figure::FiniteSize => finite_size(&inputs[0]),
             Figure::MdTimes {
@@ -591,7 +593,7 @@ fn rows_where(all: &DataFrame, key: &str, value: &str) -> Result<DataFrame, Stag
     all.filter(&mask).map_err(failed)
 }
 
-fn collapse(input: &Input, rings: &[String]) -> Result<DataFrame, StageError> {
+fn collapse(input: &Input, rings: &[String], labels: &[String]) -> Result<DataFrame, StageError> {
     use contract::compare::comparison::{DU, H_BOLTZMANN, H_TAGGED, RING, TABLE};
     let all = frame(TABLE.of(input)?)?;
     let pair = |pair: &contract::Pair| (DU.name, pair.value.name, Some(pair.stderr.name));
@@ -602,9 +604,9 @@ fn collapse(input: &Input, rings: &[String]) -> Result<DataFrame, StageError> {
         "Boltzmann",
         pair(&H_BOLTZMANN),
     )?];
-    for ring in rings {
+    for (ring, label) in rings.iter().zip(labels) {
         let rows = rows_where(&all, RING.name, ring)?;
-        parts.push(series(&rows, "collapse", ring, pair(&H_TAGGED))?);
+        parts.push(series(&rows, "collapse", label, pair(&H_TAGGED))?);
     }
     stack(parts)
 }

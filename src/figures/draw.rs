@@ -1,19 +1,15 @@
 //! Drawing a figure's points with plotters, on SVG and bitmap backends alike.
 
 use std::ops::Range;
-use std::sync::OnceLock;
 
 use plotters::coord::Shift;
 use plotters::coord::ranged1d::{AsRangedCoord, ValueFormatter};
+use plotters::element::{ComposedElement, DashedPathElement};
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
-use plotters::style::{FontStyle, register_font};
 
+use super::text::{FAMILY, Typeset};
 use super::{DODGE, Layout, Panel, Point, Style};
-
-/// DejaVu Sans (Bitstream Vera licence: fonts/DejaVu-LICENSE), the one font of
-/// every figure.
-const FONT: &[u8] = include_bytes!("fonts/DejaVuSans.ttf");
 
 /// Colour-blind safe colours (Okabe and Ito), one per series in order.
 pub const PALETTE: [RGBColor; 7] = [
@@ -41,6 +37,9 @@ pub struct Size {
     pub text: f64,
     /// Stroke width of lines, px.
     pub stroke: u32,
+    /// Resolution the file is meant to be shown at, px per inch (a PNG's
+    /// `pHYs` chunk).
+    pub pixels_per_inch: f64,
 }
 
 impl Size {
@@ -52,6 +51,7 @@ impl Size {
         panel_height: 235,
         text: 11.0 * 1.24,
         stroke: 1,
+        pixels_per_inch: 96.0,
     };
     /// [`Size::COLUMN_SVG`] at 600 px per inch (text 69 px = 8.25 pt).
     pub const COLUMN_PNG: Size = Size {
@@ -60,30 +60,49 @@ impl Size {
         panel_height: 1469,
         text: 68.75 * 1.24,
         stroke: 6,
+        pixels_per_inch: 600.0,
     };
-    /// A screen size: 1200 px wide.
+    /// A screen size: 1200 px wide, at a screen's 96 px per inch.
     pub const SCREEN: Size = Size {
         suffix: "_screen",
         width: 1200,
         panel_height: 760,
         text: 20.0 * 1.24,
         stroke: 3,
+        pixels_per_inch: 96.0,
     };
 
     /// Height of a figure of `panels` panels, px.
     pub fn height(&self, panels: usize) -> u32 {
         self.panel_height * panels.max(1) as u32
     }
+
+    /// The resolution as a PNG's `pHYs` chunk states it: pixels per metre.
+    pub fn pixels_per_metre(&self) -> u32 {
+        (self.pixels_per_inch / METRES_PER_INCH).round() as u32
+    }
+
+    /// This size drawn `factor` times finer: every length `factor` times
+    /// longer.
+    fn scaled(&self, factor: u32) -> Size {
+        Size {
+            width: self.width * factor,
+            panel_height: self.panel_height * factor,
+            text: self.text * f64::from(factor),
+            stroke: self.stroke * factor,
+            pixels_per_inch: self.pixels_per_inch * f64::from(factor),
+            ..*self
+        }
+    }
 }
 
-fn register_fonts() {
-    static REGISTERED: OnceLock<()> = OnceLock::new();
-    REGISTERED.get_or_init(|| {
-        // The font is valid (it is the crate's own file); a failure would leave
-        // text undrawn, which the figure tests see.
-        let _ = register_font("sans-serif", FontStyle::Normal, FONT);
-    });
-}
+/// SVG user units per pixel: an SVG is drawn this much finer than its size
+/// and shown at its size through its `viewBox`, so that curves keep a tenth
+/// of a pixel (plotters places everything on whole units).
+const SVG_UNITS_PER_PX: u32 = 10;
+
+/// One inch, m.
+const METRES_PER_INCH: f64 = 0.0254;
 
 /// The figure's files: `<name>.svg`, `<name>.png` (one column) and
 /// `<name>_screen.svg`, `<name>_screen.png`.
@@ -92,7 +111,6 @@ pub fn render(
     layout: &Layout,
     points: &[Point],
 ) -> Result<Vec<(String, Vec<u8>)>, String> {
-    register_fonts();
     let mut files = Vec::new();
     for (svg, png) in [
         (Size::COLUMN_SVG, Size::COLUMN_PNG),
@@ -110,27 +128,49 @@ pub fn render(
     Ok(files)
 }
 
+/// The SVG drawn [`SVG_UNITS_PER_PX`] times finer than `size`, its `width`
+/// and `height` those of `size` (its `viewBox` the finer drawing's).
 fn svg_bytes(layout: &Layout, points: &[Point], size: &Size) -> Result<Vec<u8>, String> {
+    let fine = size.scaled(SVG_UNITS_PER_PX);
+    let panels = layout.panels.len();
     let mut text = String::new();
     {
-        let dimensions = (size.width, size.height(layout.panels.len()));
-        let root = SVGBackend::with_string(&mut text, dimensions).into_drawing_area();
-        draw(&root, layout, points, size).map_err(|e| e.to_string())?;
+        let backend = SVGBackend::with_string(&mut text, (fine.width, fine.height(panels)));
+        let root = Typeset::vector(backend).into_drawing_area();
+        draw(&root, layout, points, &fine).map_err(|e| e.to_string())?;
     }
-    Ok(text.into_bytes())
+    let dimensions = |size: &Size| {
+        format!(
+            "<svg width=\"{}\" height=\"{}\"",
+            size.width,
+            size.height(panels)
+        )
+    };
+    let drawn = dimensions(&fine);
+    if !text.starts_with(&drawn) {
+        return Err(format!("an SVG starting otherwise than `{drawn}`"));
+    }
+    Ok(text.replacen(&drawn, &dimensions(size), 1).into_bytes())
 }
 
 fn png_bytes(layout: &Layout, points: &[Point], size: &Size) -> Result<Vec<u8>, String> {
     let (width, height) = (size.width, size.height(layout.panels.len()));
     let mut pixels = vec![0u8; (width * height * 3) as usize];
     {
-        let root = BitMapBackend::with_buffer(&mut pixels, (width, height)).into_drawing_area();
+        let backend = BitMapBackend::with_buffer(&mut pixels, (width, height));
+        let root = Typeset::bitmap(backend).into_drawing_area();
         draw(&root, layout, points, size).map_err(|e| e.to_string())?;
     }
     let mut bytes = Vec::new();
     let mut encoder = png::Encoder::new(&mut bytes, width, height);
     encoder.set_color(png::ColorType::Rgb);
     encoder.set_depth(png::BitDepth::Eight);
+    let resolution = size.pixels_per_metre();
+    encoder.set_pixel_dims(Some(png::PixelDimensions {
+        xppu: resolution,
+        yppu: resolution,
+        unit: png::Unit::Meter,
+    }));
     let mut writer = encoder.write_header().map_err(|e| e.to_string())?;
     writer
         .write_image_data(&pixels)
@@ -152,11 +192,16 @@ fn draw<DB: DrawingBackend>(
     let areas = root.split_evenly((layout.panels.len().max(1), 1));
     for (k, (area, panel)) in areas.iter().zip(&layout.panels).enumerate() {
         let mine: Vec<&Point> = points.iter().filter(|p| p.panel == panel.name).collect();
-        let tag = if layout.panels.len() > 1 {
+        let letter = if layout.panels.len() > 1 {
             format!("({})", char::from(b'a' + k as u8))
         } else {
             String::new()
         };
+        let tag = [letter.as_str(), panel.title]
+            .into_iter()
+            .filter(|part| !part.is_empty())
+            .collect::<Vec<_>>()
+            .join(" ");
         draw_panel(area, panel, &mine, size, &tag)?;
     }
     root.present()
@@ -240,7 +285,7 @@ where
     Y::CoordDescType: ValueFormatter<f64>,
 {
     let text = size.text;
-    let font = |scale: f64| ("sans-serif", text * scale).into_font();
+    let font = |scale: f64| (FAMILY, text * scale).into_font();
     let mut chart = ChartBuilder::on(area)
         .margin((text * 0.6) as i32)
         // Room for half the widest tick label at the x axis's right end.
@@ -269,8 +314,18 @@ where
     } else {
         f64::NEG_INFINITY
     };
-    let names = series_names(points);
     let x_range = chart.x_range();
+    if let Some(level) = panel.level {
+        let line = vec![(x_range.start, level), (x_range.end, level)];
+        let (dash, gap) = in_pixels(LEVEL_DASH, size);
+        chart.draw_series(DashedLineSeries::new(
+            line,
+            dash,
+            gap,
+            MARK.stroke_width(size.stroke),
+        ))?;
+    }
+    let names = series_names(points);
     for (k, (name, colour)) in names.iter().zip(series_colours(panel, &names)).enumerate() {
         let style = panel.style_of(name);
         let moved = if panel.dodge && style == Style::Markers {
@@ -288,7 +343,12 @@ where
             })
             .collect();
         let series: Vec<&Point> = series.iter().collect();
-        draw_series(&mut chart, style, &series, colour, size, panel.y.log)?;
+        let pen = Pen {
+            colour,
+            dash: panel.dash_of(k),
+        };
+        let floor = panel.y.log.then_some(y_low);
+        draw_series(&mut chart, style, &series, pen, size, floor)?;
     }
     for mark in &panel.marks {
         let (low, high) = (chart.y_range().start, chart.y_range().end);
@@ -335,8 +395,50 @@ fn dodged(x: f64, moved: f64, log: bool, range: &Range<f64>) -> f64 {
     }
 }
 
-/// Colour of vertical marks.
+/// Colour of vertical marks and reference levels.
 const MARK: RGBColor = RGBColor(110, 110, 110);
+
+/// Dash pattern of a reference level, (dash, gap) in text heights.
+const LEVEL_DASH: (f64, f64) = (0.4, 0.3);
+
+/// A dash pattern in text heights as whole pixels of `size`.
+fn in_pixels((dash, gap): (f64, f64), size: &Size) -> (u32, u32) {
+    let px = |length: f64| (length * size.text).round().max(1.0) as u32;
+    (px(dash), px(gap))
+}
+
+/// How a series' lines are drawn: its colour and dash pattern (in text
+/// heights, `None` solid).
+#[derive(Clone, Copy)]
+struct Pen {
+    colour: RGBColor,
+    dash: Option<(f64, f64)>,
+}
+
+/// A line through `points` with `pen`, `width` px wide.
+fn draw_line<DB, X, Y>(
+    chart: &mut ChartContext<'_, DB, Cartesian2d<X, Y>>,
+    points: &[&Point],
+    pen: Pen,
+    width: u32,
+    size: &Size,
+) -> DrawResult<DB>
+where
+    DB: DrawingBackend,
+    X: Ranged<ValueType = f64>,
+    Y: Ranged<ValueType = f64>,
+{
+    let line = pen.colour.stroke_width(width);
+    let path = points.iter().map(|p| (p.x, p.y));
+    match pen.dash {
+        None => chart.draw_series(LineSeries::new(path, line))?,
+        Some(dash) => {
+            let (dash, gap) = in_pixels(dash, size);
+            chart.draw_series(DashedLineSeries::new(path, dash, gap, line))?
+        }
+    };
+    Ok(())
+}
 
 /// The names of the series among `points`, in order of appearance.
 fn series_names<'p>(points: &[&'p Point]) -> Vec<&'p str> {
@@ -352,11 +454,11 @@ fn series_names<'p>(points: &[&'p Point]) -> Vec<&'p str> {
 /// Where each legend entry goes (x, row) and how many rows they take.
 type Placed = (Vec<(i32, i32)>, i32);
 
-/// One legend entry: its sample (line or marker), colour and text.
+/// One legend entry: its sample (line or marker), pen and text.
 struct Entry {
     text: String,
     style: Style,
-    colour: RGBColor,
+    pen: Pen,
 }
 
 /// The legend entries of a panel: its series, then its marks.
@@ -365,16 +467,23 @@ fn entries(panel: &Panel, points: &[&Point]) -> Vec<Entry> {
     let mut entries: Vec<Entry> = names
         .iter()
         .zip(series_colours(panel, &names))
-        .map(|(name, colour)| Entry {
+        .enumerate()
+        .map(|(k, (name, colour))| Entry {
             text: name.to_string(),
             style: panel.style_of(name),
-            colour,
+            pen: Pen {
+                colour,
+                dash: panel.dash_of(k),
+            },
         })
         .collect();
     entries.extend(panel.marks.iter().map(|mark| Entry {
         text: mark.label.to_string(),
         style: Style::Line,
-        colour: MARK,
+        pen: Pen {
+            colour: MARK,
+            dash: None,
+        },
     }));
     entries
 }
@@ -408,7 +517,7 @@ fn legend_rows<DB: DrawingBackend>(
 }
 
 fn legend_font(size: &Size) -> TextStyle<'static> {
-    TextStyle::from(("sans-serif", size.text).into_font())
+    TextStyle::from((FAMILY, size.text).into_font())
 }
 
 /// Height of one legend row, px.
@@ -441,18 +550,21 @@ fn draw_legend<DB: DrawingBackend>(
     let sample = (size.text * 1.6) as i32;
     for (entry, (x, row)) in entries.iter().zip(places) {
         let y = margin / 2 + row * row_height + row_height / 2;
-        let line = entry.colour.stroke_width(size.stroke + 1);
-        match entry.style {
-            Style::Markers => {
+        let line = entry.pen.colour.stroke_width(size.stroke + 1);
+        let path = vec![(x, y), (x + sample, y)];
+        match (entry.style, entry.pen.dash) {
+            (Style::Markers, _) => {
                 let radius = marker_radius(size);
                 area.draw(&Circle::new(
                     (x + sample / 2, y),
                     radius,
-                    entry.colour.filled(),
+                    entry.pen.colour.filled(),
                 ))?;
             }
-            Style::Band | Style::Line => {
-                area.draw(&PathElement::new(vec![(x, y), (x + sample, y)], line))?;
+            (Style::Band | Style::Line, None) => area.draw(&PathElement::new(path, line))?,
+            (Style::Band | Style::Line, Some(dash)) => {
+                let (dash, gap) = in_pixels(dash, size);
+                area.draw(&DashedPathElement::new(path, dash, gap, line))?
             }
         }
         let text_x = x + sample + (size.text * 0.35) as i32;
@@ -489,70 +601,113 @@ fn marker_radius(size: &Size) -> i32 {
     (size.text * 0.13).max(2.0) as i32
 }
 
-/// A tick label: `1e-3` on a log axis, plain (shortest form) on a linear one.
+/// A tick label: `10⁻³` on a log axis at a decade, `2×10⁻³` between
+/// decades; on a linear axis the number's shortest form, `5×10⁻⁴` below
+/// 1e-3 or from 1e4 on. Negative numbers take a minus sign (U+2212).
 fn tick(value: f64, log: bool) -> String {
-    if log {
+    let label = if log {
         let exponent = libm::log10(value).round();
         if (libm::log10(value) - exponent).abs() < 1e-9 {
-            return format!("1e{exponent}");
+            power_of_ten(exponent as i32)
+        } else {
+            scientific(&format!("{value:.0e}"))
         }
-        return format!("{value:.0e}");
-    }
-    let rounded = (value * 1e12).round() / 1e12;
-    if rounded == 0.0 {
-        "0".into()
-    } else if rounded.abs() >= 1e4 || rounded.abs() < 1e-3 {
-        format!("{rounded:e}")
     } else {
-        format!("{rounded}")
+        let rounded = (value * 1e12).round() / 1e12;
+        if rounded == 0.0 {
+            "0".into()
+        } else if rounded.abs() >= 1e4 || rounded.abs() < 1e-3 {
+            scientific(&format!("{rounded:e}"))
+        } else {
+            format!("{rounded}")
+        }
+    };
+    label.replace('-', "−")
+}
+
+/// A number in Rust's `e` notation (`2e-3`, `1e4`) as `2×10⁻³`, `10⁴`.
+fn scientific(e_notation: &str) -> String {
+    let (mantissa, exponent) = e_notation.split_once('e').unwrap_or((e_notation, "0"));
+    let power = power_of_ten(exponent.parse().unwrap_or(0));
+    if mantissa == "1" {
+        power
+    } else {
+        format!("{mantissa}×{power}")
     }
 }
 
-/// One series in its style; returns the annotation for its legend entry.
+/// `10⁻⁴`: ten to `exponent`, in Unicode superscripts (DejaVu Sans has
+/// them, so PNG and SVG alike show them).
+fn power_of_ten(exponent: i32) -> String {
+    let superscript = |c: char| match c {
+        '-' => '⁻',
+        '1' => '¹',
+        '2' => '²',
+        '3' => '³',
+        digit => char::from_u32(0x2070 + digit.to_digit(10).unwrap_or(0)).unwrap_or(digit),
+    };
+    let digits: String = exponent.to_string().chars().map(superscript).collect();
+    format!("10{digits}")
+}
+
+/// One series in its style. On a log axis (`floor`: the frame's bottom)
+/// an error whose lower end is at or below zero has no place there: its band
+/// reaches down to the frame's bottom, its bar is drawn open ([`open_bar`]).
 fn draw_series<DB, X, Y>(
     chart: &mut ChartContext<'_, DB, Cartesian2d<X, Y>>,
     style: Style,
     series: &[&Point],
-    colour: RGBColor,
+    pen: Pen,
     size: &Size,
-    log_y: bool,
+    floor: Option<f64>,
 ) -> DrawResult<DB>
 where
     DB: DrawingBackend,
     X: Ranged<ValueType = f64>,
     Y: Ranged<ValueType = f64>,
 {
-    let line = colour.stroke_width(size.stroke.max(1) + 1);
+    let (colour, width) = (pen.colour, size.stroke.max(1) + 1);
+    // The lower end drawn, and whether it is open (the frame's bottom).
     let low = |p: &Point| {
         let low = p.y - p.y_error;
-        if log_y && low <= 0.0 { p.y / 10.0 } else { low }
+        match floor {
+            Some(bottom) if low <= 0.0 => (bottom, true),
+            _ => (low, false),
+        }
     };
     match style {
         Style::Band => {
             let mut outline: Vec<(f64, f64)> =
                 series.iter().map(|p| (p.x, p.y + p.y_error)).collect();
-            outline.extend(series.iter().rev().map(|p| (p.x, low(p))));
+            outline.extend(series.iter().rev().map(|p| (p.x, low(p).0)));
             chart.draw_series(std::iter::once(Polygon::new(
                 outline,
                 colour.mix(0.25).filled(),
             )))?;
-            chart.draw_series(LineSeries::new(series.iter().map(|p| (p.x, p.y)), line))?;
+            draw_line(chart, series, pen, width, size)?;
         }
-        Style::Line => {
-            chart.draw_series(LineSeries::new(series.iter().map(|p| (p.x, p.y)), line))?;
-        }
+        Style::Line => draw_line(chart, series, pen, width, size)?,
         Style::Markers => {
             let width = (size.text * 0.35) as u32;
-            chart.draw_series(series.iter().filter(|p| p.y_error > 0.0).map(|p| {
-                ErrorBar::new_vertical(
-                    p.x,
-                    low(p),
-                    p.y,
-                    p.y + p.y_error,
-                    colour.stroke_width(size.stroke),
-                    width,
-                )
+            let bar = colour.stroke_width(size.stroke);
+            let (open, closed): (Vec<&Point>, Vec<&Point>) = series
+                .iter()
+                .copied()
+                .filter(|p| p.y_error > 0.0)
+                .partition(|p| low(p).1);
+            chart.draw_series(closed.iter().map(|p| {
+                ErrorBar::new_vertical(p.x, low(p).0, p.y, p.y + p.y_error, bar, width)
             }))?;
+            let open: Vec<_> = open
+                .iter()
+                .map(|p| {
+                    let bottom = (p.x, low(p).0);
+                    let drop = chart.backend_coord(&bottom).1
+                        - chart.backend_coord(&(p.x, p.y + p.y_error)).1;
+                    open_bar(bottom, drop, bar, width as i32)
+                })
+                .collect();
+            chart.draw_series(open)?;
             let radius = marker_radius(size);
             chart.draw_series(
                 series
@@ -562,4 +717,49 @@ where
         }
     }
     Ok(())
+}
+
+/// An error bar open downward: from its upper end, `drop` px above
+/// `bottom` (the frame's bottom edge) and capped `width` px wide like a
+/// closed bar, down to `bottom`, where it ends in an arrow head.
+fn open_bar<DB: DrawingBackend>(
+    bottom: (f64, f64),
+    drop: i32,
+    style: ShapeStyle,
+    width: i32,
+) -> OpenBar<DB> {
+    let half = width / 2;
+    let cap_and_bar = vec![(-half, -drop), (half, -drop), (0, -drop), (0, 0)];
+    EmptyElement::at(bottom)
+        + PathElement::new(cap_and_bar, style)
+        + Polygon::new(
+            vec![(0, 0), (-half, -width), (half, -width)],
+            style.filled(),
+        )
+}
+
+/// The elements of an [`open_bar`]: a path and a triangle placed in pixels
+/// from a point of the chart.
+type OpenBar<DB> = ComposedElement<(f64, f64), DB, PathElement<(i32, i32)>, Polygon<(i32, i32)>>;
+
+#[cfg(test)]
+mod tests {
+    use super::tick;
+
+    #[test]
+    fn log_ticks_are_powers_of_ten_in_superscripts() {
+        assert_eq!(tick(1e-4, true), "10⁻⁴");
+        assert_eq!(tick(1.0, true), "10⁰");
+        assert_eq!(tick(1e12, true), "10¹²");
+        assert_eq!(tick(2e-3, true), "2×10⁻³");
+    }
+
+    #[test]
+    fn linear_ticks_take_minus_signs_and_powers_of_ten() {
+        assert_eq!(tick(-0.05, false), "−0.05");
+        assert_eq!(tick(0.0, false), "0");
+        assert_eq!(tick(15.0, false), "15");
+        assert_eq!(tick(-5e-4, false), "−5×10⁻⁴");
+        assert_eq!(tick(2e4, false), "2×10⁴");
+    }
 }

@@ -10,6 +10,7 @@
 
 mod draw;
 pub mod frames;
+mod text;
 
 pub mod catalogue;
 
@@ -102,19 +103,67 @@ pub struct Panel {
     /// stay apart. Drawing only: the figure table keeps the true `x`.
     #[serde(skip_serializing_if = "std::ops::Not::not")]
     pub dodge: bool,
+    /// Series drawn in distinct dash patterns (the `k`-th series the `k`-th
+    /// of [`DASHES`]), so that curves lying on one another stay visible.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub dashed: bool,
+    /// What the panel shows, after its tag (`(a) tagged particles`).
+    #[serde(skip_serializing_if = "str::is_empty")]
+    pub title: &'static str,
+    /// A horizontal reference line (at 1 where a ratio is plotted).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub level: Option<f64>,
 }
 
 /// The share of the horizontal axis between neighbouring series of a
 /// [`Panel::dodge`] panel.
 pub const DODGE: f64 = 0.012;
 
+/// Dash patterns of a [`Panel::dashed`] panel's series in order, (dash,
+/// gap) in text heights, `None` solid: lengths that differ, so that lines on
+/// one another show each colour in turn.
+pub const DASHES: [Option<(f64, f64)>; 6] = [
+    None,
+    Some((0.9, 0.3)),
+    Some((0.15, 0.3)),
+    Some((0.45, 0.2)),
+    Some((1.5, 0.45)),
+    Some((0.08, 0.6)),
+];
+
 impl Panel {
+    /// A panel of series drawn by `styles`, without marks, titles or
+    /// reference levels, each series in its own colour, solid.
+    pub fn new(name: &'static str, x: Axis, y: Axis, styles: Vec<(&'static str, Style)>) -> Panel {
+        Panel {
+            name,
+            x,
+            y,
+            marks: Vec::new(),
+            styles,
+            paired: false,
+            dodge: false,
+            dashed: false,
+            title: "",
+            level: None,
+        }
+    }
+
     /// How the series `name` is drawn.
     pub fn style_of(&self, name: &str) -> Style {
         self.styles
             .iter()
             .find(|(pattern, _)| name.starts_with(pattern))
             .map_or(Style::Markers, |(_, style)| *style)
+    }
+
+    /// The dash pattern of the `k`-th series (see [`DASHES`]).
+    pub fn dash_of(&self, k: usize) -> Option<(f64, f64)> {
+        if self.dashed {
+            DASHES[k % DASHES.len()]
+        } else {
+            None
+        }
     }
 }
 

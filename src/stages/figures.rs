@@ -170,10 +170,12 @@ pub fn figure_stages(study: &Study, plan: &[Box<dyn Stage>]) -> Vec<FiguresStage
         ));
         let compared = study.compared_rings();
         let compared: Vec<&MdParams> = compared.iter().collect();
-        let collapsing: Vec<String> = study.collapse_rings().into_iter().map(|r| r.name).collect();
+        let collapsing = study.collapse_rings();
         if collapsing.len() > 1 {
+            let rings = collapsing.iter().map(|r| r.name.clone()).collect();
+            let labels = collapsing.iter().map(ring_label).collect();
             figures.push(FiguresStage::new(
-                Figure::Collapse { rings: collapsing },
+                Figure::Collapse { rings, labels },
                 vec![compare.clone()],
             ));
         }
@@ -215,8 +217,7 @@ fn kernels_at_density(study: &Study) -> Option<FiguresStage> {
             } else {
                 format!("{factor}ρ")
             };
-            let kt_mev = (ring.gas.kt_ev * 1e6).round() / 1e3;
-            labels.push(format!("{density}, {kt_mev} meV"));
+            labels.push(format!("{density}, {} meV", kt_mev(ring)));
             inputs.push(id);
         }
     }
@@ -229,6 +230,21 @@ fn kernels_at_density(study: &Study) -> Option<FiguresStage> {
             inputs,
         )
     })
+}
+
+/// A ring's `kT`, meV (to a micro-electronvolt).
+fn kt_mev(ring: &MdParams) -> f64 {
+    (ring.gas.kt_ev * 1e6).round() / 1e3
+}
+
+/// A ring's legend label: `N = 161, R = 51.2 mm, 100 meV`.
+fn ring_label(ring: &MdParams) -> String {
+    let radius_mm = ring.radius_um / 1e3;
+    format!(
+        "N = {}, R = {radius_mm} mm, {} meV",
+        ring.particles,
+        kt_mev(ring)
+    )
 }
 
 /// `h(u, t)` at several times: the first compared ring simulated to more
