@@ -280,18 +280,20 @@ fn chart<DB, X, Y>(
 where
     DB: DrawingBackend,
     X: AsRangedCoord<Value = f64>,
-    Y: AsRangedCoord<Value = f64>,
+    Y: AsRangedCoord<Value = f64> + Clone,
     X::CoordDescType: ValueFormatter<f64>,
     Y::CoordDescType: ValueFormatter<f64>,
 {
     let text = size.text;
     let font = |scale: f64| (FAMILY, text * scale).into_font();
+    let y_labels = y_label_width(area, &y, panel.y.log, &font(1.0).into())?;
     let mut chart = ChartBuilder::on(area)
         .margin((text * 0.6) as i32)
         // Room for half the widest tick label at the x axis's right end.
         .margin_right((text * 2.0) as i32)
         .x_label_area_size((text * 2.8) as i32)
-        .y_label_area_size((text * 4.6) as i32)
+        // The widest tick label, the tick marks and the rotated axis title.
+        .y_label_area_size((text * 4.6).max(f64::from(y_labels) + text * 2.6) as i32)
         .build_cartesian_2d(x, y)?;
     chart
         .configure_mesh()
@@ -623,6 +625,26 @@ fn tick(value: f64, log: bool) -> String {
         }
     };
     label.replace('-', "−")
+}
+
+/// Width in pixels of the widest tick label plotters will write on the y axis
+/// (the same key points as `.y_labels(5)`): `2×10⁻⁴` is twice as wide as `20`.
+fn y_label_width<DB, Y>(
+    area: &DrawingArea<DB, Shift>,
+    y: &Y,
+    log: bool,
+    font: &TextStyle,
+) -> Result<u32, DrawError<DB>>
+where
+    DB: DrawingBackend,
+    Y: AsRangedCoord<Value = f64> + Clone,
+{
+    let spec: Y::CoordDescType = y.clone().into();
+    let mut widest = 0;
+    for value in spec.key_points(5) {
+        widest = widest.max(area.estimate_text_size(&tick(value, log), font)?.0);
+    }
+    Ok(widest)
 }
 
 /// A number in Rust's `e` notation (`2e-3`, `1e4`) as `2×10⁻³`, `10⁴`.

@@ -341,6 +341,9 @@ fn table_i_matrix(frame: &DataFrame, rows: &[usize]) -> Result<String> {
     Ok(out)
 }
 
+/// One table of each instance that has it: the instance and its frame.
+type InstanceFrames = Vec<(String, DataFrame)>;
+
 /// The frames of `spec`'s table with the output opened by the line `title`,
 /// or `None` when no instance has the table.
 fn titled_frames(
@@ -348,7 +351,7 @@ fn titled_frames(
     reports: &[InstanceReport],
     spec: &TableSpec,
     title: &str,
-) -> Result<Option<(String, Vec<(String, DataFrame)>)>> {
+) -> Result<Option<(String, InstanceFrames)>> {
     let frames = table_frames(store, reports, spec)?;
     Ok((!frames.is_empty()).then(|| (format!("\n{title}\n"), frames)))
 }
@@ -358,7 +361,7 @@ fn table_frames(
     store: &Store,
     reports: &[InstanceReport],
     spec: &TableSpec,
-) -> Result<Vec<(String, DataFrame)>> {
+) -> Result<InstanceFrames> {
     reports
         .iter()
         .filter(|r| r.id.stage == spec.stage)
