@@ -770,7 +770,8 @@ fn a_study_beyond_the_limits_is_refused_unless_allowed() {
             assert!(within.is_none_or(|key| !message.contains(key)), "{message}");
             assert!(
                 started.elapsed() < Duration::from_secs(10),
-                "{name}: slow refusal"
+                "{name}: slow refusal of {command:?}: {:?}",
+                started.elapsed()
             );
         }
         assert!(!dir.join("data").exists(), "{name}: a store was created");
