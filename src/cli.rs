@@ -651,7 +651,15 @@ fn dispatch(cli: Cli) -> Result<ExitCode> {
         } => {
             let study = Study::load(&cli.config)?;
             within_limits(&study, &stages::plan(&study), i_know)?;
-            let store = open(&study, Opening::Write)?;
+            // A dry run reads a missing store as empty and creates nothing.
+            let store = open(
+                &study,
+                if dry_run {
+                    Opening::View
+                } else {
+                    Opening::Write
+                },
+            )?;
             let configured = study.config.slurm.clone();
             let options = SubmitOptions {
                 slurm: SlurmConfig {

@@ -41,7 +41,8 @@ pub struct SubmitOptions {
     /// Shards, resources and placement: `[slurm]` with the command line's
     /// overrides.
     pub slurm: SlurmConfig,
-    /// Print the scripts and commands instead of submitting.
+    /// Print the scripts and commands instead of submitting, changing
+    /// nothing on the filesystem.
     pub dry_run: bool,
     /// The study was allowed beyond `[limits]`: its jobs' runs are too.
     pub i_know: bool,
@@ -215,7 +216,7 @@ fn sbatch(args: &[String], script: &Path) -> Result<String> {
 
 /// Writes the scripts and submits the array job over the missing shard
 /// indices and the dependent merge job, or with `dry_run` prints them and
-/// the commands. A study with every
+/// the commands, creating nothing (not even the store). A study with every
 /// instance fresh submits nothing; one with no shard missing submits the
 /// merge job alone.
 pub fn submit(
@@ -227,7 +228,9 @@ pub fn submit(
     options.check()?;
     let shards = options.slurm.shards;
     let lines = executor::status(store, plan, shards)?;
-    let root = fs::canonicalize(store.root())?;
+    // Not canonicalized: in a dry run the store may not exist yet.
+    let root = std::path::absolute(store.root())
+        .with_context(|| format!("resolving {}", store.root().display()))?;
     if lines.iter().all(|line| line.freshness == Freshness::Fresh) {
         return Ok(format!(
             "nothing to submit: every stage instance is fresh (store {})\n",

@@ -313,6 +313,30 @@ fn slurm_options_cannot_inject_lines_into_the_scripts() {
     }
 }
 
+/// A dry run changes nothing on the filesystem: against a store path that
+/// does not exist it prints both scripts (all shards missing) and leaves
+/// the study directory as it was (it used to create the store: marker,
+/// lock, folders).
+#[test]
+fn a_dry_run_creates_nothing() {
+    let dir = workspace("slurm-dry-run");
+    let config = write_config(&dir, &study());
+    let before = common::files_under(&dir);
+    let output = ternary(&config, &["slurm", "submit", "--shards", "4", "--dry-run"]);
+    let text = stdout(&output);
+    assert!(output.status.success(), "{}", stderr(&output));
+    assert!(text.contains("slurm/shards.sbatch\n"), "{text}");
+    assert!(text.contains("#SBATCH --array=0-3\n"), "{text}");
+    assert!(text.contains("slurm/merge.sbatch\n"), "{text}");
+    assert!(!dir.join("data").exists(), "the store was created");
+    assert_eq!(common::files_under(&dir), before);
+    assert_eq!(
+        std::fs::read_dir(&dir).unwrap().count(),
+        1,
+        "only pipeline.toml"
+    );
+}
+
 /// With every shard done but not merged, a dry run shows the merge job
 /// alone and a command that submits only it (it named a `shards.sbatch` it
 /// did not write); with every instance fresh there is nothing to submit.
