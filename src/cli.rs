@@ -12,7 +12,7 @@ use crate::bench::{
     WorkPrecisionOptions,
 };
 use ternary::config::{
-    MAX_EXPONENT, MAX_GAS_DENSITY, MAX_RING_ENCOUNTERS, Study, THETA_RANGE, compact,
+    MAX_EXPONENT, MAX_GAS_DENSITY, MAX_RING_ENCOUNTERS, SlurmConfig, Study, THETA_RANGE, compact,
 };
 use ternary::export::{self, ExportOptions};
 use ternary::physics::potential::Potential;
@@ -151,20 +151,40 @@ enum Command {
 #[derive(Subcommand)]
 enum SlurmCommand {
     /// Submit an array job (one task per missing shard) and a dependent merge job.
+    /// Each option overrides its `[slurm]` key.
     Submit {
-        /// Shards per shardable instance (array tasks).
-        #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u32).range(2..=4096))]
-        shards: u32,
-        /// Slurm partition.
+        /// Shards per shardable instance (array tasks), in [2, 4096] (`[slurm] shards`, 8).
+        #[arg(long, value_name = "N")]
+        shards: Option<u32>,
+        /// CPUs of each job, also its run's `--threads`.
+        #[arg(long, value_name = "N")]
+        cpus_per_task: Option<u32>,
+        /// Memory of each job (e.g. 4000, 500M, 16G).
+        #[arg(long, value_name = "SIZE")]
+        mem: Option<String>,
+        /// Slurm account charged.
+        #[arg(long)]
+        account: Option<String>,
+        /// Slurm partition (several separated by commas).
         #[arg(long)]
         partition: Option<String>,
-        /// Time limit of each job (e.g. 2:00:00).
+        /// Slurm quality of service.
+        #[arg(long)]
+        qos: Option<String>,
+        /// Time limit of each shard task (e.g. 2:00:00).
         #[arg(long)]
         time: Option<String>,
+        /// Time limit of the merge job (default: --time).
+        #[arg(long, value_name = "TIME")]
+        merge_time: Option<String>,
         /// Most array tasks running at once.
-        #[arg(long, value_name = "K", value_parser = clap::value_parser!(u32).range(1..))]
+        #[arg(long, value_name = "K")]
         max_parallel: Option<u32>,
-        /// Print the scripts instead of submitting them.
+        /// A further sbatch option for both jobs, as `--sbatch-arg=--exclusive`
+        /// (repeatable; replaces `[slurm] sbatch_args`).
+        #[arg(long, value_name = "OPTION", allow_hyphen_values = true)]
+        sbatch_arg: Vec<String>,
+        /// Print the scripts instead of submitting them (creates nothing).
         #[arg(long)]
         dry_run: bool,
         /// Submit even when the study's estimate exceeds `[limits]` (the
@@ -616,21 +636,48 @@ fn dispatch(cli: Cli) -> Result<ExitCode> {
             which:
                 SlurmCommand::Submit {
                     shards,
+                    cpus_per_task,
+                    mem,
+                    account,
                     partition,
+                    qos,
                     time,
+                    merge_time,
                     max_parallel,
+                    sbatch_arg,
                     dry_run,
                     i_know,
                 },
         } => {
             let study = Study::load(&cli.config)?;
             within_limits(&study, &stages::plan(&study), i_know)?;
-            let store = open(&study, Opening::Write)?;
+            // A dry run reads a missing store as empty and creates nothing.
+            let store = open(
+                &study,
+                if dry_run {
+                    Opening::View
+                } else {
+                    Opening::Write
+                },
+            )?;
+            let configured = study.config.slurm.clone();
             let options = SubmitOptions {
-                shards,
-                partition,
-                time,
-                max_parallel,
+                slurm: SlurmConfig {
+                    shards: shards.unwrap_or(configured.shards),
+                    cpus_per_task: cpus_per_task.or(configured.cpus_per_task),
+                    mem: mem.or(configured.mem),
+                    account: account.or(configured.account),
+                    partition: partition.or(configured.partition),
+                    qos: qos.or(configured.qos),
+                    time: time.or(configured.time),
+                    merge_time: merge_time.or(configured.merge_time),
+                    max_parallel: max_parallel.or(configured.max_parallel),
+                    sbatch_args: if sbatch_arg.is_empty() {
+                        configured.sbatch_args
+                    } else {
+                        sbatch_arg
+                    },
+                },
                 dry_run,
                 i_know,
             };

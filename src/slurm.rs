@@ -11,6 +11,11 @@
 //! slurm/logs/merge-<job>.out          the merge job's log
 //! ```
 //!
+//! Shards, resources (`--cpus-per-task`, which the runs also take as
+//! `--threads`, `--mem`), placement (`--account`, `--partition`, `--qos`),
+//! time limits (the merge job's its own) and extra options come from
+//! `[slurm]` ([`SlurmConfig`]) with the command line's overrides.
+//!
 //! Resubmitting after a failed or cancelled task submits only the shard
 //! indices still missing; a shard is an artifact committed atomically, so a
 //! task that did not finish leaves nothing the merge uses. The merge job is
@@ -23,81 +28,39 @@ use std::fs;
 use std::path::Path;
 use std::process::Command;
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result, anyhow, bail};
 
+use crate::config::SlurmConfig;
 use crate::pipeline::Stage;
-use crate::pipeline::executor;
+use crate::pipeline::executor::{self, Freshness, StatusLine};
 use crate::pipeline::store::Store;
 
 /// What `ternary slurm submit` asks of the scheduler.
 #[derive(Clone, Debug)]
 pub struct SubmitOptions {
-    /// Shards per shardable instance.
-    pub shards: u32,
-    /// `--partition`.
-    pub partition: Option<String>,
-    /// `--time` of each job (Slurm's formats, e.g. `2:00:00`).
-    pub time: Option<String>,
-    /// Most array tasks running at once (`%K`).
-    pub max_parallel: Option<u32>,
-    /// Print the scripts and commands instead of submitting.
+    /// Shards, resources and placement: `[slurm]` with the command line's
+    /// overrides.
+    pub slurm: SlurmConfig,
+    /// Print the scripts and commands instead of submitting, changing
+    /// nothing on the filesystem.
     pub dry_run: bool,
     /// The study was allowed beyond `[limits]`: its jobs' runs are too.
     pub i_know: bool,
 }
 
 impl SubmitOptions {
-    /// Refuses a value that is not in Slurm's own syntax: whatever goes into
-    /// a `#SBATCH` line must not end it (a newline would turn the rest into
-    /// a shell command) or change its meaning.
+    /// Refuses a value that is not in Slurm's own syntax ([`SlurmConfig::check`]),
+    /// naming the command-line option: `[slurm]` was checked when the study
+    /// loaded, so a value failing here came from the command line.
     pub fn check(&self) -> Result<()> {
-        if let Some(partition) = &self.partition
-            && !is_partition_list(partition)
-        {
-            bail!(
-                "--partition {partition:?}: not a Slurm partition name (letters, digits, `_`, `-`, `.`; several separated by commas)"
-            );
-        }
-        if let Some(time) = &self.time
-            && !is_time_limit(time)
-        {
-            bail!(
-                "--time {time:?}: not a Slurm time limit (`M`, `M:S`, `H:M:S`, `D-H`, `D-H:M`, `D-H:M:S` or `UNLIMITED`)"
-            );
-        }
-        Ok(())
+        self.slurm.check().map_err(|(key, message)| {
+            let option = match key.split_once('[') {
+                Some(("sbatch_args", _)) => "sbatch-arg".to_string(),
+                _ => key.replace('_', "-"),
+            };
+            anyhow!("--{option}: {message}")
+        })
     }
-}
-
-/// `name[,name...]`, each of letters, digits, `_`, `-` and `.`.
-fn is_partition_list(text: &str) -> bool {
-    text.split(',').all(|name| {
-        !name.is_empty()
-            && name
-                .chars()
-                .all(|c| c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '.'))
-    })
-}
-
-/// Slurm's time formats: `M`, `M:S`, `H:M:S`, `D-H`, `D-H:M`, `D-H:M:S`,
-/// `UNLIMITED` or `infinite`.
-fn is_time_limit(text: &str) -> bool {
-    if text.eq_ignore_ascii_case("unlimited") || text.eq_ignore_ascii_case("infinite") {
-        return true;
-    }
-    let digits = |part: &str| {
-        !part.is_empty() && part.len() <= 9 && part.bytes().all(|b| b.is_ascii_digit())
-    };
-    let (days, clock) = match text.split_once('-') {
-        Some((days, clock)) => (Some(days), clock),
-        None => (None, text),
-    };
-    let fields: Vec<&str> = clock.split(':').collect();
-    let counted = match days {
-        Some(days) => digits(days) && (1..=3).contains(&fields.len()),
-        None => (1..=3).contains(&fields.len()),
-    };
-    counted && fields.iter().all(|f| digits(f))
 }
 
 /// A path that goes into a `#SBATCH` line as is: no control characters,
@@ -115,28 +78,61 @@ fn directive_path(path: &Path) -> Result<String> {
     Ok(text)
 }
 
-/// The shard indices with at least one shard still to compute.
-pub fn missing_shards(
-    store: &Store,
-    plan: &[Box<dyn Stage>],
-    shards: u32,
-) -> Result<BTreeSet<u32>> {
-    Ok(executor::status(store, plan, shards)?
-        .into_iter()
-        .filter_map(|line| line.shards)
-        .flat_map(|progress| progress.missing)
-        .collect())
+/// The shard indices with at least one shard still to compute, from a
+/// sharded status.
+fn missing_shards(lines: &[StatusLine]) -> BTreeSet<u32> {
+    lines
+        .iter()
+        .filter_map(|line| line.shards.as_ref())
+        .flat_map(|progress| progress.missing.iter().copied())
+        .collect()
 }
 
-/// A `#SBATCH` header: job name, log file and the chosen resources (all
-/// checked: [`SubmitOptions::check`], [`directive_path`]).
-fn header(name: &str, output: &str, options: &SubmitOptions) -> String {
-    let mut out = format!("#!/bin/bash\n#SBATCH --job-name={name}\n#SBATCH --output={output}\n");
-    if let Some(partition) = &options.partition {
-        let _ = writeln!(out, "#SBATCH --partition={partition}");
+/// Slurm's `--array` index list: runs of consecutive indices as ranges
+/// (`0-31`, `0-3,7,9-12`), so the directive stays short for any shard count.
+fn array_indices(tasks: &BTreeSet<u32>) -> String {
+    let mut runs: Vec<(u32, u32)> = Vec::new();
+    for &task in tasks {
+        match runs.last_mut() {
+            Some((_, last)) if *last + 1 == task => *last = task,
+            _ => runs.push((task, task)),
+        }
     }
-    if let Some(time) = &options.time {
-        let _ = writeln!(out, "#SBATCH --time={time}");
+    let ranges: Vec<String> = runs
+        .iter()
+        .map(|&(first, last)| {
+            if first == last {
+                first.to_string()
+            } else {
+                format!("{first}-{last}")
+            }
+        })
+        .collect();
+    ranges.join(",")
+}
+
+/// A `#SBATCH` header: job name, log file, time limit and the resources
+/// and extra options every job shares (all checked: [`SubmitOptions::check`],
+/// [`directive_path`]).
+fn header(name: &str, output: &str, time: Option<&str>, slurm: &SlurmConfig) -> String {
+    let mut out = format!("#!/bin/bash\n#SBATCH --job-name={name}\n#SBATCH --output={output}\n");
+    let directives = [
+        ("account", slurm.account.as_deref()),
+        ("partition", slurm.partition.as_deref()),
+        ("qos", slurm.qos.as_deref()),
+        ("time", time),
+        ("mem", slurm.mem.as_deref()),
+    ];
+    for (option, value) in directives {
+        if let Some(value) = value {
+            let _ = writeln!(out, "#SBATCH --{option}={value}");
+        }
+    }
+    if let Some(cpus) = slurm.cpus_per_task {
+        let _ = writeln!(out, "#SBATCH --cpus-per-task={cpus}");
+    }
+    for arg in &slurm.sbatch_args {
+        let _ = writeln!(out, "#SBATCH {arg}");
     }
     out
 }
@@ -146,36 +142,48 @@ fn quoted(path: &Path) -> String {
     format!("'{}'", path.display().to_string().replace('\'', r"'\''"))
 }
 
-/// The array script over shard indices `tasks` and the merge script.
+/// The scripts of one submission: the array job (none without missing
+/// shards) and the merge job.
+struct Scripts {
+    array: Option<String>,
+    merge: String,
+}
+
+/// The array script over shard indices `tasks` and the merge script. Both
+/// runs use the CPUs they ask for (`--threads` = `--cpus-per-task`).
 fn scripts(
     binary: &Path,
     config: &Path,
     logs: &Path,
     tasks: &BTreeSet<u32>,
     options: &SubmitOptions,
-) -> Result<(String, String)> {
+) -> Result<Scripts> {
+    let slurm = &options.slurm;
     let allowed = if options.i_know { " --i-know" } else { "" };
-    let command = format!("{} --config {}", quoted(binary), quoted(config));
-    let list: Vec<String> = tasks.iter().map(ToString::to_string).collect();
-    let throttle = options
-        .max_parallel
-        .map_or(String::new(), |k| format!("%{k}"));
+    let threads = slurm
+        .cpus_per_task
+        .map_or(String::new(), |n| format!(" --threads {n}"));
+    let run = format!(
+        "set -euo pipefail\nexec {} --config {} run{allowed}{threads} --shards {}",
+        quoted(binary),
+        quoted(config),
+        slurm.shards
+    );
     let array_log = directive_path(&logs.join("shard-%A_%a.out"))?;
     let merge_log = directive_path(&logs.join("merge-%j.out"))?;
-    let mut array = header("ternary-shards", &array_log, options);
-    let _ = writeln!(array, "#SBATCH --array={}{throttle}", list.join(","));
-    let _ = writeln!(
-        array,
-        "set -euo pipefail\nexec {command} run{allowed} --shards {} --shard \"$SLURM_ARRAY_TASK_ID\"",
-        options.shards
-    );
-    let mut merge = header("ternary-merge", &merge_log, options);
-    let _ = writeln!(
-        merge,
-        "set -euo pipefail\nexec {command} run{allowed} --shards {}",
-        options.shards
-    );
-    Ok((array, merge))
+    let array = (!tasks.is_empty()).then(|| {
+        let throttle = slurm
+            .max_parallel
+            .map_or(String::new(), |k| format!("%{k}"));
+        let mut array = header("ternary-shards", &array_log, slurm.time.as_deref(), slurm);
+        let _ = writeln!(array, "#SBATCH --array={}{throttle}", array_indices(tasks));
+        let _ = writeln!(array, "{run} --shard \"$SLURM_ARRAY_TASK_ID\"");
+        array
+    });
+    let merge_time = slurm.merge_time.as_deref().or(slurm.time.as_deref());
+    let mut merge = header("ternary-merge", &merge_log, merge_time, slurm);
+    let _ = writeln!(merge, "{run}");
+    Ok(Scripts { array, merge })
 }
 
 /// `sbatch --parsable [args] script`: the job id.
@@ -207,7 +215,10 @@ fn sbatch(args: &[String], script: &Path) -> Result<String> {
 }
 
 /// Writes the scripts and submits the array job over the missing shard
-/// indices and the dependent merge job (or prints them with `dry_run`).
+/// indices and the dependent merge job, or with `dry_run` prints them and
+/// the commands, creating nothing (not even the store). A study with every
+/// instance fresh submits nothing; one with no shard missing submits the
+/// merge job alone.
 pub fn submit(
     config: &Path,
     store: &Store,
@@ -215,46 +226,48 @@ pub fn submit(
     options: &SubmitOptions,
 ) -> Result<String> {
     options.check()?;
-    let tasks = missing_shards(store, plan, options.shards)?;
+    let shards = options.slurm.shards;
+    let lines = executor::status(store, plan, shards)?;
+    // Not canonicalized: in a dry run the store may not exist yet.
+    let root = std::path::absolute(store.root())
+        .with_context(|| format!("resolving {}", store.root().display()))?;
+    if lines.iter().all(|line| line.freshness == Freshness::Fresh) {
+        return Ok(format!(
+            "nothing to submit: every stage instance is fresh (store {})\n",
+            root.display()
+        ));
+    }
+    let tasks = missing_shards(&lines);
     let binary = std::env::current_exe().context("locating the ternary binary")?;
     let config =
         fs::canonicalize(config).with_context(|| format!("resolving {}", config.display()))?;
-    let dir = fs::canonicalize(store.root())?.join("slurm");
+    let dir = root.join("slurm");
     let logs = dir.join("logs");
-    let (array, merge) = scripts(&binary, &config, &logs, &tasks, options)?;
+    let scripts = scripts(&binary, &config, &logs, &tasks, options)?;
     let (array_path, merge_path) = (dir.join("shards.sbatch"), dir.join("merge.sbatch"));
-    let mut out = String::new();
     if options.dry_run {
-        if !tasks.is_empty() {
-            let _ = writeln!(out, "# {}\n{array}", array_path.display());
-        }
-        let _ = writeln!(out, "# {}\n{merge}", merge_path.display());
-        let _ = writeln!(
-            out,
-            "# submit: sbatch --parsable {}; sbatch --parsable --dependency=afterok:<array job> --kill-on-invalid-dep=yes {}",
-            array_path.display(),
-            merge_path.display()
-        );
-        return Ok(out);
+        return Ok(dry_run_text(&scripts, &array_path, &merge_path));
     }
     fs::create_dir_all(&logs)?;
-    fs::write(&array_path, &array)?;
-    fs::write(&merge_path, &merge)?;
+    let mut out = String::new();
     let mut merge_args = Vec::new();
-    if !tasks.is_empty() {
+    if let Some(array) = &scripts.array {
+        fs::write(&array_path, array)?;
         let array_id = sbatch(&[], &array_path)?;
         let _ = writeln!(
             out,
-            "submitted shards job {array_id}: tasks {:?} of {} (logs {}/shard-{array_id}_<task>.out)",
-            tasks,
-            options.shards,
+            "submitted shards job {array_id}: tasks {} of {shards} (logs {}/shard-{array_id}_<task>.out)",
+            array_indices(&tasks),
             logs.display()
         );
         merge_args = vec![
             format!("--dependency=afterok:{array_id}"),
             "--kill-on-invalid-dep=yes".to_string(),
         ];
+    } else {
+        let _ = writeln!(out, "no shards to compute: submitting the merge job alone");
     }
+    fs::write(&merge_path, &scripts.merge)?;
     let merge_id = sbatch(&merge_args, &merge_path)?;
     let _ = writeln!(
         out,
@@ -264,48 +277,150 @@ pub fn submit(
     Ok(out)
 }
 
+/// What a dry run prints: each script under the path it would be written
+/// to, then the `sbatch` commands that would submit them.
+fn dry_run_text(scripts: &Scripts, array_path: &Path, merge_path: &Path) -> String {
+    let mut out = String::new();
+    let submit = match &scripts.array {
+        Some(array) => {
+            let _ = writeln!(out, "# {}\n{array}", array_path.display());
+            format!(
+                "sbatch --parsable {}; sbatch --parsable --dependency=afterok:<array job> --kill-on-invalid-dep=yes {}",
+                array_path.display(),
+                merge_path.display()
+            )
+        }
+        None => {
+            let _ = writeln!(
+                out,
+                "# no shards to compute: the merge job alone would run\n"
+            );
+            format!("sbatch --parsable {}", merge_path.display())
+        }
+    };
+    let _ = writeln!(out, "# {}\n{}", merge_path.display(), scripts.merge);
+    let _ = writeln!(out, "# submit: {submit}");
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
     #[test]
-    fn time_limits_follow_slurms_formats() {
-        for good in [
-            "30",
-            "30:00",
-            "2:00:00",
-            "1-0",
-            "1-12:30",
-            "1-12:30:00",
-            "UNLIMITED",
-            "infinite",
-        ] {
-            assert!(is_time_limit(good), "{good}");
-        }
-        for bad in [
-            "",
-            ":",
-            "1:",
-            "1:2:3:4",
-            "1-",
-            "-1",
-            "1-2-3",
-            "1-1:2:3:4",
-            "1h",
-            " 1",
-            "1\n",
-        ] {
-            assert!(!is_time_limit(bad), "{bad:?}");
-        }
+    fn array_indices_compact_runs_into_ranges() {
+        let indices = |tasks: &[u32]| array_indices(&tasks.iter().copied().collect());
+        assert_eq!(indices(&(0..32).collect::<Vec<_>>()), "0-31");
+        assert_eq!(indices(&[0, 1, 2, 3, 7, 9, 10, 11, 12]), "0-3,7,9-12");
+        assert_eq!(indices(&[5]), "5");
+        assert_eq!(indices(&[3, 4]), "3-4");
+        assert_eq!(indices(&[0, 2, 4]), "0,2,4");
     }
 
+    /// The scripts of a submission with `slurm` over `tasks`.
+    fn scripts_of(slurm: SlurmConfig, tasks: &[u32]) -> Scripts {
+        let options = SubmitOptions {
+            slurm,
+            dry_run: true,
+            i_know: false,
+        };
+        let tasks = tasks.iter().copied().collect();
+        scripts(
+            Path::new("/opt/ternary"),
+            Path::new("/study/pipeline.toml"),
+            Path::new("/study/data/slurm/logs"),
+            &tasks,
+            &options,
+        )
+        .unwrap()
+    }
+
+    /// Every resource goes into both scripts, the CPUs also into the runs'
+    /// `--threads`; the merge job has its own time limit.
     #[test]
-    fn partition_lists_are_names_separated_by_commas() {
-        for good in ["debug", "a,b", "long.q", "gpu_a-1"] {
-            assert!(is_partition_list(good), "{good}");
+    fn scripts_ask_for_the_resources_and_runs_use_the_cpus() {
+        let slurm = SlurmConfig {
+            shards: 16,
+            cpus_per_task: Some(4),
+            mem: Some("8G".into()),
+            account: Some("physics".into()),
+            partition: Some("normal,long".into()),
+            qos: Some("high".into()),
+            time: Some("30:00".into()),
+            merge_time: Some("4:00:00".into()),
+            max_parallel: Some(8),
+            sbatch_args: vec!["--exclusive".into(), "--constraint=avx2".into()],
+        };
+        let scripts = scripts_of(slurm, &[0, 1, 2, 3, 7, 9, 10, 11, 12]);
+        let array = scripts.array.unwrap();
+        let shared =
+            "#SBATCH --account=physics\n#SBATCH --partition=normal,long\n#SBATCH --qos=high\n";
+        let resources = "#SBATCH --mem=8G\n#SBATCH --cpus-per-task=4\n#SBATCH --exclusive\n#SBATCH --constraint=avx2\n";
+        assert_eq!(
+            array,
+            format!(
+                "#!/bin/bash\n#SBATCH --job-name=ternary-shards\n#SBATCH --output=/study/data/slurm/logs/shard-%A_%a.out\n{shared}#SBATCH --time=30:00\n{resources}#SBATCH --array=0-3,7,9-12%8\nset -euo pipefail\nexec '/opt/ternary' --config '/study/pipeline.toml' run --threads 4 --shards 16 --shard \"$SLURM_ARRAY_TASK_ID\"\n"
+            )
+        );
+        assert_eq!(
+            scripts.merge,
+            format!(
+                "#!/bin/bash\n#SBATCH --job-name=ternary-merge\n#SBATCH --output=/study/data/slurm/logs/merge-%j.out\n{shared}#SBATCH --time=4:00:00\n{resources}set -euo pipefail\nexec '/opt/ternary' --config '/study/pipeline.toml' run --threads 4 --shards 16\n"
+            )
+        );
+    }
+
+    /// Without `merge_time` the merge job takes `time`; without resources
+    /// the scripts ask for none (the cluster's defaults) and the runs use
+    /// the threads they find; without missing shards there is no array.
+    #[test]
+    fn scripts_without_resources_ask_for_none() {
+        let slurm = SlurmConfig {
+            time: Some("1:00:00".into()),
+            ..SlurmConfig::default()
+        };
+        let scripts = scripts_of(slurm.clone(), &[0, 1, 2, 3, 4, 5, 6, 7]);
+        let array = scripts.array.unwrap();
+        assert!(array.contains("#SBATCH --array=0-7\n"), "{array}");
+        assert!(array.contains(" run --shards 8 --shard "), "{array}");
+        for absent in [
+            "--cpus-per-task",
+            "--mem",
+            "--account",
+            "--qos",
+            "--partition",
+        ] {
+            assert!(!array.contains(absent), "{array}");
+            assert!(!scripts.merge.contains(absent), "{}", scripts.merge);
         }
-        for bad in ["", ",", "a,", "a b", "a\nb", "a;b", "$(x)"] {
-            assert!(!is_partition_list(bad), "{bad:?}");
-        }
+        assert!(
+            scripts.merge.contains("#SBATCH --time=1:00:00\n"),
+            "{}",
+            scripts.merge
+        );
+        assert!(scripts_of(slurm, &[]).array.is_none());
+    }
+
+    /// A bad command-line value is refused naming its option.
+    #[test]
+    fn a_bad_value_names_its_command_line_option() {
+        let refused = |slurm: SlurmConfig| {
+            let options = SubmitOptions {
+                slurm,
+                dry_run: true,
+                i_know: false,
+            };
+            options.check().unwrap_err().to_string()
+        };
+        let message = refused(SlurmConfig {
+            merge_time: Some("soon".into()),
+            ..SlurmConfig::default()
+        });
+        assert!(message.starts_with("--merge-time: \"soon\""), "{message}");
+        let message = refused(SlurmConfig {
+            sbatch_args: vec!["--comment=$(id)".into()],
+            ..SlurmConfig::default()
+        });
+        assert!(message.starts_with("--sbatch-arg: "), "{message}");
     }
 }

@@ -384,6 +384,18 @@ eps_ev = 1.0
 kt_ev = 0.1
 mass_amu = 4.0
 density_per_um = 5e-4
+
+[slurm]
+shards = 16
+cpus_per_task = 4
+mem = "8G"
+account = "physics"
+partition = "normal,long"
+qos = "high"
+time = "1:00:00"
+merge_time = "4:00:00"
+max_parallel = 8
+sbatch_args = ["--exclusive", "--constraint=avx2"]
 "#;
 
 /// Each `(from, to, key)`: replacing `from` by `to` in [`STUDY`] is rejected
@@ -996,6 +1008,45 @@ fn evolve_section_rejects_bad_values() {
             "times_ns = [100.0]",
             "times_ns = [-1.0]",
             "evolve.times_ns[0]",
+        ),
+    ]);
+}
+
+/// Whatever `slurm submit` writes into `#SBATCH` lines is in Slurm's
+/// syntax (no newline, space or shell character), and counts are in range.
+#[test]
+fn slurm_section_rejects_bad_values() {
+    rejects(&[
+        ("shards = 16", "shards = 1", "slurm.shards"),
+        ("shards = 16", "shards = 4097", "slurm.shards"),
+        (
+            "cpus_per_task = 4",
+            "cpus_per_task = 0",
+            "slurm.cpus_per_task",
+        ),
+        ("mem = \"8G\"", "mem = \"8 GB\"", "slurm.mem"),
+        (
+            "account = \"physics\"",
+            "account = \"a\\necho x\"",
+            "slurm.account",
+        ),
+        (
+            "partition = \"normal,long\"",
+            "partition = \"normal,\"",
+            "slurm.partition",
+        ),
+        ("qos = \"high\"", "qos = \"$(id)\"", "slurm.qos"),
+        ("time = \"1:00:00\"", "time = \"1h\"", "slurm.time"),
+        (
+            "merge_time = \"4:00:00\"",
+            "merge_time = \"4 hours\"",
+            "slurm.merge_time",
+        ),
+        ("max_parallel = 8", "max_parallel = 0", "slurm.max_parallel"),
+        (
+            "sbatch_args = [\"--exclusive\", \"--constraint=avx2\"]",
+            "sbatch_args = [\"--exclusive\", \"--constraint=avx2;rm\"]",
+            "slurm.sbatch_args[1]",
         ),
     ]);
 }

@@ -199,9 +199,9 @@ fn a_slurm_array_with_a_cancelled_task_resubmits_only_what_is_missing() {
         stdout(&output)
     };
     let dry = submit(&["--dry-run"]);
-    assert!(dry.contains("#SBATCH --array=0,1,2,3%1"), "{dry}");
+    assert!(dry.contains("#SBATCH --array=0-3%1\n"), "{dry}");
     let first = submit(&[]);
-    assert!(first.contains("tasks {0, 1, 2, 3} of 4"), "{first}");
+    assert!(first.contains("tasks 0-3 of 4 "), "{first}");
     let array = first
         .split("submitted shards job ")
         .nth(1)
@@ -222,7 +222,7 @@ fn a_slurm_array_with_a_cancelled_task_resubmits_only_what_is_missing() {
     let logs = dir.join("data/slurm/logs");
     assert!(logs.join(format!("shard-{array}_0.out")).exists());
     let second = submit(&[]);
-    assert!(second.contains("tasks {3} of 4"), "{second}");
+    assert!(second.contains("tasks 3 of 4 "), "{second}");
     wait_for_queue_to_empty();
     assert_eq!(merged_bytes(&dir.join("data")), single_process());
     let status = stdout(&ternary(&config, &["status"]));
@@ -247,8 +247,9 @@ fn a_slurm_array_with_a_cancelled_task_resubmits_only_what_is_missing() {
 
 /// Values that go into `#SBATCH` lines are in Slurm's own syntax: a newline
 /// in `--partition` or `--time` wrote a bare `echo injected` line into both
-/// scripts (run as a command), and `--partition ''` was accepted. Valid
-/// lists and time formats still produce the directives.
+/// scripts (run as a command), and `--partition ''` was accepted; so are the
+/// other resources and the extra sbatch options. Valid lists and time
+/// formats still produce the directives.
 #[test]
 fn slurm_options_cannot_inject_lines_into_the_scripts() {
     let dir = workspace("slurm-inject");
@@ -270,6 +271,17 @@ fn slurm_options_cannot_inject_lines_into_the_scripts() {
         ("--time", "1:2:3:4"),
         ("--time", "tomorrow"),
         ("--time", "-1"),
+        ("--merge-time", "1:00\necho injected"),
+        ("--mem", "16G\necho injected"),
+        ("--mem", "lots"),
+        ("--account", "a b"),
+        ("--qos", "$(id)"),
+        ("--sbatch-arg", "--exclusive\necho injected"),
+        ("--sbatch-arg", "--comment=a;b"),
+        ("--sbatch-arg", "exclusive"),
+        ("--shards", "1"),
+        ("--cpus-per-task", "0"),
+        ("--max-parallel", "0"),
     ] {
         let output = submit(&[&format!("{option}={value}")]);
         let message = stderr(&output);
@@ -299,4 +311,124 @@ fn slurm_options_cannot_inject_lines_into_the_scripts() {
         );
         assert!(text.contains(&format!("#SBATCH --time={time}\n")), "{text}");
     }
+}
+
+/// A dry run changes nothing on the filesystem: against a store path that
+/// does not exist it prints both scripts (all shards missing) and leaves
+/// the study directory as it was (it used to create the store: marker,
+/// lock, folders).
+#[test]
+fn a_dry_run_creates_nothing() {
+    let dir = workspace("slurm-dry-run");
+    let config = write_config(&dir, &study());
+    let before = common::files_under(&dir);
+    let output = ternary(&config, &["slurm", "submit", "--shards", "4", "--dry-run"]);
+    let text = stdout(&output);
+    assert!(output.status.success(), "{}", stderr(&output));
+    assert!(text.contains("slurm/shards.sbatch\n"), "{text}");
+    assert!(text.contains("#SBATCH --array=0-3\n"), "{text}");
+    assert!(text.contains("slurm/merge.sbatch\n"), "{text}");
+    assert!(!dir.join("data").exists(), "the store was created");
+    assert_eq!(common::files_under(&dir), before);
+    assert_eq!(
+        std::fs::read_dir(&dir).unwrap().count(),
+        1,
+        "only pipeline.toml"
+    );
+}
+
+/// With every shard done but not merged, a dry run shows the merge job
+/// alone and a command that submits only it (it named a `shards.sbatch` it
+/// did not write); with every instance fresh there is nothing to submit.
+#[test]
+fn a_dry_run_without_missing_shards_names_only_what_would_run() {
+    let dir = workspace("slurm-dry-run-done");
+    let config = write_config(&dir, &study());
+    for task in ["0", "1"] {
+        let output = ternary(&config, &["run", "--shards", "2", "--shard", task]);
+        assert!(output.status.success(), "{}", stderr(&output));
+    }
+    let dry_run = || {
+        let output = ternary(&config, &["slurm", "submit", "--shards", "2", "--dry-run"]);
+        assert!(output.status.success(), "{}", stderr(&output));
+        stdout(&output)
+    };
+    let merge_only = dry_run();
+    assert!(
+        merge_only.starts_with("# no shards to compute: the merge job alone would run\n"),
+        "{merge_only}"
+    );
+    assert!(!merge_only.contains("shards.sbatch"), "{merge_only}");
+    assert!(!merge_only.contains("--array"), "{merge_only}");
+    assert!(
+        merge_only.contains("merge.sbatch\n#!/bin/bash\n"),
+        "{merge_only}"
+    );
+    let submit = format!(
+        "# submit: sbatch --parsable {}",
+        dir.join("data/slurm/merge.sbatch").display()
+    );
+    assert_eq!(merge_only.lines().last(), Some(submit.as_str()));
+    let store = common::files_under(&dir.join("data"));
+    assert!(ternary(&config, &["run", "--shards", "2"]).status.success());
+    assert_ne!(common::files_under(&dir.join("data")), store);
+    let complete = common::files_under(&dir.join("data"));
+    let nothing = dry_run();
+    assert!(
+        nothing.starts_with("nothing to submit: every stage instance is fresh"),
+        "{nothing}"
+    );
+    assert!(!nothing.contains("sbatch"), "{nothing}");
+    assert_eq!(common::files_under(&dir.join("data")), complete);
+}
+
+/// `[slurm]` keys shape the scripts and each command-line option replaces
+/// its key: shards, CPUs (also the runs' threads), time and extra options.
+#[test]
+fn slurm_keys_shape_the_scripts_and_options_override_them() {
+    let dir = workspace("slurm-config");
+    let config = write_config(
+        &dir,
+        &format!(
+            "{}\n[slurm]\nshards = 4\ncpus_per_task = 2\ntime = \"10:00\"\nsbatch_args = [\"--exclusive\"]\n",
+            study()
+        ),
+    );
+    let dry_run = |extra: &[&str]| {
+        let output = ternary(
+            &config,
+            &[&["slurm", "submit", "--dry-run"][..], extra].concat(),
+        );
+        assert!(output.status.success(), "{}", stderr(&output));
+        stdout(&output)
+    };
+    let configured = dry_run(&[]);
+    for line in [
+        "#SBATCH --array=0-3\n",
+        "#SBATCH --cpus-per-task=2\n",
+        "#SBATCH --time=10:00\n",
+        "#SBATCH --exclusive\n",
+        " run --threads 2 --shards 4 --shard ",
+    ] {
+        assert!(configured.contains(line), "{line:?} in {configured}");
+    }
+    let overridden = dry_run(&[
+        "--shards",
+        "2",
+        "--cpus-per-task",
+        "3",
+        "--merge-time",
+        "2:00:00",
+        "--sbatch-arg=--requeue",
+    ]);
+    for line in [
+        "#SBATCH --array=0-1\n",
+        "#SBATCH --cpus-per-task=3\n",
+        "#SBATCH --time=2:00:00\n",
+        "#SBATCH --requeue\n",
+        " run --threads 3 --shards 2 --shard ",
+    ] {
+        assert!(overridden.contains(line), "{line:?} in {overridden}");
+    }
+    assert!(!overridden.contains("--exclusive"), "{overridden}");
 }

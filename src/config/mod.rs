@@ -3,7 +3,7 @@
 //!
 //! One module per section (`[store]`, `[potentials]`, `[engine]`, `[scan]`,
 //! `[collisions]`, `[kernel]`, `[sweep]`, `[convergence]`, `[evolve]`,
-//! `[md]`, `[[gas]]`, `[figures]`, `[publication]`), each owning its schema with defaults, the check of
+//! `[md]`, `[[gas]]`, `[figures]`, `[publication]`, `[limits]`, `[slurm]`), each owning its schema with defaults, the check of
 //! every documented range, and the parameters of the stages it configures.
 //! Unknown keys, wrong types and out-of-range values are rejected with a
 //! [`ConfigError`] naming the key path and, where the document shows it, the
@@ -28,6 +28,7 @@ mod md;
 mod potentials;
 mod publication;
 mod scan;
+mod slurm;
 mod store;
 mod sweep;
 
@@ -64,6 +65,7 @@ pub use scan::{
     MAX_SCAN_LAUNCHES, MAX_SCAN_POINTS, MAX_SCAN_SCENES, NamedLaunch, ScanConfig, ScanGrid,
     ScanGridOverride, ScanParams,
 };
+pub use slurm::SlurmConfig;
 pub use store::StoreConfig;
 pub use sweep::{MAX_SWEEP_POINTS, SweepConfig, SweepParams};
 
@@ -142,6 +144,9 @@ pub struct Config {
     /// The largest study started without `--i-know`.
     #[serde(default)]
     pub limits: LimitsConfig,
+    /// What `slurm submit` asks of the scheduler.
+    #[serde(default)]
+    pub slurm: SlurmConfig,
 }
 
 /// A loaded and validated study, with the parameters that needed lookups
@@ -266,6 +271,7 @@ impl Study {
         let md = config.md.resolve(&config.gas, &gases)?;
         config.publication.validate()?;
         config.limits.validate()?;
+        config.slurm.validate()?;
         Ok(Study {
             file: file.to_path_buf(),
             potentials,
