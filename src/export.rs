@@ -6,9 +6,9 @@
 //!
 //! ```text
 //! datapackage.json        Frictionless Data Package v2: one resource per file
-//!                         (but itself and SHA256SUMS) with bytes and sha256; for
-//!                         a table its Table Schema (types, units, descriptions)
-//!                         and the artifact it came from
+//!                         (but itself and SHA256SUMS); for a table its Table
+//!                         Schema (types, units, descriptions) and the artifact
+//!                         it came from, for any other file its bytes and sha256
 //! CITATION.cff            Citation File Format 1.2.0 }  both from `[publication]`
 //! .zenodo.json            Zenodo deposit metadata    }  (Zenodo reads only this one)
 //! README.md               what each table holds, how to read it (Python, R, DuckDB)
@@ -325,7 +325,7 @@ fn write_bundle(study: &Study, entries: &[Entry], dir: &Path) -> Result<()> {
         }
         fs::write(&target, &bytes).with_context(|| format!("writing {}", target.display()))?;
         resources.push(if is_table_file(&entry.path) {
-            resource(entry, &target, bytes.len() as u64)?
+            resource(entry, &target)?
         } else {
             figure_resource(entry, bytes.len() as u64)
         });
@@ -482,9 +482,12 @@ fn field_type(data_type: &DataType) -> &'static str {
     }
 }
 
-/// The descriptor of one table: path, size, hash, Table Schema from the
-/// file's column metadata, and the artifact it came from.
-fn resource(entry: &Entry, file: &Path, bytes: u64) -> Result<Value> {
+/// The descriptor of one table: path, Table Schema from the file's column
+/// metadata, and the artifact it came from. No `bytes` or `hash`:
+/// frictionless reads Parquet through pandas, cannot count its bytes and
+/// reports every such table invalid (`byte-count ... actual is None`);
+/// `SHA256SUMS` and `verify --bundle` check a table's bytes instead.
+fn resource(entry: &Entry, file: &Path) -> Result<Value> {
     let (schema, metadata, rows) = read_parquet_footer(file)?;
     let fields: Vec<Value> = schema
         .fields()
@@ -512,8 +515,6 @@ fn resource(entry: &Entry, file: &Path, bytes: u64) -> Result<Value> {
         "type": "table",
         "format": "parquet",
         "mediatype": PARQUET_MEDIATYPE,
-        "bytes": bytes,
-        "hash": format!("sha256:{}", entry.sha256),
         "description": description,
         "schema": { "fields": fields },
         "ternary": {
@@ -698,8 +699,9 @@ fn bundle_readme(publication: &PublicationConfig, tables: &[Value]) -> String {
     let _ = writeln!(
         out,
         "`datapackage.json` (Frictionless Data Package v2) describes every table: its columns \
-         with types, units and descriptions, its size and SHA-256, and the stage, version, key \
-         and parameters that produced it. `SHA256SUMS` lists every file (`sha256sum -c SHA256SUMS`); \
+         with types, units and descriptions, and the stage, version, key and parameters that \
+         produced it (`frictionless validate datapackage.json` checks it against the tables). \
+         `SHA256SUMS` lists every file with its SHA-256 (`sha256sum -c SHA256SUMS`); \
          `ternary verify --bundle .` checks both.\n"
     );
     let _ = writeln!(out, "## Reading the tables\n");
@@ -828,7 +830,8 @@ pub fn verify_bundle(dir: &Path) -> Result<(String, usize)> {
 }
 
 /// Required fields of the package and of each resource, and each resource's
-/// file against its `bytes` and `hash`.
+/// file against its `bytes` and `hash` where it records them (a table
+/// records neither: `SHA256SUMS` holds its hash).
 fn descriptor_problems(dir: &Path, descriptor: &Value) -> Vec<String> {
     let mut problems = Vec::new();
     for field in [
@@ -855,9 +858,13 @@ fn descriptor_problems(dir: &Path, descriptor: &Value) -> Vec<String> {
             problems.push(format!("datapackage.json: resources[{k}] has no `path`"));
             continue;
         };
-        let table = resource["type"] == "table";
-        for field in ["name", "format", "mediatype", "bytes", "hash", "schema"] {
-            if (table || field != "schema") && resource.get(field).is_none_or(Value::is_null) {
+        let required: &[&str] = if resource["type"] == "table" {
+            &["name", "format", "mediatype", "schema"]
+        } else {
+            &["name", "format", "mediatype", "bytes", "hash"]
+        };
+        for field in required {
+            if resource.get(field).is_none_or(Value::is_null) {
                 problems.push(format!("{path}: the descriptor lacks `{field}`"));
             }
         }
@@ -867,23 +874,31 @@ fn descriptor_problems(dir: &Path, descriptor: &Value) -> Vec<String> {
         }
         match fs::read(dir.join(path)) {
             Err(error) => problems.push(format!("{path}: {error}")),
-            Ok(bytes) => {
-                if resource["bytes"].as_u64() != Some(bytes.len() as u64) {
-                    problems.push(format!(
-                        "{path}: {} bytes but the descriptor records {}",
-                        bytes.len(),
-                        resource["bytes"]
-                    ));
-                }
-                let hash = format!("sha256:{}", sha256_hex(&bytes));
-                if resource["hash"].as_str() != Some(hash.as_str()) {
-                    problems.push(format!(
-                        "{path}: {hash} but the descriptor records {}",
-                        resource["hash"]
-                    ));
-                }
-            }
+            Ok(bytes) => problems.extend(size_and_hash_problems(path, resource, &bytes)),
         }
+    }
+    problems
+}
+
+/// A file's size and SHA-256 against the `bytes` and `hash` its resource
+/// records, when it records them.
+fn size_and_hash_problems(path: &str, resource: &Value, bytes: &[u8]) -> Vec<String> {
+    let mut problems = Vec::new();
+    if let Some(recorded) = resource.get("bytes")
+        && recorded.as_u64() != Some(bytes.len() as u64)
+    {
+        problems.push(format!(
+            "{path}: {} bytes but the descriptor records {recorded}",
+            bytes.len()
+        ));
+    }
+    let hash = format!("sha256:{}", sha256_hex(bytes));
+    if let Some(recorded) = resource.get("hash")
+        && recorded.as_str() != Some(hash.as_str())
+    {
+        problems.push(format!(
+            "{path}: {hash} but the descriptor records {recorded}"
+        ));
     }
     problems
 }

@@ -65,6 +65,31 @@ fn python(script: &str, dir: &Path) -> String {
     stdout(&output)
 }
 
+/// `frictionless validate datapackage.json`, the plain command a reader
+/// runs (it failed on every table's `bytes` until the tables dropped them),
+/// passes. Skipped, saying why, only where frictionless is not installed.
+fn assert_frictionless_valid(bundle: &Path) {
+    let importable = Command::new("python3")
+        .args(["-c", "import frictionless"])
+        .output()
+        .is_ok_and(|o| o.status.success());
+    if !importable {
+        eprintln!("skipped `frictionless validate`: python3 cannot import frictionless");
+        return;
+    }
+    let validation = Command::new("python3")
+        .args(["-m", "frictionless", "validate", "datapackage.json"])
+        .current_dir(bundle)
+        .output()
+        .unwrap();
+    assert!(
+        validation.status.success(),
+        "frictionless: {}{}",
+        stdout(&validation),
+        stderr(&validation)
+    );
+}
+
 /// Rows and the sum of the first numeric column with a finite sum, as
 /// `ternary show` reports them for a file of the bundle.
 fn shown_rows_and_sum(config: &Path, file: &Path) -> (u64, String, f64) {
@@ -96,8 +121,8 @@ fn shown_rows_and_sum(config: &Path, file: &Path) -> (u64, String, f64) {
     (rows, column, sum)
 }
 
-/// The bundle of the small study passes `frictionless validate`, `sha256sum
-/// -c`, and DuckDB and polars read every table with the row counts and
+/// The bundle of the small study passes `frictionless validate` (plain),
+/// `sha256sum -c`, and DuckDB and polars read every table with the row counts and
 /// column sums `ternary show` reports.
 #[test]
 fn a_bundle_passes_tools_that_are_not_ours() {
@@ -105,26 +130,7 @@ fn a_bundle_passes_tools_that_are_not_ours() {
     let bundle = dir.join("bundle");
     let output = export(&config, &bundle, &[]);
     assert!(output.status.success(), "{}", stderr(&output));
-    // frictionless reads Parquet through pandas and cannot count its bytes
-    // ("actual is None"): sizes and hashes are checked by sha256sum and
-    // `verify --bundle` below.
-    let validation = Command::new("python3")
-        .args([
-            "-m",
-            "frictionless",
-            "validate",
-            "--skip-errors",
-            "byte-count",
-        ])
-        .arg(bundle.join("datapackage.json"))
-        .output()
-        .unwrap();
-    assert!(
-        validation.status.success(),
-        "frictionless: {}{}",
-        stdout(&validation),
-        stderr(&validation)
-    );
+    assert_frictionless_valid(&bundle);
     let sums = Command::new("sha256sum")
         .args(["-c", "SHA256SUMS"])
         .current_dir(&bundle)
