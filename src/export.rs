@@ -82,7 +82,7 @@ struct Entry {
 
 /// Writes the bundle of `study`'s current artifacts into `dir` (missing or
 /// empty); refuses while a selected instance is stale, missing or damaged.
-/// Returns a one-line summary.
+/// Returns a one-line summary that counts tables and figure files apart.
 pub fn export(
     study: &Study,
     store: &Store,
@@ -107,9 +107,13 @@ pub fn export(
         .iter()
         .map(|path| fs::metadata(dir.join(path)).map(|m| m.len()).unwrap_or(0))
         .sum();
+    let tables = entries
+        .iter()
+        .filter(|entry| is_table_file(&entry.path))
+        .count();
     Ok(format!(
-        "export: {} tables, {bytes} bytes in {}\n",
-        entries.len(),
+        "export: {tables} tables, {} figure files, {bytes} bytes in {}\n",
+        entries.len() - tables,
         dir.display()
     ))
 }

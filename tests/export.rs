@@ -130,6 +130,11 @@ fn a_bundle_passes_tools_that_are_not_ours() {
     let bundle = dir.join("bundle");
     let output = export(&config, &bundle, &[]);
     assert!(output.status.success(), "{}", stderr(&output));
+    assert!(
+        stdout(&output).starts_with("export: 13 tables, 16 figure files, "),
+        "{}",
+        stdout(&output)
+    );
     assert_frictionless_valid(&bundle);
     let sums = Command::new("sha256sum")
         .args(["-c", "SHA256SUMS"])
