@@ -18,12 +18,16 @@
 //! <stage>/<instance>/<table>.parquet    one of several tables
 //! ```
 //!
+//! `<instance>` is the instance's name with each parameter value cut to six
+//! significant digits (`rho5.38226e-5` for `rho0.00005382255169036728`);
+//! the full name and parameters stay in the table's resource.
+//!
 //! Exporting the same store twice gives the same bytes: files are written in
 //! sorted order and nothing records the wall-clock time (dates come from
 //! `[publication]`). The bundle is written next to its target and renamed
 //! into place, so it appears complete or not at all.
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, BTreeSet};
 use std::fmt::Write as _;
 use std::fs;
 use std::path::{Path, PathBuf};
@@ -71,6 +75,8 @@ pub struct ExportOptions {
 struct Entry {
     stage: String,
     instance: String,
+    /// The instance's short name in the bundle (`bundle_names`).
+    name: String,
     key: String,
     code: CodeRecord,
     params: Value,
@@ -253,10 +259,13 @@ fn selected_entries(
             && (options.potentials.is_empty()
                 || potential_of(instance).is_none_or(|p| options.potentials.contains(&p)))
     };
+    let lines = executor::status(store, plan, 1)?;
+    let names = bundle_names(lines.iter().map(|line| line.id.instance.as_str()));
     let mut not_fresh = Vec::new();
     let mut entries = Vec::new();
-    for line in executor::status(store, plan, 1)? {
+    for line in &lines {
         let (stage, instance) = (&line.id.stage, &line.id.instance);
+        let name = &names[instance.as_str()];
         if !selected(stage, instance) {
             continue;
         }
@@ -274,13 +283,14 @@ fn selected_entries(
         for file in &manifest.files {
             let table = file.name.trim_end_matches(".parquet").to_string();
             let path = if single {
-                format!("{stage}/{instance}.parquet")
+                format!("{stage}/{name}.parquet")
             } else {
-                format!("{stage}/{instance}/{}", file.name)
+                format!("{stage}/{name}/{}", file.name)
             };
             entries.push(Entry {
                 stage: stage.clone(),
                 instance: instance.clone(),
+                name: name.clone(),
                 key: key.clone(),
                 code: manifest.code.clone(),
                 params: manifest.params.clone(),
@@ -301,6 +311,74 @@ fn selected_entries(
         bail!("the selection holds no table");
     }
     Ok(entries)
+}
+
+/// Significant digits of a parameter value in a bundle path.
+const NAME_DIGITS: usize = 6;
+
+/// A parameter value, short: the shorter of its shortest round-trip form
+/// (when that has at most `NAME_DIGITS` significant digits) and its
+/// `NAME_DIGITS`-digit exponent form without trailing zeros: `0`, `-0.25`,
+/// `5.38226e-5`, `1e-20`.
+fn short_number(value: f64) -> String {
+    let exponent = format!("{value:.*e}", NAME_DIGITS - 1);
+    let (mantissa, power) = exponent.split_once('e').unwrap_or((&exponent, "0"));
+    let mantissa = mantissa.trim_end_matches('0').trim_end_matches('.');
+    let rounded = format!("{mantissa}e{power}");
+    let plain = value.to_string();
+    let significant = plain
+        .trim_start_matches(['-', '0', '.'])
+        .chars()
+        .filter(char::is_ascii_digit)
+        .count();
+    if significant <= NAME_DIGITS && plain.len() <= rounded.len() {
+        plain
+    } else {
+        rounded
+    }
+}
+
+/// An instance name with each `<label><number>` part between underscores
+/// (`rho0.00005382255169036728`, `lj-0.1052`) cut by `short_number`.
+fn short_instance(instance: &str) -> String {
+    let short_part = |part: &str| {
+        let at = part
+            .find(|c: char| c.is_ascii_digit() || matches!(c, '-' | '.'))
+            .unwrap_or(part.len());
+        let (label, number) = part.split_at(at);
+        match number.parse::<f64>() {
+            Ok(value) if value.is_finite() => format!("{label}{}", short_number(value)),
+            _ => part.to_string(),
+        }
+    };
+    instance
+        .split('_')
+        .map(short_part)
+        .collect::<Vec<_>>()
+        .join("_")
+}
+
+/// The bundle name of each of the plan's `instances`: its `short_instance`,
+/// or its full name where two instances' short names coincide. It does not
+/// depend on the selection, so a name is the same in every bundle of a study.
+fn bundle_names<'a>(instances: impl Iterator<Item = &'a str>) -> BTreeMap<&'a str, String> {
+    let instances: BTreeSet<&str> = instances.collect();
+    let mut sharing: BTreeMap<String, usize> = BTreeMap::new();
+    for instance in &instances {
+        *sharing.entry(short_instance(instance)).or_default() += 1;
+    }
+    instances
+        .into_iter()
+        .map(|instance| {
+            let short = short_instance(instance);
+            let name = if sharing[&short] == 1 {
+                short
+            } else {
+                instance.to_string()
+            };
+            (instance, name)
+        })
+        .collect()
 }
 
 fn describe(freshness: &Freshness) -> String {
@@ -426,7 +504,7 @@ fn document_resource(
 
 /// A Data Package resource name: lower-case, `[a-z0-9._-]`.
 fn resource_name(entry: &Entry) -> String {
-    format!("{}.{}.{}", entry.stage, entry.instance, entry.table)
+    format!("{}.{}.{}", entry.stage, entry.name, entry.table)
         .to_lowercase()
         .chars()
         .map(|c| {
@@ -939,4 +1017,42 @@ fn sums_problems(dir: &Path) -> Result<Vec<String>> {
         }
     }
     Ok(problems)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_long_parameter_value_is_cut_to_six_significant_digits() {
+        assert_eq!(
+            short_instance("lj-0.1052_u0_rho0.00005382255169036728"),
+            "lj-0.1052_u0_rho5.38226e-5"
+        );
+        assert_eq!(
+            short_instance("ipp-6_u-0.25_rho0.0010324090855340624"),
+            "ipp-6_u-0.25_rho1.03241e-3"
+        );
+        assert_eq!(short_instance("ipp-6_u-3_rho0"), "ipp-6_u-3_rho0");
+        assert_eq!(short_instance("study"), "study");
+        assert_eq!(short_number(1e-20), "1e-20");
+        assert_eq!(short_number(2.0e-5), "2e-5");
+    }
+
+    #[test]
+    fn bundle_names_are_unique_even_where_short_names_coincide() {
+        let instances = [
+            "ipp-6_u0_rho0.00005382255169036728",
+            "ipp-6_u0_rho0.00005382255169036729",
+            "ipp-6_u0_rho0.0007300234653397379",
+            "ipp-6_u0_rho0",
+        ];
+        let names = bundle_names(instances.into_iter());
+        let distinct: BTreeSet<&String> = names.values().collect();
+        assert_eq!(distinct.len(), instances.len(), "{names:?}");
+        assert_eq!(names[instances[0]], instances[0], "coinciding: full names");
+        assert_eq!(names[instances[1]], instances[1]);
+        assert_eq!(names[instances[2]], "ipp-6_u0_rho7.30023e-4");
+        assert_eq!(names[instances[3]], "ipp-6_u0_rho0");
+    }
 }
