@@ -11,7 +11,8 @@
 //!                         it came from, for any other file its bytes and sha256
 //! CITATION.cff            Citation File Format 1.2.0 }  both from `[publication]`
 //! .zenodo.json            Zenodo deposit metadata    }  (Zenodo reads only this one)
-//! README.md               what each table holds, how to read it (Python, R, DuckDB)
+//! README.md               the headline tables, names, figures and each kind of
+//!                         table once; how to read one (Python, R, DuckDB)
 //! pipeline.toml           the study configuration, verbatim
 //! SHA256SUMS              every other file, in the format `sha256sum -c` reads
 //! <stage>/<instance>.parquet            a stage's only table
@@ -43,6 +44,8 @@ use crate::pipeline::executor::{self, Freshness, tool_version};
 use crate::pipeline::key::sha256_hex;
 use crate::pipeline::store::{Depth, Store};
 use crate::pipeline::table::{is_table_file, read_parquet_footer};
+
+mod readme;
 
 /// The stages whose tables hold every launch pair and integrated scene:
 /// large, and left out of a bundle unless asked for.
@@ -417,12 +420,10 @@ fn write_bundle(study: &Study, entries: &[Entry], dir: &Path) -> Result<()> {
     write_json(&dir.join(".zenodo.json"), &zenodo(publication))?;
     fs::copy(&study.file, dir.join("pipeline.toml"))
         .with_context(|| format!("copying {}", study.file.display()))?;
-    let tables: Vec<Value> = resources
-        .iter()
-        .filter(|r| r["type"] == "table")
-        .cloned()
-        .collect();
-    fs::write(dir.join("README.md"), bundle_readme(publication, &tables))?;
+    fs::write(
+        dir.join("README.md"),
+        readme::bundle_readme(publication, &resources),
+    )?;
     for (path, format, mediatype, description) in DOCUMENTS {
         resources.push(document_resource(
             dir,
@@ -754,94 +755,6 @@ fn zenodo(publication: &PublicationConfig) -> Value {
         value["publication_date"] = json!(date);
     }
     value
-}
-
-fn bundle_readme(publication: &PublicationConfig, tables: &[Value]) -> String {
-    let mut out = String::new();
-    let _ = writeln!(out, "# {}\n", publication.title);
-    let _ = writeln!(out, "{}\n", publication.description);
-    let authors: Vec<String> = publication
-        .authors
-        .iter()
-        .map(AuthorConfig::display_name)
-        .collect();
-    if !authors.is_empty() {
-        let _ = writeln!(out, "Authors: {}.\n", authors.join("; "));
-    }
-    let _ = writeln!(
-        out,
-        "Version {}, licence {}. Written by {} from the study configuration `pipeline.toml` \
-         (included). The model and its units follow {PAPER_CITATION} (doi:{PAPER_DOI}, \
-         arXiv:{PAPER_ARXIV}): velocities in v_th = sqrt(kT/m), lengths in l = l0 (eps/kT)^(1/n) \
-         (n = 6 for Lennard-Jones), times in l/v_th, rates in rho^2 l v_th.\n",
-        publication.version,
-        publication.license,
-        tool_version()
-    );
-    let _ = writeln!(
-        out,
-        "`datapackage.json` (Frictionless Data Package v2) describes every table: its columns \
-         with types, units and descriptions, and the stage, version, key and parameters that \
-         produced it (`frictionless validate datapackage.json` checks it against the tables). \
-         `SHA256SUMS` lists every file with its SHA-256 (`sha256sum -c SHA256SUMS`); \
-         `ternary verify --bundle .` checks both.\n"
-    );
-    let _ = writeln!(out, "## Reading the tables\n");
-    let example = tables[0]["path"].as_str().unwrap_or("table.parquet");
-    let _ = writeln!(
-        out,
-        "Python (polars):\n\n    import polars as pl\n    frame = pl.read_parquet(\"{example}\")\n"
-    );
-    let _ = writeln!(
-        out,
-        "Python (pyarrow), with units from the column metadata:\n\n    import pyarrow.parquet as pq\n    table = pq.read_table(\"{example}\")\n    print(table.schema.field(0).metadata)   # {{b'unit': ..., b'description': ...}}\n"
-    );
-    let _ = writeln!(
-        out,
-        "R (arrow):\n\n    library(arrow)\n    frame <- read_parquet(\"{example}\")\n"
-    );
-    let _ = writeln!(
-        out,
-        "DuckDB:\n\n    SELECT * FROM '{example}';\n    SELECT * FROM parquet_kv_metadata('{example}');\n"
-    );
-    let _ = writeln!(out, "## Tables\n");
-    for resource in tables {
-        let meta = &resource["ternary"];
-        let _ = writeln!(
-            out,
-            "### `{}`\n\n{} ({} rows; stage `{}` version {}, instance `{}`, key `{}`)\n",
-            resource["path"].as_str().unwrap_or_default(),
-            resource["description"].as_str().unwrap_or_default(),
-            meta["rows"],
-            meta["stage"].as_str().unwrap_or_default(),
-            meta["code"]["fingerprint"]
-                .as_str()
-                .map_or("", |fingerprint| &fingerprint[..12.min(fingerprint.len())]),
-            meta["instance"].as_str().unwrap_or_default(),
-            meta["key"].as_str().unwrap_or_default(),
-        );
-        let _ = writeln!(out, "| column | type | unit | description |");
-        let _ = writeln!(out, "|---|---|---|---|");
-        for field in resource["schema"]["fields"]
-            .as_array()
-            .into_iter()
-            .flatten()
-        {
-            let _ = writeln!(
-                out,
-                "| `{}` | {} | {} | {} |",
-                field["name"].as_str().unwrap_or_default(),
-                field["type"].as_str().unwrap_or_default(),
-                field["unit"].as_str().unwrap_or(""),
-                field["description"]
-                    .as_str()
-                    .unwrap_or_default()
-                    .replace('|', "\\|"),
-            );
-        }
-        let _ = writeln!(out);
-    }
-    out
 }
 
 /// Every file of a bundle, relative, sorted.

@@ -194,6 +194,49 @@ print(rows, total, frame.height, frame["{column}"].sum(), frame["{column}"].abs(
     assert_eq!(zenodo["version"], descriptor["version"]);
 }
 
+/// The README shows the headline tables first and each kind of table (one
+/// stage's table of one name) under one heading with its files, so it
+/// stays short; the reading examples use a table with rows.
+#[test]
+fn the_readme_describes_each_table_kind_once() {
+    let (config, dir) = computed("export-readme");
+    let bundle = dir.join("bundle");
+    assert!(export(&config, &bundle, &[]).status.success());
+    let readme = fs::read_to_string(bundle.join("README.md")).unwrap();
+    assert!(readme.len() < 60_000, "{} bytes", readme.len());
+    let headings: Vec<&str> = readme.lines().filter(|l| l.starts_with("### ")).collect();
+    let descriptor: serde_json::Value =
+        serde_json::from_str(&fs::read_to_string(bundle.join("datapackage.json")).unwrap())
+            .unwrap();
+    let mut kinds: Vec<String> = descriptor["resources"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|r| r["type"] == "table")
+        .map(|r| {
+            let meta = &r["ternary"];
+            format!(
+                "### `{}` table `{}`",
+                meta["stage"].as_str().unwrap(),
+                meta["table"].as_str().unwrap()
+            )
+        })
+        .collect();
+    kinds.sort();
+    kinds.dedup();
+    assert_eq!(headings.len(), kinds.len(), "{headings:?}");
+    for kind in &kinds {
+        assert_eq!(readme.matches(kind.as_str()).count(), 1, "{kind}");
+    }
+    let headline = readme.find("## Headline tables").unwrap();
+    assert!(headline < readme.find("## Other tables").unwrap());
+    assert!(
+        readme.contains("pl.read_parquet(\"table/study.parquet\")"),
+        "{readme}"
+    );
+    assert!(readme.contains("`figures/kernels/kernels.svg`"));
+}
+
 /// Two exports of one store are identical byte for byte.
 #[test]
 fn exporting_twice_gives_the_same_bytes() {
