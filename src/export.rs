@@ -6,24 +6,29 @@
 //!
 //! ```text
 //! datapackage.json        Frictionless Data Package v2: one resource per file
-//!                         (but itself and SHA256SUMS) with bytes and sha256; for
-//!                         a table its Table Schema (types, units, descriptions)
-//!                         and the artifact it came from
+//!                         (but itself and SHA256SUMS); for a table its Table
+//!                         Schema (types, units, descriptions) and the artifact
+//!                         it came from, for any other file its bytes and sha256
 //! CITATION.cff            Citation File Format 1.2.0 }  both from `[publication]`
 //! .zenodo.json            Zenodo deposit metadata    }  (Zenodo reads only this one)
-//! README.md               what each table holds, how to read it (Python, R, DuckDB)
+//! README.md               the headline tables, names, figures and each kind of
+//!                         table once; how to read one (Python, R, DuckDB)
 //! pipeline.toml           the study configuration, verbatim
 //! SHA256SUMS              every other file, in the format `sha256sum -c` reads
 //! <stage>/<instance>.parquet            a stage's only table
 //! <stage>/<instance>/<table>.parquet    one of several tables
 //! ```
 //!
+//! `<instance>` is the instance's name with each parameter value cut to six
+//! significant digits (`rho5.38226e-5` for `rho0.00005382255169036728`);
+//! the full name and parameters stay in the table's resource.
+//!
 //! Exporting the same store twice gives the same bytes: files are written in
 //! sorted order and nothing records the wall-clock time (dates come from
 //! `[publication]`). The bundle is written next to its target and renamed
 //! into place, so it appears complete or not at all.
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, BTreeSet};
 use std::fmt::Write as _;
 use std::fs;
 use std::path::{Path, PathBuf};
@@ -39,6 +44,8 @@ use crate::pipeline::executor::{self, Freshness, tool_version};
 use crate::pipeline::key::sha256_hex;
 use crate::pipeline::store::{Depth, Store};
 use crate::pipeline::table::{is_table_file, read_parquet_footer};
+
+mod readme;
 
 /// The stages whose tables hold every launch pair and integrated scene:
 /// large, and left out of a bundle unless asked for.
@@ -71,6 +78,8 @@ pub struct ExportOptions {
 struct Entry {
     stage: String,
     instance: String,
+    /// The instance's short name in the bundle (`bundle_names`).
+    name: String,
     key: String,
     code: CodeRecord,
     params: Value,
@@ -82,7 +91,7 @@ struct Entry {
 
 /// Writes the bundle of `study`'s current artifacts into `dir` (missing or
 /// empty); refuses while a selected instance is stale, missing or damaged.
-/// Returns a one-line summary.
+/// Returns a one-line summary that counts tables and figure files apart.
 pub fn export(
     study: &Study,
     store: &Store,
@@ -107,9 +116,13 @@ pub fn export(
         .iter()
         .map(|path| fs::metadata(dir.join(path)).map(|m| m.len()).unwrap_or(0))
         .sum();
+    let tables = entries
+        .iter()
+        .filter(|entry| is_table_file(&entry.path))
+        .count();
     Ok(format!(
-        "export: {} tables, {bytes} bytes in {}\n",
-        entries.len(),
+        "export: {tables} tables, {} figure files, {bytes} bytes in {}\n",
+        entries.len() - tables,
         dir.display()
     ))
 }
@@ -249,10 +262,13 @@ fn selected_entries(
             && (options.potentials.is_empty()
                 || potential_of(instance).is_none_or(|p| options.potentials.contains(&p)))
     };
+    let lines = executor::status(store, plan, 1)?;
+    let names = bundle_names(lines.iter().map(|line| line.id.instance.as_str()));
     let mut not_fresh = Vec::new();
     let mut entries = Vec::new();
-    for line in executor::status(store, plan, 1)? {
+    for line in &lines {
         let (stage, instance) = (&line.id.stage, &line.id.instance);
+        let name = &names[instance.as_str()];
         if !selected(stage, instance) {
             continue;
         }
@@ -270,13 +286,14 @@ fn selected_entries(
         for file in &manifest.files {
             let table = file.name.trim_end_matches(".parquet").to_string();
             let path = if single {
-                format!("{stage}/{instance}.parquet")
+                format!("{stage}/{name}.parquet")
             } else {
-                format!("{stage}/{instance}/{}", file.name)
+                format!("{stage}/{name}/{}", file.name)
             };
             entries.push(Entry {
                 stage: stage.clone(),
                 instance: instance.clone(),
+                name: name.clone(),
                 key: key.clone(),
                 code: manifest.code.clone(),
                 params: manifest.params.clone(),
@@ -297,6 +314,74 @@ fn selected_entries(
         bail!("the selection holds no table");
     }
     Ok(entries)
+}
+
+/// Significant digits of a parameter value in a bundle path.
+const NAME_DIGITS: usize = 6;
+
+/// A parameter value, short: the shorter of its shortest round-trip form
+/// (when that has at most `NAME_DIGITS` significant digits) and its
+/// `NAME_DIGITS`-digit exponent form without trailing zeros: `0`, `-0.25`,
+/// `5.38226e-5`, `1e-20`.
+fn short_number(value: f64) -> String {
+    let exponent = format!("{value:.*e}", NAME_DIGITS - 1);
+    let (mantissa, power) = exponent.split_once('e').unwrap_or((&exponent, "0"));
+    let mantissa = mantissa.trim_end_matches('0').trim_end_matches('.');
+    let rounded = format!("{mantissa}e{power}");
+    let plain = value.to_string();
+    let significant = plain
+        .trim_start_matches(['-', '0', '.'])
+        .chars()
+        .filter(char::is_ascii_digit)
+        .count();
+    if significant <= NAME_DIGITS && plain.len() <= rounded.len() {
+        plain
+    } else {
+        rounded
+    }
+}
+
+/// An instance name with each `<label><number>` part between underscores
+/// (`rho0.00005382255169036728`, `lj-0.1052`) cut by `short_number`.
+fn short_instance(instance: &str) -> String {
+    let short_part = |part: &str| {
+        let at = part
+            .find(|c: char| c.is_ascii_digit() || matches!(c, '-' | '.'))
+            .unwrap_or(part.len());
+        let (label, number) = part.split_at(at);
+        match number.parse::<f64>() {
+            Ok(value) if value.is_finite() => format!("{label}{}", short_number(value)),
+            _ => part.to_string(),
+        }
+    };
+    instance
+        .split('_')
+        .map(short_part)
+        .collect::<Vec<_>>()
+        .join("_")
+}
+
+/// The bundle name of each of the plan's `instances`: its `short_instance`,
+/// or its full name where two instances' short names coincide. It does not
+/// depend on the selection, so a name is the same in every bundle of a study.
+fn bundle_names<'a>(instances: impl Iterator<Item = &'a str>) -> BTreeMap<&'a str, String> {
+    let instances: BTreeSet<&str> = instances.collect();
+    let mut sharing: BTreeMap<String, usize> = BTreeMap::new();
+    for instance in &instances {
+        *sharing.entry(short_instance(instance)).or_default() += 1;
+    }
+    instances
+        .into_iter()
+        .map(|instance| {
+            let short = short_instance(instance);
+            let name = if sharing[&short] == 1 {
+                short
+            } else {
+                instance.to_string()
+            };
+            (instance, name)
+        })
+        .collect()
 }
 
 fn describe(freshness: &Freshness) -> String {
@@ -325,7 +410,7 @@ fn write_bundle(study: &Study, entries: &[Entry], dir: &Path) -> Result<()> {
         }
         fs::write(&target, &bytes).with_context(|| format!("writing {}", target.display()))?;
         resources.push(if is_table_file(&entry.path) {
-            resource(entry, &target, bytes.len() as u64)?
+            resource(entry, &target)?
         } else {
             figure_resource(entry, bytes.len() as u64)
         });
@@ -335,12 +420,10 @@ fn write_bundle(study: &Study, entries: &[Entry], dir: &Path) -> Result<()> {
     write_json(&dir.join(".zenodo.json"), &zenodo(publication))?;
     fs::copy(&study.file, dir.join("pipeline.toml"))
         .with_context(|| format!("copying {}", study.file.display()))?;
-    let tables: Vec<Value> = resources
-        .iter()
-        .filter(|r| r["type"] == "table")
-        .cloned()
-        .collect();
-    fs::write(dir.join("README.md"), bundle_readme(publication, &tables))?;
+    fs::write(
+        dir.join("README.md"),
+        readme::bundle_readme(publication, &resources),
+    )?;
     for (path, format, mediatype, description) in DOCUMENTS {
         resources.push(document_resource(
             dir,
@@ -422,7 +505,7 @@ fn document_resource(
 
 /// A Data Package resource name: lower-case, `[a-z0-9._-]`.
 fn resource_name(entry: &Entry) -> String {
-    format!("{}.{}.{}", entry.stage, entry.instance, entry.table)
+    format!("{}.{}.{}", entry.stage, entry.name, entry.table)
         .to_lowercase()
         .chars()
         .map(|c| {
@@ -482,9 +565,12 @@ fn field_type(data_type: &DataType) -> &'static str {
     }
 }
 
-/// The descriptor of one table: path, size, hash, Table Schema from the
-/// file's column metadata, and the artifact it came from.
-fn resource(entry: &Entry, file: &Path, bytes: u64) -> Result<Value> {
+/// The descriptor of one table: path, Table Schema from the file's column
+/// metadata, and the artifact it came from. No `bytes` or `hash`:
+/// frictionless reads Parquet through pandas, cannot count its bytes and
+/// reports every such table invalid (`byte-count ... actual is None`);
+/// `SHA256SUMS` and `verify --bundle` check a table's bytes instead.
+fn resource(entry: &Entry, file: &Path) -> Result<Value> {
     let (schema, metadata, rows) = read_parquet_footer(file)?;
     let fields: Vec<Value> = schema
         .fields()
@@ -512,8 +598,6 @@ fn resource(entry: &Entry, file: &Path, bytes: u64) -> Result<Value> {
         "type": "table",
         "format": "parquet",
         "mediatype": PARQUET_MEDIATYPE,
-        "bytes": bytes,
-        "hash": format!("sha256:{}", entry.sha256),
         "description": description,
         "schema": { "fields": fields },
         "ternary": {
@@ -673,93 +757,6 @@ fn zenodo(publication: &PublicationConfig) -> Value {
     value
 }
 
-fn bundle_readme(publication: &PublicationConfig, tables: &[Value]) -> String {
-    let mut out = String::new();
-    let _ = writeln!(out, "# {}\n", publication.title);
-    let _ = writeln!(out, "{}\n", publication.description);
-    let authors: Vec<String> = publication
-        .authors
-        .iter()
-        .map(AuthorConfig::display_name)
-        .collect();
-    if !authors.is_empty() {
-        let _ = writeln!(out, "Authors: {}.\n", authors.join("; "));
-    }
-    let _ = writeln!(
-        out,
-        "Version {}, licence {}. Written by {} from the study configuration `pipeline.toml` \
-         (included). The model and its units follow {PAPER_CITATION} (doi:{PAPER_DOI}, \
-         arXiv:{PAPER_ARXIV}): velocities in v_th = sqrt(kT/m), lengths in l = l0 (eps/kT)^(1/n) \
-         (n = 6 for Lennard-Jones), times in l/v_th, rates in rho^2 l v_th.\n",
-        publication.version,
-        publication.license,
-        tool_version()
-    );
-    let _ = writeln!(
-        out,
-        "`datapackage.json` (Frictionless Data Package v2) describes every table: its columns \
-         with types, units and descriptions, its size and SHA-256, and the stage, version, key \
-         and parameters that produced it. `SHA256SUMS` lists every file (`sha256sum -c SHA256SUMS`); \
-         `ternary verify --bundle .` checks both.\n"
-    );
-    let _ = writeln!(out, "## Reading the tables\n");
-    let example = tables[0]["path"].as_str().unwrap_or("table.parquet");
-    let _ = writeln!(
-        out,
-        "Python (polars):\n\n    import polars as pl\n    frame = pl.read_parquet(\"{example}\")\n"
-    );
-    let _ = writeln!(
-        out,
-        "Python (pyarrow), with units from the column metadata:\n\n    import pyarrow.parquet as pq\n    table = pq.read_table(\"{example}\")\n    print(table.schema.field(0).metadata)   # {{b'unit': ..., b'description': ...}}\n"
-    );
-    let _ = writeln!(
-        out,
-        "R (arrow):\n\n    library(arrow)\n    frame <- read_parquet(\"{example}\")\n"
-    );
-    let _ = writeln!(
-        out,
-        "DuckDB:\n\n    SELECT * FROM '{example}';\n    SELECT * FROM parquet_kv_metadata('{example}');\n"
-    );
-    let _ = writeln!(out, "## Tables\n");
-    for resource in tables {
-        let meta = &resource["ternary"];
-        let _ = writeln!(
-            out,
-            "### `{}`\n\n{} ({} rows; stage `{}` version {}, instance `{}`, key `{}`)\n",
-            resource["path"].as_str().unwrap_or_default(),
-            resource["description"].as_str().unwrap_or_default(),
-            meta["rows"],
-            meta["stage"].as_str().unwrap_or_default(),
-            meta["code"]["fingerprint"]
-                .as_str()
-                .map_or("", |fingerprint| &fingerprint[..12.min(fingerprint.len())]),
-            meta["instance"].as_str().unwrap_or_default(),
-            meta["key"].as_str().unwrap_or_default(),
-        );
-        let _ = writeln!(out, "| column | type | unit | description |");
-        let _ = writeln!(out, "|---|---|---|---|");
-        for field in resource["schema"]["fields"]
-            .as_array()
-            .into_iter()
-            .flatten()
-        {
-            let _ = writeln!(
-                out,
-                "| `{}` | {} | {} | {} |",
-                field["name"].as_str().unwrap_or_default(),
-                field["type"].as_str().unwrap_or_default(),
-                field["unit"].as_str().unwrap_or(""),
-                field["description"]
-                    .as_str()
-                    .unwrap_or_default()
-                    .replace('|', "\\|"),
-            );
-        }
-        let _ = writeln!(out);
-    }
-    out
-}
-
 /// Every file of a bundle, relative, sorted.
 fn files_of(dir: &Path) -> Result<Vec<String>> {
     let mut found = Vec::new();
@@ -828,7 +825,8 @@ pub fn verify_bundle(dir: &Path) -> Result<(String, usize)> {
 }
 
 /// Required fields of the package and of each resource, and each resource's
-/// file against its `bytes` and `hash`.
+/// file against its `bytes` and `hash` where it records them (a table
+/// records neither: `SHA256SUMS` holds its hash).
 fn descriptor_problems(dir: &Path, descriptor: &Value) -> Vec<String> {
     let mut problems = Vec::new();
     for field in [
@@ -855,9 +853,13 @@ fn descriptor_problems(dir: &Path, descriptor: &Value) -> Vec<String> {
             problems.push(format!("datapackage.json: resources[{k}] has no `path`"));
             continue;
         };
-        let table = resource["type"] == "table";
-        for field in ["name", "format", "mediatype", "bytes", "hash", "schema"] {
-            if (table || field != "schema") && resource.get(field).is_none_or(Value::is_null) {
+        let required: &[&str] = if resource["type"] == "table" {
+            &["name", "format", "mediatype", "schema"]
+        } else {
+            &["name", "format", "mediatype", "bytes", "hash"]
+        };
+        for field in required {
+            if resource.get(field).is_none_or(Value::is_null) {
                 problems.push(format!("{path}: the descriptor lacks `{field}`"));
             }
         }
@@ -867,23 +869,31 @@ fn descriptor_problems(dir: &Path, descriptor: &Value) -> Vec<String> {
         }
         match fs::read(dir.join(path)) {
             Err(error) => problems.push(format!("{path}: {error}")),
-            Ok(bytes) => {
-                if resource["bytes"].as_u64() != Some(bytes.len() as u64) {
-                    problems.push(format!(
-                        "{path}: {} bytes but the descriptor records {}",
-                        bytes.len(),
-                        resource["bytes"]
-                    ));
-                }
-                let hash = format!("sha256:{}", sha256_hex(&bytes));
-                if resource["hash"].as_str() != Some(hash.as_str()) {
-                    problems.push(format!(
-                        "{path}: {hash} but the descriptor records {}",
-                        resource["hash"]
-                    ));
-                }
-            }
+            Ok(bytes) => problems.extend(size_and_hash_problems(path, resource, &bytes)),
         }
+    }
+    problems
+}
+
+/// A file's size and SHA-256 against the `bytes` and `hash` its resource
+/// records, when it records them.
+fn size_and_hash_problems(path: &str, resource: &Value, bytes: &[u8]) -> Vec<String> {
+    let mut problems = Vec::new();
+    if let Some(recorded) = resource.get("bytes")
+        && recorded.as_u64() != Some(bytes.len() as u64)
+    {
+        problems.push(format!(
+            "{path}: {} bytes but the descriptor records {recorded}",
+            bytes.len()
+        ));
+    }
+    let hash = format!("sha256:{}", sha256_hex(bytes));
+    if let Some(recorded) = resource.get("hash")
+        && recorded.as_str() != Some(hash.as_str())
+    {
+        problems.push(format!(
+            "{path}: {hash} but the descriptor records {recorded}"
+        ));
     }
     problems
 }
@@ -920,4 +930,42 @@ fn sums_problems(dir: &Path) -> Result<Vec<String>> {
         }
     }
     Ok(problems)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_long_parameter_value_is_cut_to_six_significant_digits() {
+        assert_eq!(
+            short_instance("lj-0.1052_u0_rho0.00005382255169036728"),
+            "lj-0.1052_u0_rho5.38226e-5"
+        );
+        assert_eq!(
+            short_instance("ipp-6_u-0.25_rho0.0010324090855340624"),
+            "ipp-6_u-0.25_rho1.03241e-3"
+        );
+        assert_eq!(short_instance("ipp-6_u-3_rho0"), "ipp-6_u-3_rho0");
+        assert_eq!(short_instance("study"), "study");
+        assert_eq!(short_number(1e-20), "1e-20");
+        assert_eq!(short_number(2.0e-5), "2e-5");
+    }
+
+    #[test]
+    fn bundle_names_are_unique_even_where_short_names_coincide() {
+        let instances = [
+            "ipp-6_u0_rho0.00005382255169036728",
+            "ipp-6_u0_rho0.00005382255169036729",
+            "ipp-6_u0_rho0.0007300234653397379",
+            "ipp-6_u0_rho0",
+        ];
+        let names = bundle_names(instances.into_iter());
+        let distinct: BTreeSet<&String> = names.values().collect();
+        assert_eq!(distinct.len(), instances.len(), "{names:?}");
+        assert_eq!(names[instances[0]], instances[0], "coinciding: full names");
+        assert_eq!(names[instances[1]], instances[1]);
+        assert_eq!(names[instances[2]], "ipp-6_u0_rho7.30023e-4");
+        assert_eq!(names[instances[3]], "ipp-6_u0_rho0");
+    }
 }

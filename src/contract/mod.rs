@@ -81,12 +81,22 @@ impl Value for String {
     }
 }
 
+/// The unit of a column whose unit differs from row to row (the `paper`
+/// table's values): each row's unit is in its text column `unit`. A unit
+/// that starts with `per ` is never a unit but says where the units are.
+pub const UNIT_PER_ROW: &str = "per row: see column `unit`";
+
+/// The unit of a figure coordinate (`x`, `y`, `y_error` of `points.parquet`):
+/// the panel's axis unit, in the file's `ternary.axes` metadata.
+pub const UNIT_PER_PANEL: &str = "per panel: see the axes in the `ternary.axes` metadata";
+
 /// One declared column holding values of type `T`.
 #[derive(Debug)]
 pub struct Col<T> {
     /// Column name.
     pub name: &'static str,
-    /// Unit (`1` dimensionless, empty for labels).
+    /// Unit (`1` dimensionless, empty for labels, [`UNIT_PER_ROW`] or
+    /// [`UNIT_PER_PANEL`] where it varies).
     pub unit: &'static str,
     /// One-line description.
     pub description: &'static str,

@@ -2,7 +2,7 @@
 //! name, description and columns in file order. The only place a column name
 //! is spelled; units follow physics.md (`v_th`, `l/v_th`, `rho^2 l v_th`).
 
-use super::{Col, Pair, TableSpec};
+use super::{Col, Pair, TableSpec, UNIT_PER_PANEL, UNIT_PER_ROW};
 
 /// Bin centre relative to `u'` (kernel, md and early-evolution tables).
 pub const DU: Col<f64> = Col::f64("du", "v_th", "bin centre relative to u'");
@@ -453,6 +453,11 @@ const ALPHA: &str = "alpha";
 const BETA: &str = "beta";
 const SIGMA: &str = "sigma";
 
+/// Unit of the shape amplitude alpha: `g(x) = alpha |x|^-beta exp(...)` is a
+/// rate density in `rho^2 l v_th` per `v_th`, and `|x|^-beta` carries
+/// `v_th^-beta`.
+pub const ALPHA_UNIT: &str = "rho^2 l v_th (v_th)^(beta-1)";
+
 /// The `fit` stage: `fit.parquet`, one row.
 pub mod fit {
     use super::*;
@@ -489,17 +494,17 @@ pub mod fit {
         "weights",
         "statistical (1 / stderr^2 of the group means) or relative (1 / G^2: least squares in ln G; its chi2 is not a goodness of fit)",
     );
-    /// Amplitude (its error's unit is written `as alpha`).
+    /// Amplitude.
     pub const ALPHA: Pair = Pair {
         value: Col::f64(
             super::ALPHA,
-            "rho^2 l v_th (v_th)^(beta-1)",
+            ALPHA_UNIT,
             "amplitude of g(x) = alpha |x|^-beta exp(-x^2/2 sigma^2), fit to the mean kernel",
         ),
-        stderr: Col::f64("alpha_stderr", "as alpha", REFITS),
+        stderr: Col::f64("alpha_stderr", ALPHA_UNIT, REFITS),
     };
     /// Systematic error of alpha.
-    pub const ALPHA_SYSTEMATIC: Col<f64> = Col::f64("alpha_systematic", "as alpha", SPREAD);
+    pub const ALPHA_SYSTEMATIC: Col<f64> = Col::f64("alpha_systematic", ALPHA_UNIT, SPREAD);
     /// Systematic error of beta.
     pub const BETA_SYSTEMATIC: Col<f64> = Col::f64("beta_systematic", "1", SPREAD);
     /// Systematic error of sigma.
@@ -521,19 +526,19 @@ pub mod fit {
     /// Covariance of alpha and beta.
     pub const COV_ALPHA_BETA: Col<f64> = Col::f64(
         "cov_alpha_beta",
-        "mixed",
+        ALPHA_UNIT,
         "covariance of the means of alpha and beta over replicates",
     );
     /// Covariance of alpha and sigma.
     pub const COV_ALPHA_SIGMA: Col<f64> = Col::f64(
         "cov_alpha_sigma",
-        "mixed",
+        "rho^2 l v_th (v_th)^beta",
         "covariance of the means of alpha and sigma",
     );
     /// Covariance of beta and sigma.
     pub const COV_BETA_SIGMA: Col<f64> = Col::f64(
         "cov_beta_sigma",
-        "mixed",
+        "v_th",
         "covariance of the means of beta and sigma",
     );
     /// Error scale factor.
@@ -755,12 +760,28 @@ pub mod convergence {
         pub const TOLERANCE: &str = "tolerance";
         /// The bin width of the binned kernel.
         pub const BIN_WIDTH: &str = "bin_width";
+
+        /// Unit of a setting's value: `rho l`, the bound `B` (in units of
+        /// the crossing time `T`) and the tolerance are pure numbers, a bin
+        /// width is in `v_th`; the default row has no value.
+        pub fn unit(parameter: &str) -> &'static str {
+            match parameter {
+                DENSITY | OFFSET_BOUND | TOLERANCE => "1",
+                BIN_WIDTH => "v_th",
+                _ => "",
+            }
+        }
     }
     /// The setting's value.
     pub const VALUE: Col<f64> = Col::f64(
         "value",
-        "as parameter",
+        UNIT_PER_ROW,
         "the setting's value (NaN for the default)",
+    );
+    /// Unit of the setting's value.
+    pub const UNIT: Col<String> = Col::text(
+        "unit",
+        "unit of this row's value: 1 (density, offset_bound, tolerance), v_th (bin_width), empty (default)",
     );
     /// `a_n` at the setting.
     pub const A_N: Pair = Pair {
@@ -1576,14 +1597,14 @@ pub mod paper {
     /// The published value.
     pub const PUBLISHED: Pair = pair!(
         "published",
-        "see unit",
+        UNIT_PER_ROW,
         "the published value",
         "its uncertainty: as printed, else half a unit of its last printed digit"
     );
     /// Ours under the paper's definition.
     pub const OURS: Pair = pair!(
         "ours",
-        "see unit",
+        UNIT_PER_ROW,
         "ours under the paper's definition",
         "standard error"
     );
@@ -1599,7 +1620,7 @@ pub mod paper {
     /// Ours under our (converged) definition, where it differs.
     pub const OURS_CONVERGED: Pair = pair!(
         "ours_converged",
-        "see unit",
+        UNIT_PER_ROW,
         "ours under our definition where it differs from the paper's (null: see converged)",
         "standard error"
     );
@@ -1666,28 +1687,24 @@ pub mod table {
     pub const ALPHA: Pair = Pair {
         value: Col::f64(
             super::ALPHA,
-            "see fit stage",
+            ALPHA_UNIT,
             "amplitude of the kernel shape fit alpha |x|^-beta exp(-x^2/2 sigma^2) at u' = 0",
         ),
-        stderr: Col::f64("alpha_stderr", "see fit stage", REFITS),
+        stderr: Col::f64("alpha_stderr", ALPHA_UNIT, REFITS),
     };
     /// Exponent of the shape.
     pub const BETA: Pair = Pair {
-        value: Col::f64(
-            super::BETA,
-            "see fit stage",
-            "power-law exponent of the kernel near u'",
-        ),
-        stderr: Col::f64("beta_stderr", "see fit stage", REFITS),
+        value: Col::f64(super::BETA, "1", "power-law exponent of the kernel near u'"),
+        stderr: Col::f64("beta_stderr", "1", REFITS),
     };
     /// Cut-off of the shape.
     pub const SIGMA: Pair = Pair {
         value: Col::f64(
             super::SIGMA,
-            "see fit stage",
+            "v_th",
             "Gaussian cut-off of the kernel (largest momentum transfer), v_th",
         ),
-        stderr: Col::f64("sigma_stderr", "see fit stage", REFITS),
+        stderr: Col::f64("sigma_stderr", "v_th", REFITS),
     };
     /// Scenes drawn.
     pub const EVENTS: Col<u32> = Col::u32(super::EVENTS, "1", "scenes drawn for the kernel");
@@ -1723,7 +1740,8 @@ pub mod figures {
     pub const STAGE: &str = "figures";
 
     /// `points.parquet`: one row per plotted point. Units of `x` and `y` are
-    /// per panel, in the file's `ternary.axes` metadata (the figure's layout).
+    /// per panel, in the file's `ternary.axes` metadata (the figure's layout):
+    /// their declared unit is [`UNIT_PER_PANEL`].
     pub mod points {
         use super::*;
 
@@ -1734,19 +1752,19 @@ pub mod figures {
         /// Horizontal coordinate.
         pub const X: Col<f64> = Col::f64(
             "x",
-            "axis",
+            UNIT_PER_PANEL,
             "horizontal coordinate (unit: the panel's x axis)",
         );
         /// Vertical coordinate.
         pub const Y: Col<f64> = Col::f64(
             "y",
-            "axis",
+            UNIT_PER_PANEL,
             "vertical coordinate (unit: the panel's y axis)",
         );
         /// Its standard error (0 where the series has none).
         pub const Y_ERROR: Col<f64> = Col::f64(
             "y_error",
-            "axis",
+            UNIT_PER_PANEL,
             "standard error of y (0 for lines without errors: fits, closed forms)",
         );
     }

@@ -208,6 +208,7 @@ fn convergence_table(rows: &[Row], baseline: &[f64]) -> Result<Table, StageError
     Ok(Rows::new(&shifts)
         .with(PARAMETER, |(r, _)| r.parameter.to_string())
         .with(VALUE, |(r, _)| r.value)
+        .with(UNIT, |(r, _)| parameter::unit(r.parameter).to_string())
         .estimate(A_N, |(r, _)| Estimate::from_replicates(&r.replicates))
         .estimate(SHIFT, |(_, shift)| *shift)
         .with(SHIFT_OVER_ERROR, |(_, shift)| shift.mean / default.stderr)

@@ -162,7 +162,7 @@ impl TableIRow {
                 let k = [Column::Alpha, Column::Beta, Column::Sigma]
                     .iter()
                     .position(|c| *c == column)?;
-                let unit = ["rho^2 l v_th (v_th)^(beta-1)", "1", "v_th"][k];
+                let unit = [contract::ALPHA_UNIT, "1", "v_th"][k];
                 (
                     format!("{}: shape fit, n = {n}", column.name()),
                     unit,
