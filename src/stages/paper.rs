@@ -9,6 +9,7 @@
 //! a_n rho^2 l v_th` follows whichever `a_n` is used.
 
 use std::borrow::Cow;
+use std::collections::HashSet;
 
 use arrow::array::RecordBatch;
 use serde::Serialize;
@@ -480,10 +481,11 @@ const BALANCE_PAIR: (f64, f64) = (-3.0, -2.96);
 /// The `paper` stage of a study: every published number whose inputs `plan`
 /// computes (none: no stage).
 pub fn paper_stage(study: &Study, plan: &[Box<dyn Stage>]) -> Option<PaperStage> {
-    let present = |id: &InstanceId| plan.iter().any(|stage| stage.id() == *id);
+    let planned: HashSet<InstanceId> = plan.iter().map(|stage| stage.id()).collect();
+    let present = |id: &InstanceId| planned.contains(id);
     let dilute = |p: Potential| study.kernel_params(p, 0.0, 0.0);
     let has = |p: Potential| present(&MomentsStage::instance(&dilute(p)));
-    let mut checks = table_i_checks(study, plan);
+    let mut checks = table_i_checks(study, &planned);
     if has(LJ_0_1) {
         checks.push(Check::Rate {
             published: A_LJ,
@@ -546,9 +548,9 @@ pub fn paper_stage(study: &Study, plan: &[Box<dyn Stage>]) -> Option<PaperStage>
 /// The symmetric launch of Table I's `|u1f,max|`.
 const SYMMETRIC_LAUNCH: (f64, f64) = (1.0, -1.0);
 
-/// Every Table I cell whose inputs `plan` computes, column by column.
-fn table_i_checks(study: &Study, plan: &[Box<dyn Stage>]) -> Vec<Check> {
-    let present = |id: &InstanceId| plan.iter().any(|stage| stage.id() == *id);
+/// Every Table I cell whose inputs are `planned`, column by column.
+fn table_i_checks(study: &Study, planned: &HashSet<InstanceId>) -> Vec<Check> {
+    let present = |id: &InstanceId| planned.contains(id);
     let scans_symmetric = study
         .config
         .scan
