@@ -6,6 +6,7 @@
 //!
 //! ```text
 //! slurm/shards.sbatch                 the array job (task k: `run --shards N --shard k`)
+//! slurm/shards-from-<K>.sbatch        further array jobs, task k running shard K + k
 //! slurm/merge.sbatch                  the dependent job (`run --shards N`)
 //! slurm/logs/shard-<job>_<task>.out   one log per task (progress lines per instance)
 //! slurm/logs/merge-<job>.out          the merge job's log
@@ -15,6 +16,11 @@
 //! `--threads`, `--mem`), placement (`--account`, `--partition`, `--qos`),
 //! time limits (the merge job's its own) and extra options come from
 //! `[slurm]` ([`SlurmConfig`]) with the command line's overrides.
+//!
+//! Slurm refuses array indices at or above the cluster's `MaxArraySize`
+//! (1001 by default), so shard indices beyond it go to further array jobs
+//! whose tasks add an offset; the merge job waits for all of them, and
+//! `max_parallel` throttles each array job on its own.
 //!
 //! Resubmitting after a failed or cancelled task submits only the shard
 //! indices still missing; a shard is an artifact committed atomically, so a
@@ -142,20 +148,85 @@ fn quoted(path: &Path) -> String {
     format!("'{}'", path.display().to_string().replace('\'', r"'\''"))
 }
 
-/// The scripts of one submission: the array job (none without missing
+/// Slurm's default `MaxArraySize`: array indices stay below it.
+const DEFAULT_MAX_ARRAY_SIZE: u32 = 1001;
+
+/// The cluster's `MaxArraySize` from `scontrol show config`, or Slurm's
+/// default when `scontrol` is absent or does not say (a dry run off the
+/// cluster).
+fn max_array_size() -> u32 {
+    let Ok(output) = Command::new("scontrol").args(["show", "config"]).output() else {
+        return DEFAULT_MAX_ARRAY_SIZE;
+    };
+    String::from_utf8_lossy(&output.stdout)
+        .lines()
+        .find_map(|line| {
+            let (key, value) = line.split_once('=')?;
+            (key.trim() == "MaxArraySize").then(|| value.trim().parse().ok())?
+        })
+        .filter(|&size| size >= 1)
+        .unwrap_or(DEFAULT_MAX_ARRAY_SIZE)
+}
+
+/// One array job: its task `k` computes shard `offset + k`.
+struct ArrayJob {
+    /// Added to `$SLURM_ARRAY_TASK_ID` to give the shard index.
+    offset: u32,
+    /// The task indices (shard indices less `offset`).
+    tasks: BTreeSet<u32>,
+    /// The `sbatch` script.
+    script: String,
+}
+
+impl ArrayJob {
+    /// The script's file name: `shards.sbatch`, or `shards-from-K.sbatch`
+    /// for the array job starting at shard K.
+    fn file_name(&self) -> String {
+        match self.offset {
+            0 => "shards.sbatch".to_string(),
+            offset => format!("shards-from-{offset}.sbatch"),
+        }
+    }
+
+    /// The shard indices its tasks compute, as an `--array` list.
+    fn shards(&self) -> String {
+        array_indices(&self.tasks.iter().map(|&k| k + self.offset).collect())
+    }
+}
+
+/// The missing shard `tasks` split into array jobs whose indices stay
+/// below `max_array_size`: shards `[j M, (j + 1) M)` go to the job with
+/// offset `j M`.
+fn array_chunks(tasks: &BTreeSet<u32>, max_array_size: u32) -> Vec<(u32, BTreeSet<u32>)> {
+    let mut chunks: Vec<(u32, BTreeSet<u32>)> = Vec::new();
+    for &shard in tasks {
+        let offset = shard - shard % max_array_size;
+        match chunks.last_mut() {
+            Some((last, chunk)) if *last == offset => {
+                chunk.insert(shard - offset);
+            }
+            _ => chunks.push((offset, BTreeSet::from([shard - offset]))),
+        }
+    }
+    chunks
+}
+
+/// The scripts of one submission: the array jobs (none without missing
 /// shards) and the merge job.
 struct Scripts {
-    array: Option<String>,
+    arrays: Vec<ArrayJob>,
     merge: String,
 }
 
-/// The array script over shard indices `tasks` and the merge script. Both
-/// runs use the CPUs they ask for (`--threads` = `--cpus-per-task`).
+/// The array scripts over shard indices `tasks` (indices below
+/// `max_array_size`) and the merge script. Both runs use the CPUs they ask
+/// for (`--threads` = `--cpus-per-task`).
 fn scripts(
     binary: &Path,
     config: &Path,
     logs: &Path,
     tasks: &BTreeSet<u32>,
+    max_array_size: u32,
     options: &SubmitOptions,
 ) -> Result<Scripts> {
     let slurm = &options.slurm;
@@ -171,19 +242,34 @@ fn scripts(
     );
     let array_log = directive_path(&logs.join("shard-%A_%a.out"))?;
     let merge_log = directive_path(&logs.join("merge-%j.out"))?;
-    let array = (!tasks.is_empty()).then(|| {
-        let throttle = slurm
-            .max_parallel
-            .map_or(String::new(), |k| format!("%{k}"));
-        let mut array = header("ternary-shards", &array_log, slurm.time.as_deref(), slurm);
-        let _ = writeln!(array, "#SBATCH --array={}{throttle}", array_indices(tasks));
-        let _ = writeln!(array, "{run} --shard \"$SLURM_ARRAY_TASK_ID\"");
-        array
-    });
+    let throttle = slurm
+        .max_parallel
+        .map_or(String::new(), |k| format!("%{k}"));
+    let arrays = array_chunks(tasks, max_array_size)
+        .into_iter()
+        .map(|(offset, tasks)| {
+            let shard = match offset {
+                0 => "\"$SLURM_ARRAY_TASK_ID\"".to_string(),
+                offset => format!("\"$((SLURM_ARRAY_TASK_ID + {offset}))\""),
+            };
+            let mut script = header("ternary-shards", &array_log, slurm.time.as_deref(), slurm);
+            let _ = writeln!(
+                script,
+                "#SBATCH --array={}{throttle}",
+                array_indices(&tasks)
+            );
+            let _ = writeln!(script, "{run} --shard {shard}");
+            ArrayJob {
+                offset,
+                tasks,
+                script,
+            }
+        })
+        .collect();
     let merge_time = slurm.merge_time.as_deref().or(slurm.time.as_deref());
     let mut merge = header("ternary-merge", &merge_log, merge_time, slurm);
     let _ = writeln!(merge, "{run}");
-    Ok(Scripts { array, merge })
+    Ok(Scripts { arrays, merge })
 }
 
 /// `sbatch --parsable [args] script`: the job id.
@@ -243,30 +329,35 @@ pub fn submit(
         fs::canonicalize(config).with_context(|| format!("resolving {}", config.display()))?;
     let dir = root.join("slurm");
     let logs = dir.join("logs");
-    let scripts = scripts(&binary, &config, &logs, &tasks, options)?;
-    let (array_path, merge_path) = (dir.join("shards.sbatch"), dir.join("merge.sbatch"));
+    let scripts = scripts(&binary, &config, &logs, &tasks, max_array_size(), options)?;
+    let merge_path = dir.join("merge.sbatch");
     if options.dry_run {
-        return Ok(dry_run_text(&scripts, &array_path, &merge_path));
+        return Ok(dry_run_text(&scripts, &dir, &merge_path));
     }
     fs::create_dir_all(&logs)?;
     let mut out = String::new();
-    let mut merge_args = Vec::new();
-    if let Some(array) = &scripts.array {
-        fs::write(&array_path, array)?;
-        let array_id = sbatch(&[], &array_path)?;
+    let mut array_ids = Vec::new();
+    for array in &scripts.arrays {
+        let path = dir.join(array.file_name());
+        fs::write(&path, &array.script)?;
+        let array_id = sbatch(&[], &path)?;
         let _ = writeln!(
             out,
-            "submitted shards job {array_id}: tasks {} of {shards} (logs {}/shard-{array_id}_<task>.out)",
-            array_indices(&tasks),
+            "submitted shards job {array_id}: shards {} of {shards} (logs {}/shard-{array_id}_<task>.out)",
+            array.shards(),
             logs.display()
         );
-        merge_args = vec![
-            format!("--dependency=afterok:{array_id}"),
-            "--kill-on-invalid-dep=yes".to_string(),
-        ];
-    } else {
-        let _ = writeln!(out, "no shards to compute: submitting the merge job alone");
+        array_ids.push(array_id);
     }
+    let merge_args = if array_ids.is_empty() {
+        let _ = writeln!(out, "no shards to compute: submitting the merge job alone");
+        Vec::new()
+    } else {
+        vec![
+            format!("--dependency=afterok:{}", array_ids.join(":")),
+            "--kill-on-invalid-dep=yes".to_string(),
+        ]
+    };
     fs::write(&merge_path, &scripts.merge)?;
     let merge_id = sbatch(&merge_args, &merge_path)?;
     let _ = writeln!(
@@ -278,28 +369,29 @@ pub fn submit(
 }
 
 /// What a dry run prints: each script under the path it would be written
-/// to, then the `sbatch` commands that would submit them.
-fn dry_run_text(scripts: &Scripts, array_path: &Path, merge_path: &Path) -> String {
+/// to (in `dir`), then the `sbatch` commands that would submit them.
+fn dry_run_text(scripts: &Scripts, dir: &Path, merge_path: &Path) -> String {
     let mut out = String::new();
-    let submit = match &scripts.array {
-        Some(array) => {
-            let _ = writeln!(out, "# {}\n{array}", array_path.display());
-            format!(
-                "sbatch --parsable {}; sbatch --parsable --dependency=afterok:<array job> --kill-on-invalid-dep=yes {}",
-                array_path.display(),
-                merge_path.display()
-            )
-        }
-        None => {
-            let _ = writeln!(
-                out,
-                "# no shards to compute: the merge job alone would run\n"
-            );
-            format!("sbatch --parsable {}", merge_path.display())
-        }
-    };
+    let mut commands = Vec::new();
+    for array in &scripts.arrays {
+        let path = dir.join(array.file_name());
+        let _ = writeln!(out, "# {}\n{}", path.display(), array.script);
+        commands.push(format!("sbatch --parsable {}", path.display()));
+    }
+    if scripts.arrays.is_empty() {
+        let _ = writeln!(
+            out,
+            "# no shards to compute: the merge job alone would run\n"
+        );
+        commands.push(format!("sbatch --parsable {}", merge_path.display()));
+    } else {
+        commands.push(format!(
+            "sbatch --parsable --dependency=afterok:<each shards job, joined by :> --kill-on-invalid-dep=yes {}",
+            merge_path.display()
+        ));
+    }
     let _ = writeln!(out, "# {}\n{}", merge_path.display(), scripts.merge);
-    let _ = writeln!(out, "# submit: {submit}");
+    let _ = writeln!(out, "# submit: {}", commands.join("; "));
     out
 }
 
@@ -330,6 +422,7 @@ mod tests {
             Path::new("/study/pipeline.toml"),
             Path::new("/study/data/slurm/logs"),
             &tasks,
+            DEFAULT_MAX_ARRAY_SIZE,
             &options,
         )
         .unwrap()
@@ -352,13 +445,16 @@ mod tests {
             sbatch_args: vec!["--exclusive".into(), "--constraint=avx2".into()],
         };
         let scripts = scripts_of(slurm, &[0, 1, 2, 3, 7, 9, 10, 11, 12]);
-        let array = scripts.array.unwrap();
+        let [array] = &scripts.arrays[..] else {
+            panic!("one array job expected")
+        };
+        let array = array.script.as_str();
         let shared =
             "#SBATCH --account=physics\n#SBATCH --partition=normal,long\n#SBATCH --qos=high\n";
         let resources = "#SBATCH --mem=8G\n#SBATCH --cpus-per-task=4\n#SBATCH --exclusive\n#SBATCH --constraint=avx2\n";
         assert_eq!(
             array,
-            format!(
+            &format!(
                 "#!/bin/bash\n#SBATCH --job-name=ternary-shards\n#SBATCH --output=/study/data/slurm/logs/shard-%A_%a.out\n{shared}#SBATCH --time=30:00\n{resources}#SBATCH --array=0-3,7,9-12%8\nset -euo pipefail\nexec '/opt/ternary' --config '/study/pipeline.toml' run --threads 4 --shards 16 --shard \"$SLURM_ARRAY_TASK_ID\"\n"
             )
         );
@@ -380,7 +476,7 @@ mod tests {
             ..SlurmConfig::default()
         };
         let scripts = scripts_of(slurm.clone(), &[0, 1, 2, 3, 4, 5, 6, 7]);
-        let array = scripts.array.unwrap();
+        let array = &scripts.arrays[0].script;
         assert!(array.contains("#SBATCH --array=0-7\n"), "{array}");
         assert!(array.contains(" run --shards 8 --shard "), "{array}");
         for absent in [
@@ -398,7 +494,38 @@ mod tests {
             "{}",
             scripts.merge
         );
-        assert!(scripts_of(slurm, &[]).array.is_none());
+        assert!(scripts_of(slurm, &[]).arrays.is_empty());
+    }
+
+    /// Shards at or beyond the cluster's `MaxArraySize` go to further array
+    /// jobs whose tasks add their offset: every missing shard is computed
+    /// once, and no array index reaches the limit.
+    #[test]
+    fn shards_beyond_the_largest_array_index_go_to_offset_jobs() {
+        let slurm = SlurmConfig {
+            shards: 4096,
+            ..SlurmConfig::default()
+        };
+        let missing: Vec<u32> = (0..4096).filter(|k| k % 7 != 3).collect();
+        let scripts = scripts_of(slurm, &missing);
+        let offsets: Vec<u32> = scripts.arrays.iter().map(|a| a.offset).collect();
+        assert_eq!(offsets, [0, 1001, 2002, 3003, 4004]);
+        let mut computed = Vec::new();
+        for array in &scripts.arrays {
+            assert!(array.tasks.iter().all(|&k| k < DEFAULT_MAX_ARRAY_SIZE));
+            computed.extend(array.tasks.iter().map(|&k| k + array.offset));
+            let shard = match array.offset {
+                0 => "--shard \"$SLURM_ARRAY_TASK_ID\"\n".to_string(),
+                offset => format!("--shard \"$((SLURM_ARRAY_TASK_ID + {offset}))\"\n"),
+            };
+            assert!(array.script.ends_with(&shard), "{}", array.script);
+        }
+        assert_eq!(computed, missing);
+        assert_eq!(scripts.arrays[4].file_name(), "shards-from-4004.sbatch");
+        assert_eq!(
+            scripts.arrays[4].shards(),
+            "4004-4006,4008-4013,4015-4020,4022-4027,4029-4034,4036-4041,4043-4048,4050-4055,4057-4062,4064-4069,4071-4076,4078-4083,4085-4090,4092-4095"
+        );
     }
 
     /// A bad command-line value is refused naming its option.
@@ -422,5 +549,22 @@ mod tests {
             ..SlurmConfig::default()
         });
         assert!(message.starts_with("--sbatch-arg: "), "{message}");
+        for (arg, instead) in [
+            ("--array=0-3", "set `shards` and `max_parallel`"),
+            ("--arr=0-3", "set `shards` and `max_parallel`"),
+            ("--output=/tmp/x", "logs go to the store's slurm/logs/"),
+            ("--cpus-per-task=8", "set `cpus_per_task`"),
+            (
+                "--dependency=afterok:1",
+                "the merge job depends on the shards' jobs",
+            ),
+        ] {
+            let message = refused(SlurmConfig {
+                sbatch_args: vec!["--exclusive".into(), arg.into()],
+                ..SlurmConfig::default()
+            });
+            assert!(message.starts_with("--sbatch-arg: "), "{message}");
+            assert!(message.ends_with(instead), "{message}");
+        }
     }
 }

@@ -7,6 +7,7 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::Command;
+use std::sync::OnceLock;
 use std::time::{Duration, Instant};
 
 mod common;
@@ -29,11 +30,16 @@ fn merged_bytes(store: &Path) -> BTreeMap<PathBuf, String> {
         .collect()
 }
 
-/// The bytes of an unsharded run of [`study`].
-fn single_process() -> BTreeMap<PathBuf, String> {
-    let dir = workspace("shards-single");
-    run_counts(&write_config(&dir, &study()), &[]);
-    merged_bytes(&dir.join("data"))
+/// The bytes of an unsharded run of [`study`], computed once: tests run
+/// in parallel, and two runs in the one workspace removed each other's
+/// store.
+fn single_process() -> &'static BTreeMap<PathBuf, String> {
+    static BYTES: OnceLock<BTreeMap<PathBuf, String>> = OnceLock::new();
+    BYTES.get_or_init(|| {
+        let dir = workspace("shards-single");
+        run_counts(&write_config(&dir, &study()), &[]);
+        merged_bytes(&dir.join("data"))
+    })
 }
 
 /// Runs the shard tasks `tasks` of `shards`, then a merging run; returns the
@@ -68,7 +74,7 @@ fn merged_shards_equal_an_unsharded_run() {
         );
         assert_eq!(
             merged_bytes(&dir.join("data")),
-            reference,
+            *reference,
             "{shards} shards"
         );
         // gc keeps no shard once merged.
@@ -137,7 +143,7 @@ fn a_merging_run_computes_missing_shards_and_gc_keeps_pending_ones() {
     let status = stdout(&ternary(&config, &["status", "--shards", "4"]));
     assert!(status.contains("missing [0, 2, 3]"), "{status}");
     assert!(ternary(&config, &["run", "--shards", "4"]).status.success());
-    assert_eq!(merged_bytes(&dir.join("data")), single_process());
+    assert_eq!(&merged_bytes(&dir.join("data")), single_process());
 }
 
 fn slurm_available() -> bool {
@@ -173,9 +179,11 @@ fn wait_for_queue_to_empty() {
     }
 }
 
-/// An array job of 4 shard tasks (one at a time), task 3 cancelled while
-/// pending: the merge job is cancelled with it, status shows shard 3
-/// missing, a resubmission runs only task 3 and the merge, and the store
+/// 6 shards on the test cluster, whose `MaxArraySize` is 4 (indices 0-3):
+/// two array jobs (shards 0-3, and 4-5 as tasks 0-1 with an offset), one
+/// task at a time each. Shard 5 is cancelled while pending: the merge job,
+/// which waits for both arrays, is cancelled with it, status shows shard 5
+/// missing, a resubmission runs only shard 5 and the merge, and the store
 /// ends with the bytes of a single process.
 #[test]
 fn a_slurm_array_with_a_cancelled_task_resubmits_only_what_is_missing() {
@@ -190,7 +198,7 @@ fn a_slurm_array_with_a_cancelled_task_resubmits_only_what_is_missing() {
     let config = write_config(&dir, &study());
     let submit = |extra: &[&str]| {
         let args = [
-            &["slurm", "submit", "--shards", "4", "--max-parallel", "1"][..],
+            &["slurm", "submit", "--shards", "6", "--max-parallel", "1"][..],
             extra,
         ]
         .concat();
@@ -200,31 +208,39 @@ fn a_slurm_array_with_a_cancelled_task_resubmits_only_what_is_missing() {
     };
     let dry = submit(&["--dry-run"]);
     assert!(dry.contains("#SBATCH --array=0-3%1\n"), "{dry}");
+    assert!(dry.contains("slurm/shards-from-4.sbatch\n"), "{dry}");
+    assert!(dry.contains("#SBATCH --array=0-1%1\n"), "{dry}");
+    assert!(
+        dry.contains("--shard \"$((SLURM_ARRAY_TASK_ID + 4))\"\n"),
+        "{dry}"
+    );
     let first = submit(&[]);
-    assert!(first.contains("tasks 0-3 of 4 "), "{first}");
-    let array = first
+    assert!(first.contains("shards 0-3 of 6 "), "{first}");
+    assert!(first.contains("shards 4-5 of 6 "), "{first}");
+    let offset_array = first
         .split("submitted shards job ")
-        .nth(1)
+        .nth(2)
         .and_then(|rest| rest.split(':').next())
         .unwrap()
         .to_string();
     let cancel = Command::new("scancel")
-        .arg(format!("{array}_3"))
+        .arg(format!("{offset_array}_1"))
         .output()
         .unwrap();
     assert!(cancel.status.success(), "{}", stderr(&cancel));
     wait_for_queue_to_empty();
-    let status = stdout(&ternary(&config, &["status", "--shards", "4"]));
+    let status = stdout(&ternary(&config, &["status", "--shards", "6"]));
     assert!(
-        status.contains("collisions[ipp-6]") && status.contains("missing [3]"),
+        status.contains("collisions[ipp-6]") && status.contains("missing [5]"),
         "{status}"
     );
     let logs = dir.join("data/slurm/logs");
-    assert!(logs.join(format!("shard-{array}_0.out")).exists());
+    assert!(logs.join(format!("shard-{offset_array}_0.out")).exists());
     let second = submit(&[]);
-    assert!(second.contains("tasks 3 of 4 "), "{second}");
+    assert!(second.contains("shards 5 of 6 "), "{second}");
+    assert!(!second.contains("shards 0-3"), "{second}");
     wait_for_queue_to_empty();
-    assert_eq!(merged_bytes(&dir.join("data")), single_process());
+    assert_eq!(&merged_bytes(&dir.join("data")), single_process());
     let status = stdout(&ternary(&config, &["status"]));
     // Every instance fresh, then the estimate with nothing left to compute.
     let (estimate, instances) = status

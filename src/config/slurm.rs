@@ -107,11 +107,18 @@ impl SlurmConfig {
             }
         }
         for (k, arg) in self.sbatch_args.iter().enumerate() {
+            let key = format!("sbatch_args[{k}]");
             check(
                 is_sbatch_option(arg),
-                format!("sbatch_args[{k}]"),
+                key.as_str(),
                 format!("{arg:?} is not {SBATCH_OPTION}"),
             )?;
+            if let Some((option, instead)) = reserved_option(arg) {
+                return Err((
+                    key,
+                    format!("{arg:?}: ternary writes `--{option}` itself; {instead}"),
+                ));
+            }
         }
         Ok(())
     }
@@ -166,6 +173,43 @@ fn is_time_limit(text: &str) -> bool {
         None => (1..=3).contains(&fields.len()),
     };
     counted && fields.iter().all(|f| digits(f))
+}
+
+/// The options the scripts write themselves, each with what to use
+/// instead: an extra argument repeating one would override the job's
+/// array, log or dependency, or contradict its resources.
+const RESERVED_OPTIONS: [(&str, &str); 14] = [
+    ("array", "set `shards` and `max_parallel`"),
+    ("output", "logs go to the store's slurm/logs/"),
+    ("error", "logs go to the store's slurm/logs/"),
+    (
+        "job-name",
+        "the jobs are named ternary-shards and ternary-merge",
+    ),
+    ("dependency", "the merge job depends on the shards' jobs"),
+    (
+        "kill-on-invalid-dep",
+        "the merge job is cancelled when a shard fails",
+    ),
+    ("parsable", "submission reads the job ids itself"),
+    ("wrap", "the jobs run the scripts ternary writes"),
+    ("cpus-per-task", "set `cpus_per_task`"),
+    ("mem", "set `mem`"),
+    ("account", "set `account`"),
+    ("partition", "set `partition`"),
+    ("qos", "set `qos`"),
+    ("time", "set `time` and `merge_time`"),
+];
+
+/// The reserved option `arg` names and what to use instead, if any.
+/// sbatch, like getopt, takes any unambiguous prefix of a long option
+/// (`--arr=0-3` is `--array`), so a prefix of a reserved name is one too.
+fn reserved_option(arg: &str) -> Option<(&'static str, &'static str)> {
+    let option = arg.strip_prefix("--")?;
+    let name = option.split_once('=').map_or(option, |(name, _)| name);
+    RESERVED_OPTIONS
+        .into_iter()
+        .find(|(reserved, _)| reserved.starts_with(name))
 }
 
 /// `--name` or `--name=value`: a long option whose name is letters, digits
