@@ -451,7 +451,8 @@ fn kernel_sides(input: &Input, u_prime: f64) -> Result<Vec<DataFrame>, StageErro
     [("u > u'", du), ("u < u'", below)]
         .iter()
         .map(|(side, x)| {
-            let name = format!("u' = {u_prime}, {side}");
+            // The legend's minus sign is U+2212, as on the axes.
+            let name = format!("u' = {}, {side}", u_prime.to_string().replace('-', "−"));
             resolved(&log_groups(
                 ("kernels", &name),
                 x,
