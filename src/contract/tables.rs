@@ -1518,7 +1518,8 @@ pub mod compare {
             "1",
             "md_variance / boltzmann_variance: 1 at large N and small rho l",
             PROPAGATED
-        );
+        )
+        .or_null("not estimable: the ratio's denominator is zero");
         /// Thermal MD variance.
         pub const THERMAL_MD_VARIANCE: Pair = pair!(
             "thermal_md_variance",
@@ -1539,7 +1540,8 @@ pub mod compare {
             "1",
             "thermal_md_variance / thermal_boltzmann_variance",
             PROPAGATED
-        );
+        )
+        .or_null("not estimable: the ratio's denominator is zero");
     }
 }
 
@@ -1650,7 +1652,7 @@ pub mod paper {
     /// `ours / published - 1`.
     pub const RELATIVE_DIFFERENCE: Col<f64> =
         Col::f64("relative_difference", "1", "ours / published - 1")
-            .or_null("ours is missing (see note)");
+            .or_null("ours is missing (see note), or the published value is zero");
     /// z-score of the difference.
     pub const Z: Col<f64> = Col::f64(
         "z",
@@ -1805,12 +1807,14 @@ pub mod figures {
             "y",
             UNIT_PER_PANEL,
             "vertical coordinate (unit: the panel's y axis)",
-        );
+        )
+        .or_null("no value at this point: a null in the plotted table");
         /// Its standard error (0 where the series has none).
         pub const Y_ERROR: Col<f64> = Col::f64(
             "y_error",
             UNIT_PER_PANEL,
             "standard error of y (0 for lines without errors: fits, closed forms)",
-        );
+        )
+        .or_null("no error at this point: a null in the plotted table");
     }
 }
