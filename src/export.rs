@@ -566,7 +566,8 @@ fn field_type(data_type: &DataType) -> &'static str {
 }
 
 /// The descriptor of one table: path, Table Schema from the file's column
-/// metadata, and the artifact it came from. No `bytes` or `hash`:
+/// metadata (a nullable column's `null` says what a null means; every other
+/// column is `required`), and the artifact it came from. No `bytes` or `hash`:
 /// frictionless reads Parquet through pandas, cannot count its bytes and
 /// reports every such table invalid (`byte-count ... actual is None`);
 /// `SHA256SUMS` and `verify --bundle` check a table's bytes instead.
@@ -584,6 +585,11 @@ fn resource(entry: &Entry, file: &Path) -> Result<Value> {
             });
             if let Some(unit) = meta.get("unit").filter(|u| !u.is_empty()) {
                 value["unit"] = json!(unit);
+            }
+            // A nullable column says what a null means; any other has none.
+            match meta.get("null").filter(|_| field.is_nullable()) {
+                Some(meaning) => value["null"] = json!(meaning),
+                None => value["constraints"] = json!({ "required": true }),
             }
             value
         })

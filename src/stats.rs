@@ -42,12 +42,17 @@ impl Estimate {
 
     /// `self / other`, with the two relative standard errors combined to
     /// first order (the two estimates treated as independent):
-    /// `s_r = |r| hypot(s_a / a, s_b / b)`. A ratio without a value (`0/0`)
-    /// has no error either: NaN, written as `f64::NAN` because the sign of a
-    /// product of two NaNs depends on the compiler's choice of operand order,
-    /// and files must not.
+    /// `s_r = |r| hypot(s_a / a, s_b / b)`. A ratio without a finite value
+    /// (`0/0`, `x/0`) has neither value nor error: NaN (a null in a table),
+    /// written as `f64::NAN` because the sign of a product of two NaNs
+    /// depends on the compiler's choice of operand order, and files must not.
     pub fn ratio(self, other: Estimate) -> Estimate {
-        let mean = self.mean / other.mean;
+        let quotient = self.mean / other.mean;
+        let mean = if quotient.is_finite() {
+            quotient
+        } else {
+            f64::NAN
+        };
         let relative = libm::hypot(self.stderr / self.mean, other.stderr / other.mean);
         Estimate {
             mean,

@@ -194,6 +194,64 @@ print(rows, total, frame.height, frame["{column}"].sum(), frame["{column}"].abs(
     assert_eq!(zenodo["version"], descriptor["version"]);
 }
 
+/// Missing values are Parquet nulls, read by pyarrow: no float column of a
+/// bundle table holds NaN or infinity, a column holds nulls only where its
+/// schema says what a null means (nullable in the Parquet file, `null` in
+/// `datapackage.json`), and every other column is `required`. The small
+/// study's nulls: the untruncated row's `truncation`, the Lennard-Jones
+/// temperature `theta` of an inverse power law, and the rows whose fit did
+/// not converge.
+#[test]
+fn missing_values_are_declared_nulls() {
+    let (config, dir) = computed("export-nulls");
+    let bundle = dir.join("bundle");
+    let output = export(&config, &bundle, &[]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let script = r#"
+import json, pyarrow as pa, pyarrow.compute as pc, pyarrow.parquet as pq
+descriptor = json.load(open("datapackage.json"))
+nulls = set()
+for resource in descriptor["resources"]:
+    if resource.get("type") != "table":
+        continue
+    table = pq.read_table(resource["path"])
+    for field, declared in zip(table.schema, resource["schema"]["fields"]):
+        where = resource["path"] + ": " + field.name
+        assert field.name == declared["name"], where
+        meaning = declared.get("null")
+        assert field.nullable == (meaning is not None), where
+        assert (declared.get("constraints") == {"required": True}) == (meaning is None), where
+        if meaning is not None:
+            assert field.metadata[b"null"].decode() == meaning, where
+        column = table[field.name]
+        if pa.types.is_floating(field.type):
+            assert not pc.any(pc.is_nan(column)).as_py(), where + " holds NaN"
+            assert not pc.any(pc.is_inf(column)).as_py(), where + " holds infinity"
+        if column.null_count:
+            assert meaning is not None, where + " holds an undeclared null"
+            nulls.add(resource["ternary"]["stage"] + "." + field.name)
+print(" ".join(sorted(nulls)))
+"#;
+    let nulls = python(script, &bundle);
+    for column in [
+        "moments.truncation",
+        "table.theta",
+        "fit.alpha",
+        "fit.chi2_per_dof",
+    ] {
+        assert!(
+            nulls.split_whitespace().any(|c| c == column),
+            "{column} null: {nulls}"
+        );
+    }
+    let readme = fs::read_to_string(bundle.join("README.md")).unwrap();
+    assert!(
+        readme.contains("| `truncation` | number | v_th | half-width X: only \\|u - u'\\| <= X counts | no truncation: every \\|u - u'\\| counts |"),
+        "{readme}"
+    );
+    assert_frictionless_valid(&bundle);
+}
+
 /// The README shows the headline tables first and each kind of table (one
 /// stage's table of one name) under one heading with its files, so it
 /// stays short; the reading examples use a table with rows.

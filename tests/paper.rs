@@ -54,11 +54,13 @@ fn md_params(store: &Path, ring: &str) -> serde_json::Value {
 /// The self variance rate (mean, stderr) of a moments table at truncation `x`.
 fn rate_at(moments: &RecordBatch, x: f64) -> (f64, f64) {
     use contract::moments::{SELF_VARIANCE, TRUNCATION};
+    // The untruncated row's truncation is null: infinity here.
     let row = TRUNCATION
-        .read(moments)
+        .optional(moments)
         .unwrap()
-        .iter()
-        .position(|&t| t == x || (x.is_finite() && (t - x).abs() <= 1e-12 * x))
+        .into_iter()
+        .map(|t| t.unwrap_or(f64::INFINITY))
+        .position(|t| t == x || (x.is_finite() && (t - x).abs() <= 1e-12 * x))
         .unwrap_or_else(|| panic!("no truncation {x}"));
     let rate = SELF_VARIANCE.read(moments).unwrap()[row];
     (rate.mean, rate.stderr)

@@ -54,7 +54,7 @@ impl Stage for Value {
         };
         Ok(vec![Table::new(
             "value",
-            vec![Column::f64("x", "1", "a value", vec![value])],
+            vec![Column::f64("x", "1", "a value", None, vec![value])],
         )?])
     }
 }

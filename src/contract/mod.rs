@@ -12,9 +12,9 @@
 
 use std::marker::PhantomData;
 
-use arrow::array::RecordBatch;
+use arrow::array::{Float64Array, RecordBatch};
 
-use crate::pipeline::table::{TableError, f64_values, text_values, u32_values};
+use crate::pipeline::table::{TableError, column, f64_values, text_values, u32_values};
 use crate::pipeline::{Column, Input, InstanceId, StageError, Table};
 use crate::stats::Estimate;
 
@@ -52,8 +52,9 @@ pub trait Value: Sized {
 }
 
 impl Value for f64 {
+    /// A NaN (a value that is missing or undefined) is written as a null.
     fn column(col: &Col<f64>, values: Vec<f64>) -> Column {
-        Column::f64(col.name, col.unit, col.description, values)
+        Column::f64(col.name, col.unit, col.description, col.null, values)
     }
 
     fn read(batch: &RecordBatch, name: &str) -> Result<Vec<f64>, TableError> {
@@ -100,6 +101,10 @@ pub struct Col<T> {
     pub unit: &'static str,
     /// One-line description.
     pub description: &'static str,
+    /// What a null in this column means; `None` for a column that never
+    /// holds one (the only nullable columns are `float64` ones declared with
+    /// [`Col::or_null`]).
+    pub null: Option<&'static str>,
     kind: PhantomData<fn() -> T>,
 }
 
@@ -112,14 +117,40 @@ impl<T> Clone for Col<T> {
 impl<T> Copy for Col<T> {}
 
 impl Col<f64> {
-    /// A `float64` column.
+    /// A `float64` column without nulls.
     pub const fn f64(name: &'static str, unit: &'static str, description: &'static str) -> Self {
         Col {
             name,
             unit,
             description,
+            null: None,
             kind: PhantomData,
         }
+    }
+
+    /// The column, nullable: a null means `meaning` (a value that is missing
+    /// or undefined, e.g. `no fit converged`).
+    pub const fn or_null(self, meaning: &'static str) -> Self {
+        Col {
+            null: Some(meaning),
+            ..self
+        }
+    }
+
+    /// The column with these values (`None` written as a null).
+    pub fn optional_column(&self, values: impl IntoIterator<Item = Option<f64>>) -> Column {
+        Column::optional_f64(
+            self.name,
+            self.unit,
+            self.description,
+            self.null,
+            values.into_iter().collect(),
+        )
+    }
+
+    /// This column of `batch`, nulls as `None`.
+    pub fn optional(&self, batch: &RecordBatch) -> Result<Vec<Option<f64>>, TableError> {
+        Ok(column::<Float64Array>(batch, self.name)?.iter().collect())
     }
 }
 
@@ -130,6 +161,7 @@ impl Col<u32> {
             name,
             unit,
             description,
+            null: None,
             kind: PhantomData,
         }
     }
@@ -142,6 +174,7 @@ impl Col<String> {
             name,
             unit: "",
             description,
+            null: None,
             kind: PhantomData,
         }
     }
@@ -177,6 +210,14 @@ pub struct Pair {
 }
 
 impl Pair {
+    /// The pair, both columns nullable: a null means `meaning`.
+    pub const fn or_null(self, meaning: &'static str) -> Pair {
+        Pair {
+            value: self.value.or_null(meaning),
+            stderr: self.stderr.or_null(meaning),
+        }
+    }
+
     /// The two columns of `estimates`.
     pub fn columns(&self, estimates: &[Estimate]) -> [Column; 2] {
         [
@@ -262,6 +303,14 @@ impl<'r, R> Rows<'r, R> {
         self
     }
 
+    /// Adds the nullable column `col` with `value` of every row (`None`
+    /// written as a null).
+    pub fn optional(mut self, col: Col<f64>, value: impl Fn(&R) -> Option<f64>) -> Rows<'r, R> {
+        self.columns
+            .push(col.optional_column(self.rows.iter().map(value)));
+        self
+    }
+
     /// Adds the value and error columns of `pair` from the estimate of every row.
     pub fn estimate(mut self, pair: Pair, value: impl Fn(&R) -> Estimate) -> Rows<'r, R> {
         let estimates: Vec<Estimate> = self.rows.iter().map(value).collect();
@@ -293,6 +342,7 @@ mod tests {
     const LABEL: Col<String> = Col::text("label", "which row");
     const COUNT: Col<u32> = Col::u32("count", "1", "how many");
     const RATE: Pair = pair!("rate", "1/s", "a rate", "its standard error");
+    const BOUND: Col<f64> = Col::f64("bound", "1/s", "an upper bound").or_null("no bound");
 
     /// A table written from rows reads back the same values under the
     /// declared names, the pair as `rate` and `rate_stderr`.
@@ -322,5 +372,31 @@ mod tests {
         let rates = RATE.read(batch).unwrap();
         assert_eq!((rates[1].mean, rates[1].stderr), (-2.0, 0.5));
         assert!(LABEL.row_of(batch, "third").is_err());
+    }
+
+    /// A missing value is a null, allowed only in a column declared nullable
+    /// (whose field carries what a null means); infinity is never written.
+    #[test]
+    fn nulls_only_where_declared_and_no_infinity() {
+        let rows = [Some(2.0), None];
+        let table = Rows::new(&rows)
+            .optional(BOUND, |r| *r)
+            .table(&SPEC)
+            .unwrap();
+        assert_eq!(BOUND.optional(&table.batch).unwrap(), rows);
+        let schema = table.batch.schema();
+        let field = schema.field(0);
+        assert!(field.is_nullable());
+        assert_eq!(field.metadata()["null"], "no bound");
+        let written =
+            |col: Col<f64>, value: f64| Rows::new(&[value]).with(col, |v| *v).table(&SPEC);
+        let plain = written(RATE.value, 1.0).unwrap().batch.schema();
+        assert!(!plain.field(0).is_nullable() && !plain.field(0).metadata().contains_key("null"));
+        assert!(
+            written(RATE.value, f64::NAN).is_err(),
+            "a null where none is declared"
+        );
+        assert!(written(BOUND, f64::NAN).is_ok());
+        assert!(written(BOUND, f64::INFINITY).is_err(), "infinity");
     }
 }

@@ -33,9 +33,11 @@ pub mod scan {
         "free-flight arrival time of particle 3 minus that of particle 2 at the special particle",
     );
     /// Middle outgoing velocity (also in `collisions`' events).
-    pub const OUT_MIDDLE: Col<f64> = Col::f64("out_middle", "v_th", "middle outgoing velocity");
+    pub const OUT_MIDDLE: Col<f64> = Col::f64("out_middle", "v_th", "middle outgoing velocity")
+        .or_null("the scene failed (see outcome): no outgoing state");
     /// Fastest outgoing velocity (also in `collisions`' events).
-    pub const OUT_FAST: Col<f64> = Col::f64("out_fast", "v_th", "fastest outgoing velocity");
+    pub const OUT_FAST: Col<f64> = Col::f64("out_fast", "v_th", "fastest outgoing velocity")
+        .or_null("the scene failed (see outcome): no outgoing state");
     /// Outcome of a scene (also in `collisions`' events).
     pub const OUTCOME: Col<String> = Col::text("outcome", "scattered, recombined or failed_*");
     /// Force evaluations of a scene (also in `collisions`' events).
@@ -72,27 +74,32 @@ pub mod scan {
             "u1_final",
             "v_th",
             "final velocity of the special particle (sorted matching)",
-        );
+        )
+        .or_null("the scene failed (see outcome): no outgoing state");
         /// Its tolerance sensitivity.
         pub const U1_FINAL_ERROR: Col<f64> = Col::f64(
             "u1_final_error",
             "v_th",
             "|u1_final - u1_final at 100x tighter tolerance|",
-        );
+        )
+        .or_null("the scene failed (see outcome): no outgoing state");
         /// Slowest outgoing velocity.
-        pub const OUT_SLOW: Col<f64> = Col::f64("out_slow", "v_th", "slowest outgoing velocity");
+        pub const OUT_SLOW: Col<f64> = Col::f64("out_slow", "v_th", "slowest outgoing velocity")
+            .or_null("the scene failed (see outcome): no outgoing state");
         /// Relative energy error.
         pub const ENERGY_ERROR: Col<f64> = Col::f64(
             "energy_error",
             "1",
             "(E_out - E_in) / E_in of the relative motion",
-        );
+        )
+        .or_null("the scene failed (see outcome): no outgoing state");
         /// Momentum error.
         pub const MOMENTUM_ERROR: Col<f64> = Col::f64(
             "momentum_error",
             "1",
             "|P_out - P_in| / relative-speed scale",
-        );
+        )
+        .or_null("the scene failed (see outcome): no outgoing state");
         /// Accepted steps.
         pub const STEPS: Col<u32> = Col::u32("steps", "1", "accepted integrator steps");
         /// Rejected steps.
@@ -118,20 +125,23 @@ pub mod scan {
             "v_th",
             "largest |u1f| over arrival offsets, refined between grid points",
             "error bound of u1_final_max_abs (tolerance sensitivity plus bracket spread)"
-        );
+        )
+        .or_null("no peak: every scene of the curve failed");
         /// Arrival offset of the maximum with the bracket's half-width.
         pub const ARRIVAL_OFFSET_AT_MAX: Pair = bounded!(
             "arrival_offset_at_max",
             "l/v_th",
             "arrival offset of the maximum",
             "half-width of the final bracket"
-        );
+        )
+        .or_null("the maximum was not located (no peak, or not bracketed by the offset grid)");
         /// Launch delay of the maximum.
         pub const LAUNCH_DELAY_AT_MAX: Col<f64> = Col::f64(
             "launch_delay_at_max",
             "l/v_th",
             "launch delay of the maximum for entry at -sign(u) L/2",
-        );
+        )
+        .or_null("no peak: every scene of the curve failed");
         /// Offset grid spacing.
         pub const GRID_SPACING: Col<f64> =
             Col::f64("grid_spacing", "l/v_th", "spacing of the offset grid");
@@ -237,19 +247,22 @@ pub mod collisions {
         "out_slow",
         "v_th",
         "slowest outgoing velocity, special particle's frame",
-    );
+    )
+    .or_null("the scene failed (see outcome): no outgoing state");
     /// The special particle's kick.
     pub const SELF_KICK: Col<f64> = Col::f64(
         "self_kick",
         "v_th",
         "velocity change of the special particle (sorted matching)",
-    );
+    )
+    .or_null("the scene failed (see outcome): no outgoing state");
     /// Relative energy error.
     pub const ENERGY_ERROR: Col<f64> = Col::f64(
         "energy_error",
         "1",
         "(E_out - E_in) / (E_in + well depth) of the relative motion",
-    );
+    )
+    .or_null("the scene failed (see outcome): no outgoing state");
 }
 
 /// The `kernel` stage: `kernel.parquet`, one row per bin.
@@ -408,8 +421,9 @@ pub mod moments {
     pub const TRUNCATION: Col<f64> = Col::f64(
         "truncation",
         "v_th",
-        "half-width X: only |u - u'| <= X counts (inf: no truncation)",
-    );
+        "half-width X: only |u - u'| <= X counts",
+    )
+    .or_null("no truncation: every |u - u'| counts");
     /// Self drift rate.
     pub const SELF_DRIFT: Pair = pair!(
         "self_drift",
@@ -502,18 +516,23 @@ pub mod fit {
             "amplitude of g(x) = alpha |x|^-beta exp(-x^2/2 sigma^2), fit to the mean kernel",
         ),
         stderr: Col::f64("alpha_stderr", ALPHA_UNIT, REFITS),
-    };
+    }
+    .or_null("the fit did not converge (see status), or its error is not estimable");
     /// Systematic error of alpha.
-    pub const ALPHA_SYSTEMATIC: Col<f64> = Col::f64("alpha_systematic", ALPHA_UNIT, SPREAD);
+    pub const ALPHA_SYSTEMATIC: Col<f64> = Col::f64("alpha_systematic", ALPHA_UNIT, SPREAD)
+        .or_null("not estimable: a protocol's fit did not converge");
     /// Systematic error of beta.
-    pub const BETA_SYSTEMATIC: Col<f64> = Col::f64("beta_systematic", "1", SPREAD);
+    pub const BETA_SYSTEMATIC: Col<f64> = Col::f64("beta_systematic", "1", SPREAD)
+        .or_null("not estimable: a protocol's fit did not converge");
     /// Systematic error of sigma.
-    pub const SIGMA_SYSTEMATIC: Col<f64> = Col::f64("sigma_systematic", "v_th", SPREAD);
+    pub const SIGMA_SYSTEMATIC: Col<f64> = Col::f64("sigma_systematic", "v_th", SPREAD)
+        .or_null("not estimable: a protocol's fit did not converge");
     /// Power-law exponent.
     pub const BETA: Pair = Pair {
         value: Col::f64(super::BETA, "1", "power-law exponent near u'"),
         stderr: Col::f64("beta_stderr", "1", REFITS),
-    };
+    }
+    .or_null("the fit did not converge (see status), or its error is not estimable");
     /// Gaussian cut-off.
     pub const SIGMA: Pair = Pair {
         value: Col::f64(
@@ -522,25 +541,29 @@ pub mod fit {
             "Gaussian cut-off: largest momentum transfer of a collision",
         ),
         stderr: Col::f64("sigma_stderr", "v_th", REFITS),
-    };
+    }
+    .or_null("the fit did not converge (see status), or its error is not estimable");
     /// Covariance of alpha and beta.
     pub const COV_ALPHA_BETA: Col<f64> = Col::f64(
         "cov_alpha_beta",
         ALPHA_UNIT,
         "covariance of the means of alpha and beta over replicates",
-    );
+    )
+    .or_null("the fit did not converge (see status), or its covariance is not estimable");
     /// Covariance of alpha and sigma.
     pub const COV_ALPHA_SIGMA: Col<f64> = Col::f64(
         "cov_alpha_sigma",
         "rho^2 l v_th (v_th)^beta",
         "covariance of the means of alpha and sigma",
-    );
+    )
+    .or_null("the fit did not converge (see status), or its covariance is not estimable");
     /// Covariance of beta and sigma.
     pub const COV_BETA_SIGMA: Col<f64> = Col::f64(
         "cov_beta_sigma",
         "v_th",
         "covariance of the means of beta and sigma",
-    );
+    )
+    .or_null("the fit did not converge (see status), or its covariance is not estimable");
     /// Error scale factor.
     pub const SCALE_FACTOR: Col<f64> = Col::f64(
         "scale_factor",
@@ -552,7 +575,8 @@ pub mod fit {
         "chi2_per_dof",
         "1",
         "chi-square per degree of freedom of the mean fit (bins treated as independent)",
-    );
+    )
+    .or_null("the fit did not converge (see status)");
     /// Groups fitted.
     pub const BINS: Col<u32> = Col::u32(
         "bins",
@@ -619,7 +643,8 @@ pub mod sweep {
             "fokker_planck_z",
             "1",
             "(D1 - Fokker-Planck drift) / its standard error (per-replicate differences)",
-        );
+        )
+        .or_null("not estimable: the difference has no spread over randomizations");
     }
 
     /// `detailed_balance.parquet`: one row per `(a, b)`.
@@ -663,7 +688,8 @@ pub mod sweep {
             "1",
             "G(a -> b) / G(b -> a)",
             "standard error from the randomizations, the two kernels' correlation kept (first order)"
-        );
+        )
+        .or_null("not estimable: G(b -> a) is zero");
         /// `f0(b) / f0(a)`.
         pub const EXPECTED_RATIO: Col<f64> =
             Col::f64("expected_ratio", "1", "f0(b) / f0(a): detailed balance");
@@ -672,13 +698,15 @@ pub mod sweep {
             "imbalance_z",
             "1",
             "(f0(a) G(a->b) - f0(b) G(b->a)) / its standard error (per-replicate differences)",
-        );
+        )
+        .or_null("not estimable: the imbalance has no spread over randomizations");
         /// Share of the imbalance's spread in one randomization.
         pub const LARGEST_SHARE: Col<f64> = Col::f64(
             "largest_share",
             "1",
             "share of the imbalance's spread over randomizations carried by the most deviant one; above 0.5 one scene makes the error and the pair is no evidence (left out of the joint test)",
-        );
+        )
+        .or_null("not estimable: the imbalance has no spread over randomizations");
     }
 
     /// `balance_tests.parquet`: one joint detailed-balance test per separation.
@@ -711,19 +739,22 @@ pub mod sweep {
             "1",
             "sum over counted pairs of (f0(a) G(a->b) - f0(b) G(b->a)) / mean flow, 0 under detailed balance",
             "standard error from its spread over randomizations (pairs share scenes: their correlations are in it)"
-        );
+        )
+        .or_null("not estimable: fewer than two randomizations or no counted pair");
         /// Its z-score.
         pub const JOINT_Z: Col<f64> = Col::f64(
             "joint_z",
             "1",
             "joint_imbalance / its standard error: 0 +- 1 under detailed balance",
-        );
+        )
+        .or_null("not estimable: fewer than two randomizations or no counted pair");
         /// Share of the joint statistic's spread in one randomization.
         pub const JOINT_LARGEST_SHARE: Col<f64> = Col::f64(
             "joint_largest_share",
             "1",
             "share of joint_imbalance's spread carried by one randomization; above 0.5 one scene makes the error (z ~ +-1 by construction) and the test is no evidence",
-        );
+        )
+        .or_null("not estimable: fewer than two randomizations or no counted pair");
     }
 }
 
@@ -773,11 +804,8 @@ pub mod convergence {
         }
     }
     /// The setting's value.
-    pub const VALUE: Col<f64> = Col::f64(
-        "value",
-        UNIT_PER_ROW,
-        "the setting's value (NaN for the default)",
-    );
+    pub const VALUE: Col<f64> = Col::f64("value", UNIT_PER_ROW, "the setting's value")
+        .or_null("the default row: no setting varied");
     /// Unit of the setting's value.
     pub const UNIT: Col<String> = Col::text(
         "unit",
@@ -833,11 +861,8 @@ pub mod evolve {
     pub const TIME_SCALED: Col<f64> =
         Col::f64("time_scaled", "1/(rho^2 l v_th)", "time t rho^2 l v_th");
     /// Physical time.
-    pub const TIME_NS: Col<f64> = Col::f64(
-        "time_ns",
-        "ns",
-        "physical time of the configured gas (NaN when given in 1/Gamma)",
-    );
+    pub const TIME_NS: Col<f64> = Col::f64("time_ns", "ns", "physical time of the configured gas")
+        .or_null("a time given in 1/Gamma: no physical time");
 
     /// `early_evolution.parquet`: one row per time and bin.
     pub mod early_evolution {
@@ -1033,16 +1058,18 @@ pub mod evolve {
         pub const LARGEST_CLIPPED_RATE: Pair = pair!(
             "largest_clipped_rate",
             RATE,
-            "largest positive eigenvalue of the estimated generator (symmetrized, invariants projected out), set to zero: Monte Carlo noise (NaN: not projected)",
+            "largest positive eigenvalue of the estimated generator (symmetrized, invariants projected out), set to zero: Monte Carlo noise",
             JACKKNIFE
-        );
+        )
+        .or_null("not projected: the process has no estimated generator");
         /// Detailed-balance violation.
         pub const ASYMMETRY: Pair = pair!(
             "asymmetry",
             "1",
             "||S - S^T|| / ||S + S^T|| of S = f0^(-1/2) M f0^(1/2): detailed-balance violation of the raw estimate, removed",
             JACKKNIFE
-        );
+        )
+        .or_null("not projected: the process has no estimated generator");
     }
 
     /// `projection.parquet`: one row per time, the `full` process.
@@ -1062,7 +1089,8 @@ pub mod evolve {
             "1",
             "sum_i |h_i - h_unclipped_i|: h_unclipped propagates the same symmetrized, invariant-projected operator without clipping its positive eigenvalues (0 when none is positive)",
             JACKKNIFE
-        );
+        )
+        .or_null("overflow: the unprojected evolution diverges beyond the floating-point range");
         /// Weight of `h` in the clipped modes.
         pub const CLIPPED_WEIGHT: Pair = pair!(
             "clipped_weight",
@@ -1076,28 +1104,32 @@ pub mod evolve {
             "1",
             "sum_i (h - h_unclipped)_i: 0 to rounding (clipped modes are orthogonal to the invariants)",
             JACKKNIFE
-        );
+        )
+        .or_null("overflow: the unprojected evolution diverges beyond the floating-point range");
         /// Momentum of the change.
         pub const CLIPPING_MOMENTUM: Pair = pair!(
             "clipping_momentum",
             "v_th",
             "sum_i u_i (h - h_unclipped)_i: 0 to rounding",
             JACKKNIFE
-        );
+        )
+        .or_null("overflow: the unprojected evolution diverges beyond the floating-point range");
         /// Second moment of the change.
         pub const CLIPPING_SECOND_MOMENT: Pair = pair!(
             "clipping_second_moment",
             "v_th^2",
             "sum_i u_i^2 (h - h_unclipped)_i: 0 to rounding",
             JACKKNIFE
-        );
+        )
+        .or_null("overflow: the unprojected evolution diverges beyond the floating-point range");
         /// L1 size of the whole projection's change.
         pub const PROJECTION_CHANGE: Pair = pair!(
             "projection_change",
             "1",
             "sum_i |h_i - h_raw_i|: h_raw = exp(t M) h(0) of the raw estimate M (neither symmetrized nor clipped)",
             JACKKNIFE
-        );
+        )
+        .or_null("overflow: the unprojected evolution diverges beyond the floating-point range");
         /// The statistical error of `h_full` in L1.
         pub const H_ERROR_L1: Col<f64> = Col::f64(
             "h_error_l1",
@@ -1109,19 +1141,22 @@ pub mod evolve {
             "clipping_change_over_error",
             "1",
             "largest clipping_change of the full and every leave-one-out estimate over h_error_l1 (< 1: within the errors)",
-        );
+        )
+        .or_null("h_error_l1 is zero to rounding (h is exact at t = 0): no finite ratio");
         /// Clipped weight against the error.
         pub const CLIPPED_WEIGHT_OVER_ERROR: Col<f64> = Col::f64(
             "clipped_weight_over_error",
             "1",
             "largest clipped_weight of the full and every leave-one-out estimate over h_error_l1",
-        );
+        )
+        .or_null("h_error_l1 is zero to rounding (h is exact at t = 0): no finite ratio");
         /// Projection change against the error.
         pub const PROJECTION_CHANGE_OVER_ERROR: Col<f64> = Col::f64(
             "projection_change_over_error",
             "1",
             "largest projection_change of the full and every leave-one-out estimate over h_error_l1",
-        );
+        )
+        .or_null("h_error_l1 is zero to rounding (h is exact at t = 0): no finite ratio");
     }
 }
 
@@ -1251,8 +1286,9 @@ pub mod md {
         pub const INVARIANT_DRIFT: Col<f64> = Col::f64(
             "invariant_drift",
             "v_th",
-            "largest change of a Lax eigenvalue (rapidity) over the run: the n = 2 Sutherland ring's conservation check (NaN otherwise)",
-        );
+            "largest change of a Lax eigenvalue (rapidity) over the run: the n = 2 Sutherland ring's conservation check",
+        )
+        .or_null("not the n = 2 Sutherland ring: no conserved rapidities to check");
     }
 
     /// The tables of a shard of a ring's runs (stage `md.shard`): every run's
@@ -1412,19 +1448,22 @@ pub mod compare {
             "chi2_per_dof",
             "1",
             "chi2 / dof: ~1 when MD follows the reference",
-        );
+        )
+        .or_null("no degrees of freedom: no test");
         /// p-value of `chi2` with `dof` degrees of freedom.
         pub const P_VALUE: Col<f64> = Col::f64(
             "p_value",
             "1",
             "probability of a chi2 at least this large if MD followed the reference",
-        );
+        )
+        .or_null("no degrees of freedom: no test");
         /// Reduced chi-square with the MD runs' own spread (the published definition).
         pub const SAMPLE_CHI2_PER_DOF: Col<f64> = Col::f64(
             "sample_chi2_per_dof",
             "1",
             "chi2 / dof with the MD runs' own standard errors, over the bins where they are nonzero (the published estimator's definition)",
-        );
+        )
+        .or_null("no degrees of freedom: no test");
         /// Its degrees of freedom.
         pub const SAMPLE_DOF: Col<u32> = Col::u32(
             "sample_dof",
@@ -1479,7 +1518,8 @@ pub mod compare {
             "1",
             "md_variance / boltzmann_variance: 1 at large N and small rho l",
             PROPAGATED
-        );
+        )
+        .or_null("not estimable: the ratio's denominator is zero");
         /// Thermal MD variance.
         pub const THERMAL_MD_VARIANCE: Pair = pair!(
             "thermal_md_variance",
@@ -1500,7 +1540,8 @@ pub mod compare {
             "1",
             "thermal_md_variance / thermal_boltzmann_variance",
             PROPAGATED
-        );
+        )
+        .or_null("not estimable: the ratio's denominator is zero");
     }
 }
 
@@ -1561,7 +1602,8 @@ pub mod gases {
         "ns",
         "1 / Gamma (dilute)",
         "standard error"
-    );
+    )
+    .or_null("Gamma is zero (no kicks): the gas never relaxes");
 }
 
 /// The `paper` stage: `paper.parquet`, one row per published number.
@@ -1584,11 +1626,9 @@ pub mod paper {
     /// Unit of the published value and ours.
     pub const UNIT: Col<String> = Col::text("unit", "unit of the value columns of this row");
     /// The row's `n` in Table I.
-    pub const TABLE_I_N: Col<f64> = Col::f64(
-        "table_i_n",
-        "1",
-        "exponent n of the row's Table I cell (null: not in Table I)",
-    );
+    pub const TABLE_I_N: Col<f64> =
+        Col::f64("table_i_n", "1", "exponent n of the row's Table I cell")
+            .or_null("not in Table I");
     /// The row's column in Table I.
     pub const TABLE_I_COLUMN: Col<String> = Col::text(
         "table_i_column",
@@ -1607,23 +1647,27 @@ pub mod paper {
         UNIT_PER_ROW,
         "ours under the paper's definition",
         "standard error"
-    );
+    )
+    .or_null("the study lacks what this row is computed from (see note)");
     /// `ours / published - 1`.
     pub const RELATIVE_DIFFERENCE: Col<f64> =
-        Col::f64("relative_difference", "1", "ours / published - 1");
+        Col::f64("relative_difference", "1", "ours / published - 1")
+            .or_null("ours is missing (see note), or the published value is zero");
     /// z-score of the difference.
     pub const Z: Col<f64> = Col::f64(
         "z",
         "1",
-        "(ours - published) / sqrt(ours_stderr^2 + published_stderr^2) (null: ours holds by construction, no measurement)",
-    );
+        "(ours - published) / sqrt(ours_stderr^2 + published_stderr^2)",
+    )
+    .or_null("no measurement: ours holds by construction, or is missing");
     /// Ours under our (converged) definition, where it differs.
     pub const OURS_CONVERGED: Pair = pair!(
         "ours_converged",
         UNIT_PER_ROW,
-        "ours under our definition where it differs from the paper's (null: see converged)",
+        "ours under our definition where it differs from the paper's",
         "standard error"
-    );
+    )
+    .or_null("see converged: our definition is the paper's, or not converged or missing");
     /// Whether ours under our definition differs.
     pub const CONVERGED: Col<String> = Col::text(
         "converged",
@@ -1658,11 +1702,8 @@ pub mod table {
         "exponent of the inverse power law (6 for Lennard-Jones: sets the length unit)",
     );
     /// Lennard-Jones temperature.
-    pub const THETA: Col<f64> = Col::f64(
-        "theta",
-        "1",
-        "kT/eps of Lennard-Jones (NaN for inverse power laws)",
-    );
+    pub const THETA: Col<f64> = Col::f64("theta", "1", "kT/eps of Lennard-Jones")
+        .or_null("an inverse power law: no Lennard-Jones temperature");
     /// `a_n`.
     pub const A_N: Pair = Pair {
         value: Col::f64(
@@ -1691,12 +1732,14 @@ pub mod table {
             "amplitude of the kernel shape fit alpha |x|^-beta exp(-x^2/2 sigma^2) at u' = 0",
         ),
         stderr: Col::f64("alpha_stderr", ALPHA_UNIT, REFITS),
-    };
+    }
+    .or_null("the study's fit did not converge, or its error is not estimable");
     /// Exponent of the shape.
     pub const BETA: Pair = Pair {
         value: Col::f64(super::BETA, "1", "power-law exponent of the kernel near u'"),
         stderr: Col::f64("beta_stderr", "1", REFITS),
-    };
+    }
+    .or_null("the study's fit did not converge, or its error is not estimable");
     /// Cut-off of the shape.
     pub const SIGMA: Pair = Pair {
         value: Col::f64(
@@ -1705,7 +1748,8 @@ pub mod table {
             "Gaussian cut-off of the kernel (largest momentum transfer), v_th",
         ),
         stderr: Col::f64("sigma_stderr", "v_th", REFITS),
-    };
+    }
+    .or_null("the study's fit did not converge, or its error is not estimable");
     /// Scenes drawn.
     pub const EVENTS: Col<u32> = Col::u32(super::EVENTS, "1", "scenes drawn for the kernel");
     /// Scenes failed.
@@ -1715,17 +1759,20 @@ pub mod table {
     /// a launch pair per potential, with its error bound.
     pub fn scan_maximum(launch: &str, maxima: Vec<f64>, errors: Vec<f64>) -> [Column; 2] {
         let name = format!("u1f_max_{launch}");
+        let null = super::scan::peak::U1_FINAL_MAX_ABS.value.null;
         [
             Column::f64(
                 &name,
                 "v_th",
                 "largest |u1f| of the mono-energetic scan of this launch pair",
+                null,
                 maxima,
             ),
             Column::f64(
                 &format!("{name}_error"),
                 "v_th",
                 "error bound of the scan maximum",
+                null,
                 errors,
             ),
         ]
@@ -1760,12 +1807,14 @@ pub mod figures {
             "y",
             UNIT_PER_PANEL,
             "vertical coordinate (unit: the panel's y axis)",
-        );
+        )
+        .or_null("no value at this point: a null in the plotted table");
         /// Its standard error (0 where the series has none).
         pub const Y_ERROR: Col<f64> = Col::f64(
             "y_error",
             UNIT_PER_PANEL,
             "standard error of y (0 for lines without errors: fits, closed forms)",
-        );
+        )
+        .or_null("no error at this point: a null in the plotted table");
     }
 }

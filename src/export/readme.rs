@@ -191,6 +191,10 @@ fn reading(out: &mut String, tables: &[&Value]) {
     let _ = writeln!(out, "## Reading a table\n");
     let _ = writeln!(
         out,
+        "A value that is missing or undefined is a null; a column holds nulls only where its schema says what a null means (`null` in `datapackage.json`, the `null` column metadata in the Parquet file), and every other column is `required`. No table holds NaN or infinity.\n"
+    );
+    let _ = writeln!(
+        out,
         "Python (polars):\n\n    import polars as pl\n    frame = pl.read_parquet(\"{example}\")\n"
     );
     let _ = writeln!(
@@ -291,16 +295,22 @@ fn schema(out: &mut String, kind: &TableKind, variant: Option<usize>) {
         text(kind.files[0], "description")
     );
     files(out, &kind.files);
-    let _ = writeln!(out, "| column | type | unit | description |");
-    let _ = writeln!(out, "|---|---|---|---|");
+    let _ = writeln!(out, "| column | type | unit | description | null means |");
+    let _ = writeln!(out, "|---|---|---|---|---|");
     for field in kind.fields.as_array().into_iter().flatten() {
+        let null = if field["constraints"]["required"] == true {
+            "never null"
+        } else {
+            text(field, "null")
+        };
         let _ = writeln!(
             out,
-            "| `{}` | {} | {} | {} |",
+            "| `{}` | {} | {} | {} | {} |",
             text(field, "name"),
             text(field, "type"),
             text(field, "unit").replace('|', "\\|"),
             text(field, "description").replace('|', "\\|"),
+            null.replace('|', "\\|"),
         );
     }
     let _ = writeln!(out);

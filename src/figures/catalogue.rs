@@ -550,12 +550,7 @@ fn md_boltzmann(input: &Input, ring: &str) -> Result<DataFrame, StageError> {
 fn truncation(input: &Input, label: &str) -> Result<DataFrame, StageError> {
     use contract::moments::{SELF_VARIANCE, TABLE, TRUNCATION};
     let all = frame(TABLE.of(input)?)?;
-    let mask = all
-        .column(TRUNCATION.name)
-        .map_err(failed)?
-        .f64()
-        .map_err(failed)?
-        .lt(f64::INFINITY);
+    let mask = all.column(TRUNCATION.name).map_err(failed)?.is_not_null();
     let finite = all.filter(&mask).map_err(failed)?;
     series(
         &finite,

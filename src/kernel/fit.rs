@@ -330,7 +330,9 @@ impl KernelFit {
     }
 
     /// Covariance of the means of two parameters over the replicate fits,
-    /// times [`KernelFit::scale`]; NaN with fewer than two replicate fits.
+    /// times [`KernelFit::scale`]; NaN (not estimable) with fewer than two
+    /// replicate fits or where it overflows (a replicate fit's parameter
+    /// far out of range).
     pub fn covariance(&self, a: fn(&Shape) -> f64, b: fn(&Shape) -> f64) -> f64 {
         let count = self.replicates.len() as f64;
         if self.replicates.len() < 2 {
@@ -343,7 +345,12 @@ impl KernelFit {
             .iter()
             .map(|s| (a(s) - mean_a) * (b(s) - mean_b))
             .sum();
-        self.scale() * (sum / ((count - 1.0) * count))
+        let covariance = self.scale() * (sum / ((count - 1.0) * count));
+        if covariance.is_finite() {
+            covariance
+        } else {
+            f64::NAN
+        }
     }
 
     /// Standard error of one parameter.

@@ -1281,7 +1281,7 @@ mod tests {
         fn run(&self, _: &[Input], _: &Progress) -> Result<Vec<Table>, StageError> {
             Ok(vec![Table::new(
                 "value",
-                vec![Column::f64("x", "1", "value", vec![self.value])],
+                vec![Column::f64("x", "1", "value", None, vec![self.value])],
             )?])
         }
     }
@@ -1311,10 +1311,10 @@ mod tests {
                 .as_any()
                 .downcast_ref::<arrow::array::Float64Array>()
                 .ok_or_else(|| StageError::Input("x is not float64".into()))?;
-            let doubled = values.iter().map(|v| 2.0 * v.unwrap_or(f64::NAN)).collect();
+            let doubled = values.iter().map(|v| v.map(|v| 2.0 * v)).collect();
             Ok(vec![Table::new(
                 "value",
-                vec![Column::f64("x", "1", "doubled", doubled)],
+                vec![Column::optional_f64("x", "1", "doubled", None, doubled)],
             )?])
         }
     }

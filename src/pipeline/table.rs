@@ -10,7 +10,7 @@ use std::path::Path;
 use std::sync::Arc;
 
 use arrow::array::{ArrayRef, Float64Array, RecordBatch, StringArray, UInt32Array};
-use arrow::datatypes::{DataType, Field, Schema};
+use arrow::datatypes::{Field, Schema};
 use parquet::arrow::ArrowWriter;
 use parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder;
 use parquet::basic::{Compression, ZstdLevel};
@@ -29,41 +29,81 @@ pub struct Column {
 }
 
 impl Column {
-    fn new(name: &str, unit: &str, description: &str, values: ArrayRef) -> Column {
-        let metadata = [
+    fn new(
+        name: &str,
+        unit: &str,
+        description: &str,
+        null: Option<&str>,
+        values: ArrayRef,
+    ) -> Column {
+        let mut metadata = HashMap::from([
             ("unit".to_string(), unit.to_string()),
             ("description".to_string(), description.to_string()),
-        ];
-        // Float columns may hold nulls (undefined values, see `Column::f64`):
-        // declared nullable whether or not this table has one, so that every
-        // table of a stage (and every shard) has one schema.
-        let nullable = values.data_type() == &DataType::Float64;
-        let field = Field::new(name, values.data_type().clone(), nullable)
-            .with_metadata(HashMap::from(metadata));
+        ]);
+        // Nullable exactly where declared, whether or not this table has a
+        // null, so that every table of a stage (and every shard) has one schema.
+        if let Some(meaning) = null {
+            metadata.insert("null".to_string(), meaning.to_string());
+        }
+        let field =
+            Field::new(name, values.data_type().clone(), null.is_some()).with_metadata(metadata);
         Column { field, values }
     }
 
     /// A `float64` column; `unit` is e.g. `v_th`, `l/v_th` or `1` (dimensionless).
-    /// A NaN (a value that is undefined or missing) is written as a null: any
-    /// Parquet reader sees it as missing, and no NaN's sign or payload (which
-    /// the compiler and CPU decide) reaches the bytes. [`f64_values`] reads
-    /// nulls back as NaN.
-    pub fn f64(name: &str, unit: &str, description: &str, values: Vec<f64>) -> Column {
-        let values: Float64Array = values
+    /// A NaN (a value that is missing or undefined) is written as a Parquet
+    /// null: any reader sees it as missing, and no NaN's sign or payload
+    /// (which the compiler and CPU decide) reaches the bytes. A column may
+    /// hold nulls only when `null` says what one means (the field is then
+    /// nullable and carries the meaning as its `null` metadata);
+    /// [`Table::new`] refuses a null elsewhere, and an infinite value
+    /// anywhere. [`f64_values`] reads nulls back as NaN.
+    pub fn f64(
+        name: &str,
+        unit: &str,
+        description: &str,
+        null: Option<&str>,
+        values: Vec<f64>,
+    ) -> Column {
+        let values = values
             .into_iter()
             .map(|value| (!value.is_nan()).then_some(value))
             .collect();
-        Column::new(name, unit, description, Arc::new(values))
+        Column::optional_f64(name, unit, description, null, values)
+    }
+
+    /// A `float64` column with `None` for each null (see [`Column::f64`]).
+    pub fn optional_f64(
+        name: &str,
+        unit: &str,
+        description: &str,
+        null: Option<&str>,
+        values: Vec<Option<f64>>,
+    ) -> Column {
+        let values = Float64Array::from(values);
+        Column::new(name, unit, description, null, Arc::new(values))
     }
 
     /// A `uint32` column (counts).
     pub fn u32(name: &str, unit: &str, description: &str, values: Vec<u32>) -> Column {
-        Column::new(name, unit, description, Arc::new(UInt32Array::from(values)))
+        Column::new(
+            name,
+            unit,
+            description,
+            None,
+            Arc::new(UInt32Array::from(values)),
+        )
     }
 
     /// A `utf8` column (labels).
     pub fn text(name: &str, description: &str, values: Vec<String>) -> Column {
-        Column::new(name, "", description, Arc::new(StringArray::from(values)))
+        Column::new(
+            name,
+            "",
+            description,
+            None,
+            Arc::new(StringArray::from(values)),
+        )
     }
 }
 
@@ -102,8 +142,25 @@ pub enum TableError {
 }
 
 impl Table {
-    /// Assembles a table from equally long columns.
+    /// Assembles a table from equally long columns; refuses a null in a
+    /// column not declared nullable and an infinite value in any (a missing
+    /// bound is a null that says so).
     pub fn new(name: &str, columns: Vec<Column>) -> Result<Table, TableError> {
+        let infinite = columns.iter().find(|c| {
+            c.values
+                .as_any()
+                .downcast_ref::<Float64Array>()
+                .is_some_and(|values| values.iter().flatten().any(f64::is_infinite))
+        });
+        if let Some(column) = infinite {
+            return Err(TableError::Arrow {
+                name: name.to_string(),
+                source: arrow::error::ArrowError::InvalidArgumentError(format!(
+                    "column `{}` holds an infinite value",
+                    column.field.name()
+                )),
+            });
+        }
         let (fields, arrays): (Vec<Field>, Vec<ArrayRef>) =
             columns.into_iter().map(|c| (c.field, c.values)).unzip();
         let batch =

@@ -426,7 +426,7 @@ fn projection_table(
                     effect.clipped.largest(|part| l1(part)),
                     effect.projection.largest(|d| l1(&d[k])),
                 ]
-                .map(|change| change / error),
+                .map(|change| Some(change / error).filter(|ratio| ratio.is_finite())),
             }
         })
         .collect();
@@ -438,9 +438,9 @@ fn projection_table(
         .estimate(CLIPPING_SECOND_MOMENT, |r| r.moments[2])
         .estimate(PROJECTION_CHANGE, |r| r.projection)
         .with(H_ERROR_L1, |r| r.error)
-        .with(CLIPPING_CHANGE_OVER_ERROR, |r| r.over_error[0])
-        .with(CLIPPED_WEIGHT_OVER_ERROR, |r| r.over_error[1])
-        .with(PROJECTION_CHANGE_OVER_ERROR, |r| r.over_error[2])
+        .optional(CLIPPING_CHANGE_OVER_ERROR, |r| r.over_error[0])
+        .optional(CLIPPED_WEIGHT_OVER_ERROR, |r| r.over_error[1])
+        .optional(PROJECTION_CHANGE_OVER_ERROR, |r| r.over_error[2])
         .table(&TABLE)?)
 }
 
@@ -454,8 +454,10 @@ struct ProjectionRow {
     projection: Estimate,
     /// `sum_i sigma_i` of `h_full`.
     error: f64,
-    /// Largest clipping change, clipped weight and projection change over `error`.
-    over_error: [f64; 3],
+    /// Largest clipping change, clipped weight and projection change over
+    /// `error` (`None` where the ratio is not finite: at `t = 0`, where `h`
+    /// is exact and `error` zero or of rounding size).
+    over_error: [Option<f64>; 3],
 }
 
 /// Adds the three time columns of every evolve table.

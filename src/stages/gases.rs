@@ -114,9 +114,11 @@ impl Stage for GasesStage {
             .estimate(GAMMA_AT_DENSITY, |r| gamma(r, r.dense))
             .estimate(RELAXATION_TIME, |r| {
                 let Estimate { mean, stderr } = gamma(r, r.dilute);
+                // Without kicks (Gamma = 0) there is no relaxation time: null.
+                let defined = |value: f64| if mean == 0.0 { f64::NAN } else { value };
                 Estimate {
-                    mean: 1.0 / mean,
-                    stderr: stderr / mean.powi(2),
+                    mean: defined(1.0 / mean),
+                    stderr: defined(stderr / mean.powi(2)),
                 }
             })
             .table(&TABLE)?;

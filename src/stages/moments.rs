@@ -72,15 +72,17 @@ impl MomentsStage {
 }
 
 /// The special particle's variance rate at truncation `limit` (a value of
-/// the table's grid, or infinity) from a moments table, `rho^2 l v_th`: `a_n`
+/// the table's grid, or infinity for the row without truncation, whose
+/// truncation is null) from a moments table, `rho^2 l v_th`: `a_n`
 /// at the window edge for `u' = 0` in the dilute limit.
 pub fn self_variance_at(batch: &RecordBatch, limit: f64) -> Result<Estimate, StageError> {
     use contract::moments::*;
     let row = TRUNCATION
-        .read(batch)?
-        .iter()
+        .optional(batch)?
+        .into_iter()
+        .map(|x| x.unwrap_or(f64::INFINITY))
         // The grid's edge is `edge * 10^0`: equal up to rounding of the limit's own arithmetic.
-        .position(|&x| x == limit || (limit.is_finite() && (x - limit).abs() <= 1e-12 * limit))
+        .position(|x| x == limit || (limit.is_finite() && (x - limit).abs() <= 1e-12 * limit))
         .ok_or_else(|| StageError::Input(format!("no truncation {limit} in the moments table")))?;
     Ok(SELF_VARIANCE.read(batch)?[row])
 }
@@ -136,7 +138,9 @@ impl Stage for MomentsStage {
         };
         progress.advance(1);
         let table = Rows::new(&rows)
-            .with(TRUNCATION, |&k| truncations[k])
+            .optional(TRUNCATION, |&k| {
+                Some(truncations[k]).filter(|x| x.is_finite())
+            })
             .estimate(SELF_DRIFT, estimate(|m| m.self_drift))
             .estimate(SELF_VARIANCE, estimate(|m| m.self_variance))
             .estimate(WINDOW_DRIFT, estimate(|m| m.window_drift))

@@ -1125,8 +1125,8 @@ impl Stage for PaperStage {
                 stderr: r.published.uncertainty,
             })
             .estimate(OURS, |r| r.ours)
-            .with(RELATIVE_DIFFERENCE, |r| {
-                r.ours.mean / r.published.value - 1.0
+            .optional(RELATIVE_DIFFERENCE, |r| {
+                Some(r.ours.mean / r.published.value - 1.0).filter(|d| d.is_finite())
             })
             .with(Z, |r| {
                 if r.comparable {
