@@ -275,7 +275,11 @@ fn selected_entries(
         let key = match (&line.freshness, &line.key) {
             (Freshness::Fresh, Some(key)) => key.clone(),
             (freshness, _) => {
-                not_fresh.push(format!("{}: {}", line.id, describe(freshness)));
+                not_fresh.push(format!(
+                    "{}: {}",
+                    line.id,
+                    crate::report::describe(freshness)
+                ));
                 continue;
             }
         };
@@ -382,15 +386,6 @@ fn bundle_names<'a>(instances: impl Iterator<Item = &'a str>) -> BTreeMap<&'a st
             (instance, name)
         })
         .collect()
-}
-
-fn describe(freshness: &Freshness) -> String {
-    match freshness {
-        Freshness::Fresh => "fresh".into(),
-        Freshness::Stale(reasons) => format!("stale: {}", reasons.join("; ")),
-        Freshness::Damaged(problems) => format!("damaged: {}", problems.join("; ")),
-        Freshness::Missing(reason) => format!("missing: {reason}"),
-    }
 }
 
 /// Copies the tables (checking each copy's hash) and writes the descriptors.
