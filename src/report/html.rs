@@ -210,7 +210,7 @@ fn page(
     writeln!(out, "<nav>\n<h2>Contents</h2>\n<ol>")?;
     for (id, heading, body) in &sections {
         if !body.is_empty() {
-            writeln!(out, "<li><a href=\"#{id}\">{heading}</a></li>")?;
+            writeln!(out, "<li><a href=\"#{id}\">{}</a></li>", escape(heading))?;
         }
     }
     writeln!(out, "</ol>\n</nav>")?;
@@ -218,7 +218,8 @@ fn page(
         if !body.is_empty() {
             writeln!(
                 out,
-                "<section id=\"{id}\">\n<h2>{heading}</h2>\n{body}</section>"
+                "<section id=\"{id}\">\n<h2>{}</h2>\n{body}</section>",
+                escape(heading)
             )?;
         }
     }
