@@ -18,7 +18,7 @@ use std::time::UNIX_EPOCH;
 
 use anyhow::{Context, Result};
 
-use super::layout::{Align, Columns, Sink};
+use super::layout::{Align, Cell, Columns, Sink};
 use super::{describe, paper_table, stage_tables, study_table};
 use crate::config::Study;
 use crate::contract;
@@ -242,8 +242,8 @@ fn headline(store: &Store, instances: &[Instance]) -> String {
         format!("newest artifact {date}")
     });
     format!(
-        "{} stage instances: {}; {newest}; written by {}.",
-        instances.len(),
+        "{}: {}; {newest}; written by {}.",
+        counted(instances.len(), "stage instance"),
         states.join(", "),
         tool_version()
     )
@@ -371,11 +371,15 @@ fn stage_list(instances: &[Instance]) -> String {
             .filter(|f| !f.is_empty())
             .collect();
         summary.push(vec![
-            super::Cell::text(*stage),
-            super::Cell::text(members.len().to_string()),
-            super::Cell::text(manifests.len().to_string()),
-            super::Cell::text(seconds_text(seconds)),
-            super::Cell::text(
+            Cell::text(*stage),
+            Cell::text(members.len().to_string()),
+            Cell::text(manifests.len().to_string()),
+            Cell::text(if manifests.is_empty() {
+                "-".to_string()
+            } else {
+                seconds_text(seconds)
+            }),
+            Cell::text(
                 fingerprints
                     .iter()
                     .map(|f| short(f))
@@ -385,9 +389,9 @@ fn stage_list(instances: &[Instance]) -> String {
         ]);
         let _ = writeln!(
             details,
-            "<details>\n<summary><code>{}</code>: {} instances, {} s</summary>",
+            "<details>\n<summary><code>{}</code>: {}, {} s</summary>",
             escape(stage),
-            members.len(),
+            counted(members.len(), "instance"),
             seconds_text(seconds)
         );
         let mut table = Columns::new(&[
@@ -398,10 +402,10 @@ fn stage_list(instances: &[Instance]) -> String {
         ]);
         for instance in members {
             table.push(vec![
-                super::Cell::text(instance.line.id.instance.as_str()),
-                super::Cell::text(instance.line.freshness.name()),
-                super::Cell::text(instance.line.key.as_deref().map_or("-".to_string(), short)),
-                super::Cell::text(
+                Cell::text(instance.line.id.instance.as_str()),
+                Cell::text(instance.line.freshness.name()),
+                Cell::text(instance.line.key.as_deref().map_or("-".to_string(), short)),
+                Cell::text(
                     instance
                         .manifest
                         .as_ref()
@@ -412,9 +416,27 @@ fn stage_list(instances: &[Instance]) -> String {
         details.push_str(&html_table(&table));
         details.push_str("</details>\n");
     }
+    let total: f64 = instances
+        .iter()
+        .filter_map(|i| i.manifest.as_ref())
+        .map(|m| m.wall_seconds)
+        .sum();
+    summary.push(vec![
+        Cell::text("all"),
+        Cell::text(instances.len().to_string()),
+        Cell::text(
+            instances
+                .iter()
+                .filter(|i| i.manifest.is_some())
+                .count()
+                .to_string(),
+        ),
+        Cell::text(seconds_text(total)),
+        Cell::text(""),
+    ]);
     let mut out = String::from(
-        "<p>Wall time is each artifact's own computation as its manifest records it \
-         (the sum over a stage's instances, not the elapsed time of a parallel run). \
+        "<p>Wall time is each fresh artifact's own computation as its manifest records it \
+         (the sum over a stage's fresh instances, not the elapsed time of a parallel run). \
          A key is the SHA-256 of an instance's parameters, inputs and code; the code \
          fingerprint, of the source files and crates the stage runs.</p>\n",
     );
@@ -425,7 +447,16 @@ fn stage_list(instances: &[Instance]) -> String {
 
 /// Seconds to three significant digits.
 fn seconds_text(seconds: f64) -> String {
-    super::numbers::significant(seconds)
+    super::numbers::significant_to(seconds, 3)
+}
+
+/// `count` and `noun`, plural unless one: `1 instance`, `4 instances`.
+fn counted(count: usize, noun: &str) -> String {
+    if count == 1 {
+        format!("{count} {noun}")
+    } else {
+        format!("{count} {noun}s")
+    }
 }
 
 /// The first [`SHORT`] characters of a key or fingerprint.
@@ -462,8 +493,9 @@ fn provenance(study: &Study, instances: &[Instance]) -> Result<String> {
     )?;
     writeln!(
         out,
-        "<h3>Configuration <code>{}</code></h3>\n<pre>{}</pre>",
+        "<details>\n<summary>The configuration, <code>{}</code> ({})</summary>\n<pre>{}</pre>\n</details>",
         escape(&file_name(&study.file)),
+        counted(config.lines().count(), "line"),
         escape(&config)
     )?;
     Ok(out)
