@@ -131,6 +131,18 @@ fn an_incomplete_store_gives_a_page_that_says_what_is_missing() {
     assert!(page.contains(">Not fresh</h2>"));
     assert!(page.contains("12 of 12 instances are not fresh"), "{page}");
     assert!(!page.contains("<img"));
+
+    let inside = ternary(
+        &config,
+        &["report", &dir.join("data/report").to_string_lossy()],
+    );
+    assert!(!inside.status.success(), "a report inside the store");
+    assert!(
+        stderr(&inside).contains("is inside the store"),
+        "{}",
+        stderr(&inside)
+    );
+    assert!(!dir.join("data").exists(), "report created the store");
 }
 
 /// The page as headless Chromium shows it: every image loaded (a copy of the

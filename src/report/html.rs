@@ -16,7 +16,7 @@ use std::fs;
 use std::path::Path;
 use std::time::UNIX_EPOCH;
 
-use anyhow::{Context, Result};
+use anyhow::{Context, Result, bail};
 
 use super::layout::{Align, Cell, Columns, Sink};
 use super::{describe, paper_table, stage_tables, study_table};
@@ -69,6 +69,17 @@ struct Figure {
 /// page and its figures; figure files of an earlier report that the study
 /// no longer has are removed. Returns a one-line summary.
 pub fn write(study: &Study, store: &Store, plan: &[Box<dyn Stage>], dir: &Path) -> Result<String> {
+    let (target, root) = (
+        std::path::absolute(dir)?,
+        std::path::absolute(store.root())?,
+    );
+    if target.starts_with(&root) {
+        bail!(
+            "{} is inside the store {}: a report goes elsewhere (the store holds only what `run` writes)",
+            dir.display(),
+            store.root().display()
+        );
+    }
     let lines = executor::status(store, plan, 1)?;
     let instances: Vec<Instance> = lines
         .iter()
