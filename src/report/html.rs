@@ -221,7 +221,11 @@ fn page(
     writeln!(out, "<nav>\n<h2>Contents</h2>\n<ol>")?;
     for (id, heading, body) in &sections {
         if !body.is_empty() {
-            writeln!(out, "<li><a href=\"#{id}\">{}</a></li>", escape(heading))?;
+            write!(out, "<li><a href=\"#{id}\">{}</a>", escape(heading))?;
+            if *id == "figures" {
+                out.push_str(&figure_contents(figures));
+            }
+            writeln!(out, "</li>")?;
         }
     }
     writeln!(out, "</ol>\n</nav>")?;
@@ -328,11 +332,23 @@ fn not_fresh(instances: &[Instance]) -> String {
     out
 }
 
+/// The figures' names as links, for the contents.
+fn figure_contents(figures: &[Figure]) -> String {
+    let links: Vec<String> = figures
+        .iter()
+        .map(|figure| {
+            let name = escape(&figure.name);
+            format!("<a href=\"#figure-{name}\">{name}</a>")
+        })
+        .collect();
+    format!("<br><small>{}</small>", links.join(", "))
+}
+
 /// Every figure with its number, name and caption.
 fn figure_list(figures: &[Figure]) -> String {
     let mut out = String::new();
     for (k, figure) in figures.iter().enumerate() {
-        let caption = escape(&figure.caption);
+        let caption = escape(figure.caption.trim_end_matches('.'));
         let _ = writeln!(
             out,
             "<figure id=\"figure-{name}\">\n<img src=\"{href}\" alt=\"Figure {number}, {name}: {caption}\" \
@@ -590,6 +606,7 @@ h2 { font-size: 1.35rem; margin-top: 2.5rem; border-bottom: 1px solid #ccc; padd
 h3 { font-size: 1.1rem; }
 .lead { color: #444; }
 nav ol { columns: 2; }
+nav li { break-inside: avoid; }
 code, pre { font-family: 'DejaVu Sans Mono', Menlo, Consolas, monospace; font-size: 0.9em; }
 pre { background: #f6f6f6; padding: 0.8rem; overflow-x: auto; border: 1px solid #e2e2e2; }
 .title { font-weight: 600; margin: 1.6rem 0 0.4rem; max-width: 75ch; }
@@ -601,7 +618,7 @@ th, td { padding: 0.2rem 0.7rem; text-align: left; vertical-align: top; white-sp
 th { border-bottom: 2px solid #888; font-weight: 600; }
 tbody tr:nth-child(even) { background: #f7f7f7; }
 .num { text-align: right; }
-td:last-child { white-space: normal; min-width: 24ch; }
+td:last-child:not(.num) { white-space: normal; min-width: 24ch; }
 figure { margin: 2rem 0; }
 figure img { display: block; width: 860px; max-width: 100%; height: auto; border: 1px solid #ddd; }
 figcaption { margin-top: 0.5rem; max-width: 90ch; font-size: 0.95em; }
