@@ -550,12 +550,23 @@ fn html_table(table: &Columns) -> String {
     for row in table.shown_rows() {
         out.push_str("<tr>");
         for (cell, (_, align)) in row.iter().zip(table.heads()) {
-            let _ = write!(out, "<td{}>{}</td>", class(*align), escape(cell.trim()));
+            let _ = write!(
+                out,
+                "<td{}>{}</td>",
+                class(*align),
+                unbroken(&escape(cell.trim()))
+            );
         }
         out.push_str("</tr>\n");
     }
     out.push_str("</tbody>\n</table></div>\n");
     out
+}
+
+/// A cell's text with `value ± error` kept on one line (cells wrap at their
+/// other spaces: Table I's `published | ours (z)` breaks at its bar).
+fn unbroken(html: &str) -> String {
+    html.replace(" ± ", "\u{a0}±\u{a0}")
 }
 
 /// The summaries' blocks as HTML.
@@ -614,11 +625,12 @@ pre { background: #f6f6f6; padding: 0.8rem; overflow-x: auto; border: 1px solid 
 .warning { background: #fff4e0; border-left: 4px solid #e69f00; padding: 0.5rem 0.8rem; }
 .scroll { overflow-x: auto; }
 table { border-collapse: collapse; font-variant-numeric: tabular-nums; font-size: 0.9em; margin: 0.3rem 0 0.8rem; }
-th, td { padding: 0.2rem 0.7rem; text-align: left; vertical-align: top; white-space: nowrap; }
+th, td { padding: 0.2rem 0.7rem; text-align: left; vertical-align: top; }
+th, .num { white-space: nowrap; }
 th { border-bottom: 2px solid #888; font-weight: 600; }
 tbody tr:nth-child(even) { background: #f7f7f7; }
 .num { text-align: right; }
-td:last-child:not(.num) { white-space: normal; min-width: 24ch; }
+td:last-child:not(.num) { min-width: 20ch; }
 figure { margin: 2rem 0; }
 figure img { display: block; width: 860px; max-width: 100%; height: auto; border: 1px solid #ddd; }
 figcaption { margin-top: 0.5rem; max-width: 90ch; font-size: 0.95em; }
