@@ -124,6 +124,14 @@ enum Command {
         #[arg(long)]
         include_events: bool,
     },
+    /// Write the study as a static HTML page (tables, figures with captions,
+    /// each stage's instances with keys and times, provenance) into DIR.
+    Report {
+        /// The report's directory: `index.html` and its `figures/` (created
+        /// when missing; the store is only read).
+        #[arg(default_value = "report")]
+        dir: PathBuf,
+    },
     /// Remove artifacts that no stage instance of the current study references.
     Gc,
     /// Show a stage's instances and files, or an artifact or Parquet file: metadata and first rows.
@@ -609,6 +617,16 @@ fn dispatch(cli: Cli) -> Result<ExitCode> {
                 &stages::plan(&study),
                 &dir,
                 &options,
+            )?);
+            Ok(ExitCode::SUCCESS)
+        }
+        Command::Report { dir } => {
+            let (study, store) = load(&cli.config, Opening::View)?;
+            emit(&report::html::write(
+                &study,
+                &store,
+                &stages::plan(&study),
+                &dir,
             )?);
             Ok(ExitCode::SUCCESS)
         }

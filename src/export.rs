@@ -14,6 +14,8 @@
 //! README.md               the headline tables, names, figures and each kind of
 //!                         table once; how to read one (Python, R, DuckDB)
 //! pipeline.toml           the study configuration, verbatim
+//! report/index.html       the study report (`ternary report`): tables, figures
+//!                         (in `report/figures/`), stages and provenance
 //! SHA256SUMS              every other file, in the format `sha256sum -c` reads
 //! <stage>/<instance>.parquet            a stage's only table
 //! <stage>/<instance>/<table>.parquet    one of several tables
@@ -44,8 +46,12 @@ use crate::pipeline::executor::{self, Freshness, tool_version};
 use crate::pipeline::key::sha256_hex;
 use crate::pipeline::store::{Depth, Store};
 use crate::pipeline::table::{is_table_file, read_parquet_footer};
+use crate::report::html;
 
 mod readme;
+
+/// The bundle's folder of the study report.
+const REPORT: &str = "report";
 
 /// The stages whose tables hold every launch pair and integrated scene:
 /// large, and left out of a bundle unless asked for.
@@ -107,7 +113,8 @@ pub fn export(
     }
     let entries = selected_entries(store, plan, options)?;
     let staging = prepare_target(dir)?;
-    let placed = write_bundle(study, &entries, &staging.dir).and_then(|()| staging.place(dir));
+    let placed =
+        write_bundle(study, store, plan, &entries, &staging.dir).and_then(|()| staging.place(dir));
     if let Err(error) = placed {
         let _ = fs::remove_dir_all(&staging.dir);
         return Err(error);
@@ -275,7 +282,11 @@ fn selected_entries(
         let key = match (&line.freshness, &line.key) {
             (Freshness::Fresh, Some(key)) => key.clone(),
             (freshness, _) => {
-                not_fresh.push(format!("{}: {}", line.id, describe(freshness)));
+                not_fresh.push(format!(
+                    "{}: {}",
+                    line.id,
+                    crate::report::describe(freshness)
+                ));
                 continue;
             }
         };
@@ -384,17 +395,15 @@ fn bundle_names<'a>(instances: impl Iterator<Item = &'a str>) -> BTreeMap<&'a st
         .collect()
 }
 
-fn describe(freshness: &Freshness) -> String {
-    match freshness {
-        Freshness::Fresh => "fresh".into(),
-        Freshness::Stale(reasons) => format!("stale: {}", reasons.join("; ")),
-        Freshness::Damaged(problems) => format!("damaged: {}", problems.join("; ")),
-        Freshness::Missing(reason) => format!("missing: {reason}"),
-    }
-}
-
-/// Copies the tables (checking each copy's hash) and writes the descriptors.
-fn write_bundle(study: &Study, entries: &[Entry], dir: &Path) -> Result<()> {
+/// Copies the tables (checking each copy's hash), writes the study's report
+/// and the descriptors.
+fn write_bundle(
+    study: &Study,
+    store: &Store,
+    plan: &[Box<dyn Stage>],
+    entries: &[Entry],
+    dir: &Path,
+) -> Result<()> {
     let mut resources = Vec::new();
     for entry in entries {
         let target = dir.join(&entry.path);
@@ -433,6 +442,7 @@ fn write_bundle(study: &Study, entries: &[Entry], dir: &Path) -> Result<()> {
             description,
         )?);
     }
+    resources.extend(report_resources(study, store, plan, dir)?);
     check_unique_names(&resources)?;
     write_json(
         &dir.join("datapackage.json"),
@@ -479,6 +489,38 @@ const DOCUMENTS: [(&str, &str, &str, &str); 4] = [
     ),
 ];
 
+/// Writes the study's HTML report into `report/` (`ternary report`) and
+/// returns the descriptors of its page and figures.
+fn report_resources(
+    study: &Study,
+    store: &Store,
+    plan: &[Box<dyn Stage>],
+    dir: &Path,
+) -> Result<Vec<Value>> {
+    let folder = Path::new(REPORT);
+    html::write(study, store, plan, &dir.join(folder))?;
+    let mut resources = vec![document_resource(
+        dir,
+        &format!("{REPORT}/{}", html::PAGE),
+        "html",
+        "text/html",
+        "the study report: tables, figures with captions, stages and provenance (open in a browser)",
+    )?];
+    let figures = folder.join(html::FIGURES);
+    for entry in fs::read_dir(dir.join(&figures))? {
+        let name = entry?.file_name().to_string_lossy().into_owned();
+        resources.push(document_resource(
+            dir,
+            &format!("{REPORT}/{}/{name}", html::FIGURES),
+            "png",
+            "image/png",
+            "a figure of the study report, as it shows it",
+        )?);
+    }
+    resources.sort_by(|a, b| a["path"].as_str().cmp(&b["path"].as_str()));
+    Ok(resources)
+}
+
 /// The descriptor of a non-tabular file of the bundle.
 fn document_resource(
     dir: &Path,
@@ -491,7 +533,7 @@ fn document_resource(
     let name: String = path
         .trim_start_matches('.')
         .to_lowercase()
-        .replace('.', "-");
+        .replace(['.', '/'], "-");
     Ok(json!({
         "name": name,
         "path": path,

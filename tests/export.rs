@@ -148,8 +148,18 @@ fn a_bundle_passes_tools_that_are_not_ours() {
     let resources = descriptor["resources"].as_array().unwrap();
     let count = |format: &str| resources.iter().filter(|r| r["format"] == format).count();
     assert_eq!(count("parquet"), 13, "9 result tables and 4 figure tables");
-    assert_eq!((count("svg"), count("png")), (8, 8), "4 figures at 2 sizes");
-    assert_eq!(resources.len(), 13 + 16 + 4, "and 4 documents");
+    assert_eq!(
+        (count("svg"), count("png")),
+        (8, 8 + 4),
+        "4 figures at 2 sizes, and the report's 4"
+    );
+    assert_eq!(count("html"), 1, "the report's page");
+    assert!(bundle.join("report/index.html").is_file());
+    assert_eq!(
+        resources.len(),
+        13 + 16 + 4 + 5,
+        "and 4 documents and the report's page and figures"
+    );
     for resource in resources.iter().filter(|r| r["type"] == "table") {
         let path = resource["path"].as_str().unwrap();
         let (rows, column, sum) = shown_rows_and_sum(&config, &bundle.join(path));

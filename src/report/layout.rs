@@ -100,9 +100,13 @@ impl Columns {
         self.rows.push(row);
     }
 
-    /// The heading line and one line per row, each column as wide as its
-    /// widest cell, two spaces apart, without trailing spaces.
-    pub fn render(&self) -> String {
+    /// The headings and alignments.
+    pub fn heads(&self) -> &[(String, Align)] {
+        &self.heads
+    }
+
+    /// Every row's cells as written, each estimate in its column's notation.
+    pub fn shown_rows(&self) -> Vec<Vec<String>> {
         let notations: Vec<Notation> = (0..self.heads.len())
             .map(|k| {
                 self.rows
@@ -111,18 +115,27 @@ impl Columns {
                     .fold(Notation::default(), Notation::covering)
             })
             .collect();
+        self.rows
+            .iter()
+            .map(|row| {
+                row.iter()
+                    .zip(&notations)
+                    .map(|(cell, &notation)| cell.shown(notation))
+                    .collect()
+            })
+            .collect()
+    }
+
+    /// The heading line and one line per row, each column as wide as its
+    /// widest cell, two spaces apart, without trailing spaces.
+    pub fn render(&self) -> String {
         let lines: Vec<Vec<String>> = std::iter::once(
             self.heads
                 .iter()
                 .map(|(head, _)| head.clone())
                 .collect::<Vec<String>>(),
         )
-        .chain(self.rows.iter().map(|row| {
-            row.iter()
-                .zip(&notations)
-                .map(|(cell, &notation)| cell.shown(notation))
-                .collect()
-        }))
+        .chain(self.shown_rows())
         .collect();
         let widths: Vec<usize> = (0..self.heads.len())
             .map(|k| {
@@ -148,6 +161,35 @@ impl Columns {
             out.push('\n');
         }
         out
+    }
+}
+
+/// Where the summaries go, block by block: plain text for the terminal
+/// (`String`) or HTML for the study report (`html::Tables`).
+pub trait Sink {
+    /// The sentence that introduces the next table (or lines).
+    fn title(&mut self, text: &str);
+    /// A table.
+    fn table(&mut self, table: &Columns);
+    /// A line of text: a note under a table.
+    fn line(&mut self, text: &str);
+}
+
+/// Text: a title after a blank line, tables as [`Columns::render`] writes them.
+impl Sink for String {
+    fn title(&mut self, text: &str) {
+        self.push('\n');
+        self.push_str(text);
+        self.push('\n');
+    }
+
+    fn table(&mut self, table: &Columns) {
+        self.push_str(&table.render());
+    }
+
+    fn line(&mut self, text: &str) {
+        self.push_str(text);
+        self.push('\n');
     }
 }
 

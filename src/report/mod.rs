@@ -5,6 +5,7 @@
 //! ([`with_error`]); a number that does not exist says why.
 
 mod dag;
+pub mod html;
 mod layout;
 mod numbers;
 
@@ -25,7 +26,7 @@ use crate::pipeline::shards;
 use crate::pipeline::store::{Depth, Store, is_live_staging, listing_problem};
 use crate::pipeline::table::{is_table_file, read_parquet};
 use crate::pipeline::{Cost, InstanceId, Stage};
-use layout::{Align, Cell, Columns};
+use layout::{Align, Cell, Columns, Sink};
 use numbers::{Notation, fixed, natural_notation, or_why, significant, written};
 
 /// Cell `col` of `row` as a number (NaN when null).
@@ -94,57 +95,61 @@ fn read_frame(path: &Path) -> Result<DataFrame> {
 /// table (rates of gases, convergence, evolution, MD and its comparison,
 /// scans, detailed balance), else a line saying how to get them.
 pub fn summary(store: &Store, reports: &[InstanceReport], details: bool) -> Result<String> {
-    let mut out = study_table(store, reports)?;
-    out.push_str(&paper_table(store, reports)?);
-    out.push_str(&figures_line(store, reports)?);
-    if !details {
-        writeln!(
-            out,
-            "\nper-stage tables (gases, convergence, evolution, MD, scans, detailed balance): `ternary run --details`"
-        )?;
-        return Ok(out);
+    let mut out = String::new();
+    study_table(&mut out, store, reports)?;
+    paper_table(&mut out, store, reports)?;
+    figures_line(&mut out, store, reports);
+    if details {
+        stage_tables(&mut out, store, reports)?;
+    } else {
+        out.title(
+            "per-stage tables (gases, convergence, evolution, MD, scans, detailed balance): `ternary run --details`",
+        );
     }
-    out.push_str(&gases_table(store, reports)?);
-    out.push_str(&convergence_table(store, reports)?);
-    out.push_str(&evolve_table(store, reports)?);
-    out.push_str(&md_table(store, reports)?);
-    out.push_str(&compare_table(store, reports)?);
-    out.push_str(&scan_table(store, reports)?);
-    out.push_str(&balance_table(store, reports)?);
     Ok(out)
 }
 
-/// How many figures the run's store holds and where (empty when none).
-fn figures_line(store: &Store, reports: &[InstanceReport]) -> Result<String> {
+/// Every stage's table beyond `a_n` and the paper's: rates of gases,
+/// convergence, evolution, MD and its comparison, scans, detailed balance.
+fn stage_tables(out: &mut dyn Sink, store: &Store, reports: &[InstanceReport]) -> Result<()> {
+    gases_table(out, store, reports)?;
+    convergence_table(out, store, reports)?;
+    evolve_table(out, store, reports)?;
+    md_table(out, store, reports)?;
+    compare_table(out, store, reports)?;
+    scan_table(out, store, reports)?;
+    balance_table(out, store, reports)
+}
+
+/// How many figures the run's store holds and where (nothing when none).
+fn figures_line(out: &mut dyn Sink, store: &Store, reports: &[InstanceReport]) {
     let stage = contract::figures::STAGE;
     let drawn = reports
         .iter()
         .filter(|report| report.id.stage == stage && report.action.has_artifact())
         .count();
-    let mut out = String::new();
     if drawn > 0 {
-        writeln!(
-            out,
-            "\nfigures: {drawn}, one artifact each under {} (`ternary show {stage}` lists their files)",
+        out.title(&format!(
+            "figures: {drawn}, one artifact each under {} (`ternary show {stage}` lists their files)",
             store.artifact_dir(stage, "").display()
-        )?;
+        ));
     }
-    Ok(out)
 }
 
 /// The sweeps' joint detailed-balance tests.
-fn balance_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
+fn balance_table(out: &mut dyn Sink, store: &Store, reports: &[InstanceReport]) -> Result<()> {
     use crate::kernel::equilibrium::DOMINATED_SHARE;
     use contract::sweep::balance_tests::*;
-    let Some((mut out, frames)) = titled_frames(
+    let frames = titled_frames(
+        out,
         store,
         reports,
         &TABLE,
         "detailed balance, joint over the pairs of each separation (sum of relative imbalances, correlations from the randomizations; pairs whose error one randomization carries left out)",
-    )?
-    else {
-        return Ok(String::new());
-    };
+    )?;
+    if frames.is_empty() {
+        return Ok(());
+    }
     let mut table = Columns::new(&[
         ("potential", Align::Left),
         ("b - a", Align::Right),
@@ -181,25 +186,23 @@ fn balance_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
             ]);
         }
     }
-    out.push_str(&table.render());
-    Ok(out)
+    out.table(&table);
+    Ok(())
 }
 
 /// The `paper` stage's output: published numbers against ours.
-fn paper_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
+fn paper_table(out: &mut dyn Sink, store: &Store, reports: &[InstanceReport]) -> Result<()> {
     use contract::paper::*;
-    let mut out = String::new();
     let Some((_, frame)) = table_frames(store, reports, &TABLE)?.into_iter().next() else {
-        return Ok(out);
+        return Ok(());
     };
-    writeln!(
-        out,
-        "\nthe paper (Phys. Rev. E 110, 014114): published against ours under its definition (+- standard errors; published: +- as printed, else rounding); converged: ours under our definition where it differs"
-    )?;
+    out.title(
+        "the paper (Phys. Rev. E 110, 014114): published against ours under its definition (+- standard errors; published: +- as printed, else rounding); converged: ours under our definition where it differs",
+    );
     let table_i: Vec<usize> = (0..frame.height())
         .filter(|&row| number(&frame, row, TABLE_I_N).is_ok_and(f64::is_finite))
         .collect();
-    out.push_str(&table_i_matrix(&frame, &table_i)?);
+    table_i_matrix(out, &frame, &table_i)?;
     let rest: Vec<usize> = (0..frame.height())
         .filter(|row| !table_i.contains(row))
         .collect();
@@ -234,26 +237,24 @@ fn paper_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
             )),
         ]);
     }
-    out.push_str(&table.render());
+    out.table(&table);
     for &row in &rest {
-        writeln!(
-            out,
+        out.line(&format!(
             "{:<4} {}",
             format!("{}.", row + 1),
             text(&frame, row, NOTE)?
-        )?;
+        ));
     }
-    Ok(out)
+    Ok(())
 }
 
 /// Table I as the paper prints it, rows `rows` of the `paper` table: one
 /// line per `n`, each cell `published | ours z` (ours under the paper's
 /// definition; the table's rows and notes have the rest).
-fn table_i_matrix(frame: &DataFrame, rows: &[usize]) -> Result<String> {
+fn table_i_matrix(out: &mut dyn Sink, frame: &DataFrame, rows: &[usize]) -> Result<()> {
     use contract::paper::*;
-    let mut out = String::new();
     if rows.is_empty() {
-        return Ok(out);
+        return Ok(());
     }
     let mut columns: Vec<String> = Vec::new();
     let mut exponents: Vec<f64> = Vec::new();
@@ -301,59 +302,44 @@ fn table_i_matrix(frame: &DataFrame, rows: &[usize]) -> Result<String> {
             significant(number(frame, row, PUBLISHED.value)?)
         ))
     };
-    let mut cells = Vec::new();
-    for &n in &exponents {
-        cells.push(
-            columns
-                .iter()
-                .map(|column| cell(n, column))
-                .collect::<Result<Vec<_>>>()?,
-        );
-    }
-    let widths: Vec<usize> = (0..columns.len())
-        .map(|k| {
-            cells
-                .iter()
-                .map(|line| line[k].len())
-                .chain([columns[k].len()])
-                .max()
-                .unwrap_or(0)
-        })
-        .collect();
-    writeln!(
-        out,
+    out.line(&format!(
         "Table I, published | ours (z) (rows {}-{} of the table; a_n at |u - u'| <= 0.04; shape: our fit up to 0.04, statistical and protocol errors combined; |u1f,max| to 6 digits, its error bound below 1e-6)",
         rows[0] + 1,
         rows[rows.len() - 1] + 1
-    )?;
-    write!(out, "{:>4}", "n")?;
-    for (column, width) in columns.iter().zip(&widths) {
-        write!(out, "  {column:<width$}")?;
-    }
-    writeln!(out)?;
-    for (n, line) in exponents.iter().zip(&cells) {
-        write!(out, "{n:>4}")?;
-        for (shown, width) in line.iter().zip(&widths) {
-            write!(out, "  {shown:<width$}")?;
+    ));
+    let n_head = format!("{:>4}", "n");
+    let heads: Vec<(&str, Align)> = std::iter::once((n_head.as_str(), Align::Right))
+        .chain(columns.iter().map(|column| (column.as_str(), Align::Left)))
+        .collect();
+    let mut table = Columns::new(&heads);
+    for &n in &exponents {
+        let mut line = vec![Cell::text(format!("{n:>4}"))];
+        for column in &columns {
+            line.push(Cell::text(cell(n, column)?));
         }
-        writeln!(out)?;
+        table.push(line);
     }
-    Ok(out)
+    out.table(&table);
+    Ok(())
 }
 
 /// One table of each instance that has it: the instance and its frame.
 type InstanceFrames = Vec<(String, DataFrame)>;
 
-/// The frames of `spec`'s table with the output opened by the line `title`,
-/// or `None` when no instance has the table.
+/// The frames of `spec`'s table, after `title` goes to `out` (nothing goes
+/// when no instance has the table).
 fn titled_frames(
+    out: &mut dyn Sink,
     store: &Store,
     reports: &[InstanceReport],
     spec: &TableSpec,
     title: &str,
-) -> Result<Option<(String, InstanceFrames)>> {
+) -> Result<InstanceFrames> {
     let frames = table_frames(store, reports, spec)?;
-    Ok((!frames.is_empty()).then(|| (format!("\n{title}\n"), frames)))
+    if !frames.is_empty() {
+        out.title(title);
+    }
+    Ok(frames)
 }
 
 /// The table `spec` of every intact artifact of its stage in a run.
@@ -379,16 +365,14 @@ fn table_frames(
 }
 
 /// The `table` stage's output: `a_n` with standard errors per potential.
-fn study_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
+fn study_table(out: &mut dyn Sink, store: &Store, reports: &[InstanceReport]) -> Result<()> {
     use contract::table::*;
-    let mut out = String::new();
     let Some((_, frame)) = table_frames(store, reports, &TABLE)?.into_iter().next() else {
-        return Ok(out);
+        return Ok(());
     };
-    writeln!(
-        out,
-        "\nthermalization constants a_n = self variance rate at u' = 0, dilute limit [rho^2 l v_th]; kernel shape near u' (+- standard errors; shape: statistical and fit-protocol errors combined)"
-    )?;
+    out.title(
+        "thermalization constants a_n = self variance rate at u' = 0, dilute limit [rho^2 l v_th]; kernel shape near u' (+- standard errors; shape: statistical and fit-protocol errors combined)",
+    );
     let mut table = Columns::new(&[
         (POTENTIAL.name, Align::Left),
         ("a_n (|u-u'| <= window/2)", Align::Left),
@@ -428,21 +412,19 @@ fn study_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
             )),
         ]);
     }
-    out.push_str(&table.render());
-    Ok(out)
+    out.table(&table);
+    Ok(())
 }
 
 /// The `gases` stage's output: rates in physical units.
-fn gases_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
+fn gases_table(out: &mut dyn Sink, store: &Store, reports: &[InstanceReport]) -> Result<()> {
     use contract::gases::*;
-    let mut out = String::new();
     let Some((_, frame)) = table_frames(store, reports, &TABLE)?.into_iter().next() else {
-        return Ok(out);
+        return Ok(());
     };
-    writeln!(
-        out,
-        "\nthermalization rates in physical units (Gamma = a_n rho^2 l v_th, +- standard error)"
-    )?;
+    out.title(
+        "thermalization rates in physical units (Gamma = a_n rho^2 l v_th, +- standard error)",
+    );
     let mut table = Columns::new(&[
         (GAS.name, Align::Left),
         (POTENTIAL.name, Align::Left),
@@ -463,24 +445,21 @@ fn gases_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
             estimate(&frame, row, RELAXATION_TIME, "never: no kicks")?,
         ]);
     }
-    out.push_str(&table.render());
-    writeln!(
-        out,
-        "* Gamma times the paper's launch rule's finite-density factor exp(-r |delay|) in a box of L = kernel.launch_length: an artifact of that algorithm (it depends on L), not the gas's rate at rho l; MD's finite-density change has the opposite sign (finite_size table)"
-    )?;
-    Ok(out)
+    out.table(&table);
+    out.line(
+        "* Gamma times the paper's launch rule's finite-density factor exp(-r |delay|) in a box of L = kernel.launch_length: an artifact of that algorithm (it depends on L), not the gas's rate at rho l; MD's finite-density change has the opposite sign (finite_size table)",
+    );
+    Ok(())
 }
 
 /// The `convergence` stage's output: shifts of `a_n` against the defaults.
-fn convergence_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
+fn convergence_table(out: &mut dyn Sink, store: &Store, reports: &[InstanceReport]) -> Result<()> {
     use contract::convergence::*;
-    let mut out = String::new();
     for (instance, frame) in table_frames(store, reports, &TABLE)? {
-        writeln!(
-            out,
-            "\nconvergence of a_n for {} (shift = a_n - default, paired over randomizations)",
+        out.title(&format!(
+            "convergence of a_n for {} (shift = a_n - default, paired over randomizations)",
             instance
-        )?;
+        ));
         let mut table = Columns::new(&[
             (PARAMETER.name, Align::Left),
             (VALUE.name, Align::Right),
@@ -506,20 +485,18 @@ fn convergence_table(store: &Store, reports: &[InstanceReport]) -> Result<String
                 )),
             ]);
         }
-        out.push_str(&table.render());
+        out.table(&table);
     }
-    Ok(out)
+    Ok(())
 }
 
 /// The `evolve` stage's summary: spread and approach to equilibrium of `h`.
-fn evolve_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
+fn evolve_table(out: &mut dyn Sink, store: &Store, reports: &[InstanceReport]) -> Result<()> {
     use contract::evolve::evolution_summary::*;
-    let mut out = String::new();
     for (instance, frame) in table_frames(store, reports, &TABLE)? {
-        writeln!(
-            out,
-            "\nevolution of h from delta(u - u') for {instance}: full = linearized operator, tagged = special particle, fokker_planck (+- jackknife errors)"
-        )?;
+        out.title(&format!(
+            "evolution of h from delta(u - u') for {instance}: full = linearized operator, tagged = special particle, fokker_planck (+- jackknife errors)"
+        ));
         let mut table = Columns::new(&[
             (PROCESS.name, Align::Left),
             ("t Gamma", Align::Right),
@@ -539,23 +516,24 @@ fn evolve_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
                 estimate(&frame, row, DISTANCE_TO_EQUILIBRIUM, "-")?,
             ]);
         }
-        out.push_str(&table.render());
+        out.table(&table);
     }
-    Ok(out)
+    Ok(())
 }
 
 /// The `md` stage's summaries: moments of `h(u, t_f)` by both estimators.
-fn md_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
+fn md_table(out: &mut dyn Sink, store: &Store, reports: &[InstanceReport]) -> Result<()> {
     use contract::md::summary::*;
-    let Some((mut out, frames)) = titled_frames(
+    let frames = titled_frames(
+        out,
         store,
         reports,
         &TABLE,
         "ring molecular dynamics: h(u, t_f) within the window (+- standard errors over runs)",
-    )?
-    else {
-        return Ok(String::new());
-    };
+    )?;
+    if frames.is_empty() {
+        return Ok(());
+    }
     let mut table = Columns::new(&[
         (contract::compare::RING.name, Align::Left),
         (ESTIMATOR.name, Align::Left),
@@ -572,22 +550,20 @@ fn md_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
             ]);
         }
     }
-    out.push_str(&table.render());
-    out.push_str(&bound_pairs_table(store, reports)?);
-    Ok(out)
+    out.table(&table);
+    bound_pairs_table(out, store, reports)?;
+    Ok(())
 }
 
 /// The `compare` stage: goodness of fit of MD against Boltzmann and of the
 /// scaling collapse, and the finite-size and density study.
-fn compare_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
+fn compare_table(out: &mut dyn Sink, store: &Store, reports: &[InstanceReport]) -> Result<()> {
     use contract::compare::{finite_size, goodness};
     use contract::estimator;
-    let mut out = String::new();
     for (_, frame) in table_frames(store, reports, &goodness::TABLE)? {
-        writeln!(
-            out,
-            "\nMD against Boltzmann and the scaling collapse: chi2 per degree of freedom with the variance MD would have if it followed the reference, its p-value, and (sample) with the runs' own errors"
-        )?;
+        out.title(
+            "MD against Boltzmann and the scaling collapse: chi2 per degree of freedom with the variance MD would have if it followed the reference, its p-value, and (sample) with the runs' own errors",
+        );
         let mut table = Columns::new(&[
             (goodness::RING.name, Align::Left),
             (goodness::REFERENCE.name, Align::Left),
@@ -624,13 +600,12 @@ fn compare_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
                 )),
             ]);
         }
-        out.push_str(&table.render());
+        out.table(&table);
     }
     for (_, frame) in table_frames(store, reports, &finite_size::TABLE)? {
-        writeln!(
-            out,
-            "\nfinite size and density: window variance at t_f, MD / Boltzmann (+- standard errors); tagged: starts near u', thermal: every start"
-        )?;
+        out.title(
+            "finite size and density: window variance at t_f, MD / Boltzmann (+- standard errors); tagged: starts near u', thermal: every start",
+        );
         let mut table = Columns::new(&[
             (finite_size::RING.name, Align::Left),
             ("N", Align::Right),
@@ -655,23 +630,24 @@ fn compare_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
                 estimate(&frame, row, finite_size::THERMAL_RATIO, "0/0: no spread")?,
             ]);
         }
-        out.push_str(&table.render());
+        out.table(&table);
     }
-    Ok(out)
+    Ok(())
 }
 
 /// The `scan` stages' peaks: largest `|u1f|` per launch pair.
-fn scan_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
+fn scan_table(out: &mut dyn Sink, store: &Store, reports: &[InstanceReport]) -> Result<()> {
     use contract::scan::{LAUNCH, peak::*};
-    let Some((mut out, frames)) = titled_frames(
+    let frames = titled_frames(
+        out,
         store,
         reports,
         &TABLE,
         "mono-energetic scans: largest |u1f| (error bound) and its arrival offset",
-    )?
-    else {
-        return Ok(String::new());
-    };
+    )?;
+    if frames.is_empty() {
+        return Ok(());
+    }
     let mut table = Columns::new(&[
         (contract::POTENTIAL.name, Align::Left),
         (LAUNCH.name, Align::Left),
@@ -692,15 +668,14 @@ fn scan_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
             ]);
         }
     }
-    out.push_str(&table.render());
-    Ok(out)
+    out.table(&table);
+    Ok(())
 }
 
 /// Bound neighbour pairs of the rings with a well: sampled, after the
 /// dynamics, and the dilute limit.
-fn bound_pairs_table(store: &Store, reports: &[InstanceReport]) -> Result<String> {
+fn bound_pairs_table(out: &mut dyn Sink, store: &Store, reports: &[InstanceReport]) -> Result<()> {
     use contract::md::pairs::*;
-    let mut out = String::new();
     for (instance, frame) in table_frames(store, reports, &TABLE)? {
         let bound = |state: &str| -> Result<Cell> {
             estimate(&frame, row_of(&frame, STATE, state)?, BOUND_FRACTION, "-")
@@ -711,16 +686,15 @@ fn bound_pairs_table(store: &Store, reports: &[InstanceReport]) -> Result<String
             BOUND_FRACTION.value,
         )?;
         if dilute > 0.0 {
-            writeln!(
-                out,
+            out.line(&format!(
                 "{instance}: bound neighbour pairs per gap {} initial, {} final, {} dilute limit rho K_b",
                 bound(INITIAL)?,
                 bound(FINAL)?,
                 significant(dilute),
-            )?;
+            ));
         }
     }
-    Ok(out)
+    Ok(())
 }
 
 /// Checks every artifact down to its tables' content hashes (and, for stages
@@ -881,6 +855,16 @@ pub fn cost_estimate(costs: &[(InstanceId, Cost)], lines: &[StatusLine]) -> Stri
         size(whole.bytes),
         hours(pending.cpu_seconds)
     )
+}
+
+/// An instance's state and why: `stale: <reasons>`, `missing: <reason>`.
+pub fn describe(freshness: &Freshness) -> String {
+    match freshness {
+        Freshness::Fresh => "fresh".into(),
+        Freshness::Stale(reasons) => format!("stale: {}", reasons.join("; ")),
+        Freshness::Damaged(problems) => format!("damaged: {}", problems.join("; ")),
+        Freshness::Missing(reason) => format!("missing: {reason}"),
+    }
 }
 
 /// CPU-seconds as hours, two significant digits.

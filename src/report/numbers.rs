@@ -170,7 +170,7 @@ pub fn significant(x: f64) -> String {
 
 /// `x` to `digits` significant digits without trailing zeros, in fixed
 /// notation for magnitudes from `1e-4` to `1e6`; zero as `0`.
-fn significant_to(x: f64, digits: i32) -> String {
+pub fn significant_to(x: f64, digits: i32) -> String {
     if x == 0.0 {
         return "0".to_string();
     }
