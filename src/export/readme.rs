@@ -152,7 +152,9 @@ fn overview(
          file: a table's columns with types, units and descriptions, and the stage, code \
          version, key and full parameters that produced it (`frictionless validate \
          datapackage.json` checks it against the tables). `SHA256SUMS` lists every file with \
-         its SHA-256 (`sha256sum -c SHA256SUMS`); `ternary verify --bundle .` checks both.\n",
+         its SHA-256 (`sha256sum -c SHA256SUMS`); `ternary verify --bundle .` checks both. \
+         `report/index.html` is the study at a glance (open it in a browser): the summary \
+         tables, every figure with its caption, what each stage computed and the provenance.\n",
         kinds.len(),
         figures.len()
     );

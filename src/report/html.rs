@@ -625,12 +625,12 @@ pre { background: #f6f6f6; padding: 0.8rem; overflow-x: auto; border: 1px solid 
 .warning { background: #fff4e0; border-left: 4px solid #e69f00; padding: 0.5rem 0.8rem; }
 .scroll { overflow-x: auto; }
 table { border-collapse: collapse; font-variant-numeric: tabular-nums; font-size: 0.9em; margin: 0.3rem 0 0.8rem; }
-th, td { padding: 0.2rem 0.7rem; text-align: left; vertical-align: top; }
+th, td { padding: 0.2rem 0.45rem; text-align: left; vertical-align: top; }
 th, .num { white-space: nowrap; }
 th { border-bottom: 2px solid #888; font-weight: 600; }
 tbody tr:nth-child(even) { background: #f7f7f7; }
 .num { text-align: right; }
-td:last-child:not(.num) { min-width: 20ch; }
+td:last-child:not(.num) { min-width: 18ch; }
 figure { margin: 2rem 0; }
 figure img { display: block; width: 860px; max-width: 100%; height: auto; border: 1px solid #ddd; }
 figcaption { margin-top: 0.5rem; max-width: 90ch; font-size: 0.95em; }
