@@ -609,7 +609,8 @@ fn field_type(data_type: &DataType) -> &'static str {
 
 /// The descriptor of one table: path, Table Schema from the file's column
 /// metadata (a nullable column's `null` says what a null means; every other
-/// column is `required`), and the artifact it came from. No `bytes` or `hash`:
+/// column is `required`; only a null is missing, not an empty string), and
+/// the artifact it came from. No `bytes` or `hash`:
 /// frictionless reads Parquet through pandas, cannot count its bytes and
 /// reports every such table invalid (`byte-count ... actual is None`);
 /// `SHA256SUMS` and `verify --bundle` check a table's bytes instead.
@@ -647,7 +648,11 @@ fn resource(entry: &Entry, file: &Path) -> Result<Value> {
         "format": "parquet",
         "mediatype": PARQUET_MEDIATYPE,
         "description": description,
-        "schema": { "fields": fields },
+        // Only a Parquet null is missing: an empty string is a value (the
+        // paper table's `table_i_column` of a row outside Table I, a unit of
+        // 1), and frictionless's default would read it as missing and fail
+        // a `required` column.
+        "schema": { "fields": fields, "missingValues": [] },
         "ternary": {
             "stage": entry.stage,
             "code": entry.code,
