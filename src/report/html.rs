@@ -113,7 +113,8 @@ fn fresh_manifest(store: &Store, line: &StatusLine) -> Option<Manifest> {
 }
 
 /// Copies the screen PNG of every fresh figure into `dir` and reads its
-/// caption and size; removes the PNGs there that are not the study's.
+/// caption and size. Removes nothing: `dir` may hold files that are not
+/// ternary's.
 fn copy_figures(store: &Store, instances: &[Instance], dir: &Path) -> Result<Vec<Figure>> {
     let mut figures = Vec::new();
     for instance in instances {
@@ -139,16 +140,6 @@ fn copy_figures(store: &Store, instances: &[Instance], dir: &Path) -> Result<Vec
             width,
             height,
         });
-    }
-    let kept: BTreeSet<String> = figures
-        .iter()
-        .map(|f| f.href[FIGURES.len() + 1..].to_string())
-        .collect();
-    for entry in fs::read_dir(dir)? {
-        let name = entry?.file_name().to_string_lossy().into_owned();
-        if name.ends_with(".png") && !kept.contains(&name) {
-            fs::remove_file(dir.join(&name))?;
-        }
     }
     Ok(figures)
 }
