@@ -739,9 +739,7 @@ fn dispatch(cli: Cli) -> Result<ExitCode> {
         } => {
             let study = bench_study(&cli.config)?;
             let options = KernelBenchOptions {
-                potential: theta.map_or(Potential::InversePower { n }, |theta| {
-                    Potential::LennardJones { theta }
-                }),
+                potential: theta.map_or(Potential::inverse_power(n), Potential::lennard_jones),
                 randomizations,
                 points,
                 seed,
@@ -775,7 +773,7 @@ fn dispatch(cli: Cli) -> Result<ExitCode> {
             }
             let study = bench_study(&cli.config)?;
             let options = BalanceBenchOptions {
-                potential: Potential::InversePower { n },
+                potential: Potential::inverse_power(n),
                 randomizations,
                 from,
                 separation,

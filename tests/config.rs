@@ -646,7 +646,7 @@ fn methods_can_differ_per_potential() {
     let engine = study.engine();
     for potential in &study.potentials() {
         let plan = study.config.collisions.params(*potential, engine).sampling;
-        let sampled = matches!(potential, Potential::LennardJones { .. });
+        let sampled = potential.family().has_well();
         assert_eq!(plan.offsets.is_sampled(), sampled, "{}", potential.id());
     }
 }
@@ -719,7 +719,7 @@ fn sweep_points_share_sizes_only_the_sweep_set() {
         "launch_spread = 2.0\npoints_share = 0.25",
     );
     let study = Study::parse(std::path::Path::new("pipeline.toml"), &text).expect("valid");
-    let potential = Potential::InversePower { n: 6.0 };
+    let potential = Potential::inverse_power(6.0);
     let (_, wide) = study.wide_collisions(potential);
     let wide = wide.expect("the sweep has its own scene set");
     assert_eq!(wide.points, 64);
@@ -729,7 +729,7 @@ fn sweep_points_share_sizes_only_the_sweep_set() {
     assert_eq!(kernel.points, 256);
     assert!(kernel.sampling.opposite_points >= 128);
     // A per-potential count is shared the same way.
-    let lennard_jones = Potential::LennardJones { theta: 0.1 };
+    let lennard_jones = Potential::lennard_jones(0.1);
     let (_, wide) = study.wide_collisions(lennard_jones);
     assert_eq!(wide.expect("own set").points, 128);
 }
@@ -749,7 +749,7 @@ fn sweep_randomizations_and_halvings_set_only_the_sweep_set() {
             "[collisions.method_per_potential]\n\"ipp-6\" = \"quadrature\"\n\n[collisions.points_per_potential]",
         );
     let study = Study::parse(std::path::Path::new("pipeline.toml"), &text).expect("valid");
-    let potential = Potential::InversePower { n: 6.0 };
+    let potential = Potential::inverse_power(6.0);
     let wide = study.wide_collisions(potential).1.expect("own set");
     let kernel = study.collisions_params(potential);
     assert_eq!(wide.sampling.randomizations, 12);

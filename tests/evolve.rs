@@ -34,7 +34,7 @@ fn events(seed: u64, randomizations: u32, spread: f64) -> Vec<Event> {
         offsets: OffsetIntegration::Sampled,
     };
     let engine = EngineSettings::new(Method::Dprkn12, 1e-12, 100_000);
-    plan.integrate_all(&Potential::InversePower { n: 6.0 }, &engine, |_| ())
+    plan.integrate_all(&Potential::inverse_power(6.0), &engine, |_| ())
         .iter()
         .map(Event::from_record)
         .collect()

@@ -114,7 +114,7 @@ fn compare(a: &[Estimate], b: &[Estimate]) -> (f64, f64, usize) {
 
 #[test]
 fn every_contribution_conserves_number_momentum_and_energy() {
-    let events = draw(Potential::InversePower { n: 6.0 }, &plan(3, 2, 512));
+    let events = draw(Potential::inverse_power(6.0), &plan(3, 2, 512));
     let wide = Bins::for_window(40.0, 0.01);
     for u_prime in [0.0, 0.7, -1.9] {
         // No kick floor: the raw scenes, exact to rounding.
@@ -158,7 +158,7 @@ fn every_contribution_conserves_number_momentum_and_energy() {
 /// three floors per scene.
 #[test]
 fn kick_floor_changes_momentum_by_at_most_three_floors() {
-    let events = draw(Potential::InversePower { n: 6.0 }, &plan(3, 2, 512));
+    let events = draw(Potential::inverse_power(6.0), &plan(3, 2, 512));
     for event in &events {
         for c in contributions(event, &dilute(0.3)) {
             let momentum: f64 = c.outgoing.iter().sum::<f64>() - c.incoming.iter().sum::<f64>();
@@ -173,7 +173,7 @@ fn kick_floor_changes_momentum_by_at_most_three_floors() {
 
 #[test]
 fn calogero_kernel_vanishes() {
-    let events = draw(Potential::InversePower { n: 2.0 }, &plan(5, 4, 1024));
+    let events = draw(Potential::inverse_power(2.0), &plan(5, 4, 1024));
     let bins = Bins::for_window(0.2, 5e-5);
     let g = kernel(&events, &dilute(0.0), &bins, total);
     assert!(g.iter().all(|e| e.mean == 0.0 && e.stderr == 0.0));
@@ -181,7 +181,7 @@ fn calogero_kernel_vanishes() {
     // Kicks are permutation defects below 1e-10: their squares weigh < 1e-19.
     assert!(a2.mean.abs() < 1e-19, "{a2:?}");
     let a6 = self_variance(
-        &draw(Potential::InversePower { n: 6.0 }, &plan(5, 4, 256)),
+        &draw(Potential::inverse_power(6.0), &plan(5, 4, 256)),
         &dilute(0.0),
         0.1,
     );
@@ -201,7 +201,7 @@ fn calogero_kernel_vanishes() {
 /// (a sign error in `LaunchPair::lines` or in the `u'` shift of the weights).
 #[test]
 fn kernel_mirrors_under_velocity_reversal() {
-    let potential = Potential::InversePower { n: 6.0 };
+    let potential = Potential::inverse_power(6.0);
     let records = plan(7, 8, 512).integrate_all(&potential, &engine(), |_| ());
     let once = |event: Event| Event {
         stratum: Stratum::Literal,
@@ -273,7 +273,7 @@ fn kernel_mirrors_under_velocity_reversal() {
 
 #[test]
 fn detailed_balance_between_nearby_velocities() {
-    let events = draw(Potential::InversePower { n: 6.0 }, &plan(11, 16, 4096));
+    let events = draw(Potential::inverse_power(6.0), &plan(11, 16, 4096));
     let draws = replicates(&events);
     let bins = Bins::for_window(0.2, 0.004);
     for (a, b) in [(0.0, 0.012), (0.6, 0.62), (-1.2, -1.188), (1.5, 1.512)] {
@@ -313,7 +313,7 @@ fn detailed_balance_between_nearby_velocities() {
 
 #[test]
 fn independent_randomizations_give_honest_error_bars() {
-    let potential = Potential::InversePower { n: 6.0 };
+    let potential = Potential::inverse_power(6.0);
     let bins = Bins::for_window(0.2, 0.002);
     let first = draw(potential, &plan(101, 16, 1024));
     let second = draw(potential, &plan(202, 16, 1024));
@@ -338,7 +338,7 @@ fn independent_randomizations_give_honest_error_bars() {
 
 /// Literal algorithm of physics.md §3 at a density where it is affordable.
 fn literal_events(density: f64, randomizations: u32, points: u32) -> Vec<Event> {
-    let potential = Potential::InversePower { n: 6.0 };
+    let potential = Potential::inverse_power(6.0);
     (0..randomizations)
         .into_par_iter()
         .flat_map_iter(|randomization| {
@@ -376,7 +376,7 @@ fn importance_sampler_agrees_with_the_literal_algorithm_at_finite_density() {
         launch_length: 90.0,
         kick_floor: DEFAULT_KICK_FLOOR,
     };
-    let sampled = draw(Potential::InversePower { n: 6.0 }, &plan(17, 16, 2048));
+    let sampled = draw(Potential::inverse_power(6.0), &plan(17, 16, 2048));
     let literal = literal_events(density, 16, 40_000);
     let (a, b) = (
         self_variance(&sampled, &target, 0.1),
@@ -406,7 +406,7 @@ fn importance_sampler_agrees_with_the_literal_algorithm_at_finite_density() {
 
 #[test]
 fn reweighted_kernel_agrees_with_direct_sampling_at_the_same_velocity() {
-    let potential = Potential::InversePower { n: 6.0 };
+    let potential = Potential::inverse_power(6.0);
     let reweighted = draw(potential, &plan(23, 16, 2048));
     let direct = draw(potential, &shifted_plan(29, 16, 2048, 0.5));
     let target = dilute(0.5);
@@ -433,7 +433,7 @@ fn reweighted_kernel_agrees_with_direct_sampling_at_the_same_velocity() {
 fn pilot_allocation_favours_the_opposite_side_and_declines_without_kicks() {
     let pilot_plan = plan(31, 1, 64);
     let target = dilute(0.0);
-    let calogero = Potential::InversePower { n: 2.0 };
+    let calogero = Potential::inverse_power(2.0);
     assert_eq!(
         pilot_same_side_fraction(&pilot_plan, &calogero, &engine(), &target, 256),
         None
@@ -441,7 +441,7 @@ fn pilot_allocation_favours_the_opposite_side_and_declines_without_kicks() {
     // numerics.md: the opposite-side pattern carries ~90% of a_n; Neyman gives ~15% same-side.
     let fraction = pilot_same_side_fraction(
         &pilot_plan,
-        &Potential::InversePower { n: 6.0 },
+        &Potential::inverse_power(6.0),
         &engine(),
         &target,
         1024,
@@ -455,7 +455,7 @@ fn pilot_allocation_favours_the_opposite_side_and_declines_without_kicks() {
 /// bit for bit, at every off-centre bin and at a shifted `u'`.
 #[test]
 fn single_bin_self_kernel_equals_the_histogram() {
-    let events = draw(Potential::InversePower { n: 6.0 }, &plan(3, 4, 512));
+    let events = draw(Potential::inverse_power(6.0), &plan(3, 4, 512));
     let draws = replicates(&events);
     let bins = Bins::for_window(0.06, 0.005);
     for target in [dilute(0.0), dilute(-1.3)] {
@@ -485,7 +485,7 @@ fn single_bin_self_kernel_equals_the_histogram() {
 #[test]
 fn single_bin_self_kernel_equals_the_histogram_under_the_quadrature() {
     let events = draw(
-        Potential::InversePower { n: 6.0 },
+        Potential::inverse_power(6.0),
         &quadrature_plan(5, 3, OffsetRule::default()),
     );
     let draws = replicates(&events);
@@ -521,7 +521,7 @@ fn single_bin_self_kernel_equals_the_histogram_under_the_quadrature() {
 #[test]
 fn quadrature_kernel_conserves_number() {
     let events = draw(
-        Potential::InversePower { n: 6.0 },
+        Potential::inverse_power(6.0),
         &quadrature_plan(9, 2, OffsetRule::default()),
     );
     let wide = Bins::for_window(40.0, 0.01);
@@ -563,7 +563,7 @@ fn self_rates(events: &[Event], target: &Target) -> [Estimate; 2] {
 /// finite-density rate (whose survival factor depends on the offset).
 #[test]
 fn offset_quadrature_agrees_with_sampled_offsets() {
-    let potential = Potential::InversePower { n: 6.0 };
+    let potential = Potential::inverse_power(6.0);
     let sampled = draw(potential, &plan(31, 16, 2048));
     let integrated = draw(potential, &quadrature_plan(37, 16, OffsetRule::default()));
     let a_n = self_variance(&integrated, &dilute(0.0), 0.1);
@@ -603,7 +603,7 @@ fn offset_quadrature_agrees_with_sampled_offsets() {
 /// of the 12 has 11 degrees of freedom; p outside [0.001, 0.999] fails).
 #[test]
 fn offset_quadrature_error_bars_are_calibrated() {
-    let potential = Potential::InversePower { n: 6.0 };
+    let potential = Potential::inverse_power(6.0);
     let runs: Vec<Estimate> = (0..12)
         .map(|k| {
             let events = draw(
@@ -632,7 +632,7 @@ fn offset_quadrature_error_bars_are_calibrated() {
 /// reported bound covers its change.
 #[test]
 fn offset_quadrature_error_is_far_below_the_statistical_error() {
-    let potential = Potential::InversePower { n: 6.0 };
+    let potential = Potential::inverse_power(6.0);
     let rule = OffsetRule::default();
     let tight = OffsetRule {
         halvings: rule.halvings + 2,
@@ -680,7 +680,7 @@ fn offset_quadrature_error_is_far_below_the_statistical_error() {
 /// misses by 5e-5 to 4e-3 on 12 of these pairs.
 #[test]
 fn offset_rule_averaged_over_grid_moves_is_the_integral() {
-    let potential = Potential::InversePower { n: 12.0 };
+    let potential = Potential::inverse_power(12.0);
     let rule = OffsetRule::default();
     let finer = OffsetRule {
         halvings: rule.halvings + 1,

@@ -16,7 +16,7 @@ fn default_engine() -> EngineSettings {
 }
 
 fn ipp(n: f64) -> Potential {
-    Potential::InversePower { n }
+    Potential::inverse_power(n)
 }
 
 /// Relative energy error bound stated in README: 1e-11 at the default tolerance.
@@ -45,7 +45,7 @@ fn thermal_scenes_conserve_energy_and_momentum() {
         ipp(6.0),
         ipp(7.5),
         ipp(12.0),
-        Potential::LennardJones { theta: 1.0 },
+        Potential::lennard_jones(1.0),
     ];
     for potential in potentials {
         for (k, lines) in thermal_scenes(1000, 7).into_iter().enumerate() {
@@ -94,7 +94,7 @@ fn mirrored(lines: [FreeLine; 3]) -> [FreeLine; 3] {
 
 #[test]
 fn mirror_image_negates_every_outgoing_velocity() {
-    for potential in [ipp(6.0), ipp(12.0), Potential::LennardJones { theta: 0.5 }] {
+    for potential in [ipp(6.0), ipp(12.0), Potential::lennard_jones(0.5)] {
         for lines in thermal_scenes(500, 11) {
             let direct = collide(&potential, &default_engine(), lines);
             let mirror = collide(&potential, &default_engine(), mirrored(lines));
@@ -140,7 +140,7 @@ fn head_on_at_eight_thermal_speeds() {
         ipp(2.0),
         ipp(6.0),
         ipp(12.0),
-        Potential::LennardJones { theta: 0.05 },
+        Potential::lennard_jones(0.05),
     ] {
         for offset in [-0.05, 0.0, 0.01, 0.1] {
             let collision = collide(&potential, &default_engine(), launch.lines(offset));
@@ -163,7 +163,7 @@ fn slow_collision_at_relative_speed_one_thousandth() {
         ipp(2.0),
         ipp(6.0),
         ipp(12.0),
-        Potential::LennardJones { theta: 10.0 },
+        Potential::lennard_jones(10.0),
     ] {
         for offset in [-500.0, 0.0, 300.0] {
             let collision = collide(&potential, &default_engine(), launch.lines(offset));
@@ -175,7 +175,7 @@ fn slow_collision_at_relative_speed_one_thousandth() {
 #[test]
 fn lennard_jones_shallow_and_deep_wells_conserve_energy() {
     for theta in [0.05, 10.0] {
-        let potential = Potential::LennardJones { theta };
+        let potential = Potential::lennard_jones(theta);
         for lines in thermal_scenes(500, 13) {
             let collision = collide(&potential, &default_engine(), lines);
             assert_conserved(&collision, &format!("theta = {theta}"));
@@ -199,7 +199,7 @@ fn free_flight_jumps_keep_integrability_and_conservation() {
             let calogero = collide(&ipp(2.0), &default_engine(), launch.lines(offset));
             assert_conserved(&calogero, "n = 2 with jump");
             assert!(permutation_defect(&calogero) <= 1e-10, "{calogero:?}");
-            for potential in [ipp(6.0), Potential::LennardJones { theta: 1.0 }] {
+            for potential in [ipp(6.0), Potential::lennard_jones(1.0)] {
                 let collision = collide(&potential, &default_engine(), launch.lines(offset));
                 assert_conserved(
                     &collision,
@@ -218,7 +218,7 @@ fn free_flight_jumps_keep_integrability_and_conservation() {
 /// the binding energy is conserved.
 #[test]
 fn deep_lennard_jones_well_recombines_a_pair() {
-    let potential = Potential::LennardJones { theta: 0.05 };
+    let potential = Potential::lennard_jones(0.05);
     let lines = [
         FreeLine {
             position: 0.0,
@@ -258,7 +258,7 @@ fn free_flight_skipping_agrees_with_integrating_through() {
         LaunchPair { u2: 1.1, u3: 0.4 },
         LaunchPair { u2: -0.3, u3: 2.0 },
     ];
-    for potential in [ipp(2.0), ipp(6.0), Potential::LennardJones { theta: 1.0 }] {
+    for potential in [ipp(2.0), ipp(6.0), Potential::lennard_jones(1.0)] {
         for launch in launches {
             for offset in [-300.0, -40.0, -12.0, 12.0, 40.0, 300.0] {
                 let skipped = collide(&potential, &default_engine(), launch.lines(offset));

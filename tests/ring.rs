@@ -23,7 +23,7 @@ fn ring_collision_matches_the_scattering_engine() {
     ] {
         let pair = LaunchPair { u2, u3 };
         let lines = pair.lines(offset);
-        let scene = collide(&Potential::InversePower { n: 6.0 }, &engine, lines);
+        let scene = collide(&Potential::inverse_power(6.0), &engine, lines);
         let start = -300.0;
         let mut particles: Vec<(f64, f64)> = lines
             .iter()

@@ -169,7 +169,7 @@ fn measure(
 /// Runs the sweep and returns a Markdown report with the equal-error speedups
 /// of the default method over the baseline.
 pub fn integrators(options: &WorkPrecisionOptions) -> (String, BenchFigure) {
-    let potential = Potential::InversePower { n: options.n };
+    let potential = Potential::inverse_power(options.n);
     let scenes = thermal_scenes(options.scenes, options.seed);
     let reference_of = |method| {
         let settings = EngineSettings::new(method, TIGHTEST_TOLERANCE, MAX_STEPS);

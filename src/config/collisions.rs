@@ -199,7 +199,7 @@ impl CollisionsConfig {
             };
             check(
                 self.method_of(potential) == OffsetMethod::Sampled
-                    || !matches!(potential, Potential::LennardJones { .. }),
+                    || !potential.family().has_well(),
                 key,
                 format!(
                     "\"quadrature\" cannot integrate {id}: bound and orbiting pairs make the kick a non-smooth function of the arrival offset, where the offset rule does not converge (docs/benchmarks.md, \"Offset quadrature\"); use \"sampled\" for it ([collisions.method_per_potential] \"{id}\" = \"sampled\")"

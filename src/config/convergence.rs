@@ -81,9 +81,7 @@ impl ConvergenceConfig {
         if !self.enabled {
             return Ok(None);
         }
-        let potential = Potential::InversePower {
-            n: self.inverse_power,
-        };
+        let potential = Potential::inverse_power(self.inverse_power);
         check(
             context.potentials.contains(&potential),
             "convergence.inverse_power",

@@ -128,7 +128,9 @@ impl EvolveConfig {
         };
         let physical = gas.map(|gas| {
             let times_ns = sorted(&self.times_ns);
-            let unit = gas.gas.rate_per_ns(1.0, potential.length_exponent());
+            let unit = gas
+                .gas
+                .rate_per_ns(1.0, potential.family().length_exponent());
             PhysicalTimes {
                 gas: gas.name.clone(),
                 times_scaled: times_ns.iter().map(|t| t * unit).collect(),

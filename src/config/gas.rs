@@ -46,7 +46,8 @@ pub struct GasParams {
 impl GasParams {
     /// The kernel parameters of this gas's density (`u' = 0`).
     pub fn scaled_density(&self) -> f64 {
-        self.gas.scaled_density(self.potential.length_exponent())
+        self.gas
+            .scaled_density(self.potential.family().length_exponent())
     }
 }
 
@@ -86,7 +87,7 @@ impl GasConfig {
         ] {
             check(positive(value), key(name), format!("{value} must be > 0"))?;
         }
-        if let Potential::LennardJones { theta } = potential {
+        if let Some(theta) = potential.family().theta() {
             let ratio = gas.kt_ev / gas.eps_ev;
             check(
                 (ratio / theta - 1.0).abs() <= 1e-9,
@@ -115,7 +116,7 @@ impl GasConfig {
             mass,
             density_per_um,
         };
-        let density = physical.scaled_density(potential.length_exponent());
+        let density = physical.scaled_density(potential.family().length_exponent());
         check(
             density <= MAX_GAS_DENSITY,
             key(density_key),

@@ -119,13 +119,14 @@ pub const MAX_NEIGHBOURS: u32 = 64;
 impl MdParams {
     /// `rho l` of the ring's gas (as the `gases` stage computes it).
     pub fn scaled_density(&self) -> f64 {
-        self.gas.scaled_density(self.potential.length_exponent())
+        self.gas
+            .scaled_density(self.potential.family().length_exponent())
     }
 
     /// The final time `t_f` in units of the ring's own `1 / (rho^2 l v_th)`:
     /// rings at equal values are the same dilute physics (the scaling collapse).
     pub fn scaled_final_time(&self) -> f64 {
-        let exponent = self.potential.length_exponent();
+        let exponent = self.potential.family().length_exponent();
         self.final_time_ns * self.gas.rate_per_ns(1.0, exponent)
     }
 }
@@ -228,15 +229,12 @@ impl MdConfig {
             ));
         };
         let potential = resolved.potential;
-        check(
-            matches!(potential, Potential::InversePower { n } if n >= 2.0)
-                || matches!(potential, Potential::LennardJones { .. }),
-            key("gas"),
-            format!(
-                "the md stage runs inverse power laws with n >= 2 (n = 2 as a whole ring, larger n by cluster stepping) and Lennard-Jones; `{}` is neither",
-                potential.id()
-            ),
-        )?;
+        if let Some(obstacle) = potential.family().ring_obstacle() {
+            return Err((
+                key("gas"),
+                format!("{obstacle}: `{}` cannot run", potential.id()),
+            ));
+        }
         check(
             positive(system.final_time_ns),
             key("final_time_ns"),
@@ -263,7 +261,7 @@ impl MdConfig {
             key("runs"),
             format!("must lie in [2, {MAX_MD_RUNS}] (errors come from the runs' spread)"),
         )?;
-        let exponent = potential.length_exponent();
+        let exponent = potential.family().length_exponent();
         let length = gas.length_unit_um(exponent);
         let time_unit = gas.time_unit_ns(exponent);
         let samples = self.samples.max(1);

@@ -402,7 +402,7 @@ impl Study {
         self.md
             .iter()
             .filter(|r| r.potential != first.potential && r.u_prime == 0.0)
-            .filter(|r| !r.potential.is_integrable())
+            .filter(|r| !r.potential.family().is_integrable())
             .cloned()
             .collect()
     }
@@ -528,18 +528,10 @@ points = 21
     #[test]
     fn potential_ids_within_the_ranges_are_short() {
         let extremes = [
-            Potential::InversePower {
-                n: 1.0 + f64::EPSILON,
-            },
-            Potential::InversePower {
-                n: 99.999_999_999_999_99,
-            },
-            Potential::LennardJones {
-                theta: 0.001_234_567_890_123_456_7,
-            },
-            Potential::LennardJones {
-                theta: 999.999_999_999_999_9,
-            },
+            Potential::inverse_power(1.0 + f64::EPSILON),
+            Potential::inverse_power(99.999_999_999_999_99),
+            Potential::lennard_jones(0.001_234_567_890_123_456_7),
+            Potential::lennard_jones(999.999_999_999_999_9),
         ];
         for potential in extremes {
             assert!(potential.id().len() <= 24, "{}", potential.id());
@@ -615,7 +607,7 @@ points = 21
         let study = parse(&ring(0.1)).unwrap();
         assert_eq!(
             study.md_params()[0].potential,
-            Potential::LennardJones { theta: 0.1 }
+            Potential::lennard_jones(0.1)
         );
     }
 }

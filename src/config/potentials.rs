@@ -23,11 +23,11 @@ impl PotentialsConfig {
         let inverse = self
             .inverse_power
             .iter()
-            .map(|&n| Potential::InversePower { n });
+            .map(|&n| Potential::inverse_power(n));
         let lj = self
             .lennard_jones
             .iter()
-            .map(|&theta| Potential::LennardJones { theta });
+            .map(|&theta| Potential::lennard_jones(theta));
         inverse.chain(lj).collect()
     }
 }

@@ -289,7 +289,7 @@ mod tests {
             halvings: 2,
             ..OffsetRule::default()
         };
-        let integral = rule.integrate(&Potential::InversePower { n: 6.0 }, &engine(), launch, 0.5);
+        let integral = rule.integrate(&Potential::inverse_power(6.0), &engine(), launch, 0.5);
         let offsets: Vec<f64> = integral.nodes.iter().map(|n| n.offset).collect();
         assert!(offsets.windows(2).all(|w| w[0] < w[1]));
         let coarse = (rule.half_range / rule.coarse_step).floor() as usize;
@@ -345,7 +345,7 @@ mod tests {
     /// bounds. The fixed range (no growth) misses such nodes.
     #[test]
     fn the_range_follows_the_decay_of_the_kicks() {
-        let potential = Potential::InversePower { n: 4.0 };
+        let potential = Potential::inverse_power(4.0);
         let rule = OffsetRule::default();
         let wide = OffsetRule {
             half_range: rule.half_range + 1.0,
@@ -400,7 +400,7 @@ mod tests {
     #[test]
     fn integrable_pairs_integrate_to_zero() {
         let integral = OffsetRule::default().integrate(
-            &Potential::InversePower { n: 2.0 },
+            &Potential::inverse_power(2.0),
             &engine(),
             LaunchPair { u2: 0.7, u3: -1.3 },
             0.5,
@@ -414,7 +414,7 @@ mod tests {
     /// and a same-side pair.
     #[test]
     fn the_error_bound_covers_a_finer_rule() {
-        let potential = Potential::InversePower { n: 6.0 };
+        let potential = Potential::inverse_power(6.0);
         for (u2, u3) in [(1.0, -1.0), (2.4, -0.3), (0.4, 1.7)] {
             let launch = LaunchPair { u2, u3 };
             let rule = OffsetRule::default();

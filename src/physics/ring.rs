@@ -502,7 +502,7 @@ impl<V: Vector> ErrorScales<V> for RingErrorScales<V> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::physics::potential::{InverseIntegerPower, LennardJones};
+    use crate::physics::potential::{Family, InverseIntegerPower, LennardJones};
     use crate::stats::Estimate;
     use rand::SeedableRng;
     use rand::rngs::StdRng;

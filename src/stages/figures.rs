@@ -44,14 +44,6 @@ impl FiguresStage {
     }
 }
 
-/// A potential's legend label: `n = 6`, `LJ θ = 0.1`.
-fn label(potential: &Potential) -> String {
-    match potential {
-        Potential::InversePower { n } => format!("n = {n}"),
-        Potential::LennardJones { theta } => format!("LJ θ = {theta}"),
-    }
-}
-
 /// The figures of a study whose inputs `plan` computes: kernels of every
 /// inverse power law with kicks and of every Lennard-Jones potential, and for `n = 6` (or the first such potential) the
 /// kernel with its fit, the rates against `u'` and `a_n(X)`; MD against
@@ -61,17 +53,16 @@ pub fn figure_stages(study: &Study, plan: &[Box<dyn Stage>]) -> Vec<FiguresStage
     let kicked: Vec<Potential> = study
         .potentials()
         .into_iter()
-        .filter(|p| !p.is_integrable())
+        .filter(|p| !p.family().is_integrable())
         .collect();
     let target = |stage: &str, p: &Potential| {
         InstanceId::new(stage, &target_instance(&study.kernel_params(*p, 0.0, 0.0)))
     };
     let mut figures = Vec::new();
-    let (lennard_jones, inverse_power): (Vec<Potential>, Vec<Potential>) = kicked
-        .iter()
-        .partition(|p| matches!(p, Potential::LennardJones { .. }));
+    let (lennard_jones, inverse_power): (Vec<Potential>, Vec<Potential>) =
+        kicked.iter().partition(|p| p.family().has_well());
     let kernels = |potentials: &[Potential]| -> (Vec<String>, Vec<InstanceId>) {
-        let labels = potentials.iter().map(label).collect();
+        let labels = potentials.iter().map(|p| p.family().label()).collect();
         let inputs = potentials
             .iter()
             .map(|p| target(contract::kernel::STAGE, p))
@@ -91,10 +82,10 @@ pub fn figure_stages(study: &Study, plan: &[Box<dyn Stage>]) -> Vec<FiguresStage
     }
     let main = kicked
         .iter()
-        .find(|p| **p == Potential::InversePower { n: 6.0 })
+        .find(|p| **p == Potential::inverse_power(6.0))
         .or(kicked.first());
     if let Some(p) = main {
-        let (id, label) = (p.id(), label(p));
+        let (id, label) = (p.id(), p.family().label());
         figures.push(FiguresStage::new(
             Figure::KernelFit {
                 id: id.clone(),
@@ -196,7 +187,7 @@ pub fn figure_stages(study: &Study, plan: &[Box<dyn Stage>]) -> Vec<FiguresStage
 fn kernels_at_density(study: &Study) -> Option<FiguresStage> {
     let rings = study.collapse_rings();
     let potential = rings.first()?.potential;
-    if potential.is_integrable() {
+    if potential.family().is_integrable() {
         return None;
     }
     let instance = |density: f64| {

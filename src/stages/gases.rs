@@ -94,7 +94,7 @@ impl Stage for GasesStage {
                 Ok(rates)
             })
             .collect::<Result<Vec<_>, StageError>>()?;
-        let exponent = |r: &GasRates| r.params.potential.length_exponent();
+        let exponent = |r: &GasRates| r.params.potential.family().length_exponent();
         let rate = |r: &GasRates, x: f64| r.params.gas.rate_per_ns(x, exponent(r));
         let gamma = |r: &GasRates, a: Estimate| Estimate {
             mean: rate(r, a.mean),

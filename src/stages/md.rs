@@ -77,7 +77,7 @@ impl PotentialVisitor for Runs<'_> {
 
     fn visit<P: PairPotential>(self, potential: P) -> Self::Output {
         let p = &self.stage.params;
-        let reach = if p.potential.is_integrable() {
+        let reach = if p.potential.family().is_integrable() {
             Reach::All
         } else {
             Reach::Neighbours(p.neighbours as usize)
@@ -208,7 +208,7 @@ impl MdStage {
         };
         let density = f64::from(p.particles - 1) / p.circumference;
         let dilute = Estimate {
-            mean: density * p.potential.bound_pair_length(),
+            mean: density * p.potential.family().bound_pair_length(),
             stderr: 0.0,
         };
         let rows = [

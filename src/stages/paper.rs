@@ -472,8 +472,8 @@ pub struct PaperStage {
 }
 
 /// The paper's `n = 6` and Lennard-Jones `theta = 0.1` potentials.
-const IPP_6: Potential = Potential::InversePower { n: 6.0 };
-const LJ_0_1: Potential = Potential::LennardJones { theta: 0.1 };
+const IPP_6: Potential = Potential::inverse_power(6.0);
+const LJ_0_1: Potential = Potential::lennard_jones(0.1);
 
 /// The paper's detailed-balance pair `(a, b)`.
 const BALANCE_PAIR: (f64, f64) = (-3.0, -2.96);
@@ -566,9 +566,7 @@ fn table_i_checks(study: &Study, planned: &HashSet<InstanceId>) -> Vec<Check> {
         Column::KickMax,
     ] {
         for row in &TABLE_I {
-            let potential = Potential::InversePower {
-                n: f64::from(row.n),
-            };
+            let potential = Potential::inverse_power(f64::from(row.n));
             let kernel = study.kernel_params(potential, 0.0, 0.0);
             let Some(published) = row.published(column) else {
                 continue;
@@ -624,7 +622,9 @@ fn scaling_ring(study: &Study, r: &MdParams) -> ScalingRing {
     ScalingRing {
         name: r.name.clone(),
         final_time_ns: r.final_time_ns,
-        rate_unit_per_ns: r.gas.rate_per_ns(1.0, r.potential.length_exponent()),
+        rate_unit_per_ns: r
+            .gas
+            .rate_per_ns(1.0, r.potential.family().length_exponent()),
         density_per_um: r.gas.density_per_um,
         kt_ev: r.gas.kt_ev,
         moments: study.kernel_params(r.potential, 0.0, r.scaled_density()),
@@ -680,7 +680,7 @@ fn rates(
     let paper = self_variance_at(moments, PAPER_TRUNCATION)?;
     let window = self_variance_at(moments, 0.5 * params.window)?;
     let truncated = "ours counts |u - u'| <= 0.04 like the paper";
-    if matches!(params.potential, Potential::LennardJones { .. }) {
+    if params.potential.family().has_well() {
         let untruncated = self_variance_at(moments, f64::INFINITY)?;
         let note = format!(
             "{truncated}; converged: none yet, since for Lennard-Jones the rate has not converged at the window edge (X = {}: {:.4e} +- {:.1e}; without truncation {:.4e} +- {:.1e}): bound-pair events (recombination, break-up) kick beyond any window",

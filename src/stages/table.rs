@@ -11,7 +11,6 @@ use super::moments::{MomentsStage, self_variance_at};
 use super::scan::ScanStage;
 use crate::config::KernelParams;
 use crate::contract::{self, Col, Pair, Rows, table};
-use crate::physics::potential::Potential;
 use crate::pipeline::code::{self, Code};
 use crate::pipeline::{Column, Input, InstanceId, Progress, Stage, StageError, Table};
 use crate::stats::Estimate;
@@ -150,15 +149,12 @@ impl Stage for TableStage {
                 Ok(row)
             })
             .collect::<Result<Vec<_>, StageError>>()?;
-        // The exponent (6 for Lennard-Jones: it sets the length unit) and kT/eps.
-        let exponent_and_theta = |r: &PotentialRow| match r.params.potential {
-            Potential::InversePower { n } => (n, f64::NAN),
-            Potential::LennardJones { theta } => (6.0, theta),
-        };
         let table = Rows::new(&rows)
             .with(POTENTIAL, |r| r.params.potential.id())
-            .with(N, |r| exponent_and_theta(r).0)
-            .with(THETA, |r| exponent_and_theta(r).1)
+            .with(N, |r| r.params.potential.family().length_exponent())
+            .with(THETA, |r| {
+                r.params.potential.family().theta().unwrap_or(f64::NAN)
+            })
             .estimate(A_N, |r| r.a_n)
             .estimate(A_N_UNTRUNCATED, |r| r.a_n_untruncated)
             .estimate(ALPHA, |r| r.shape[0])

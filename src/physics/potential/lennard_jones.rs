@@ -1,0 +1,93 @@
+//! The Lennard-Jones potential `U = eps ((l0/d)^12 - (l0/d)^6)`, scaled
+//! `U/kT = theta x^-12 - x^-6` with `theta = kT/eps` and `l = l0 (eps/kT)^(1/6)`
+//! (physics.md §1): a well of depth `1 / (4 theta)` that binds pairs.
+
+use serde::{Deserialize, Serialize};
+
+use super::{Family, PairPotential};
+use crate::linalg::simpson_weight;
+use crate::physics::quasi_random::standard_normal_cdf;
+
+/// Lennard-Jones `U = theta x^-12 - x^-6` with `theta = kT / eps`
+/// (physics.md §1: length unit `l = l0 (eps/kT)^(1/6)`).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LennardJones {
+    /// `theta = kT / eps`.
+    pub theta: f64,
+}
+
+impl PairPotential for LennardJones {
+    fn energy(&self, x: f64) -> f64 {
+        let inverse6 = x.recip().powi(6);
+        (self.theta * inverse6 - 1.0) * inverse6
+    }
+    fn force(&self, x: f64) -> f64 {
+        let inverse = x.recip();
+        let inverse6 = inverse.powi(6);
+        (12.0 * self.theta * inverse6 - 6.0) * inverse6 * inverse
+    }
+    fn tail_integral(&self, x: f64) -> f64 {
+        let inverse = x.recip();
+        let inverse5 = inverse.powi(5);
+        (self.theta * inverse.powi(6) / 11.0 - 0.2) * inverse5
+    }
+    /// The minimum sits at `x^6 = 2 theta` with `U = -1 / (4 theta)`.
+    fn well_depth(&self) -> f64 {
+        0.25 / self.theta
+    }
+    /// Each of the two terms is below `level / 2` beyond this separation.
+    fn range(&self, level: f64) -> f64 {
+        libm::pow(2.0 * self.theta / level, 1.0 / 12.0).max(libm::pow(2.0 / level, 1.0 / 6.0))
+    }
+}
+
+impl Family for LennardJones {
+    fn id(&self) -> String {
+        format!("lj-{}", self.theta)
+    }
+    fn label(&self) -> String {
+        format!("LJ θ = {}", self.theta)
+    }
+    /// The attractive `x^-6` tail sets the length unit.
+    fn length_exponent(&self) -> f64 {
+        6.0
+    }
+    fn theta(&self) -> Option<f64> {
+        Some(self.theta)
+    }
+    fn has_well(&self) -> bool {
+        true
+    }
+    /// Length `K_b = int_(U<0) exp(-U(x)) erf(sqrt(-U(x))) dx`, in `l`: the
+    /// phase-space weight of a bound pair. In a dilute thermal gas a neighbour
+    /// gap lies at `x` with density `rho exp(-U(x))` and its relative velocity
+    /// `w ~ N(0, 2)` binds it (`w^2/4 + U < 0`) with probability
+    /// `erf(sqrt(-U))`, so a fraction `rho K_b (1 + O(rho l))` of the gaps is
+    /// bound. Composite Simpson over `s` with `x = x0 / (1 - s^2)` (`U(x0) = 0`),
+    /// which makes the integrand smooth at both ends.
+    fn bound_pair_length(&self) -> f64 {
+        const INTERVALS: usize = 4000;
+        let zero = libm::pow(self.theta, 1.0 / 6.0);
+        let integrand = |s: f64| {
+            let y = (1.0 - s * s) / zero;
+            if y <= 0.0 {
+                return 0.0;
+            }
+            let binding = -self.energy(y.recip()).min(0.0);
+            let erf = 1.0 - 2.0 * standard_normal_cdf(-(2.0 * binding).sqrt());
+            libm::exp(binding) * erf * 2.0 * s / (zero * y * y)
+        };
+        let h = 1.0 / INTERVALS as f64;
+        let sum: f64 = (0..=INTERVALS)
+            .map(|k| simpson_weight(k, INTERVALS) * integrand(k as f64 * h))
+            .sum();
+        sum * h / 3.0
+    }
+    fn is_integrable(&self) -> bool {
+        false
+    }
+    fn ring_obstacle(&self) -> Option<String> {
+        None
+    }
+}
