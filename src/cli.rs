@@ -11,11 +11,9 @@ use crate::bench::{
     self, BalanceBenchOptions, KernelBenchOptions, MdBenchOptions, StudySettings,
     WorkPrecisionOptions,
 };
-use ternary::config::{
-    MAX_EXPONENT, MAX_GAS_DENSITY, MAX_RING_ENCOUNTERS, SlurmConfig, Study, THETA_RANGE, compact,
-};
+use ternary::config::{MAX_GAS_DENSITY, MAX_RING_ENCOUNTERS, SlurmConfig, Study, compact};
 use ternary::export::{self, ExportOptions};
-use ternary::physics::potential::Potential;
+use ternary::physics::potential::{InversePower, LennardJones, Potential};
 use ternary::physics::units::{Mass, PhysicalGas, ring_density_per_um};
 use ternary::pipeline::Stage;
 use ternary::pipeline::executor::{self, Action, Freshness, RunOptions, Verbosity};
@@ -324,25 +322,16 @@ fn bench_study(config: &Path) -> Result<StudySettings> {
     Ok(StudySettings::of(study.as_ref()))
 }
 
-/// A Lennard-Jones `theta = kT/eps` within `THETA_RANGE`.
+/// A Lennard-Jones `theta = kT/eps` the family accepts.
 fn theta(text: &str) -> Result<f64, String> {
     let value: f64 = text.parse().map_err(|e| format!("{e}"))?;
-    let [low, high] = THETA_RANGE;
-    if (low..=high).contains(&value) {
-        Ok(value)
-    } else {
-        Err(format!("theta = {value} is outside [{low}, {high}]"))
-    }
+    Ok(LennardJones::new(value)?.theta)
 }
 
-/// An inverse-power exponent in (1, 100].
+/// An inverse-power exponent the family accepts.
 fn exponent(text: &str) -> Result<f64, String> {
     let value: f64 = text.parse().map_err(|e| format!("{e}"))?;
-    if value > 1.0 && value <= MAX_EXPONENT {
-        Ok(value)
-    } else {
-        Err(format!("n = {value} is outside (1, {MAX_EXPONENT}]"))
-    }
+    Ok(InversePower::new(value)?.n)
 }
 
 /// Refuses a bench ring that is not dilute or would take absurdly long, by the

@@ -111,7 +111,7 @@ pub fn export(
             study.file.display()
         );
     }
-    let entries = selected_entries(store, plan, options)?;
+    let entries = selected_entries(study, store, plan, options)?;
     let staging = prepare_target(dir)?;
     let placed =
         write_bundle(study, store, plan, &entries, &staging.dir).and_then(|()| staging.place(dir));
@@ -243,19 +243,18 @@ fn remove_dead_staging(dir: &Path, prefix: &str) -> Result<()> {
 
 /// The tables of the selected, fresh instances, in plan order.
 fn selected_entries(
+    study: &Study,
     store: &Store,
     plan: &[Box<dyn Stage>],
     options: &ExportOptions,
 ) -> Result<Vec<Entry>> {
     executor::check_stage_names(plan, &options.stages).map_err(anyhow::Error::msg)?;
+    let known_potentials: Vec<String> = study.potentials().iter().map(|p| p.id()).collect();
+    // The potential an instance is computed for: its name's first part.
     let potential_of = |instance: &str| -> Option<String> {
         let id = instance.split('_').next().unwrap_or(instance);
-        (id.starts_with("ipp-") || id.starts_with("lj-")).then(|| id.to_string())
+        known_potentials.iter().find(|known| *known == id).cloned()
     };
-    let known_potentials: Vec<String> = plan
-        .iter()
-        .filter_map(|s| potential_of(&s.id().instance))
-        .collect();
     if let Some(unknown) = options
         .potentials
         .iter()

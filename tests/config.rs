@@ -6,7 +6,7 @@ use std::collections::{BTreeMap, BTreeSet};
 
 use serde_json::Value;
 use ternary::config::{Config, Study};
-use ternary::physics::potential::Potential;
+use ternary::physics::potential::{FAMILIES, Potential};
 
 /// A study that sets every optional table once (overrides, per-potential
 /// points, launch pairs, rings, gases), so that every key appears.
@@ -221,7 +221,9 @@ fn same(readme: &Value, schema: &Value) -> bool {
 
 #[test]
 fn every_key_has_a_readme_row_and_every_row_a_key() {
-    let schema: BTreeSet<String> = leaves(EVERY_KEY).into_keys().collect();
+    let mut schema: BTreeSet<String> = leaves(EVERY_KEY).into_keys().collect();
+    // `[potentials]` holds one list per family, whichever the sample lists.
+    schema.extend(FAMILIES.iter().map(|f| format!("potentials.{}", f.key)));
     let documented: BTreeSet<String> = readme_rows().into_iter().flat_map(|r| r.keys).collect();
     let undocumented: Vec<&String> = schema.difference(&documented).collect();
     let unknown: Vec<&String> = documented.difference(&schema).collect();
@@ -457,6 +459,16 @@ fn potentials_section_rejects_bad_values() {
             "inverse_power = [2, 6]",
             "inverse_power = [2, 6]\nbogus = 1",
             "potentials.bogus",
+        ),
+        (
+            "inverse_power = [2, 6]",
+            "inverse_power = [2, 6]\nmorse_like = [1.0]",
+            "potentials.morse_like",
+        ),
+        (
+            "inverse_power = [2, 6]",
+            "inverse_power = [2, \"six\"]",
+            "potentials.inverse_power[1]",
         ),
     ]);
 }

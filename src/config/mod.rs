@@ -59,7 +59,7 @@ pub use md::{
     MAX_MD_RUNS, MAX_MD_SAMPLES, MAX_NEIGHBOURS, MAX_RING_ENCOUNTERS, MdConfig, MdParams,
     MdSystemConfig,
 };
-pub use potentials::{MAX_EXPONENT, PotentialsConfig, THETA_RANGE};
+pub use potentials::PotentialsConfig;
 pub use publication::{AuthorConfig, LICENSES, PublicationConfig, license_url};
 pub use scan::{
     MAX_SCAN_LAUNCHES, MAX_SCAN_POINTS, MAX_SCAN_SCENES, NamedLaunch, ScanConfig, ScanGrid,

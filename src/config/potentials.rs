@@ -1,83 +1,57 @@
-//! `[potentials]`: the pair potentials of the study.
+//! `[potentials]`: the pair potentials of the study, one list per family
+//! (`inverse_power = [2, 6]`, `lennard_jones = [0.1]`); each family says
+//! how it is listed ([`FAMILIES`]).
+
+use std::collections::BTreeMap;
 
 use serde::{Deserialize, Serialize};
 
-use super::check::{Invalid, check, check_unique, compact};
-use crate::physics::potential::Potential;
+use super::check::{Invalid, check, check_unique};
+use crate::physics::potential::{FAMILIES, Potential};
 
-/// `[potentials]`: one potential per listed value.
+/// `[potentials]`: per family key, one potential per listed value.
 #[derive(Clone, Debug, Default, Deserialize, Serialize)]
-#[serde(deny_unknown_fields)]
-pub struct PotentialsConfig {
-    /// Exponents `n > 1` of inverse power laws `U = eps (l0/d)^n`.
-    #[serde(default)]
-    pub inverse_power: Vec<f64>,
-    /// `theta = kT/eps > 0` of Lennard-Jones potentials.
-    #[serde(default)]
-    pub lennard_jones: Vec<f64>,
-}
+#[serde(transparent)]
+pub struct PotentialsConfig(BTreeMap<String, Vec<serde_json::Value>>);
 
 impl PotentialsConfig {
-    /// One potential per listed value, inverse power laws first, in file order.
-    fn list(&self) -> Vec<Potential> {
-        let inverse = self
-            .inverse_power
-            .iter()
-            .map(|&n| Potential::inverse_power(n));
-        let lj = self
-            .lennard_jones
-            .iter()
-            .map(|&theta| Potential::lennard_jones(theta));
-        inverse.chain(lj).collect()
-    }
-}
-
-/// Largest inverse-power exponent `n`.
-pub const MAX_EXPONENT: f64 = 100.0;
-
-/// Range of Lennard-Jones `theta = kT/eps`: below it nearly every pair is
-/// bound, above it the well does not matter. With `n` in `(1, MAX_EXPONENT]`
-/// this bounds every potential id (which names files) to 24 characters.
-pub const THETA_RANGE: [f64; 2] = [1e-3, 1e3];
-
-impl PotentialsConfig {
-    /// Checks every value and returns the potentials, inverse power laws
-    /// first, in file order.
+    /// Checks every value and returns the potentials, family by family in
+    /// the order of [`FAMILIES`] (inverse power laws first), each family's
+    /// in file order.
     pub(super) fn resolve(&self) -> Result<Vec<Potential>, Invalid> {
-        let potentials = self;
+        if let Some(unknown) = self
+            .0
+            .keys()
+            .find(|key| FAMILIES.iter().all(|family| family.key != key.as_str()))
+        {
+            let known: Vec<&str> = FAMILIES.iter().map(|family| family.key).collect();
+            return Err((
+                format!("potentials.{unknown}"),
+                format!("is no potential family; known: {}", known.join(", ")),
+            ));
+        }
+        let examples: Vec<String> = FAMILIES
+            .iter()
+            .map(|family| format!("`{}`", family.example))
+            .collect();
         check(
-            !potentials.inverse_power.is_empty() || !potentials.lennard_jones.is_empty(),
+            self.0.values().any(|values| !values.is_empty()),
             "potentials",
-            "lists no potential: give `inverse_power = [6]` or `lennard_jones = [1.0]`",
+            format!("lists no potential: give {}", examples.join(" or ")),
         )?;
-        for (k, &n) in potentials.inverse_power.iter().enumerate() {
-            check(
-                n > 1.0 && n <= MAX_EXPONENT,
-                format!("potentials.inverse_power[{k}]"),
-                format!(
-                    "n = {} is outside (1, {MAX_EXPONENT}] (the potential tail must be integrable; steeper walls are hard spheres)",
-                    compact(n)
-                ),
-            )?;
+        let mut potentials = Vec::new();
+        for family in &FAMILIES {
+            let values = self.0.get(family.key).map_or(&[][..], Vec::as_slice);
+            let key = |k: usize| format!("potentials.{}[{k}]", family.key);
+            let listed = values
+                .iter()
+                .enumerate()
+                .map(|(k, value)| (family.potential)(value.clone()).map_err(|e| (key(k), e)))
+                .collect::<Result<Vec<Potential>, Invalid>>()?;
+            let ids: Vec<String> = listed.iter().map(Potential::id).collect();
+            check_unique(&ids, key)?;
+            potentials.extend(listed);
         }
-        for (k, &theta) in potentials.lennard_jones.iter().enumerate() {
-            check(
-                (THETA_RANGE[0]..=THETA_RANGE[1]).contains(&theta),
-                format!("potentials.lennard_jones[{k}]"),
-                format!(
-                    "theta = kT/eps = {} is outside [{}, {}]",
-                    compact(theta),
-                    THETA_RANGE[0],
-                    THETA_RANGE[1]
-                ),
-            )?;
-        }
-        check_unique(&potentials.inverse_power, |k| {
-            format!("potentials.inverse_power[{k}]")
-        })?;
-        check_unique(&potentials.lennard_jones, |k| {
-            format!("potentials.lennard_jones[{k}]")
-        })?;
-        Ok(self.list())
+        Ok(potentials)
     }
 }

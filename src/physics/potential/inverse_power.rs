@@ -4,7 +4,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::{Family, PairPotential, PotentialVisitor};
+use super::{Family, Listed, PairPotential, Potential, PotentialVisitor, parameters};
 
 /// Inverse power law `U = x^-n` with any real exponent `n > 1`.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -64,6 +64,29 @@ impl Family for InversePower {
 }
 
 impl InversePower {
+    /// Largest exponent: steeper walls are hard spheres.
+    pub const MAX_EXPONENT: f64 = 100.0;
+
+    /// How `[potentials]` lists inverse power laws: by exponent.
+    pub const LISTED: Listed = Listed {
+        key: "inverse_power",
+        example: "inverse_power = [6]",
+        potential: |value| Ok(Potential::InversePower(Self::new(parameters(value)?)?)),
+    };
+
+    /// The inverse power law of exponent `n` in `(1, MAX_EXPONENT]`: the
+    /// potential tail must be integrable.
+    pub fn new(n: f64) -> Result<InversePower, String> {
+        if n > 1.0 && n <= Self::MAX_EXPONENT {
+            Ok(InversePower { n })
+        } else {
+            Err(format!(
+                "n = {n} is outside (1, {}] (the potential tail must be integrable; steeper walls are hard spheres)",
+                Self::MAX_EXPONENT
+            ))
+        }
+    }
+
     /// Calls `visitor` with this potential; the study's even exponents
     /// 2..=12 get compile-time powers.
     pub fn visit<V: PotentialVisitor>(self, visitor: V) -> V::Output {

@@ -4,7 +4,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::{Family, PairPotential};
+use super::{Family, Listed, PairPotential, Potential, parameters};
 use crate::linalg::simpson_weight;
 use crate::physics::quasi_random::standard_normal_cdf;
 
@@ -39,6 +39,31 @@ impl PairPotential for LennardJones {
     /// Each of the two terms is below `level / 2` beyond this separation.
     fn range(&self, level: f64) -> f64 {
         libm::pow(2.0 * self.theta / level, 1.0 / 12.0).max(libm::pow(2.0 / level, 1.0 / 6.0))
+    }
+}
+
+impl LennardJones {
+    /// Range of `theta = kT/eps`: below it nearly every pair is bound, above
+    /// it the well does not matter.
+    pub const THETA_RANGE: [f64; 2] = [1e-3, 1e3];
+
+    /// How `[potentials]` lists Lennard-Jones potentials: by `theta`.
+    pub const LISTED: Listed = Listed {
+        key: "lennard_jones",
+        example: "lennard_jones = [1.0]",
+        potential: |value| Ok(Potential::LennardJones(Self::new(parameters(value)?)?)),
+    };
+
+    /// The Lennard-Jones potential at `theta = kT/eps` within `THETA_RANGE`.
+    pub fn new(theta: f64) -> Result<LennardJones, String> {
+        let [low, high] = Self::THETA_RANGE;
+        if (low..=high).contains(&theta) {
+            Ok(LennardJones { theta })
+        } else {
+            Err(format!(
+                "theta = kT/eps = {theta} is outside [{low}, {high}]"
+            ))
+        }
     }
 }
 

@@ -56,6 +56,26 @@ pub trait Family {
     fn ring_obstacle(&self) -> Option<String>;
 }
 
+/// A family as a study's `[potentials]` section lists it: the key, and how
+/// one listed value (a number or a table of the family's parameters) becomes
+/// a potential.
+pub struct Listed {
+    /// Key under `[potentials]`, e.g. `inverse_power`.
+    pub key: &'static str,
+    /// An entry that lists one potential, for messages: `inverse_power = [6]`.
+    pub example: &'static str,
+    /// The potential one listed value describes, or why the value is refused.
+    pub potential: fn(serde_json::Value) -> Result<Potential, String>,
+}
+
+/// Every family, in the order a study lists its potentials.
+pub const FAMILIES: [Listed; 2] = [InversePower::LISTED, LennardJones::LISTED];
+
+/// The listed parameters of a family, or the deserializer's complaint.
+fn parameters<T: serde::de::DeserializeOwned>(value: serde_json::Value) -> Result<T, String> {
+    serde_json::from_value(value).map_err(|e| e.to_string())
+}
+
 /// A pair potential as configured by a study; its serialized form (`kind`
 /// and the family's parameters) enters the keys of every stage it reaches.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
