@@ -344,7 +344,7 @@ fn check_md_bench(options: &MdBenchOptions) -> Result<()> {
         mass: Mass::ElectronMasses(1.0),
         density_per_um: ring_density_per_um(options.particles as u32, options.radius_um),
     };
-    let density = gas.scaled_density(6.0);
+    let density = gas.scaled_density(Some(6.0));
     if density > MAX_GAS_DENSITY {
         bail!(
             "--radius-um {} with --particles {} and --kt-ev {} gives rho*l = {density:.3e}, above {MAX_GAS_DENSITY}: the ring is not dilute",

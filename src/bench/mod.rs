@@ -929,9 +929,9 @@ pub fn md(options: &MdBenchOptions) -> Result<String, String> {
         mass: Mass::ElectronMasses(1.0),
         density_per_um: 0.0,
     };
-    let length = gas.length_unit_um(6.0);
+    let length = gas.length_unit_um(Some(6.0));
     let circumference = 2.0 * std::f64::consts::PI * options.radius_um / length;
-    let duration = options.final_time_ns / gas.time_unit_ns(6.0);
+    let duration = options.final_time_ns / gas.time_unit_ns(Some(6.0));
     let forces = RingForces {
         potential: InverseIntegerPower::<6>,
         circumference,

@@ -254,8 +254,16 @@ pub struct TableSpec {
 impl TableSpec {
     /// The table of these columns, with its description.
     pub fn table(&self, columns: Vec<Column>) -> Result<Table, TableError> {
-        Ok(Table::new(self.name, columns)?
-            .with_metadata("ternary.description", self.description.into()))
+        self.described(columns, self.description)
+    }
+
+    /// The table of these columns with a description composed at run time
+    /// (a figure's, which names what it draws).
+    pub fn described(&self, columns: Vec<Column>, description: &str) -> Result<Table, TableError> {
+        Ok(
+            Table::new(self.name, columns)?
+                .with_metadata("ternary.description", description.into()),
+        )
     }
 
     /// This table of `input`.
@@ -327,6 +335,11 @@ impl<'r, R> Rows<'r, R> {
     /// The table `spec` of these columns.
     pub fn table(self, spec: &TableSpec) -> Result<Table, TableError> {
         spec.table(self.columns)
+    }
+
+    /// The table of these rows with a description composed at run time.
+    pub fn described(self, spec: &TableSpec, description: &str) -> Result<Table, TableError> {
+        spec.described(self.columns, description)
     }
 }
 

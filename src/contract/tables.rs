@@ -1700,8 +1700,9 @@ pub mod table {
         "n",
         "1",
         "exponent of the inverse power law (6 for Lennard-Jones: sets the length unit)",
-    );
-    /// Lennard-Jones temperature.
+    )
+    .or_null("a family whose length unit does not scale with kT (Morse: l = 1/a)");
+    /// Temperature of a family with a well.
     pub const THETA: Col<f64> = Col::f64("theta", "1", "kT/eps of Lennard-Jones")
         .or_null("an inverse power law: no Lennard-Jones temperature");
     /// `a_n`.

@@ -24,9 +24,16 @@ pub enum Figure {
         /// Legend label of each kernel input.
         labels: Vec<String>,
     },
-    /// `G(0 -> u)` of every Lennard-Jones `theta = kT/eps` in scaled units
-    /// (paper: scaling holds at low `T`, breaks at high `T`).
-    KernelsLennardJones {
+    /// `G(0 -> u)` of every `theta = kT/eps` of one family with a well, in
+    /// scaled units (paper, Lennard-Jones: scaling holds at low `T`, breaks
+    /// at high `T`).
+    KernelsAtTheta {
+        /// The family's name (`Lennard-Jones`).
+        family: String,
+        /// Its id prefix, which names the figure (`kernels_lj`).
+        prefix: String,
+        /// Its length unit (`l = l0 (eps/kT)^(1/6)`).
+        unit: String,
         /// Legend label of each kernel input.
         labels: Vec<String>,
     },
@@ -136,7 +143,7 @@ impl Figure {
     pub fn name(&self) -> String {
         match self {
             Figure::KernelsEveryN { .. } => "kernels".into(),
-            Figure::KernelsLennardJones { .. } => "kernels_lj".into(),
+            Figure::KernelsAtTheta { prefix, .. } => format!("kernels_{prefix}"),
             Figure::KernelFit { id, .. } => format!("kernel_fit_{id}"),
             Figure::Rates { id, .. } => format!("rates_{id}"),
             Figure::MdBoltzmann { ring } => format!("md_boltzmann_{ring}"),
@@ -152,46 +159,46 @@ impl Figure {
     }
 
     /// What the figure shows (its table's description).
-    pub fn description(&self) -> &'static str {
+    pub fn description(&self) -> String {
         match self {
             Figure::KernelsEveryN { .. } => {
-                "G(0 -> u) of every inverse power law (u' = 0, dilute) against u - u' > 0, log axes, +- standard error; bins grouped 20 per decade, groups with relative error above 0.5 left out"
+                "G(0 -> u) of every inverse power law (u' = 0, dilute) against u - u' > 0, log axes, +- standard error; bins grouped 20 per decade, groups with relative error above 0.5 left out".into()
             }
-            Figure::KernelsLennardJones { .. } => {
-                "G(0 -> u) of every Lennard-Jones theta = kT/eps (u' = 0, dilute, units of l = l0 (eps/kT)^(1/6)) against u - u' > 0, log axes, +- standard error; bins grouped 20 per decade, groups with relative error above 0.5 left out"
+            Figure::KernelsAtTheta { family, unit, .. } => {
+                format!("G(0 -> u) of every {family} theta = kT/eps (u' = 0, dilute, units of {unit}) against u - u' > 0, log axes, +- standard error; bins grouped 20 per decade, groups with relative error above 0.5 left out")
             }
             Figure::KernelFit { .. } => {
-                "G(0 -> u) against u - u' > 0, +- standard error, with the fitted shape alpha x^-beta exp(-x^2 / 2 sigma^2); bars whose lower end is at or below zero are drawn open downward (an arrow to the frame's bottom)"
+                "G(0 -> u) against u - u' > 0, +- standard error, with the fitted shape alpha x^-beta exp(-x^2 / 2 sigma^2); bars whose lower end is at or below zero are drawn open downward (an arrow to the frame's bottom)".into()
             }
             Figure::Rates { .. } => {
-                "self variance rate D2 (a) and drift D1 with the Fokker-Planck drift (D2' - u D2)/2 (b) against u'"
+                "self variance rate D2 (a) and drift D1 with the Fokker-Planck drift (D2' - u D2)/2 (b) against u'".into()
             }
             Figure::MdBoltzmann { .. } => {
-                "h(u, t_f) of a ring: the Boltzmann master equation against MD, tagged particles (a) and the published estimator (b)"
+                "h(u, t_f) of a ring: the Boltzmann master equation against MD, tagged particles (a) and the published estimator (b)".into()
             }
             Figure::Truncation { .. } => {
-                "self variance rate a_n(X) of the kernel truncated at |u - u'| <= X, with the paper's X = 0.04"
+                "self variance rate a_n(X) of the kernel truncated at |u - u'| <= X, with the paper's X = 0.04".into()
             }
             Figure::Kicks { .. } => {
-                "final velocity u1f of the special particle (u1 = 0) against the launch delay, per scanned launch pair, +- error bound"
+                "final velocity u1f of the special particle (u1 = 0) against the launch delay, per scanned launch pair, +- error bound".into()
             }
             Figure::Collapse { .. } => {
-                "tagged h(u, t_f) of rings with one N at different rho and T and the same rho^2 l v_th t_f (the rho^2 T^(1/2 - 1/n) collapse), with the Boltzmann h"
+                "tagged h(u, t_f) of rings with one N at different rho and T and the same rho^2 l v_th t_f (the rho^2 T^(1/2 - 1/n) collapse), with the Boltzmann h".into()
             }
             Figure::Evolution { .. } => {
-                "tagged particle's h(u, t) relaxing to f0 (a, log scale), the early variance of h with its closed form t kappa_2 (b), and the early h at each of evolve.early_times scaled to unit variance against the standard normal (c): a cusp from the kernel at first, the central limit's Gaussian by t ~ 1e-2 / Gamma; bars and bands whose lower end is at or below zero are drawn open downward (to the frame's bottom)"
+                "tagged particle's h(u, t) relaxing to f0 (a, log scale), the early variance of h with its closed form t kappa_2 (b), and the early h at each of evolve.early_times scaled to unit variance against the standard normal (c): a cusp from the kernel at first, the central limit's Gaussian by t ~ 1e-2 / Gamma; bars and bands whose lower end is at or below zero are drawn open downward (to the frame's bottom)".into()
             }
             Figure::FiniteSize => {
-                "MD / Boltzmann window variance at t_f against rho l, one series per N (drawn side by side: N = 41, 81, 161 at one rho l are moved apart by 1.2% of the axis), tagged (a) and thermal (b) estimators; the rings at the study's common rho^2 l v_th t_f (others, such as a ring's earlier time, are in the table, not drawn)"
+                "MD / Boltzmann window variance at t_f against rho l, one series per N (drawn side by side: N = 41, 81, 161 at one rho l are moved apart by 1.2% of the axis), tagged (a) and thermal (b) estimators; the rings at the study's common rho^2 l v_th t_f (others, such as a ring's earlier time, are in the table, not drawn)".into()
             }
             Figure::MdTimes { .. } => {
-                "h(u, t) of one ring at several times: Boltzmann (band) and MD, tagged particles (markers)"
+                "h(u, t) of one ring at several times: Boltzmann (band) and MD, tagged particles (markers)".into()
             }
             Figure::KernelsAtDensity { .. } => {
-                "G(0 -> u) in the dilute limit and at finite rho l with the paper's launch rule (exp(-r |delay|) in an observation region of length L: an artifact of that algorithm, not the gas's density dependence) against u - u' > 0, log axes, +- standard error (a); each against the dilute kernel (b), errors combined as if independent (the kernels share their scenes: an upper bound); bins grouped 20 per decade, groups with relative error above 0.5 left out"
+                "G(0 -> u) in the dilute limit and at finite rho l with the paper's launch rule (exp(-r |delay|) in an observation region of length L: an artifact of that algorithm, not the gas's density dependence) against u - u' > 0, log axes, +- standard error (a); each against the dilute kernel (b), errors combined as if independent (the kernels share their scenes: an upper bound); bins grouped 20 per decade, groups with relative error above 0.5 left out".into()
             }
             Figure::KernelsAtUPrime { .. } => {
-                "G(u' -> u) at each u' (dilute) against |u - u'| on both sides of u', log axes, +- standard error; bins grouped 20 per decade, groups with relative error above 0.5 left out"
+                "G(u' -> u) at each u' (dilute) against |u - u'| on both sides of u', log axes, +- standard error; bins grouped 20 per decade, groups with relative error above 0.5 left out".into()
             }
         }
     }
@@ -202,7 +209,7 @@ impl Figure {
         let log = Axis::log;
         let panel = Panel::new;
         let panels = match self {
-            Figure::KernelsEveryN { .. } | Figure::KernelsLennardJones { .. } => vec![panel(
+            Figure::KernelsEveryN { .. } | Figure::KernelsAtTheta { .. } => vec![panel(
                 "kernels",
                 log(DU_AXIS),
                 log(G_AXIS),
@@ -334,7 +341,7 @@ impl Figure {
     /// The figure's long table, built with polars from its inputs' tables.
     pub fn frame(&self, inputs: &[Input]) -> Result<DataFrame, StageError> {
         match self {
-            Figure::KernelsEveryN { labels } | Figure::KernelsLennardJones { labels } => {
+            Figure::KernelsEveryN { labels } | Figure::KernelsAtTheta { labels, .. } => {
                 let parts = labels
                     .iter()
                     .zip(inputs)

@@ -225,15 +225,19 @@ pub fn points(frame: &DataFrame) -> Result<Vec<Point>, StageError> {
 pub struct FigureRows;
 
 impl FigureRows {
-    /// The figure table of `points`.
-    pub fn table(points: &[Point], spec: &TableSpec) -> Result<Table, StageError> {
+    /// The figure table of `points`, described as `description`.
+    pub fn table(
+        points: &[Point],
+        spec: &TableSpec,
+        description: &str,
+    ) -> Result<Table, StageError> {
         Ok(Rows::new(points)
             .with(PANEL, |p| p.panel.clone())
             .with(SERIES, |p| p.series.clone())
             .with(X, |p| p.x)
             .with(Y, |p| p.y)
             .with(Y_ERROR, |p| p.y_error)
-            .table(spec)?)
+            .described(spec, description)?)
     }
 
     /// The points of a figure table.

@@ -51,9 +51,12 @@ pub struct PhysicalGas {
 }
 
 impl PhysicalGas {
-    /// Length unit `l = l0 (eps/kT)^(1/n)`, um (`n` the length exponent).
-    pub fn length_unit_um(&self, length_exponent: f64) -> f64 {
-        self.l0_um * libm::pow(self.eps_ev / self.kt_ev, 1.0 / length_exponent)
+    /// Length unit `l = l0 (eps/kT)^(1/n)`, um (`n` the length exponent;
+    /// `l = l0` without one).
+    pub fn length_unit_um(&self, length_exponent: Option<f64>) -> f64 {
+        length_exponent.map_or(self.l0_um, |n| {
+            self.l0_um * libm::pow(self.eps_ev / self.kt_ev, 1.0 / n)
+        })
     }
 
     /// Thermal speed `v_th = sqrt(kT/m)`, um/ns (1 m/s = 1e-3 um/ns).
@@ -62,17 +65,17 @@ impl PhysicalGas {
     }
 
     /// Scaled density `rho l`.
-    pub fn scaled_density(&self, length_exponent: f64) -> f64 {
+    pub fn scaled_density(&self, length_exponent: Option<f64>) -> f64 {
         self.density_per_um * self.length_unit_um(length_exponent)
     }
 
     /// Time unit `l / v_th`, ns.
-    pub fn time_unit_ns(&self, length_exponent: f64) -> f64 {
+    pub fn time_unit_ns(&self, length_exponent: Option<f64>) -> f64 {
         self.length_unit_um(length_exponent) / self.thermal_speed_um_per_ns()
     }
 
     /// `Gamma = a rho^2 l v_th` in 1/ns for a rate `a` in units of `rho^2 l v_th`.
-    pub fn rate_per_ns(&self, scaled_rate: f64, length_exponent: f64) -> f64 {
+    pub fn rate_per_ns(&self, scaled_rate: f64, length_exponent: Option<f64>) -> f64 {
         scaled_rate
             * self.density_per_um.powi(2)
             * self.length_unit_um(length_exponent)
@@ -108,11 +111,13 @@ mod tests {
     fn published_gas_in_scaled_units() {
         let gas = published();
         assert!((gas.thermal_speed_um_per_ns() / 132.620_5 - 1.0).abs() < 1e-5);
-        let l = gas.length_unit_um(6.0);
+        let l = gas.length_unit_um(Some(6.0));
         let pair_energy_ev = gas.eps_ev * (gas.l0_um / l).powi(6);
         assert!((pair_energy_ev / gas.kt_ev - 1.0).abs() < 1e-14);
         // The time unit is l / v_th, and rho l v_th is a rate per ns.
-        assert!((gas.time_unit_ns(6.0) * gas.thermal_speed_um_per_ns() / l - 1.0).abs() < 1e-14);
+        assert!(
+            (gas.time_unit_ns(Some(6.0)) * gas.thermal_speed_um_per_ns() / l - 1.0).abs() < 1e-14
+        );
     }
 
     /// The published collapse (physics.md §7): `(rho, T, t_f)`,
@@ -129,13 +134,15 @@ mod tests {
             kt_ev: 8.0 * base.kt_ev,
             ..denser
         };
-        let exposure = |gas: &PhysicalGas, time_ns: f64| gas.rate_per_ns(1.0, 6.0) * time_ns;
+        let exposure = |gas: &PhysicalGas, time_ns: f64| gas.rate_per_ns(1.0, Some(6.0)) * time_ns;
         assert!((exposure(&denser, 3200.0) / exposure(&base, 12800.0) - 1.0).abs() < 1e-12);
         assert!((exposure(&hotter, 1600.0) / exposure(&base, 12800.0) - 1.0).abs() < 1e-12);
         let scaled = PhysicalGas {
             kt_ev: 64.0 * base.kt_ev,
             ..denser
         };
-        assert!((scaled.scaled_density(6.0) / base.scaled_density(6.0) - 1.0).abs() < 1e-12);
+        assert!(
+            (scaled.scaled_density(Some(6.0)) / base.scaled_density(Some(6.0)) - 1.0).abs() < 1e-12
+        );
     }
 }

@@ -8,7 +8,7 @@ use serde_json::{Value, json};
 use crate::config::{MdParams, Study};
 use crate::contract::{self, TableSpec};
 use crate::figures::{DILUTE, Figure, FigureRows, Size, frames, render};
-use crate::physics::potential::Potential;
+use crate::physics::potential::{Family, Potential};
 use crate::pipeline::code::{self, Code};
 use crate::pipeline::{Input, InstanceId, Progress, Stage, StageError, Table};
 
@@ -35,17 +35,18 @@ impl FiguresStage {
         FiguresStage { figure, inputs }
     }
 
-    fn spec(&self) -> TableSpec {
-        TableSpec {
-            stage: contract::figures::STAGE,
-            name: POINTS,
-            description: self.figure.description(),
-        }
-    }
+    /// The figure table's declaration; each table carries its own figure's
+    /// description.
+    const SPEC: TableSpec = TableSpec {
+        stage: contract::figures::STAGE,
+        name: POINTS,
+        description: "the points a figure draws",
+    };
 }
 
 /// The figures of a study whose inputs `plan` computes: kernels of every
-/// inverse power law with kicks and of every Lennard-Jones potential, and for `n = 6` (or the first such potential) the
+/// scale-free potential with kicks (the inverse power laws) and, per family
+/// with a temperature in its shape, of its every `theta`; for `n = 6` (or the first such potential) the
 /// kernel with its fit, the rates against `u'` and `a_n(X)`; MD against
 /// Boltzmann for the compared ring.
 pub fn figure_stages(study: &Study, plan: &[Box<dyn Stage>]) -> Vec<FiguresStage> {
@@ -59,8 +60,8 @@ pub fn figure_stages(study: &Study, plan: &[Box<dyn Stage>]) -> Vec<FiguresStage
         InstanceId::new(stage, &target_instance(&study.kernel_params(*p, 0.0, 0.0)))
     };
     let mut figures = Vec::new();
-    let (lennard_jones, inverse_power): (Vec<Potential>, Vec<Potential>) =
-        kicked.iter().partition(|p| p.family().has_well());
+    let (at_theta, scale_free): (Vec<Potential>, Vec<Potential>) =
+        kicked.iter().partition(|p| p.family().theta().is_some());
     let kernels = |potentials: &[Potential]| -> (Vec<String>, Vec<InstanceId>) {
         let labels = potentials.iter().map(|p| p.family().label()).collect();
         let inputs = potentials
@@ -69,16 +70,30 @@ pub fn figure_stages(study: &Study, plan: &[Box<dyn Stage>]) -> Vec<FiguresStage
             .collect();
         (labels, inputs)
     };
-    if !inverse_power.is_empty() {
-        let (labels, inputs) = kernels(&inverse_power);
+    if !scale_free.is_empty() {
+        let (labels, inputs) = kernels(&scale_free);
         figures.push(FiguresStage::new(Figure::KernelsEveryN { labels }, inputs));
     }
-    if !lennard_jones.is_empty() {
-        let (labels, inputs) = kernels(&lennard_jones);
-        figures.push(FiguresStage::new(
-            Figure::KernelsLennardJones { labels },
-            inputs,
-        ));
+    let mut families: Vec<&dyn Family> = Vec::new();
+    for p in &at_theta {
+        if families.iter().all(|f| f.name() != p.family().name()) {
+            families.push(p.family());
+        }
+    }
+    for family in families {
+        let members: Vec<Potential> = at_theta
+            .iter()
+            .filter(|p| p.family().name() == family.name())
+            .copied()
+            .collect();
+        let (labels, inputs) = kernels(&members);
+        let figure = Figure::KernelsAtTheta {
+            family: family.name().into(),
+            prefix: family.id().split('-').next().unwrap_or_default().into(),
+            unit: family.length_unit().into(),
+            labels,
+        };
+        figures.push(FiguresStage::new(figure, inputs));
     }
     let main = kicked
         .iter()
@@ -320,7 +335,8 @@ impl Stage for FiguresStage {
         progress.advance(1);
         let layout = serde_json::to_string(&self.figure.layout())
             .map_err(|error| StageError::Input(format!("figure layout: {error}")))?;
-        let table = FigureRows::table(&points, &self.spec())?.with_metadata(AXES, layout);
+        let table = FigureRows::table(&points, &Self::SPEC, &self.figure.description())?
+            .with_metadata(AXES, layout);
         Ok(vec![table])
     }
 

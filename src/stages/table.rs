@@ -151,7 +151,13 @@ impl Stage for TableStage {
             .collect::<Result<Vec<_>, StageError>>()?;
         let table = Rows::new(&rows)
             .with(POTENTIAL, |r| r.params.potential.id())
-            .with(N, |r| r.params.potential.family().length_exponent())
+            .with(N, |r| {
+                r.params
+                    .potential
+                    .family()
+                    .length_exponent()
+                    .unwrap_or(f64::NAN)
+            })
             .with(THETA, |r| {
                 r.params.potential.family().theta().unwrap_or(f64::NAN)
             })

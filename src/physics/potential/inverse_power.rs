@@ -39,8 +39,14 @@ impl Family for InversePower {
     fn label(&self) -> String {
         format!("n = {}", self.n)
     }
-    fn length_exponent(&self) -> f64 {
-        self.n
+    fn name(&self) -> &'static str {
+        "inverse power law"
+    }
+    fn length_unit(&self) -> &'static str {
+        "l = l0 (eps/kT)^(1/n)"
+    }
+    fn length_exponent(&self) -> Option<f64> {
+        Some(self.n)
     }
     fn theta(&self) -> Option<f64> {
         None

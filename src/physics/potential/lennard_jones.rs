@@ -74,9 +74,15 @@ impl Family for LennardJones {
     fn label(&self) -> String {
         format!("LJ θ = {}", self.theta)
     }
+    fn name(&self) -> &'static str {
+        "Lennard-Jones"
+    }
+    fn length_unit(&self) -> &'static str {
+        "l = l0 (eps/kT)^(1/6)"
+    }
     /// The attractive `x^-6` tail sets the length unit.
-    fn length_exponent(&self) -> f64 {
-        6.0
+    fn length_exponent(&self) -> Option<f64> {
+        Some(6.0)
     }
     fn theta(&self) -> Option<f64> {
         Some(self.theta)

@@ -37,9 +37,14 @@ pub trait Family {
     fn id(&self) -> String;
     /// Legend label of figures, e.g. `n = 6`.
     fn label(&self) -> String;
+    /// The family's name in prose, e.g. `Lennard-Jones`.
+    fn name(&self) -> &'static str;
+    /// The scaled length unit, e.g. `l = l0 (eps/kT)^(1/6)`.
+    fn length_unit(&self) -> &'static str;
     /// The exponent `n` of the length unit `l = l0 (eps/kT)^(1/n)`
-    /// (physics.md §1), and of the rate's scaling with temperature.
-    fn length_exponent(&self) -> f64;
+    /// (physics.md §1), and of the rate's scaling with temperature; `None`
+    /// when the length unit is the family's own `l0` (no scaling with `kT`).
+    fn length_exponent(&self) -> Option<f64>;
     /// `theta = kT / eps` when the potential's shape depends on temperature
     /// (a well's depth in `kT`); `None` for a scale-free family.
     fn theta(&self) -> Option<f64>;
@@ -176,8 +181,7 @@ mod tests {
 
     #[test]
     fn range_bounds_the_energy() {
-        let potentials = [LennardJones { theta: 0.05 }, LennardJones { theta: 10.0 }];
-        for potential in potentials {
+        fn bounded<P: PairPotential>(potential: P) {
             for &level in &[1e-3, 1e-8, 1e-14] {
                 let x = potential.range(level);
                 for k in 0..100 {
@@ -186,6 +190,8 @@ mod tests {
                 }
             }
         }
+        bounded(LennardJones { theta: 0.05 });
+        bounded(LennardJones { theta: 10.0 });
         assert!((InverseIntegerPower::<6>.range(1e-12) - 100.0).abs() < 1e-9);
     }
 
