@@ -470,6 +470,16 @@ fn potentials_section_rejects_bad_values() {
             "inverse_power = [2, \"six\"]",
             "potentials.inverse_power[1]",
         ),
+        (
+            "inverse_power = [2, 6]",
+            "inverse_power = [2, 6]\nmorse = [{ theta = 1.0, x0 = 2.0 }]",
+            "potentials.morse[0]",
+        ),
+        (
+            "inverse_power = [2, 6]",
+            "inverse_power = [2, 6]\nmorse = [{ theta = 1.0, d0 = 4.0 }]",
+            "potentials.morse[0]",
+        ),
     ]);
 }
 

@@ -2,7 +2,7 @@
 //! conservation laws, the integrable n = 2 case, mirror symmetry, agreement of
 //! independent integrators, and stress scenes.
 
-use ternary::physics::potential::Potential;
+use ternary::physics::potential::{Family, Morse, PairPotential, Potential};
 use ternary::physics::scan::LaunchPair;
 use ternary::physics::scan::thermal_scenes;
 use ternary::physics::scene::{Collision, EngineSettings, FreeLine, Method, Outcome, collide};
@@ -276,5 +276,49 @@ fn free_flight_skipping_agrees_with_integrating_through() {
                 }
             }
         }
+    }
+}
+
+/// Thermal scenes of a Morse gas (a well, a soft but high wall) conserve
+/// energy and momentum like Lennard-Jones ones, deep well and shallow.
+#[test]
+fn morse_shallow_and_deep_wells_conserve_energy() {
+    for (theta, x0) in [(0.2, 4.0), (5.0, 6.0)] {
+        let potential = Potential::Morse(Morse::new(theta, x0).expect("valid"));
+        for lines in thermal_scenes(300, 17) {
+            let collision = collide(&potential, &default_engine(), lines);
+            assert_conserved(&collision, &potential.id());
+        }
+    }
+}
+
+/// The Morse bound-pair length `K_b = int_(U<0) exp(-U) erf(sqrt(-U)) dx`
+/// (Simpson in the family's substitution) against a plain trapezoid over `x`
+/// with libm's `erf`: two independent quadratures of one integral.
+#[test]
+fn morse_bound_pair_length_agrees_with_a_direct_quadrature() {
+    for (theta, x0) in [(0.2, 4.0), (1.0, 4.0), (5.0, 6.0)] {
+        let morse = Morse::new(theta, x0).expect("valid");
+        let start = x0 - std::f64::consts::LN_2;
+        let steps = 2_000_000;
+        let h = 60.0 / f64::from(steps);
+        let integrand = |x: f64| {
+            let binding = -morse.energy(x).min(0.0);
+            libm::exp(binding) * libm::erf(binding.sqrt())
+        };
+        let direct: f64 = (0..=steps)
+            .map(|k| {
+                let weight = if k == 0 || k == steps { 0.5 } else { 1.0 };
+                weight * integrand(start + h * f64::from(k))
+            })
+            .sum::<f64>()
+            * h;
+        let simpson = morse.bound_pair_length();
+        // The trapezoid's error is O(h^2 f'') ~ 1e-9 here (the integrand has a
+        // square-root edge at the start, which costs O(h^1.5) ~ 1e-8).
+        assert!(
+            (simpson / direct - 1.0).abs() < 1e-6,
+            "theta = {theta}: {simpson} against {direct}"
+        );
     }
 }

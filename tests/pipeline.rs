@@ -976,3 +976,42 @@ fn run_leads_with_the_summary() {
     );
     assert!(details.contains("mono-energetic scans"), "{details}");
 }
+
+/// A family added as one file runs end to end: a Morse gas (a well, so its
+/// offsets are sampled) gets scan, collisions, kernel, moments, fit, its row
+/// of the a_n table and a kernels figure of its own, beside an inverse power
+/// law; its self variance rate, a sum of `(u - u')^2 G`, is positive.
+#[test]
+fn a_morse_gas_runs_end_to_end() {
+    let dir = workspace("morse");
+    let text = small_study("data")
+        .replace(
+            "inverse_power = [6]",
+            "inverse_power = [6]\nmorse = [{ theta = 1.0, x0 = 4.0 }]",
+        )
+        .replace(
+            "pilot_points = 0",
+            "pilot_points = 0\n\n[collisions.method_per_potential]\n\"morse-1-4\" = \"sampled\"",
+        );
+    let config = write_config(&dir, &text);
+    let output = ternary(&config, &["run"]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let out = stdout(&output);
+    for computed in [
+        "collisions[morse-1-4]",
+        "moments[morse-1-4_u0_rho0]",
+        "figures[kernels_morse]",
+    ] {
+        assert!(
+            out.lines()
+                .any(|l| l.starts_with(computed) && l.contains("computed")),
+            "{computed} not computed:\n{out}"
+        );
+    }
+    let row = out
+        .lines()
+        .find(|l| l.starts_with("morse-1-4 "))
+        .unwrap_or_else(|| panic!("no a_n row for morse-1-4:\n{out}"));
+    let a_n: f64 = row.split_whitespace().nth(1).unwrap().parse().unwrap();
+    assert!(a_n > 0.0, "{row}");
+}

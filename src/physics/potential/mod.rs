@@ -9,9 +9,11 @@ use serde::{Deserialize, Serialize};
 
 mod inverse_power;
 mod lennard_jones;
+mod morse;
 
 pub use inverse_power::{InverseIntegerPower, InversePower};
 pub use lennard_jones::LennardJones;
+pub use morse::Morse;
 
 /// A repulsive-core pair interaction `U(x)` between two particles at scaled
 /// separation `x > 0`.
@@ -74,7 +76,7 @@ pub struct Listed {
 }
 
 /// Every family, in the order a study lists its potentials.
-pub const FAMILIES: [Listed; 2] = [InversePower::LISTED, LennardJones::LISTED];
+pub const FAMILIES: [Listed; 3] = [InversePower::LISTED, LennardJones::LISTED, Morse::LISTED];
 
 /// The listed parameters of a family, or the deserializer's complaint.
 fn parameters<T: serde::de::DeserializeOwned>(value: serde_json::Value) -> Result<T, String> {
@@ -90,6 +92,8 @@ pub enum Potential {
     InversePower(InversePower),
     /// `U = eps ((l0/d)^12 - (l0/d)^6)`; scaled `U/kT = theta x^-12 - x^-6`.
     LennardJones(LennardJones),
+    /// `U = eps (1 - e^{-a (d - d0)})^2 - eps`; scaled with `l = 1/a`.
+    Morse(Morse),
 }
 
 impl Potential {
@@ -108,6 +112,7 @@ impl Potential {
         match self {
             Potential::InversePower(family) => family,
             Potential::LennardJones(family) => family,
+            Potential::Morse(family) => family,
         }
     }
 
@@ -121,6 +126,7 @@ impl Potential {
         match *self {
             Potential::InversePower(family) => family.visit(visitor),
             Potential::LennardJones(family) => visitor.visit(family),
+            Potential::Morse(family) => visitor.visit(family),
         }
     }
 }
@@ -167,6 +173,14 @@ mod tests {
         check_consistency(InverseIntegerPower::<12>);
         check_consistency(LennardJones { theta: 0.05 });
         check_consistency(LennardJones { theta: 10.0 });
+        check_consistency(Morse {
+            theta: 0.5,
+            x0: 4.0,
+        });
+        check_consistency(Morse {
+            theta: 20.0,
+            x0: 6.0,
+        });
     }
 
     #[test]
@@ -192,7 +206,28 @@ mod tests {
         }
         bounded(LennardJones { theta: 0.05 });
         bounded(LennardJones { theta: 10.0 });
+        bounded(Morse {
+            theta: 0.05,
+            x0: 4.0,
+        });
+        bounded(Morse {
+            theta: 500.0,
+            x0: 8.0,
+        });
         assert!((InverseIntegerPower::<6>.range(1e-12) - 100.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn morse_well_depth_is_minus_minimum_at_x0_and_low_walls_are_refused() {
+        let potential = Morse::new(0.5, 4.0).expect("a high wall");
+        assert!((potential.energy(potential.x0) + potential.well_depth()).abs() < 1e-15);
+        assert!(potential.force(potential.x0).abs() < 1e-15);
+        // U(0)/kT = (e^8 - 2 e^4) / 0.5 ~ 5852: the wall holds.
+        assert!(potential.energy(0.0) > 5000.0);
+        // x0 = 2 at kT = eps: U(0) = e^4 - 2 e^2 ~ 39.8 kT, below the 50 kT floor.
+        assert!(Morse::new(1.0, 2.0).unwrap_err().contains("wall"));
+        assert!(Morse::new(1.0, 3.0).is_ok());
+        assert!(Morse::new(1e4, 4.0).unwrap_err().contains("theta"));
     }
 
     #[test]
