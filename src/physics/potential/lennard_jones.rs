@@ -4,9 +4,9 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::{Family, Listed, PairPotential, Potential, parameters};
-use crate::linalg::simpson_weight;
-use crate::physics::quasi_random::standard_normal_cdf;
+use super::{
+    Family, Listed, PairPotential, Potential, bound_weight, parameters, simpson_on_unit_interval,
+};
 
 /// Lennard-Jones `U = theta x^-12 - x^-6` with `theta = kT / eps`
 /// (physics.md §1: length unit `l = l0 (eps/kT)^(1/6)`).
@@ -98,22 +98,15 @@ impl Family for LennardJones {
     /// bound. Composite Simpson over `s` with `x = x0 / (1 - s^2)` (`U(x0) = 0`),
     /// which makes the integrand smooth at both ends.
     fn bound_pair_length(&self) -> f64 {
-        const INTERVALS: usize = 4000;
         let zero = libm::pow(self.theta, 1.0 / 6.0);
-        let integrand = |s: f64| {
+        simpson_on_unit_interval(|s: f64| {
             let y = (1.0 - s * s) / zero;
             if y <= 0.0 {
                 return 0.0;
             }
             let binding = -self.energy(y.recip()).min(0.0);
-            let erf = 1.0 - 2.0 * standard_normal_cdf(-(2.0 * binding).sqrt());
-            libm::exp(binding) * erf * 2.0 * s / (zero * y * y)
-        };
-        let h = 1.0 / INTERVALS as f64;
-        let sum: f64 = (0..=INTERVALS)
-            .map(|k| simpson_weight(k, INTERVALS) * integrand(k as f64 * h))
-            .sum();
-        sum * h / 3.0
+            bound_weight(binding) * 2.0 * s / (zero * y * y)
+        })
     }
     fn is_integrable(&self) -> bool {
         false

@@ -7,6 +7,9 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::quasi_random::standard_normal_cdf;
+use crate::linalg::simpson_weight;
+
 mod inverse_power;
 mod lennard_jones;
 mod morse;
@@ -77,6 +80,27 @@ pub struct Listed {
 
 /// Every family, in the order a study lists its potentials.
 pub const FAMILIES: [Listed; 3] = [InversePower::LISTED, LennardJones::LISTED, Morse::LISTED];
+
+/// `exp(B) erf(sqrt(B))` for a pair at binding energy `B = -U >= 0` (in
+/// `kT`): the integrand of the bound-pair length `K_b` (the Boltzmann weight
+/// of the gap times the probability that a relative velocity `w ~ N(0, 2)`
+/// binds it, `w^2/4 < B`).
+fn bound_weight(binding: f64) -> f64 {
+    let erf = 1.0 - 2.0 * standard_normal_cdf(-(2.0 * binding).sqrt());
+    libm::exp(binding) * erf
+}
+
+/// Composite Simpson rule of `f` over `[0, 1]` with 4000 intervals: the
+/// bound-pair lengths' quadrature after a substitution that makes their
+/// integrands smooth.
+fn simpson_on_unit_interval(f: impl Fn(f64) -> f64) -> f64 {
+    const INTERVALS: usize = 4000;
+    let h = 1.0 / INTERVALS as f64;
+    let sum: f64 = (0..=INTERVALS)
+        .map(|k| simpson_weight(k, INTERVALS) * f(k as f64 * h))
+        .sum();
+    sum * h / 3.0
+}
 
 /// The listed parameters of a family, or the deserializer's complaint.
 fn parameters<T: serde::de::DeserializeOwned>(value: serde_json::Value) -> Result<T, String> {

@@ -7,9 +7,9 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::{Family, Listed, PairPotential, Potential, parameters};
-use crate::linalg::simpson_weight;
-use crate::physics::quasi_random::standard_normal_cdf;
+use super::{
+    Family, Listed, PairPotential, Potential, bound_weight, parameters, simpson_on_unit_interval,
+};
 
 /// Morse potential in scaled units.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -124,20 +124,12 @@ impl Family for Morse {
     /// / theta`, `dx = -2 ds / s`, and the integrand is smooth on `[0, 1]`
     /// (it tends to `8 / sqrt(pi theta)` at `s = 0`, the far tail).
     fn bound_pair_length(&self) -> f64 {
-        const INTERVALS: usize = 4000;
-        let integrand = |s: f64| {
+        simpson_on_unit_interval(|s: f64| {
             if s == 0.0 {
                 return 8.0 / (std::f64::consts::PI * self.theta).sqrt();
             }
-            let binding = 4.0 * s * s * (1.0 - s * s) / self.theta;
-            let erf = 1.0 - 2.0 * standard_normal_cdf(-(2.0 * binding).sqrt());
-            libm::exp(binding) * erf * 2.0 / s
-        };
-        let h = 1.0 / INTERVALS as f64;
-        let sum: f64 = (0..=INTERVALS)
-            .map(|k| simpson_weight(k, INTERVALS) * integrand(k as f64 * h))
-            .sum();
-        sum * h / 3.0
+            bound_weight(4.0 * s * s * (1.0 - s * s) / self.theta) * 2.0 / s
+        })
     }
     fn is_integrable(&self) -> bool {
         false
