@@ -122,6 +122,109 @@ impl GridEvolution {
     }
 }
 
+/// The moments of one process's `h` at one time (jackknife estimates).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ProcessMoments {
+    /// `sum_i h_i`.
+    pub number: Estimate,
+    /// `sum_i h_i u_i`, `v_th`.
+    pub momentum: Estimate,
+    /// `sum_i h_i u_i^2`, `v_th^2`.
+    pub second_moment: Estimate,
+    /// `sum_i h_i (u_i - u')^2`, `v_th^2`.
+    pub variance: Estimate,
+    /// The same within `|u_i - u'| <= reach`.
+    pub window_variance: Estimate,
+    /// `sum_i |h_i - h_eq,i|`: the L1 distance to the equilibrium.
+    pub distance: Estimate,
+}
+
+impl Process {
+    /// The moments of `h` at time index `k` on `grid`, the variances about
+    /// `u_prime` (all nodes and within `reach` of it).
+    pub fn moments(
+        &self,
+        grid: &VelocityGrid,
+        k: usize,
+        u_prime: f64,
+        reach: f64,
+    ) -> ProcessMoments {
+        let all = |h: &[f64]| grid.moments(h, 0.0, f64::INFINITY);
+        let estimate = |f: &dyn Fn(&[f64]) -> f64| self.states.estimate(k, f);
+        ProcessMoments {
+            number: estimate(&|h| all(h)[0]),
+            momentum: estimate(&|h| all(h)[1]),
+            second_moment: estimate(&|h| all(h)[2]),
+            variance: estimate(&|h| grid.moments(h, u_prime, f64::INFINITY)[2]),
+            window_variance: estimate(&|h| grid.moments(h, u_prime, reach)[2]),
+            distance: estimate(&|h| {
+                h.iter()
+                    .zip(&self.equilibrium)
+                    .map(|(a, b)| (a - b).abs())
+                    .sum()
+            }),
+        }
+    }
+}
+
+/// The size of the projection's effect on `h_full` at one time (node
+/// masses), against `h_full`'s statistical error.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ProjectionSizes {
+    /// L1 size of the clipping's change (jackknife).
+    pub clipping: Estimate,
+    /// L1 size of the weight frozen in the clipped modes (jackknife).
+    pub clipped: Estimate,
+    /// Number, momentum and second moment of the clipping's change (0 to
+    /// rounding).
+    pub moments: [Estimate; 3],
+    /// L1 size of the whole projection's change (jackknife).
+    pub projection: Estimate,
+    /// `sum_i sigma_i`: the L1 size of `h_full`'s statistical error
+    /// (jackknife `sigma_i` of node `i`'s mass).
+    pub error: f64,
+    /// The largest clipping change, clipped weight and projection change
+    /// over the full and leave-one-out estimates, over `error` (`None`
+    /// where the ratio is not finite: at `t = 0`, where `h` is exact and
+    /// `error` zero or of rounding size). Below 1: the projection moves `h`
+    /// by less than its error in every replicate.
+    pub over_error: [Option<f64>; 3],
+}
+
+/// `sum_i |x_i|`.
+fn l1(x: &[f64]) -> f64 {
+    x.iter().map(|v| v.abs()).sum()
+}
+
+impl ProjectionEffect {
+    /// The sizes at time index `k`, `states` those of `h_full`.
+    pub fn sizes(
+        &self,
+        grid: &VelocityGrid,
+        states: &Replicated<Vec<Vec<f64>>>,
+        k: usize,
+    ) -> ProjectionSizes {
+        let error: f64 = states.states(k).iter().map(|e| e.stderr).sum();
+        let moment = |p: usize| {
+            self.clipping
+                .estimate(k, |d| grid.moments(d, 0.0, f64::INFINITY)[p])
+        };
+        ProjectionSizes {
+            clipping: self.clipping.estimate(k, l1),
+            clipped: self.clipped.scalar(|part| l1(part)),
+            moments: [0, 1, 2].map(moment),
+            projection: self.projection.estimate(k, l1),
+            error,
+            over_error: [
+                self.clipping.largest(|d| l1(&d[k])),
+                self.clipped.largest(|part| l1(part)),
+                self.projection.largest(|d| l1(&d[k])),
+            ]
+            .map(|change| Some(change / error).filter(|ratio| ratio.is_finite())),
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -231,6 +334,68 @@ mod tests {
     /// `sqrt(sum x^2)`.
     fn norm_2(x: impl Iterator<Item = f64>) -> f64 {
         x.map(|x| x * x).sum::<f64>().sqrt()
+    }
+
+    /// Conserving number, momentum and energy, the full process keeps the
+    /// variance about `u'`, `m2 - 2 u' m1 + u'^2 m0`, at that of
+    /// `delta(u - u')`: zero; not within a window, where `h` is not
+    /// conserved. At `t = 0` its distance to equilibrium is that of the
+    /// delta, `sum_i |delta_i - h_eq,i|`. Rounding: the three moments'
+    /// bounds (above) weighted by `1, 2 |u'|, u'^2` stay below
+    /// `2 n EPSILON sum_i (1 + u_i^2) sqrt(f0_i) / sqrt(f0_start)` at
+    /// `u' = 0.6`, and the jackknife error of four members below `2 sqrt(3)`
+    /// times that: 8 covers both.
+    #[test]
+    fn the_full_process_keeps_zero_variance_about_u_prime() {
+        let grid = VelocityGrid::covering(4.0, 0.2);
+        let evolution = evolution(&grid);
+        let full = &evolution.processes[0];
+        let start = grid.node_of(U_PRIME).unwrap();
+        let root: Vec<f64> = grid.maxwellian().iter().map(|f| f.sqrt()).collect();
+        let scale: f64 = grid
+            .velocities()
+            .iter()
+            .zip(&root)
+            .map(|(u, r)| (1.0 + u * u) * r)
+            .sum::<f64>()
+            / root[start];
+        let rounding = 8.0 * grid.len() as f64 * f64::EPSILON * scale;
+        for k in 0..TIMES.len() {
+            let moments = full.moments(&grid, k, U_PRIME, 1.0);
+            let variance = moments.variance;
+            assert!(variance.mean.abs() < rounding, "{k}: {moments:?}");
+            assert!(variance.stderr < rounding, "{k}: {moments:?}");
+        }
+        let mut delta = vec![0.0; grid.len()];
+        delta[start] = 1.0;
+        let distance: f64 = delta
+            .iter()
+            .zip(&full.equilibrium)
+            .map(|(a, b)| (a - b).abs())
+            .sum();
+        let at_start = full.moments(&grid, 0, U_PRIME, 1.0).distance.mean;
+        assert!(
+            (at_start - distance).abs() < rounding,
+            "{at_start} vs {distance}"
+        );
+    }
+
+    /// At `t = 0` the clipping has changed nothing (its modes' gain
+    /// `1 - exp(lambda t)` vanishes exactly), later it has (the estimate had
+    /// growing modes), and the clipped weight is the same at every time.
+    #[test]
+    fn the_clipping_starts_at_zero_and_grows() {
+        let grid = VelocityGrid::covering(4.0, 0.2);
+        let evolution = evolution(&grid);
+        let states = &evolution.processes[0].states;
+        let sizes: Vec<ProjectionSizes> = (0..TIMES.len())
+            .map(|k| evolution.effect.sizes(&grid, states, k))
+            .collect();
+        assert_eq!(sizes[0].clipping.mean, 0.0);
+        assert_eq!(sizes[0].clipping.stderr, 0.0);
+        assert!(sizes[TIMES.len() - 1].clipping.mean > 0.0);
+        assert!(sizes.iter().all(|s| s.clipped == sizes[0].clipped));
+        assert!(sizes[0].clipped.mean > 0.0);
     }
 
     /// The tagged and Fokker-Planck generators are Markov generators (their

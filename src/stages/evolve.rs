@@ -33,7 +33,9 @@ use crate::evolve::convolution;
 use crate::evolve::early::EarlyEvolution;
 use crate::evolve::grid::VelocityGrid;
 use crate::evolve::operator::kernel_generators;
-use crate::evolve::processes::{GridEvolution, Process, ProjectionEffect};
+use crate::evolve::processes::{
+    GridEvolution, Process, ProcessMoments, ProjectionEffect, ProjectionSizes,
+};
 use crate::kernel::equilibrium::self_rates;
 use crate::kernel::{Draws, Event};
 use crate::pipeline::code::{self, Code};
@@ -227,22 +229,10 @@ impl EvolveStage {
         for (&name, process) in names.iter().zip(processes) {
             let [clipped, asymmetry] = process.diagnostics.unwrap_or([none, none]);
             for (k, &at) in schedule.iter().enumerate() {
-                let all = |h: &[f64]| grid.moments(h, 0.0, f64::INFINITY);
-                let estimate = |f: &dyn Fn(&[f64]) -> f64| process.states.estimate(k, f);
-                rows.push(ProcessMoments {
+                rows.push(ProcessRow {
                     process: name,
                     at,
-                    number: estimate(&|h| all(h)[0]),
-                    momentum: estimate(&|h| all(h)[1]),
-                    second_moment: estimate(&|h| all(h)[2]),
-                    variance: estimate(&|h| grid.moments(h, u_prime, f64::INFINITY)[2]),
-                    window_variance: estimate(&|h| grid.moments(h, u_prime, reach)[2]),
-                    distance: estimate(&|h| {
-                        h.iter()
-                            .zip(&process.equilibrium)
-                            .map(|(a, b)| (a - b).abs())
-                            .sum()
-                    }),
+                    moments: process.moments(grid, k, u_prime, reach),
                     clipped,
                     asymmetry,
                 });
@@ -252,12 +242,12 @@ impl EvolveStage {
         Ok(with_times(rows, |r| r.at)
             .with(GRID_STEP, |_| grid.step)
             .with(WINDOW_HALF_WIDTH, |_| reach)
-            .estimate(NUMBER, |r| r.number)
-            .estimate(MOMENTUM, |r| r.momentum)
-            .estimate(SECOND_MOMENT, |r| r.second_moment)
-            .estimate(VARIANCE, |r| r.variance)
-            .estimate(WINDOW_VARIANCE, |r| r.window_variance)
-            .estimate(DISTANCE_TO_EQUILIBRIUM, |r| r.distance)
+            .estimate(NUMBER, |r| r.moments.number)
+            .estimate(MOMENTUM, |r| r.moments.momentum)
+            .estimate(SECOND_MOMENT, |r| r.moments.second_moment)
+            .estimate(VARIANCE, |r| r.moments.variance)
+            .estimate(WINDOW_VARIANCE, |r| r.moments.window_variance)
+            .estimate(DISTANCE_TO_EQUILIBRIUM, |r| r.moments.distance)
             .estimate(LARGEST_CLIPPED_RATE, |r| r.clipped)
             .estimate(ASYMMETRY, |r| r.asymmetry)
             .table(&TABLE)?)
@@ -280,32 +270,18 @@ struct GridNode {
     equilibrium: [f64; 2],
 }
 
-/// The moments of one process's `h` at one time.
-struct ProcessMoments {
+/// The moments of one process's `h` at one time, and the diagnostics of
+/// its generator.
+struct ProcessRow {
     process: &'static str,
     at: Moment,
-    number: Estimate,
-    momentum: Estimate,
-    second_moment: Estimate,
-    variance: Estimate,
-    window_variance: Estimate,
-    distance: Estimate,
+    moments: ProcessMoments,
     clipped: Estimate,
     asymmetry: Estimate,
 }
 
-/// `sum_i |x_i|`.
-fn l1(x: &[f64]) -> f64 {
-    x.iter().map(|v| v.abs()).sum()
-}
-
-/// The `projection` table: per time the L1 sizes of the clipping's change of
-/// `h_full`, of the weight frozen in the clipped modes and of the whole
-/// projection's change, with jackknife errors; the moments of the clipping's
-/// change (0 to rounding); and each size's largest value over the full and
-/// leave-one-out estimates against `sum_i sigma_i`, the L1 size of `h_full`'s
-/// statistical error (jackknife `sigma_i` of node `i`'s mass). A ratio below 1
-/// means the projection moves `h` by less than its error in every replicate.
+/// The `projection` table: per time the sizes of the projection's effect on
+/// `h_full` against its statistical error (`ProjectionEffect::sizes`).
 fn projection_table(
     grid: &VelocityGrid,
     schedule: &[Moment],
@@ -313,60 +289,23 @@ fn projection_table(
     effect: &ProjectionEffect,
 ) -> Result<Table, StageError> {
     use contract::evolve::projection::*;
-    let rows: Vec<ProjectionRow> = schedule
+    let rows: Vec<(Moment, ProjectionSizes)> = schedule
         .iter()
         .enumerate()
-        .map(|(k, &at)| {
-            let error: f64 = states.states(k).iter().map(|e| e.stderr).sum();
-            let moment = |p: usize| {
-                effect
-                    .clipping
-                    .estimate(k, |d| grid.moments(d, 0.0, f64::INFINITY)[p])
-            };
-            ProjectionRow {
-                at,
-                clipping: effect.clipping.estimate(k, l1),
-                clipped: effect.clipped.scalar(|part| l1(part)),
-                moments: [0, 1, 2].map(moment),
-                projection: effect.projection.estimate(k, l1),
-                error,
-                over_error: [
-                    effect.clipping.largest(|d| l1(&d[k])),
-                    effect.clipped.largest(|part| l1(part)),
-                    effect.projection.largest(|d| l1(&d[k])),
-                ]
-                .map(|change| Some(change / error).filter(|ratio| ratio.is_finite())),
-            }
-        })
+        .map(|(k, &at)| (at, effect.sizes(grid, states, k)))
         .collect();
-    Ok(with_times(Rows::new(&rows), |r| r.at)
-        .estimate(CLIPPING_CHANGE, |r| r.clipping)
-        .estimate(CLIPPED_WEIGHT, |r| r.clipped)
-        .estimate(CLIPPING_NUMBER, |r| r.moments[0])
-        .estimate(CLIPPING_MOMENTUM, |r| r.moments[1])
-        .estimate(CLIPPING_SECOND_MOMENT, |r| r.moments[2])
-        .estimate(PROJECTION_CHANGE, |r| r.projection)
-        .with(H_ERROR_L1, |r| r.error)
-        .optional(CLIPPING_CHANGE_OVER_ERROR, |r| r.over_error[0])
-        .optional(CLIPPED_WEIGHT_OVER_ERROR, |r| r.over_error[1])
-        .optional(PROJECTION_CHANGE_OVER_ERROR, |r| r.over_error[2])
+    Ok(with_times(Rows::new(&rows), |r| r.0)
+        .estimate(CLIPPING_CHANGE, |r| r.1.clipping)
+        .estimate(CLIPPED_WEIGHT, |r| r.1.clipped)
+        .estimate(CLIPPING_NUMBER, |r| r.1.moments[0])
+        .estimate(CLIPPING_MOMENTUM, |r| r.1.moments[1])
+        .estimate(CLIPPING_SECOND_MOMENT, |r| r.1.moments[2])
+        .estimate(PROJECTION_CHANGE, |r| r.1.projection)
+        .with(H_ERROR_L1, |r| r.1.error)
+        .optional(CLIPPING_CHANGE_OVER_ERROR, |r| r.1.over_error[0])
+        .optional(CLIPPED_WEIGHT_OVER_ERROR, |r| r.1.over_error[1])
+        .optional(PROJECTION_CHANGE_OVER_ERROR, |r| r.1.over_error[2])
         .table(&TABLE)?)
-}
-
-/// One row of the `projection` table.
-struct ProjectionRow {
-    at: Moment,
-    clipping: Estimate,
-    clipped: Estimate,
-    /// Number, momentum and second moment of the clipping's change.
-    moments: [Estimate; 3],
-    projection: Estimate,
-    /// `sum_i sigma_i` of `h_full`.
-    error: f64,
-    /// Largest clipping change, clipped weight and projection change over
-    /// `error` (`None` where the ratio is not finite: at `t = 0`, where `h`
-    /// is exact and `error` zero or of rounding size).
-    over_error: [Option<f64>; 3],
 }
 
 /// Adds the three time columns of every evolve table.
