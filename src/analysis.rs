@@ -260,6 +260,36 @@ pub fn collapse(
     }
 }
 
+/// Largest relative difference of two rings' scaled final times
+/// `rho^2 l v_th t_f` that counts as the same time: the times come from
+/// different `N`, `rho l` and `t_f` through a few roundings each (~1e-16),
+/// while a study's distinct times differ by far more than 1e-9.
+pub const SAME_SCALED_TIME: f64 = 1e-9;
+
+/// A ring as the scaling collapse takes it: its MD `h`, its estimator bins'
+/// centres `u - u'`, its reference `h` on them (with errors) and its scaled
+/// final time `rho^2 l v_th t_f`.
+#[derive(Clone, Copy, Debug)]
+pub struct CollapseRing<'a> {
+    /// The MD estimates.
+    pub h: RingH<'a>,
+    /// Bin centres `u - u'` as the ring's tables give them, `v_th`.
+    pub du: &'a [f64],
+    /// The reference (Boltzmann) `h` on the ring's bins.
+    pub predicted: &'a [Estimate],
+    /// `rho^2 l v_th t_f`.
+    pub time: f64,
+}
+
+/// The scaling collapse of `ring` onto `first` ([`collapse`]) where it
+/// applies: the same bins and the same scaled time (to [`SAME_SCALED_TIME`]
+/// relative), so that `h` must be the same if MD follows the Boltzmann
+/// equation; `None` otherwise.
+pub fn scaling_collapse(ring: &CollapseRing, first: &CollapseRing) -> Option<Goodness> {
+    (first.du == ring.du && (ring.time / first.time - 1.0).abs() < SAME_SCALED_TIME)
+        .then(|| collapse(&ring.h, ring.predicted, &first.h, first.predicted))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -316,6 +346,63 @@ mod tests {
         assert!(tagged.boltzmann.mean.abs() < 1e-14);
         assert_eq!(thermal.boltzmann.mean, 1.0);
         assert_eq!(thermal.ratio.mean, 1.0);
+    }
+
+    /// A ring of 9 bins of width 0.1 whose published and tagged `h` (per
+    /// `v_th`) are `h`, from runs of `lineages`.
+    fn exact_ring<'a>(h: &'a [Estimate], lineages: &'a [f64]) -> RingH<'a> {
+        RingH {
+            bins: Bins::for_window(0.9, 0.1),
+            u_prime: 0.0,
+            particles: 1000,
+            published: h,
+            tagged: h,
+            lineages,
+        }
+    }
+
+    /// Two rings with the same tagged `h` on the same bins at the same
+    /// scaled time collapse with chi-square 0 (both statistics, every bin
+    /// group counted); at another time or on other bins there is no collapse.
+    #[test]
+    fn equal_rings_collapse_exactly_and_others_not_at_all() {
+        let du: Vec<f64> = (0..9).map(|k| 0.1 * (k as f64 - 4.0)).collect();
+        let h: Vec<Estimate> = du
+            .iter()
+            .map(|x| {
+                let mean = 10.0 * thermal_density(10.0 * x);
+                Estimate {
+                    mean,
+                    stderr: 0.05 * mean,
+                }
+            })
+            .collect();
+        // Three runs, thousands of lineages in all: no bin group short of
+        // MINIMUM_EXPECTED_COUNT but the tails.
+        let lineages = [400.0, 500.0, 600.0];
+        let ring = CollapseRing {
+            h: exact_ring(&h, &lineages),
+            du: &du,
+            predicted: &h,
+            time: 0.3,
+        };
+        let Goodness { model, sample } = scaling_collapse(&ring, &ring).unwrap();
+        assert_eq!((model.chi2, sample.chi2), (0.0, 0.0));
+        assert!(
+            model.dof > 0 && sample.dof == du.len(),
+            "{model:?} {sample:?}"
+        );
+        let later = CollapseRing {
+            time: 0.3 * (1.0 + 1e-6),
+            ..ring
+        };
+        assert!(scaling_collapse(&later, &ring).is_none());
+        let shifted: Vec<f64> = du.iter().map(|x| x + 0.05).collect();
+        let elsewhere = CollapseRing {
+            du: &shifted,
+            ..ring
+        };
+        assert!(scaling_collapse(&elsewhere, &ring).is_none());
     }
 
     /// Mass `1/2` at `du = +-0.2` per bins of width 0.1: variance `0.04`.

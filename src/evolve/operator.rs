@@ -179,9 +179,44 @@ pub fn fokker_planck(grid: &VelocityGrid, drift: &[f64], variance: &[f64]) -> Ge
     Generator::from_columns(&columns)
 }
 
+/// The Fokker-Planck generator ([`fokker_planck`]) of the drift and variance
+/// rates of `tagged` ([`column_rates`]): the diffusion limit of the special
+/// particle's own evolution.
+pub fn tagged_fokker_planck(tagged: &Generator, grid: &VelocityGrid) -> Generator {
+    let (drift, variance) = column_rates(tagged, grid);
+    fokker_planck(grid, &drift, &variance)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Ornstein-Uhlenbeck rates `D1 = -D u / 2`, `D2 = D` at the nodes.
+    fn ornstein_uhlenbeck(grid: &VelocityGrid, d: f64) -> Generator {
+        let variance = vec![d; grid.len()];
+        let drift: Vec<f64> = grid.velocities().iter().map(|u| -0.5 * d * u).collect();
+        fokker_planck(grid, &drift, &variance)
+    }
+
+    /// A Fokker-Planck generator is the Fokker-Planck generator of its own
+    /// drift and variance rates (three nodes hold exactly two moments and
+    /// number, also where the ends reflect), and its columns sum to zero:
+    /// it conserves probability. Rounding: a few operations on entries of
+    /// size `||M||_1`, each to `EPSILON`.
+    #[test]
+    fn fokker_planck_of_its_own_rates_is_itself_and_conserves_probability() {
+        let grid = VelocityGrid::covering(3.0, 0.1);
+        let generator = ornstein_uhlenbeck(&grid, 0.3);
+        let again = tagged_fokker_planck(&generator, &grid);
+        let rounding = 16.0 * f64::EPSILON * generator.norm_1();
+        for j in 0..grid.len() {
+            let (a, b) = (generator.column(j), again.column(j));
+            for (x, y) in a.iter().zip(&b) {
+                assert!((x - y).abs() < rounding, "column {j}: {x} vs {y}");
+            }
+            assert!(b.iter().sum::<f64>().abs() < rounding, "column {j}");
+        }
+    }
 
     /// Ornstein-Uhlenbeck (`D2 = D`, `D1 = -D u / 2`): on the grid the mean decays
     /// as `exp(-D t / 2)` and `<u^2>` relaxes as `1 - (1 - u0^2) exp(-D t)` exactly
@@ -190,9 +225,7 @@ mod tests {
     fn ornstein_uhlenbeck_moments_are_exact() {
         let grid = VelocityGrid::covering(9.0, 0.1);
         let d = 0.3;
-        let variance = vec![d; grid.len()];
-        let drift: Vec<f64> = grid.velocities().iter().map(|u| -0.5 * d * u).collect();
-        let generator = fokker_planck(&grid, &drift, &variance);
+        let generator = ornstein_uhlenbeck(&grid, d);
         let start = grid.node_of(1.5).unwrap();
         let mut h0 = vec![0.0; grid.len()];
         h0[start] = 1.0;

@@ -21,8 +21,8 @@ use super::collisions::CollisionsStage;
 use super::kernel::{collision_events, target_of};
 use super::md::MdStage;
 use crate::analysis::{
-    FiniteSize, Goodness, RingBins, RingH, boltzmann_on_bins, collapse, finite_size, goodness,
-    thermal_window_variance_rates,
+    CollapseRing, FiniteSize, Goodness, RingBins, RingH, boltzmann_on_bins, finite_size, goodness,
+    scaling_collapse, thermal_window_variance_rates,
 };
 use crate::binning::Bins;
 use crate::config::{KernelParams, MdParams};
@@ -109,6 +109,21 @@ fn ring_h<'a>(system: &MdParams, ring: &'a MdEstimates) -> RingH<'a> {
         published: &ring.published,
         tagged: &ring.tagged,
         lineages: &ring.lineages,
+    }
+}
+
+/// A ring's estimates, Boltzmann `h` and scaled time as the scaling collapse
+/// takes them.
+fn collapse_ring<'a>(
+    system: &MdParams,
+    ring: &'a MdEstimates,
+    predicted: &'a [Estimate],
+) -> CollapseRing<'a> {
+    CollapseRing {
+        h: ring_h(system, ring),
+        du: &ring.du,
+        predicted,
+        time: system.scaled_final_time(),
     }
 }
 
@@ -294,16 +309,12 @@ impl CompareStage {
             if let Some((reference, first, first_predicted)) = first
                 && reference.name != system.name
                 && reference.potential == system.potential
-                && first.du == ring.du
-                && (system.scaled_final_time() / reference.scaled_final_time() - 1.0).abs() < 1e-9
+                && let Some(collapsed) = scaling_collapse(
+                    &collapse_ring(system, ring, predicted),
+                    &collapse_ring(reference, first, first_predicted),
+                )
             {
-                let against = ring_h(reference, first);
-                record(
-                    name,
-                    &reference.name,
-                    TAGGED,
-                    collapse(&h, predicted, &against, first_predicted),
-                );
+                record(name, &reference.name, TAGGED, collapsed);
             }
         }
         Ok(Rows::new(&fits)

@@ -18,6 +18,9 @@
 //! Times are given in `1/Gamma` (`Gamma` = the special particle's variance
 //! rate at `u'`, from the same events: `a_n` at `u' = 0`) or in ns for a gas;
 //! every table carries both and the scaled time `t rho^2 l v_th`.
+//!
+//! The evolution itself lives in `evolve::early` and `evolve::processes`;
+//! this stage reads the events, calls them and writes the tables.
 
 use serde_json::Value;
 
@@ -26,19 +29,18 @@ use super::kernel::{collision_events, target_of};
 use crate::binning::Bins;
 use crate::config::EvolveParams;
 use crate::contract::{self, Rows};
-use crate::evolve::convolution::{
-    self, closed_form_excess_kurtosis, closed_form_number, closed_form_variance, excess_kurtosis,
-    kernel_moments, state_mean, state_moment, state_variance,
-};
+use crate::evolve::convolution;
+use crate::evolve::early::EarlyEvolution;
 use crate::evolve::grid::VelocityGrid;
-use crate::evolve::operator::{Generators, column_rates, fokker_planck, kernel_generators};
-use crate::evolve::propagate::Generator;
-use crate::evolve::spectral::Dissipative;
+use crate::evolve::operator::kernel_generators;
+use crate::evolve::processes::{
+    GridEvolution, Process, ProcessMoments, ProjectionEffect, ProjectionSizes,
+};
 use crate::kernel::equilibrium::self_rates;
 use crate::kernel::{Draws, Event};
 use crate::pipeline::code::{self, Code};
 use crate::pipeline::{Input, InstanceId, Progress, Stage, StageError, Table};
-use crate::stats::{Estimate, Replicated, replicate_means};
+use crate::stats::{Estimate, Replicated};
 
 /// The `evolve` stage.
 pub struct EvolveStage {
@@ -98,6 +100,7 @@ impl EvolveStage {
         moments
     }
 
+    /// The `early_evolution` and `early_summary` tables.
     fn early(
         &self,
         events: &[Event],
@@ -108,40 +111,21 @@ impl EvolveStage {
         let bins = Bins::for_window(kernel.window, kernel.bin_width);
         let rates = convolution::replicated_kernel(events, draws, &target_of(kernel), &bins);
         let times: Vec<f64> = schedule.iter().map(|m| m.scaled).collect();
-        let t_max = times.last().copied().unwrap_or(0.0);
         let rebin = self.params.early_rebin as usize;
-        let out_width = rebin as f64 * bins.width;
-        let half_out = (self.params.early_range / out_width).round() as usize;
-        let size = convolution::periodic_size(&rates.full, bins.width, t_max)
-            .max((2 * (half_out + 1) * rebin).next_power_of_two());
-        let states = rates.map(|g| convolution::evolve(g, size, &times));
-        let (centre, width) = (size / 2, bins.width);
-        let cumulants = rates.map(|g| kernel_moments(g, width));
+        let evolution =
+            EarlyEvolution::new(&rates, bins.width, &times, rebin, self.params.early_range);
+        let offsets = evolution.offsets();
         let mut h_rows = Vec::new();
         let mut summary = Vec::new();
         for (k, &at) in schedule.iter().enumerate() {
-            let binned = states.map(|s| convolution::rebin(&s[k], centre, rebin, half_out));
-            for (m, estimate) in binned.values().iter().enumerate() {
-                h_rows.push(EarlyBin {
-                    at,
-                    x: (m as f64 - half_out as f64) * out_width,
-                    h: Estimate {
-                        mean: estimate.mean / out_width,
-                        stderr: estimate.stderr / out_width,
-                    },
-                });
-            }
-            let t = at.scaled;
-            summary.push(EarlyMoments {
-                at,
-                number: states.estimate(k, |h| state_moment(h, width, 0)),
-                number_closed: cumulants.scalar(|c| closed_form_number(c, t)),
-                mean: states.estimate(k, |h| state_mean(h, width)),
-                variance: states.estimate(k, |h| state_variance(h, width)),
-                variance_closed: cumulants.scalar(|c| closed_form_variance(c, t)),
-                kurtosis: states.estimate(k, |h| excess_kurtosis(h, width)),
-                kurtosis_closed: cumulants.scalar(|c| closed_form_excess_kurtosis(c, t)),
-            });
+            let density = evolution.density(k);
+            h_rows.extend(
+                offsets
+                    .iter()
+                    .zip(density)
+                    .map(|(&x, h)| EarlyBin { at, x, h }),
+            );
+            summary.push((at, evolution.moments(k, at.scaled)));
         }
         let h_table = {
             use contract::evolve::early_evolution::*;
@@ -153,19 +137,20 @@ impl EvolveStage {
         };
         let summary_table = {
             use contract::evolve::early_summary::*;
-            with_times(Rows::new(&summary), |r| r.at)
-                .estimate(NUMBER, |r| r.number)
-                .with(NUMBER_CLOSED_FORM, |r| r.number_closed.mean)
-                .estimate(MEAN, |r| r.mean)
-                .estimate(VARIANCE, |r| r.variance)
-                .estimate(VARIANCE_CLOSED_FORM, |r| r.variance_closed)
-                .estimate(EXCESS_KURTOSIS, |r| r.kurtosis)
-                .estimate(EXCESS_KURTOSIS_CLOSED_FORM, |r| r.kurtosis_closed)
+            with_times(Rows::new(&summary), |r| r.0)
+                .estimate(NUMBER, |r| r.1.number)
+                .with(NUMBER_CLOSED_FORM, |r| r.1.number_closed.mean)
+                .estimate(MEAN, |r| r.1.mean)
+                .estimate(VARIANCE, |r| r.1.variance)
+                .estimate(VARIANCE_CLOSED_FORM, |r| r.1.variance_closed)
+                .estimate(EXCESS_KURTOSIS, |r| r.1.kurtosis)
+                .estimate(EXCESS_KURTOSIS_CLOSED_FORM, |r| r.1.kurtosis_closed)
                 .table(&TABLE)?
         };
         Ok(vec![h_table, summary_table])
     }
 
+    /// The `evolution`, `evolution_summary` and `projection` tables.
     fn grid_evolution(
         &self,
         events: &[Event],
@@ -183,66 +168,14 @@ impl EvolveStage {
             let before = placed.swap(done, std::sync::atomic::Ordering::Relaxed);
             progress.advance((done - before) as u64);
         });
-        let pick = |part: fn(&Generators) -> &Generator| -> Vec<Generator> {
-            generators.iter().map(|g| part(g).clone()).collect()
-        };
-        let raw = replicate_means(&pick(|g| &g.full));
-        let tagged = replicate_means(&pick(|g| &g.tagged));
-        let diffusion = tagged.map(|m| {
-            let (drift, variance) = column_rates(m, &grid);
-            fokker_planck(&grid, &drift, &variance)
-        });
-        let maxwellian = grid.maxwellian();
-        let velocities = grid.velocities();
-        let invariants = [
-            vec![1.0; grid.len()],
-            velocities.clone(),
-            velocities.iter().map(|u| u * u).collect(),
-        ];
-        let full = raw.map(|m| Dissipative::project(m, &maxwellian, &invariants));
-        let mut h0 = vec![0.0; grid.len()];
-        h0[start] = 1.0;
         let times: Vec<f64> = schedule.iter().map(|m| m.scaled).collect();
-        let full_states = full.map(|m| m.propagate(&h0, &times));
-        let effect = ProjectionEffect {
-            clipping: full.map(|m| m.clipping_change(&h0, &times)),
-            clipped: full.map(|m| m.clipped_part(&h0)),
-            projection: full_states.zip(&raw.map(|m| m.propagate(&h0, &times)), |h, raw| {
-                h.iter()
-                    .zip(raw)
-                    .map(|(a, b)| a.iter().zip(b).map(|(x, y)| x - y).collect())
-                    .collect()
-            }),
-        };
-        let diagnostics = |d: &Replicated<Dissipative>| {
-            [d.scalar(|d| d.largest_clipped), d.scalar(|d| d.asymmetry)]
-        };
-        use contract::evolve::evolution_summary::{FOKKER_PLANCK, FULL, TAGGED};
-        let processes = [
-            Process {
-                name: FULL,
-                states: full_states,
-                equilibrium: grid.conserving_equilibrium(p.kernel.u_prime),
-                diagnostics: Some(diagnostics(&full)),
-            },
-            Process {
-                name: TAGGED,
-                states: tagged.map(|m| m.propagate(&h0, &times)),
-                equilibrium: maxwellian.clone(),
-                diagnostics: None,
-            },
-            Process {
-                name: FOKKER_PLANCK,
-                states: diffusion.map(|m| m.propagate(&h0, &times)),
-                equilibrium: maxwellian,
-                diagnostics: None,
-            },
-        ];
+        let evolution = GridEvolution::new(&generators, &grid, start, p.kernel.u_prime, &times);
         progress.advance(1);
+        let processes = &evolution.processes;
         Ok(vec![
-            self.state_table(&grid, schedule, &processes)?,
-            self.summary_table(&grid, schedule, &processes)?,
-            projection_table(&grid, schedule, &processes[0].states, &effect)?,
+            self.state_table(&grid, schedule, processes)?,
+            self.summary_table(&grid, schedule, processes)?,
+            projection_table(&grid, schedule, &processes[0].states, &evolution.effect)?,
         ])
     }
 
@@ -291,26 +224,15 @@ impl EvolveStage {
             mean: f64::NAN,
             stderr: f64::NAN,
         };
+        let names = [FULL, TAGGED, FOKKER_PLANCK];
         let mut rows = Vec::new();
-        for process in processes {
+        for (&name, process) in names.iter().zip(processes) {
             let [clipped, asymmetry] = process.diagnostics.unwrap_or([none, none]);
             for (k, &at) in schedule.iter().enumerate() {
-                let all = |h: &[f64]| grid.moments(h, 0.0, f64::INFINITY);
-                let estimate = |f: &dyn Fn(&[f64]) -> f64| process.states.estimate(k, f);
-                rows.push(ProcessMoments {
-                    process: process.name,
+                rows.push(ProcessRow {
+                    process: name,
                     at,
-                    number: estimate(&|h| all(h)[0]),
-                    momentum: estimate(&|h| all(h)[1]),
-                    second_moment: estimate(&|h| all(h)[2]),
-                    variance: estimate(&|h| grid.moments(h, u_prime, f64::INFINITY)[2]),
-                    window_variance: estimate(&|h| grid.moments(h, u_prime, reach)[2]),
-                    distance: estimate(&|h| {
-                        h.iter()
-                            .zip(&process.equilibrium)
-                            .map(|(a, b)| (a - b).abs())
-                            .sum()
-                    }),
+                    moments: process.moments(grid, k, u_prime, reach),
                     clipped,
                     asymmetry,
                 });
@@ -320,12 +242,12 @@ impl EvolveStage {
         Ok(with_times(rows, |r| r.at)
             .with(GRID_STEP, |_| grid.step)
             .with(WINDOW_HALF_WIDTH, |_| reach)
-            .estimate(NUMBER, |r| r.number)
-            .estimate(MOMENTUM, |r| r.momentum)
-            .estimate(SECOND_MOMENT, |r| r.second_moment)
-            .estimate(VARIANCE, |r| r.variance)
-            .estimate(WINDOW_VARIANCE, |r| r.window_variance)
-            .estimate(DISTANCE_TO_EQUILIBRIUM, |r| r.distance)
+            .estimate(NUMBER, |r| r.moments.number)
+            .estimate(MOMENTUM, |r| r.moments.momentum)
+            .estimate(SECOND_MOMENT, |r| r.moments.second_moment)
+            .estimate(VARIANCE, |r| r.moments.variance)
+            .estimate(WINDOW_VARIANCE, |r| r.moments.window_variance)
+            .estimate(DISTANCE_TO_EQUILIBRIUM, |r| r.moments.distance)
             .estimate(LARGEST_CLIPPED_RATE, |r| r.clipped)
             .estimate(ASYMMETRY, |r| r.asymmetry)
             .table(&TABLE)?)
@@ -339,18 +261,6 @@ struct EarlyBin {
     h: Estimate,
 }
 
-/// The moments of the early-time `h` at one time, and their closed forms.
-struct EarlyMoments {
-    at: Moment,
-    number: Estimate,
-    number_closed: Estimate,
-    mean: Estimate,
-    variance: Estimate,
-    variance_closed: Estimate,
-    kurtosis: Estimate,
-    kurtosis_closed: Estimate,
-}
-
 /// `h` of the three processes at one grid node and time, and the limits of
 /// the first two (per `v_th`).
 struct GridNode {
@@ -360,43 +270,18 @@ struct GridNode {
     equilibrium: [f64; 2],
 }
 
-/// The moments of one process's `h` at one time.
-struct ProcessMoments {
+/// The moments of one process's `h` at one time, and the diagnostics of
+/// its generator.
+struct ProcessRow {
     process: &'static str,
     at: Moment,
-    number: Estimate,
-    momentum: Estimate,
-    second_moment: Estimate,
-    variance: Estimate,
-    window_variance: Estimate,
-    distance: Estimate,
+    moments: ProcessMoments,
     clipped: Estimate,
     asymmetry: Estimate,
 }
 
-/// What projecting the full operator's estimate does to `h_full`, for the
-/// full and every leave-one-out estimate (node masses).
-struct ProjectionEffect {
-    /// `h(t) - h_unclipped(t)` per time (`Dissipative::clipping_change`).
-    clipping: Replicated<Vec<Vec<f64>>>,
-    /// The part of `h` frozen in the clipped modes (`Dissipative::clipped_part`).
-    clipped: Replicated<Vec<f64>>,
-    /// `h(t) - exp(t M) h(0)` per time, `M` the raw estimate.
-    projection: Replicated<Vec<Vec<f64>>>,
-}
-
-/// `sum_i |x_i|`.
-fn l1(x: &[f64]) -> f64 {
-    x.iter().map(|v| v.abs()).sum()
-}
-
-/// The `projection` table: per time the L1 sizes of the clipping's change of
-/// `h_full`, of the weight frozen in the clipped modes and of the whole
-/// projection's change, with jackknife errors; the moments of the clipping's
-/// change (0 to rounding); and each size's largest value over the full and
-/// leave-one-out estimates against `sum_i sigma_i`, the L1 size of `h_full`'s
-/// statistical error (jackknife `sigma_i` of node `i`'s mass). A ratio below 1
-/// means the projection moves `h` by less than its error in every replicate.
+/// The `projection` table: per time the sizes of the projection's effect on
+/// `h_full` against its statistical error (`ProjectionEffect::sizes`).
 fn projection_table(
     grid: &VelocityGrid,
     schedule: &[Moment],
@@ -404,60 +289,23 @@ fn projection_table(
     effect: &ProjectionEffect,
 ) -> Result<Table, StageError> {
     use contract::evolve::projection::*;
-    let rows: Vec<ProjectionRow> = schedule
+    let rows: Vec<(Moment, ProjectionSizes)> = schedule
         .iter()
         .enumerate()
-        .map(|(k, &at)| {
-            let error: f64 = states.states(k).iter().map(|e| e.stderr).sum();
-            let moment = |p: usize| {
-                effect
-                    .clipping
-                    .estimate(k, |d| grid.moments(d, 0.0, f64::INFINITY)[p])
-            };
-            ProjectionRow {
-                at,
-                clipping: effect.clipping.estimate(k, l1),
-                clipped: effect.clipped.scalar(|part| l1(part)),
-                moments: [0, 1, 2].map(moment),
-                projection: effect.projection.estimate(k, l1),
-                error,
-                over_error: [
-                    effect.clipping.largest(|d| l1(&d[k])),
-                    effect.clipped.largest(|part| l1(part)),
-                    effect.projection.largest(|d| l1(&d[k])),
-                ]
-                .map(|change| Some(change / error).filter(|ratio| ratio.is_finite())),
-            }
-        })
+        .map(|(k, &at)| (at, effect.sizes(grid, states, k)))
         .collect();
-    Ok(with_times(Rows::new(&rows), |r| r.at)
-        .estimate(CLIPPING_CHANGE, |r| r.clipping)
-        .estimate(CLIPPED_WEIGHT, |r| r.clipped)
-        .estimate(CLIPPING_NUMBER, |r| r.moments[0])
-        .estimate(CLIPPING_MOMENTUM, |r| r.moments[1])
-        .estimate(CLIPPING_SECOND_MOMENT, |r| r.moments[2])
-        .estimate(PROJECTION_CHANGE, |r| r.projection)
-        .with(H_ERROR_L1, |r| r.error)
-        .optional(CLIPPING_CHANGE_OVER_ERROR, |r| r.over_error[0])
-        .optional(CLIPPED_WEIGHT_OVER_ERROR, |r| r.over_error[1])
-        .optional(PROJECTION_CHANGE_OVER_ERROR, |r| r.over_error[2])
+    Ok(with_times(Rows::new(&rows), |r| r.0)
+        .estimate(CLIPPING_CHANGE, |r| r.1.clipping)
+        .estimate(CLIPPED_WEIGHT, |r| r.1.clipped)
+        .estimate(CLIPPING_NUMBER, |r| r.1.moments[0])
+        .estimate(CLIPPING_MOMENTUM, |r| r.1.moments[1])
+        .estimate(CLIPPING_SECOND_MOMENT, |r| r.1.moments[2])
+        .estimate(PROJECTION_CHANGE, |r| r.1.projection)
+        .with(H_ERROR_L1, |r| r.1.error)
+        .optional(CLIPPING_CHANGE_OVER_ERROR, |r| r.1.over_error[0])
+        .optional(CLIPPED_WEIGHT_OVER_ERROR, |r| r.1.over_error[1])
+        .optional(PROJECTION_CHANGE_OVER_ERROR, |r| r.1.over_error[2])
         .table(&TABLE)?)
-}
-
-/// One row of the `projection` table.
-struct ProjectionRow {
-    at: Moment,
-    clipping: Estimate,
-    clipped: Estimate,
-    /// Number, momentum and second moment of the clipping's change.
-    moments: [Estimate; 3],
-    projection: Estimate,
-    /// `sum_i sigma_i` of `h_full`.
-    error: f64,
-    /// Largest clipping change, clipped weight and projection change over
-    /// `error` (`None` where the ratio is not finite: at `t = 0`, where `h`
-    /// is exact and `error` zero or of rounding size).
-    over_error: [Option<f64>; 3],
 }
 
 /// Adds the three time columns of every evolve table.
@@ -466,16 +314,6 @@ fn with_times<'r, R>(rows: Rows<'r, R>, at: impl Fn(&R) -> Moment) -> Rows<'r, R
     rows.with(TIME_GAMMA, |r| at(r).gamma)
         .with(TIME_SCALED, |r| at(r).scaled)
         .with(TIME_NS, |r| at(r).ns)
-}
-
-/// One evolved process: its states, its equilibrium (node masses) and, for
-/// the projected kernel generators, the largest positive eigenvalue removed
-/// and the detailed-balance violation of the raw estimate.
-struct Process {
-    name: &'static str,
-    states: Replicated<Vec<Vec<f64>>>,
-    equilibrium: Vec<f64>,
-    diagnostics: Option<[Estimate; 2]>,
 }
 
 /// The code this stage runs (fingerprinted by the build script).
