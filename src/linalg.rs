@@ -1,5 +1,5 @@
-//! Dense linear algebra the physics needs and no crate of ours provides: the
-//! symmetric eigenproblem (cyclic Jacobi), used for the dissipative projection
+//! Dense linear algebra the physics needs: the symmetric eigenproblem (through
+//! nalgebra, behind our own types and error), used for the dissipative projection
 //! of collision generators and for the Lax matrix of the Sutherland ring;
 //! the composite Simpson weights of the quadratures (bound-pair length,
 //! averages over thermal starts); and the node slopes of the not-a-knot cubic
@@ -16,17 +16,10 @@ pub struct SymmetricEigen {
     pub vectors: Vec<Vec<f64>>,
 }
 
-/// Sweeps [`symmetric_eigen`] makes before it gives up. Cyclic Jacobi
-/// converges quadratically once the off-diagonal part is small (Golub & Van
-/// Loan, Matrix Computations, §8.5): dense random symmetric matrices of 41,
-/// 161 and 322 rows (the sizes of the `evolve` grids and of a Lax matrix)
-/// reach the tolerance in 7, 9 and 10 sweeps, so 100 leaves a wide margin.
-const MAX_SWEEPS: usize = 100;
-
-/// Off-diagonal part, relative to the whole matrix (Frobenius norms), at
-/// which [`symmetric_eigen`] stops: `1e-15`, a few `eps`, where further
-/// rotations change the eigenvalues by less than their rounding.
-const OFF_DIAGONAL_TOLERANCE: f64 = 1e-15;
+/// Implicit QR iterations [`symmetric_eigen`] allows per row before it gives
+/// up: LAPACK's `dsteqr` allows 30, and needs about 2 (Golub & Van Loan,
+/// Matrix Computations, §8.3).
+const QR_ITERATIONS_PER_ROW: usize = 30;
 
 /// Why [`symmetric_eigen`] returned no decomposition.
 #[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
@@ -34,83 +27,38 @@ pub enum EigenError {
     /// An entry is NaN or infinite (or the squared norm overflows).
     #[error("the symmetric eigenproblem has a non-finite matrix entry")]
     NotFinite,
-    /// The off-diagonal part stayed above the tolerance.
-    #[error(
-        "Jacobi rotations did not converge in {sweeps} sweeps: the off-diagonal part is \
-         {relative_off_diagonal:e} of the matrix (tolerance {OFF_DIAGONAL_TOLERANCE:e})"
-    )]
+    /// The QR iterations did not converge.
+    #[error("the symmetric eigenproblem did not converge in {iterations} QR iterations")]
     Unconverged {
-        /// Sweeps made.
-        sweeps: usize,
-        /// `||offdiag(A)||_F / ||A||_F` left.
-        relative_off_diagonal: f64,
+        /// Iterations allowed.
+        iterations: usize,
     },
 }
 
-/// Cyclic Jacobi rotations (Golub & Van Loan, Matrix Computations, §8.5.3)
-/// until the off-diagonal part is below [`OFF_DIAGONAL_TOLERANCE`] of the
-/// matrix in Frobenius norm (row-major `a`, `n x n`, symmetric). An error,
-/// never a silent unconverged result, when that takes more than
-/// [`MAX_SWEEPS`] sweeps or an entry is not finite.
+/// Eigenvalues (in no particular order) and orthonormal eigenvectors of the
+/// symmetric matrix `a` (row-major, `n x n`): nalgebra's Householder
+/// tridiagonalization and implicit QR with Wilkinson shifts (Golub & Van
+/// Loan, Matrix Computations, §8.3), to `eps` of the matrix. An error, never
+/// a silent unconverged result, when an entry is not finite or the iterations
+/// exceed [`QR_ITERATIONS_PER_ROW`] per row.
 pub fn symmetric_eigen(a: &[f64], n: usize) -> Result<SymmetricEigen, EigenError> {
-    jacobi(a, n, MAX_SWEEPS)
+    qr_eigen(a, n, QR_ITERATIONS_PER_ROW * n)
 }
 
-/// [`symmetric_eigen`] with at most `max_sweeps` sweeps.
-fn jacobi(a: &[f64], n: usize, max_sweeps: usize) -> Result<SymmetricEigen, EigenError> {
-    let mut a = a.to_vec();
-    let mut v = vec![0.0; n * n];
-    (0..n).for_each(|i| v[i * n + i] = 1.0);
-    let total: f64 = a.iter().map(|x| x * x).sum();
-    if !total.is_finite() {
+/// [`symmetric_eigen`] with at most `iterations` QR iterations in all.
+fn qr_eigen(a: &[f64], n: usize, iterations: usize) -> Result<SymmetricEigen, EigenError> {
+    if !a.iter().all(|x| x.is_finite()) {
         return Err(EigenError::NotFinite);
     }
-    for sweep in 0..=max_sweeps {
-        let off: f64 = (0..n)
-            .flat_map(|i| (i + 1..n).map(move |j| (i, j)))
-            .map(|(i, j)| a[i * n + j].powi(2))
-            .sum();
-        if off <= OFF_DIAGONAL_TOLERANCE * OFF_DIAGONAL_TOLERANCE * total {
-            break;
-        }
-        if sweep == max_sweeps {
-            return Err(EigenError::Unconverged {
-                sweeps: sweep,
-                relative_off_diagonal: (off / total).sqrt(),
-            });
-        }
-        for p in 0..n {
-            for q in p + 1..n {
-                let apq = a[p * n + q];
-                if apq == 0.0 {
-                    continue;
-                }
-                let theta = (a[q * n + q] - a[p * n + p]) / (2.0 * apq);
-                let t = theta.signum() / (theta.abs() + (theta * theta + 1.0).sqrt());
-                let c = 1.0 / (t * t + 1.0).sqrt();
-                let s = t * c;
-                for k in 0..n {
-                    let (akp, akq) = (a[k * n + p], a[k * n + q]);
-                    a[k * n + p] = c * akp - s * akq;
-                    a[k * n + q] = s * akp + c * akq;
-                }
-                for k in 0..n {
-                    let (apk, aqk) = (a[p * n + k], a[q * n + k]);
-                    a[p * n + k] = c * apk - s * aqk;
-                    a[q * n + k] = s * apk + c * aqk;
-                }
-                for k in 0..n {
-                    let (vkp, vkq) = (v[k * n + p], v[k * n + q]);
-                    v[k * n + p] = c * vkp - s * vkq;
-                    v[k * n + q] = s * vkp + c * vkq;
-                }
-            }
-        }
-    }
+    let eigen = nalgebra::DMatrix::from_row_slice(n, n, a)
+        .try_symmetric_eigen(f64::EPSILON, iterations)
+        .ok_or(EigenError::Unconverged { iterations })?;
     Ok(SymmetricEigen {
-        values: (0..n).map(|k| a[k * n + k]).collect(),
-        vectors: (0..n)
-            .map(|k| (0..n).map(|i| v[i * n + k]).collect())
+        values: eigen.eigenvalues.iter().copied().collect(),
+        vectors: eigen
+            .eigenvectors
+            .column_iter()
+            .map(|v| v.iter().copied().collect())
             .collect(),
     })
 }
@@ -271,7 +219,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn jacobi_diagonalizes_a_symmetric_matrix() {
+    fn eigen_solver_diagonalizes_a_symmetric_matrix() {
         let n = 5;
         let a: Vec<f64> = (0..n * n)
             .map(|k| {
@@ -288,10 +236,10 @@ mod tests {
         }
     }
 
-    /// A matrix with a NaN entry, and one that needs more sweeps than allowed,
-    /// give an error rather than a decomposition.
+    /// A matrix with a NaN entry, and one that needs more iterations than
+    /// allowed, give an error rather than a decomposition.
     #[test]
-    fn jacobi_reports_what_it_cannot_diagonalize() {
+    fn eigen_solver_reports_what_it_cannot_diagonalize() {
         let mut a = [2.0, 1.0, 1.0, 3.0];
         a[1] = f64::NAN;
         assert_eq!(symmetric_eigen(&a, 2), Err(EigenError::NotFinite));
@@ -299,14 +247,11 @@ mod tests {
         let hilbert: Vec<f64> = (0..n * n)
             .map(|k| 1.0 / (1.0 + (k / n) as f64 + (k % n) as f64))
             .collect();
-        match jacobi(&hilbert, n, 1) {
-            Err(EigenError::Unconverged {
-                sweeps: 1,
-                relative_off_diagonal,
-            }) => assert!(relative_off_diagonal > OFF_DIAGONAL_TOLERANCE),
-            other => panic!("{other:?}"),
-        }
-        assert!(jacobi(&hilbert, n, MAX_SWEEPS).is_ok());
+        assert_eq!(
+            qr_eigen(&hilbert, n, 1),
+            Err(EigenError::Unconverged { iterations: 1 })
+        );
+        assert!(symmetric_eigen(&hilbert, n).is_ok());
     }
 
     /// `A = [[4, 2], [2, 3]]` has inverse `[[3, -2], [-2, 4]] / 8`: for `d =

@@ -28,7 +28,7 @@ pub struct Dissipative {
     /// Largest eigenvalue set to zero (noise), `rho^2 l v_th`; 0 if none.
     pub largest_clipped: f64,
     /// Eigenvalues up to this are zero within the rounding of the
-    /// diagonalization: `1e-12 max_k |lambda_k|` (Jacobi's eigenvalues carry
+    /// diagonalization: `1e-12 max_k |lambda_k|` (the QR eigenvalues carry
     /// errors ~ `n eps` of the largest, ~4e-14 at 161 nodes). The invariant
     /// modes, exactly 0 in exact arithmetic, stay below it.
     rounding: f64,
@@ -45,7 +45,7 @@ impl Dissipative {
     /// # Panics
     ///
     /// If the symmetrized estimate cannot be diagonalized (a non-finite
-    /// entry, or Jacobi rotations that do not converge: a defect, never
+    /// entry, or QR iterations that do not converge: a defect, never
     /// seen): the projection would otherwise be silently wrong.
     pub fn project(
         generator: &Generator,
