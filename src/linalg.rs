@@ -1,5 +1,5 @@
-//! Dense linear algebra the physics needs and no crate of ours provides: the
-//! symmetric eigenproblem (cyclic Jacobi), used for the dissipative projection
+//! Dense linear algebra the physics needs: the symmetric eigenproblem (through
+//! nalgebra, behind our own types and error), used for the dissipative projection
 //! of collision generators and for the Lax matrix of the Sutherland ring;
 //! the composite Simpson weights of the quadratures (bound-pair length,
 //! averages over thermal starts); and the node slopes of the not-a-knot cubic
@@ -16,55 +16,51 @@ pub struct SymmetricEigen {
     pub vectors: Vec<Vec<f64>>,
 }
 
-/// Cyclic Jacobi rotations until the off-diagonal part is below `1e-15` of the
-/// matrix (row-major `a`, `n x n`, symmetric).
-pub fn symmetric_eigen(a: &[f64], n: usize) -> SymmetricEigen {
-    let mut a = a.to_vec();
-    let mut v = vec![0.0; n * n];
-    (0..n).for_each(|i| v[i * n + i] = 1.0);
-    let total: f64 = a.iter().map(|x| x * x).sum();
-    for _sweep in 0..100 {
-        let off: f64 = (0..n)
-            .flat_map(|i| (i + 1..n).map(move |j| (i, j)))
-            .map(|(i, j)| a[i * n + j].powi(2))
-            .sum();
-        if off <= 1e-30 * total {
-            break;
-        }
-        for p in 0..n {
-            for q in p + 1..n {
-                let apq = a[p * n + q];
-                if apq == 0.0 {
-                    continue;
-                }
-                let theta = (a[q * n + q] - a[p * n + p]) / (2.0 * apq);
-                let t = theta.signum() / (theta.abs() + (theta * theta + 1.0).sqrt());
-                let c = 1.0 / (t * t + 1.0).sqrt();
-                let s = t * c;
-                for k in 0..n {
-                    let (akp, akq) = (a[k * n + p], a[k * n + q]);
-                    a[k * n + p] = c * akp - s * akq;
-                    a[k * n + q] = s * akp + c * akq;
-                }
-                for k in 0..n {
-                    let (apk, aqk) = (a[p * n + k], a[q * n + k]);
-                    a[p * n + k] = c * apk - s * aqk;
-                    a[q * n + k] = s * apk + c * aqk;
-                }
-                for k in 0..n {
-                    let (vkp, vkq) = (v[k * n + p], v[k * n + q]);
-                    v[k * n + p] = c * vkp - s * vkq;
-                    v[k * n + q] = s * vkp + c * vkq;
-                }
-            }
-        }
+/// Implicit QR iterations [`symmetric_eigen`] allows per row before it gives
+/// up: LAPACK's `dsteqr` allows 30, and needs about 2 (Golub & Van Loan,
+/// Matrix Computations, §8.3).
+const QR_ITERATIONS_PER_ROW: usize = 30;
+
+/// Why [`symmetric_eigen`] returned no decomposition.
+#[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
+pub enum EigenError {
+    /// An entry is NaN or infinite (or the squared norm overflows).
+    #[error("the symmetric eigenproblem has a non-finite matrix entry")]
+    NotFinite,
+    /// The QR iterations did not converge.
+    #[error("the symmetric eigenproblem did not converge in {iterations} QR iterations")]
+    Unconverged {
+        /// Iterations allowed.
+        iterations: usize,
+    },
+}
+
+/// Eigenvalues (in no particular order) and orthonormal eigenvectors of the
+/// symmetric matrix `a` (row-major, `n x n`): nalgebra's Householder
+/// tridiagonalization and implicit QR with Wilkinson shifts (Golub & Van
+/// Loan, Matrix Computations, §8.3), to `eps` of the matrix. An error, never
+/// a silent unconverged result, when an entry is not finite or the iterations
+/// exceed [`QR_ITERATIONS_PER_ROW`] per row.
+pub fn symmetric_eigen(a: &[f64], n: usize) -> Result<SymmetricEigen, EigenError> {
+    qr_eigen(a, n, QR_ITERATIONS_PER_ROW * n)
+}
+
+/// [`symmetric_eigen`] with at most `iterations` QR iterations in all.
+fn qr_eigen(a: &[f64], n: usize, iterations: usize) -> Result<SymmetricEigen, EigenError> {
+    if !a.iter().all(|x| x.is_finite()) {
+        return Err(EigenError::NotFinite);
     }
-    SymmetricEigen {
-        values: (0..n).map(|k| a[k * n + k]).collect(),
-        vectors: (0..n)
-            .map(|k| (0..n).map(|i| v[i * n + k]).collect())
+    let eigen = nalgebra::DMatrix::from_row_slice(n, n, a)
+        .try_symmetric_eigen(f64::EPSILON, iterations)
+        .ok_or(EigenError::Unconverged { iterations })?;
+    Ok(SymmetricEigen {
+        values: eigen.eigenvalues.iter().copied().collect(),
+        vectors: eigen
+            .eigenvectors
+            .column_iter()
+            .map(|v| v.iter().copied().collect())
             .collect(),
-    }
+    })
 }
 
 /// `d^T A^(-1) d` for a symmetric positive-definite `A` (row-major, `n x n`
@@ -223,7 +219,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn jacobi_diagonalizes_a_symmetric_matrix() {
+    fn eigen_solver_diagonalizes_a_symmetric_matrix() {
         let n = 5;
         let a: Vec<f64> = (0..n * n)
             .map(|k| {
@@ -231,13 +227,31 @@ mod tests {
                 1.0 / (1.0 + i as f64 + j as f64) + if i == j { i as f64 } else { 0.0 }
             })
             .collect();
-        let eigen = symmetric_eigen(&a, n);
+        let eigen = symmetric_eigen(&a, n).unwrap();
         for (l, v) in eigen.values.iter().zip(&eigen.vectors) {
             for i in 0..n {
                 let av: f64 = (0..n).map(|j| a[i * n + j] * v[j]).sum();
                 assert!((av - l * v[i]).abs() < 1e-13, "{av} vs {}", l * v[i]);
             }
         }
+    }
+
+    /// A matrix with a NaN entry, and one that needs more iterations than
+    /// allowed, give an error rather than a decomposition.
+    #[test]
+    fn eigen_solver_reports_what_it_cannot_diagonalize() {
+        let mut a = [2.0, 1.0, 1.0, 3.0];
+        a[1] = f64::NAN;
+        assert_eq!(symmetric_eigen(&a, 2), Err(EigenError::NotFinite));
+        let n = 5;
+        let hilbert: Vec<f64> = (0..n * n)
+            .map(|k| 1.0 / (1.0 + (k / n) as f64 + (k % n) as f64))
+            .collect();
+        assert_eq!(
+            qr_eigen(&hilbert, n, 1),
+            Err(EigenError::Unconverged { iterations: 1 })
+        );
+        assert!(symmetric_eigen(&hilbert, n).is_ok());
     }
 
     /// `A = [[4, 2], [2, 3]]` has inverse `[[3, -2], [-2, 4]] / 8`: for `d =

@@ -28,7 +28,7 @@ pub struct Dissipative {
     /// Largest eigenvalue set to zero (noise), `rho^2 l v_th`; 0 if none.
     pub largest_clipped: f64,
     /// Eigenvalues up to this are zero within the rounding of the
-    /// diagonalization: `1e-12 max_k |lambda_k|` (Jacobi's eigenvalues carry
+    /// diagonalization: `1e-12 max_k |lambda_k|` (the QR eigenvalues carry
     /// errors ~ `n eps` of the largest, ~4e-14 at 161 nodes). The invariant
     /// modes, exactly 0 in exact arithmetic, stay below it.
     rounding: f64,
@@ -41,6 +41,12 @@ impl Dissipative {
     /// `f0`), the invariants `invariants` (velocity polynomials at the nodes,
     /// e.g. `1, u, u^2`; the operator annihilates `f0` times each) and
     /// dissipation on the estimate `generator`.
+    ///
+    /// # Panics
+    ///
+    /// If the symmetrized estimate cannot be diagonalized (a non-finite
+    /// entry, or QR iterations that do not converge: a defect, never
+    /// seen): the projection would otherwise be silently wrong.
     pub fn project(
         generator: &Generator,
         equilibrium: &[f64],
@@ -85,7 +91,8 @@ impl Dissipative {
             }
         };
         project(&mut sym);
-        let eigen = symmetric_eigen(&sym, n);
+        let eigen = symmetric_eigen(&sym, n)
+            .unwrap_or_else(|error| panic!("projecting the collision generator: {error}"));
         let largest_clipped = eigen.values.iter().copied().fold(0.0, f64::max);
         let radius = eigen.values.iter().fold(0.0, |r: f64, l| r.max(l.abs()));
         Dissipative {

@@ -99,7 +99,7 @@ trait Advancing {
     fn advance(&mut self, duration: f64, max_steps: u64) -> Result<(), RingError>;
     fn velocities(&self) -> Vec<f64>;
     /// What each lineage carries now: label velocities, or sorted rapidities.
-    fn lineages(&self) -> Vec<f64>;
+    fn lineages(&self) -> Result<Vec<f64>, RunError>;
     fn energy(&self) -> f64;
     /// Macro steps and pair-force evaluations so far.
     fn work(&self) -> (u64, u64);
@@ -114,8 +114,8 @@ impl<P: PairPotential> Advancing for ClusterRing<P> {
     fn velocities(&self) -> Vec<f64> {
         self.velocities.clone()
     }
-    fn lineages(&self) -> Vec<f64> {
-        self.label_velocities()
+    fn lineages(&self) -> Result<Vec<f64>, RunError> {
+        Ok(self.label_velocities())
     }
     fn energy(&self) -> f64 {
         ClusterRing::energy(self)
@@ -152,8 +152,10 @@ impl<P: PairPotential> Advancing for WholeRing<P> {
     fn velocities(&self) -> Vec<f64> {
         self.state.velocities()
     }
-    fn lineages(&self) -> Vec<f64> {
-        self.state.sutherland_invariants(self.forces.circumference)
+    fn lineages(&self) -> Result<Vec<f64>, RunError> {
+        Ok(self
+            .state
+            .sutherland_invariants(self.forces.circumference)?)
     }
     fn energy(&self) -> f64 {
         self.state.energy(&self.forces)
@@ -176,6 +178,9 @@ pub enum RunError {
     /// The integration failed.
     #[error(transparent)]
     Integration(#[from] RingError),
+    /// The Lax matrix could not be diagonalized (a non-finite state).
+    #[error("rapidities of the ring: {0}")]
+    Rapidities(#[from] crate::linalg::EigenError),
     /// The state stopped being finite (a defect: never written as a result).
     #[error("the ring's state became non-finite")]
     NonFinite,
@@ -228,7 +233,7 @@ fn sample(
     let background = background(&bins, settings.u_prime, settings.particles - 1);
     let mut published = vec![0.0; bins.len()];
     let mut tagged = vec![0.0; bins.len()];
-    let start = ring.lineages();
+    let start = ring.lineages()?;
     let bound_at_start = ring.bound_pairs();
     let starters: Vec<usize> = (0..start.len())
         .filter(|&k| (start[k] - settings.u_prime).abs() <= settings.start_band)
@@ -248,7 +253,7 @@ fn sample(
                 published[k] += 1.0;
             }
         }
-        let carried = ring.lineages();
+        let carried = ring.lineages()?;
         for &label in &starters {
             if let Some(k) = bins.index(carried[label] - start[label]) {
                 tagged[k] += 1.0;
@@ -267,7 +272,7 @@ fn sample(
     }
     let samples = settings.sample_times.len();
     let thermal_count = samples as f64 * thermal_starters.len().max(1) as f64;
-    let last = ring.lineages();
+    let last = ring.lineages()?;
     let (macro_steps, pair_forces) = ring.work();
     Ok(RunResult {
         published: published_estimate(&published, &background, samples, bins.width),

@@ -23,7 +23,7 @@ use super::potential::PairPotential;
 use crate::integrate::{
     Acceleration, AfterStep, Dprkn12, Drive, Ending, ErrorScales, Span, Vector, drive,
 };
-use crate::linalg::symmetric_eigen;
+use crate::linalg::{EigenError, symmetric_eigen};
 
 /// Which pairs interact.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -232,8 +232,9 @@ impl RingState {
     /// `L = diag(u) + i (pi/C) cot(pi (s_j - s_k)/C)`: conserved when the pair
     /// potential is the chord `d^-2` acting between all pairs (numerics.md).
     /// Computed from the real symmetric form `[[A, -B], [B, A]]` of `A + iB`,
-    /// whose spectrum is `L`'s twice over.
-    pub fn sutherland_invariants(&self, circumference: f64) -> Vec<f64> {
+    /// whose spectrum is `L`'s twice over. An error if the state is not
+    /// finite or the diagonalization does not converge.
+    pub fn sutherland_invariants(&self, circumference: f64) -> Result<Vec<f64>, EigenError> {
         let (u, s) = (self.velocities(), self.positions());
         let n = u.len();
         let m = 2 * n;
@@ -249,9 +250,9 @@ impl RingState {
                 }
             }
         }
-        let mut values = symmetric_eigen(&real, m).values;
+        let mut values = symmetric_eigen(&real, m)?.values;
         values.sort_by(f64::total_cmp);
-        values.into_iter().step_by(2).collect()
+        Ok(values.into_iter().step_by(2).collect())
     }
 }
 
@@ -624,10 +625,10 @@ mod tests {
             reach: Reach::All,
         };
         let mut state = RingState::new(&positions, &velocities, circumference);
-        let before = state.sutherland_invariants(circumference);
+        let before = state.sutherland_invariants(circumference).unwrap();
         let energy = state.energy(&forces);
         evolve(&forces, &mut state, 100.0, 1e-12, 1_000_000).unwrap();
-        let after = state.sutherland_invariants(circumference);
+        let after = state.sutherland_invariants(circumference).unwrap();
         for (a, b) in before.iter().zip(&after) {
             assert!((a - b).abs() < 1e-9, "{before:?} vs {after:?}");
         }

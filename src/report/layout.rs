@@ -2,8 +2,9 @@
 //! cell (its heading included) and two spaces from the next, so no cell runs
 //! into its neighbour, and every `value ± error` of a column in one notation.
 //! (A few lines of our own rather than `comfy-table`, which polars builds:
-//! its borderless preset still pads both sides of a cell and wraps to the
-//! terminal's width, and it knows nothing of a column's notation.)
+//! its borderless preset still draws the borders as blanks and pads both
+//! sides of a cell, and it knows nothing of a column's notation;
+//! docs/crates.md.)
 
 use std::fmt;
 
