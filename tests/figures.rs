@@ -187,7 +187,7 @@ fn grouped_side(
 fn expected(store: &Path, figure: &Artifact) -> Vec<Row> {
     let params = &figure.manifest["params"]["figure"];
     match figure.kind() {
-        "kernels_every_n" | "kernels_lennard_jones" => params["labels"]
+        "kernels_every_n" | "kernels_at_theta" => params["labels"]
             .as_array()
             .unwrap()
             .iter()
