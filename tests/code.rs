@@ -372,3 +372,27 @@ fn the_library_carries_the_fingerprints_of_its_own_source() {
         assert_eq!(computed.parts, parts);
     }
 }
+
+/// Stages are adapters (decode, call the library, encode): a stage file
+/// names other stages only through the contract (their tables, readers and
+/// instance names), never by importing one, so that a stage's code reaches
+/// no other stage's code.
+#[test]
+fn no_stage_imports_another_stage() {
+    let files = real_source();
+    let stage_files: Vec<(&String, String)> = files
+        .iter()
+        .filter(|(path, _)| path.starts_with("src/stages/") && !path.ends_with("/mod.rs"))
+        .map(|(path, bytes)| (path, String::from_utf8_lossy(bytes).into_owned()))
+        .collect();
+    assert!(stage_files.len() >= 15, "{} stage files", stage_files.len());
+    for (path, text) in stage_files {
+        for line in text.lines() {
+            let line = line.trim();
+            assert!(
+                !(line.contains("use super::") || line.contains("crate::stages::")),
+                "{path} imports a stage: `{line}`"
+            );
+        }
+    }
+}

@@ -11,10 +11,10 @@ use std::path::{Path, PathBuf};
 use arrow::array::RecordBatch;
 use ternary::binning::Bins;
 use ternary::contract;
+use ternary::contract::readers::collision_events;
 use ternary::kernel::{Target, histograms};
 use ternary::pipeline::table::read_parquet;
 use ternary::pipeline::{Input, InstanceId};
-use ternary::stages::kernel::collision_events;
 use ternary::stats::Estimate;
 
 mod common;

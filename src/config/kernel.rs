@@ -10,6 +10,7 @@ use crate::physics::potential::Potential;
 use crate::physics::sampling::LaunchProposal;
 
 pub use crate::kernel::DEFAULT_KICK_FLOOR;
+use crate::kernel::Target;
 
 /// Widest velocity window (`v_th`): `u' +- 6`, beyond the largest launch
 /// speed the point sets draw (6.8 `v_th`) from any `u'` within reach.
@@ -95,6 +96,19 @@ pub struct KernelParams {
     pub launch_length: f64,
     /// Velocity changes up to this size count as zero.
     pub kick_floor: f64,
+}
+
+impl KernelParams {
+    /// The `u'`, density, observation length and kick floor the events are
+    /// reweighted to.
+    pub fn target(&self) -> Target {
+        Target {
+            u_prime: self.u_prime,
+            density: self.density,
+            launch_length: self.launch_length,
+            kick_floor: self.kick_floor,
+        }
+    }
 }
 
 /// Largest histogram bins of a kernel or an early evolution.

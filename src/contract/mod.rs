@@ -39,6 +39,8 @@ macro_rules! bounded {
     };
 }
 
+pub mod instances;
+pub mod readers;
 pub mod tables;
 
 pub use tables::*;

@@ -14,12 +14,12 @@ use std::ops::Range;
 use serde_json::Value;
 
 use crate::config::CollisionsParams;
+use crate::contract::instances;
+use crate::contract::readers::read_launches;
 use crate::contract::{self, Rows};
-use crate::kernel::Event;
-use crate::physics::sampling::{OffsetIntegration, SceneRecord, Stratum, leading_share};
+use crate::physics::sampling::{OffsetIntegration, SceneRecord, leading_share};
 use crate::pipeline::code::{self, Code};
 use crate::pipeline::{Cost, Input, InstanceId, Progress, Stage, StageError, Table};
-use crate::stages::launches::{LaunchesStage, read_launches};
 
 /// The `collisions` stage for one potential.
 pub struct CollisionsStage {
@@ -37,21 +37,6 @@ impl CollisionsStage {
             instance,
             launches,
         }
-    }
-
-    /// Instance id of the collisions named `name` (a potential id, or a variant's name).
-    pub fn instance(name: &str) -> InstanceId {
-        InstanceId::new(contract::collisions::STAGE, name)
-    }
-
-    /// The instances of scene sets `main` and `other`, `other` left out when
-    /// it is the same set (a stage then reads it once).
-    pub fn instances(main: &str, other: &str) -> Vec<InstanceId> {
-        let mut ids = vec![CollisionsStage::instance(main)];
-        if other != main {
-            ids.push(CollisionsStage::instance(other));
-        }
-        ids
     }
 }
 
@@ -84,7 +69,7 @@ impl Stage for CollisionsStage {
     }
 
     fn inputs(&self) -> Vec<InstanceId> {
-        vec![LaunchesStage::instance(&self.launches)]
+        vec![instances::launches(&self.launches)]
     }
 
     /// The configured split's total; the launches' pilot may change it.
@@ -159,42 +144,4 @@ pub fn events_table(rows: &[SceneRecord]) -> Result<Table, StageError> {
         .with(ENERGY_ERROR, |r| r.collision.energy_error)
         .with(FORCE_EVALUATIONS, |r| r.collision.evaluations)
         .table(&TABLE)?)
-}
-
-/// The events of a `collisions` artifact, for the kernel estimators.
-pub fn read_events(input: &Input) -> Result<Vec<Event>, StageError> {
-    use contract::collisions::*;
-    let batch = TABLE.of(input)?;
-    let randomization = RANDOMIZATION.read(batch)?;
-    let stratum = STRATUM.read(batch)?;
-    let point = POINT.read(batch)?;
-    let node = NODE.read(batch)?;
-    let (u2, u3) = (U2.read(batch)?, U3.read(batch)?);
-    let offset = ARRIVAL_OFFSET.read(batch)?;
-    let density = PROPOSAL_DENSITY.read(batch)?;
-    let outgoing = [
-        OUT_SLOW.read(batch)?,
-        OUT_MIDDLE.read(batch)?,
-        OUT_FAST.read(batch)?,
-    ];
-    let outcome = OUTCOME.read(batch)?;
-    (0..batch.num_rows())
-        .map(|k| {
-            let stratum = Stratum::from_index(stratum[k]).ok_or_else(|| {
-                StageError::Input(format!("row {k}: unknown stratum {}", stratum[k]))
-            })?;
-            let failed = outcome[k].starts_with("failed");
-            Ok(Event {
-                stratum,
-                randomization: randomization[k],
-                point: point[k],
-                node: node[k],
-                u2: u2[k],
-                u3: u3[k],
-                offset: offset[k],
-                proposal_density: density[k],
-                outgoing: (!failed).then(|| [outgoing[0][k], outgoing[1][k], outgoing[2][k]]),
-            })
-        })
-        .collect()
 }

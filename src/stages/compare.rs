@@ -17,15 +17,14 @@
 use serde::Serialize;
 use serde_json::Value;
 
-use super::collisions::CollisionsStage;
-use super::kernel::{collision_events, target_of};
-use super::md::MdStage;
 use crate::analysis::{
     CollapseRing, FiniteSize, Goodness, RingBins, RingH, boltzmann_on_bins, finite_size, goodness,
     scaling_collapse, thermal_window_variance_rates,
 };
 use crate::binning::Bins;
 use crate::config::{KernelParams, MdParams};
+use crate::contract::instances;
+use crate::contract::readers::collision_events;
 use crate::contract::{self, Rows};
 use crate::evolve::convolution;
 use crate::pipeline::code::{self, Code};
@@ -142,7 +141,7 @@ impl CompareStage {
     /// The kernel's collisions, then the thermal reference's when they
     /// differ, then those of each other kernel.
     fn collision_inputs(&self) -> Vec<InstanceId> {
-        let mut ids = CollisionsStage::instances(
+        let mut ids = instances::collisions_of(
             &self.params.kernel.potential.id(),
             &self.params.thermal_collisions,
         );
@@ -150,7 +149,7 @@ impl CompareStage {
             self.params
                 .other_kernels
                 .iter()
-                .map(|kernel| CollisionsStage::instance(&kernel.potential.id())),
+                .map(|kernel| instances::collisions(&kernel.potential.id())),
         );
         ids
     }
@@ -170,7 +169,7 @@ impl CompareStage {
     ) -> Result<Vec<Replicated<Vec<f64>>>, StageError> {
         let (events, draws, _) = collision_events(collisions)?;
         let bins = Bins::for_window(kernel.window, kernel.bin_width);
-        let rates = convolution::replicated_kernel(&events, &draws, &target_of(kernel), &bins);
+        let rates = convolution::replicated_kernel(&events, &draws, &kernel.target(), &bins);
         Ok(rings
             .iter()
             .map(|(system, ring)| {
@@ -209,7 +208,7 @@ impl CompareStage {
     fn thermal_rates(&self, collisions: &Input) -> Result<Vec<Vec<f64>>, StageError> {
         let (events, draws, _) = collision_events(collisions)?;
         let edges: Vec<f64> = self.params.systems.iter().map(half_window).collect();
-        let target = target_of(&self.params.kernel);
+        let target = self.params.kernel.target();
         Ok(thermal_window_variance_rates(
             &events, &draws, &target, &edges,
         ))
@@ -331,19 +330,12 @@ impl CompareStage {
     }
 }
 
-impl CompareStage {
-    /// The one compare instance of a study.
-    pub fn instance() -> InstanceId {
-        InstanceId::new(contract::compare::STAGE, "study")
-    }
-}
-
 /// The code this stage runs (fingerprinted by the build script).
 const CODE: &Code = code::of(file!());
 
 impl Stage for CompareStage {
     fn id(&self) -> InstanceId {
-        CompareStage::instance()
+        instances::compare()
     }
 
     fn code(&self) -> &'static Code {
@@ -370,7 +362,7 @@ impl Stage for CompareStage {
                 .systems
                 .iter()
                 .chain(&self.params.other_systems)
-                .map(|s| MdStage::instance(&s.name)),
+                .map(|s| instances::md(&s.name)),
         );
         ids
     }
@@ -380,7 +372,7 @@ impl Stage for CompareStage {
     }
 
     fn run(&self, inputs: &[Input], progress: &Progress) -> Result<Vec<Table>, StageError> {
-        let main = CollisionsStage::instances(
+        let main = instances::collisions_of(
             &self.params.kernel.potential.id(),
             &self.params.thermal_collisions,
         )

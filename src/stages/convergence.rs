@@ -14,10 +14,10 @@ use std::collections::HashSet;
 
 use serde_json::Value;
 
-use super::collisions::CollisionsStage;
-use super::kernel::{collision_events, target_of};
 use crate::binning::Bins;
 use crate::config::ConvergenceParams;
+use crate::contract::instances;
+use crate::contract::readers::collision_events;
 use crate::contract::{self, Rows};
 use crate::kernel::equilibrium::self_rates;
 use crate::kernel::{Draws, Event, Target, histograms};
@@ -53,7 +53,7 @@ impl ConvergenceStage {
     /// `a_n` per replicate from the binned self kernel: `sum_k G_self,k x_k^2 dx`.
     fn binned_self_variance(&self, events: &[Event], draws: &Draws, width: f64) -> Vec<f64> {
         let bins = Bins::for_window(self.params.kernel.window, width);
-        histograms(events, &target_of(&self.params.kernel), &bins, draws)
+        histograms(events, &self.params.kernel.target(), &bins, draws)
             .iter()
             .map(|h| {
                 (0..bins.len())
@@ -115,12 +115,12 @@ impl Stage for ConvergenceStage {
 
     fn inputs(&self) -> Vec<InstanceId> {
         let id = self.params.kernel.potential.id();
-        let mut inputs = vec![CollisionsStage::instance(&id)];
+        let mut inputs = vec![instances::collisions(&id)];
         inputs.extend(
             self.params
                 .tolerances
                 .iter()
-                .map(|&t| CollisionsStage::instance(&Self::tolerance_instance(&id, t))),
+                .map(|&t| instances::collisions(&Self::tolerance_instance(&id, t))),
         );
         inputs
     }
@@ -132,7 +132,7 @@ impl Stage for ConvergenceStage {
     fn run(&self, inputs: &[Input], progress: &Progress) -> Result<Vec<Table>, StageError> {
         use contract::convergence::parameter::*;
         let (events, draws, _) = collision_events(&inputs[0])?;
-        let target = target_of(&self.params.kernel);
+        let target = self.params.kernel.target();
         let baseline = self.self_variance(&events, &draws, &target);
         let mut rows = vec![Row {
             parameter: DEFAULT,

@@ -24,10 +24,10 @@
 
 use serde_json::Value;
 
-use super::collisions::CollisionsStage;
-use super::kernel::{collision_events, target_of};
 use crate::binning::Bins;
 use crate::config::EvolveParams;
+use crate::contract::instances;
+use crate::contract::readers::collision_events;
 use crate::contract::{self, Rows};
 use crate::evolve::convolution;
 use crate::evolve::early::EarlyEvolution;
@@ -67,7 +67,7 @@ impl EvolveStage {
     /// The special particle's variance rate at `u'` (within half the window),
     /// `rho^2 l v_th`: `Gamma` in scaled units.
     fn gamma(&self, events: &[Event], draws: &Draws) -> f64 {
-        let target = target_of(&self.params.kernel);
+        let target = self.params.kernel.target();
         let rates = self_rates(events, &target, 0.5 * self.params.kernel.window, draws);
         Estimate::from_replicates(&rates.variance).mean
     }
@@ -109,7 +109,7 @@ impl EvolveStage {
     ) -> Result<Vec<Table>, StageError> {
         let kernel = &self.params.kernel;
         let bins = Bins::for_window(kernel.window, kernel.bin_width);
-        let rates = convolution::replicated_kernel(events, draws, &target_of(kernel), &bins);
+        let rates = convolution::replicated_kernel(events, draws, &kernel.target(), &bins);
         let times: Vec<f64> = schedule.iter().map(|m| m.scaled).collect();
         let rebin = self.params.early_rebin as usize;
         let evolution =
@@ -323,7 +323,7 @@ impl Stage for EvolveStage {
     fn id(&self) -> InstanceId {
         InstanceId::new(
             contract::evolve::STAGE,
-            &super::kernel::target_instance(&self.params.kernel),
+            &instances::target(&self.params.kernel),
         )
     }
 
@@ -347,7 +347,7 @@ impl Stage for EvolveStage {
     }
 
     fn inputs(&self) -> Vec<InstanceId> {
-        CollisionsStage::instances(&self.params.collisions, &self.params.wide_collisions)
+        instances::collisions_of(&self.params.collisions, &self.params.wide_collisions)
     }
 
     fn work_units(&self) -> u64 {

@@ -6,15 +6,12 @@
 use serde_json::{Value, json};
 
 use crate::config::{MdParams, Study};
+use crate::contract::instances;
 use crate::contract::{self, TableSpec};
 use crate::figures::{DILUTE, Figure, FigureRows, Size, frames, render};
 use crate::physics::potential::{Family, Potential};
 use crate::pipeline::code::{self, Code};
 use crate::pipeline::{Input, InstanceId, Progress, Stage, StageError, Table};
-
-use super::compare::CompareStage;
-use super::kernel::target_instance;
-use super::scan::ScanStage;
 
 /// The figure table's name (`points.parquet`).
 const POINTS: &str = "points";
@@ -57,7 +54,10 @@ pub fn figure_stages(study: &Study, plan: &[Box<dyn Stage>]) -> Vec<FiguresStage
         .filter(|p| !p.family().is_integrable())
         .collect();
     let target = |stage: &str, p: &Potential| {
-        InstanceId::new(stage, &target_instance(&study.kernel_params(*p, 0.0, 0.0)))
+        InstanceId::new(
+            stage,
+            &instances::target(&study.kernel_params(*p, 0.0, 0.0)),
+        )
     };
     let mut figures = Vec::new();
     let (at_theta, scale_free): (Vec<Potential>, Vec<Potential>) =
@@ -135,7 +135,7 @@ pub fn figure_stages(study: &Study, plan: &[Box<dyn Stage>]) -> Vec<FiguresStage
                 .iter()
                 .map(|&u| {
                     let params = study.kernel_params(*p, u, 0.0);
-                    InstanceId::new(contract::kernel::STAGE, &target_instance(&params))
+                    InstanceId::new(contract::kernel::STAGE, &instances::target(&params))
                 })
                 .collect();
             figures.push(FiguresStage::new(
@@ -146,13 +146,13 @@ pub fn figure_stages(study: &Study, plan: &[Box<dyn Stage>]) -> Vec<FiguresStage
                 inputs,
             ));
         }
-        let scan = ScanStage::instance(p);
+        let scan = instances::scan(p);
         if present(&scan) {
             figures.push(FiguresStage::new(Figure::Kicks { id: p.id() }, vec![scan]));
         }
     }
     if let Some(evolve) = study.evolve_params() {
-        let instance = target_instance(&evolve.kernel);
+        let instance = instances::target(&evolve.kernel);
         let id = InstanceId::new(contract::evolve::STAGE, &instance);
         if present(&id) && !evolve.times.is_empty() {
             let times = spread(&evolve.times, EVOLUTION_CURVES);
@@ -165,7 +165,7 @@ pub fn figure_stages(study: &Study, plan: &[Box<dyn Stage>]) -> Vec<FiguresStage
     if let Some(figure) = kernels_at_density(study) {
         figures.push(figure);
     }
-    let compare = CompareStage::instance();
+    let compare = instances::compare();
     let rings = study.md_params();
     if let (true, Some(first)) = (present(&compare), rings.first()) {
         figures.push(FiguresStage::new(
@@ -207,7 +207,7 @@ fn kernels_at_density(study: &Study) -> Option<FiguresStage> {
     }
     let instance = |density: f64| {
         let params = study.kernel_params(potential, 0.0, density);
-        InstanceId::new(contract::kernel::STAGE, &target_instance(&params))
+        InstanceId::new(contract::kernel::STAGE, &instances::target(&params))
     };
     // Densities relative to the first ring's, as the paper names its rings:
     // (rho, 100 meV), (2 rho, 100 meV), (2 rho, 800 meV).

@@ -9,8 +9,8 @@
 
 use serde_json::Value;
 
-use super::kernel::target_instance;
-use crate::config::{FitParams, KernelParams};
+use crate::config::FitParams;
+use crate::contract::instances;
 use crate::contract::{self, Rows};
 use crate::kernel::fit::{
     KernelFit, Protocol, Shape, Weighting, fit_kernel, systematic, varied_protocols,
@@ -29,11 +29,6 @@ impl FitStage {
     pub fn new(params: FitParams) -> FitStage {
         FitStage { params }
     }
-
-    /// Instance id for kernel parameters.
-    pub fn instance(params: &KernelParams) -> InstanceId {
-        InstanceId::new(contract::fit::STAGE, &target_instance(params))
-    }
 }
 
 /// The code this stage runs (fingerprinted by the build script).
@@ -41,7 +36,7 @@ const CODE: &Code = code::of(file!());
 
 impl Stage for FitStage {
     fn id(&self) -> InstanceId {
-        FitStage::instance(&self.params.kernel)
+        instances::fit(&self.params.kernel)
     }
 
     fn code(&self) -> &'static Code {
@@ -59,7 +54,7 @@ impl Stage for FitStage {
     fn inputs(&self) -> Vec<InstanceId> {
         vec![InstanceId::new(
             contract::kernel::STAGE,
-            &target_instance(&self.params.kernel),
+            &instances::target(&self.params.kernel),
         )]
     }
 

@@ -6,8 +6,9 @@
 
 use serde_json::Value;
 
-use super::moments::{MomentsStage, self_variance_at};
 use crate::config::{GasParams, KernelParams};
+use crate::contract::instances;
+use crate::contract::readers::self_variance_at;
 use crate::contract::{self, Rows};
 use crate::pipeline::code::{self, Code};
 use crate::pipeline::{Input, InstanceId, Progress, Stage, StageError, Table};
@@ -28,7 +29,7 @@ impl GasesStage {
 
 /// `a_n` of `params` (self variance rate within half the window) from its moments table.
 fn variance_rate(inputs: &[Input], params: &KernelParams) -> Result<Estimate, StageError> {
-    let table = contract::moments::TABLE.find(inputs, &MomentsStage::instance(params))?;
+    let table = contract::moments::TABLE.find(inputs, &instances::moments(params))?;
     self_variance_at(table, 0.5 * params.window)
 }
 
@@ -63,10 +64,7 @@ impl Stage for GasesStage {
     fn inputs(&self) -> Vec<InstanceId> {
         let mut inputs: Vec<InstanceId> = Vec::new();
         for (_, dilute, dense) in &self.gases {
-            for id in [
-                MomentsStage::instance(dilute),
-                MomentsStage::instance(dense),
-            ] {
+            for id in [instances::moments(dilute), instances::moments(dense)] {
                 if !inputs.contains(&id) {
                     inputs.push(id);
                 }

@@ -5,11 +5,12 @@
 
 use serde_json::Value;
 
-use super::collisions::{CollisionsStage, read_events};
 use crate::binning::Bins;
 use crate::config::KernelParams;
+use crate::contract::instances;
+use crate::contract::readers::input_events;
 use crate::contract::{self, Rows};
-use crate::kernel::{Draws, Event, Histogram, Target, histograms, tail};
+use crate::kernel::{Histogram, histograms, tail};
 use crate::pipeline::code::{self, Code};
 use crate::pipeline::{Cost, Input, InstanceId, Progress, Stage, StageError, Table};
 use crate::stats::Estimate;
@@ -26,55 +27,12 @@ impl KernelStage {
     }
 }
 
-/// Instance name of a per-`(potential, u', density)` stage, e.g. `ipp-6_u0_rho0`.
-pub fn target_instance(params: &KernelParams) -> String {
-    format!(
-        "{}_u{}_rho{}",
-        params.potential.id(),
-        params.u_prime,
-        params.density
-    )
-}
-
-/// The reweighting target of kernel parameters.
-pub fn target_of(params: &KernelParams) -> Target {
-    Target {
-        u_prime: params.u_prime,
-        density: params.density,
-        launch_length: params.launch_length,
-        kick_floor: params.kick_floor,
-    }
-}
-
-/// The events of a `collisions` input, their draw counts, and failures.
-pub fn collision_events(input: &Input) -> Result<(Vec<Event>, Draws, usize), StageError> {
-    let events = read_events(input)?;
-    let draws = Draws::count(&events);
-    if draws.replicates() < 2 {
-        return Err(StageError::Input(format!(
-            "{}: fewer than 2 randomizations",
-            input.id
-        )));
-    }
-    let failed = events.iter().filter(|e| e.outgoing.is_none()).count();
-    Ok((events, draws, failed))
-}
-
-/// The events of the single (first) input.
-pub fn input_events(inputs: &[Input]) -> Result<(Vec<Event>, Draws, usize), StageError> {
-    collision_events(
-        inputs
-            .first()
-            .ok_or_else(|| StageError::Input("no collisions input".into()))?,
-    )
-}
-
 /// The code this stage runs (fingerprinted by the build script).
 const CODE: &Code = code::of(file!());
 
 impl Stage for KernelStage {
     fn id(&self) -> InstanceId {
-        InstanceId::new(contract::kernel::STAGE, &target_instance(&self.params))
+        InstanceId::new(contract::kernel::STAGE, &instances::target(&self.params))
     }
 
     fn code(&self) -> &'static Code {
@@ -94,7 +52,7 @@ impl Stage for KernelStage {
     }
 
     fn inputs(&self) -> Vec<InstanceId> {
-        vec![CollisionsStage::instance(&self.params.potential.id())]
+        vec![instances::collisions(&self.params.potential.id())]
     }
 
     fn work_units(&self) -> u64 {
@@ -113,7 +71,7 @@ impl Stage for KernelStage {
         use contract::kernel::*;
         let (events, draws, failed) = input_events(inputs)?;
         let bins = Bins::for_window(self.params.window, self.params.bin_width);
-        let replicates = histograms(&events, &target_of(&self.params), &bins, &draws);
+        let replicates = histograms(&events, &self.params.target(), &bins, &draws);
         let parts = Parts::of(&replicates, &bins);
         let per_bin = |k: usize, part: &[Vec<f64>]| {
             let values: Vec<f64> = part.iter().map(|values| values[k]).collect();

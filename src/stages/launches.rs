@@ -9,10 +9,10 @@
 use serde_json::Value;
 
 use crate::config::LaunchesParams;
+use crate::contract::instances;
 use crate::contract::{self, Rows};
 use crate::kernel::{PILOT_ENGINE, Target, pilot_same_side_fraction};
-use crate::physics::sampling::{LaunchPoint, SamplingPlan, Stratum};
-use crate::physics::scan::LaunchPair;
+use crate::physics::sampling::{LaunchPoint, SamplingPlan};
 use crate::pipeline::code::{self, Code};
 use crate::pipeline::{Input, InstanceId, Progress, Stage, StageError, Table};
 
@@ -26,11 +26,6 @@ impl LaunchesStage {
     /// The launch set named `instance` (a potential id, or a variant's name).
     pub fn new(params: LaunchesParams, instance: String) -> LaunchesStage {
         LaunchesStage { params, instance }
-    }
-
-    /// Instance id of the launch set named `name`.
-    pub fn instance(name: &str) -> InstanceId {
-        InstanceId::new(contract::launches::STAGE, name)
     }
 
     /// The plan with the strata split the pilot chooses for the self
@@ -58,7 +53,7 @@ const CODE: &Code = code::of(file!());
 
 impl Stage for LaunchesStage {
     fn id(&self) -> InstanceId {
-        LaunchesStage::instance(&self.instance)
+        instances::launches(&self.instance)
     }
 
     fn code(&self) -> &'static Code {
@@ -113,39 +108,4 @@ fn launches_table(points: &[LaunchPoint]) -> Result<Table, StageError> {
         .with(LAUNCH_DENSITY, |p| p.density)
         .with(OFFSET_COORDINATE, |p| p.offset_coordinate)
         .table(&TABLE)?)
-}
-
-/// The launch points of a `launches` artifact whose randomization lies in
-/// `randomizations`, in table order.
-pub fn read_launches(
-    input: &Input,
-    randomizations: std::ops::Range<u32>,
-) -> Result<Vec<LaunchPoint>, StageError> {
-    use contract::launches::*;
-    let batch = TABLE.of(input)?;
-    let randomization = RANDOMIZATION.read(batch)?;
-    let stratum = STRATUM.read(batch)?;
-    let point = POINT.read(batch)?;
-    let (u2, u3) = (U2.read(batch)?, U3.read(batch)?);
-    let density = LAUNCH_DENSITY.read(batch)?;
-    let coordinate = OFFSET_COORDINATE.read(batch)?;
-    (0..batch.num_rows())
-        .filter(|&k| randomizations.contains(&randomization[k]))
-        .map(|k| {
-            let stratum = Stratum::from_index(stratum[k]).ok_or_else(|| {
-                StageError::Input(format!("row {k}: unknown stratum {}", stratum[k]))
-            })?;
-            Ok(LaunchPoint {
-                randomization: randomization[k],
-                stratum,
-                point: point[k],
-                launch: LaunchPair {
-                    u2: u2[k],
-                    u3: u3[k],
-                },
-                density: density[k],
-                offset_coordinate: coordinate[k],
-            })
-        })
-        .collect()
 }

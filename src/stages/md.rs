@@ -15,6 +15,7 @@ use sha2::{Digest, Sha256};
 
 use crate::binning::Bins;
 use crate::config::MdParams;
+use crate::contract::instances;
 use crate::contract::{self, Col, Rows, TableSpec};
 use crate::physics::md::{RunResult, RunSettings, ThermalLineages, run};
 use crate::physics::potential::{PairPotential, PotentialVisitor};
@@ -35,11 +36,6 @@ impl MdStage {
     /// An md stage with resolved parameters.
     pub fn new(params: MdParams) -> MdStage {
         MdStage { params }
-    }
-
-    /// Instance id of the ring named `name`.
-    pub fn instance(name: &str) -> InstanceId {
-        InstanceId::new(contract::md::STAGE, name)
     }
 
     fn settings(&self) -> RunSettings {
@@ -344,7 +340,7 @@ const CODE: &Code = code::of(file!());
 
 impl Stage for MdStage {
     fn id(&self) -> InstanceId {
-        MdStage::instance(&self.params.name)
+        instances::md(&self.params.name)
     }
 
     fn code(&self) -> &'static Code {

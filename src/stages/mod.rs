@@ -18,6 +18,7 @@ pub mod sweep;
 pub mod table;
 
 use crate::config::{CollisionsParams, Study};
+use crate::contract::instances;
 use crate::pipeline::Stage;
 
 /// Registers the collisions named `name` after the launch set they
@@ -91,7 +92,7 @@ pub fn plan(study: &Study) -> Vec<Box<dyn Stage>> {
     let gases = study.gases();
     for gas in &gases {
         let dense = study.kernel_params(gas.potential, 0.0, gas.scaled_density());
-        let id = moments::MomentsStage::instance(&dense);
+        let id = instances::moments(&dense);
         if !stages.iter().any(|stage| stage.id() == id) {
             stages.push(Box::new(moments::MomentsStage::new(
                 dense,

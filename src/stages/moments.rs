@@ -5,13 +5,12 @@
 //! events without binning; standard errors from the spread of randomizations.
 //! `a_n` is the self variance rate at `u' = 0`, dilute limit, `X` = half the window.
 
-use arrow::array::RecordBatch;
 use serde::Serialize;
 use serde_json::Value;
 
-use super::collisions::CollisionsStage;
-use super::kernel::{input_events, target_instance, target_of};
 use crate::config::KernelParams;
+use crate::contract::instances;
+use crate::contract::readers::input_events;
 use crate::contract::{self, Rows};
 use crate::kernel::{MomentSums, moments};
 use crate::pipeline::code::{self, Code};
@@ -45,11 +44,6 @@ impl MomentsStage {
         MomentsStage { params, extra }
     }
 
-    /// Instance id for kernel parameters.
-    pub fn instance(params: &KernelParams) -> InstanceId {
-        InstanceId::new(contract::moments::STAGE, &target_instance(params))
-    }
-
     /// Log-spaced `X` from `10^-3` of the half window to the half window and
     /// the added truncations, ascending, then infinity.
     fn truncations(&self) -> Vec<f64> {
@@ -71,28 +65,12 @@ impl MomentsStage {
     }
 }
 
-/// The special particle's variance rate at truncation `limit` (a value of
-/// the table's grid, or infinity for the row without truncation, whose
-/// truncation is null) from a moments table, `rho^2 l v_th`: `a_n`
-/// at the window edge for `u' = 0` in the dilute limit.
-pub fn self_variance_at(batch: &RecordBatch, limit: f64) -> Result<Estimate, StageError> {
-    use contract::moments::*;
-    let row = TRUNCATION
-        .optional(batch)?
-        .into_iter()
-        .map(|x| x.unwrap_or(f64::INFINITY))
-        // The grid's edge is `edge * 10^0`: equal up to rounding of the limit's own arithmetic.
-        .position(|x| x == limit || (limit.is_finite() && (x - limit).abs() <= 1e-12 * limit))
-        .ok_or_else(|| StageError::Input(format!("no truncation {limit} in the moments table")))?;
-    Ok(SELF_VARIANCE.read(batch)?[row])
-}
-
 /// The code this stage runs (fingerprinted by the build script).
 const CODE: &Code = code::of(file!());
 
 impl Stage for MomentsStage {
     fn id(&self) -> InstanceId {
-        MomentsStage::instance(&self.params)
+        instances::moments(&self.params)
     }
 
     fn code(&self) -> &'static Code {
@@ -112,7 +90,7 @@ impl Stage for MomentsStage {
     }
 
     fn inputs(&self) -> Vec<InstanceId> {
-        vec![CollisionsStage::instance(&self.params.potential.id())]
+        vec![instances::collisions(&self.params.potential.id())]
     }
 
     fn work_units(&self) -> u64 {
@@ -123,7 +101,7 @@ impl Stage for MomentsStage {
         use contract::moments::*;
         let (events, draws, failed) = input_events(inputs)?;
         let truncations = self.truncations();
-        let sums = moments(&events, &target_of(&self.params), &truncations, &draws);
+        let sums = moments(&events, &self.params.target(), &truncations, &draws);
         let rows: Vec<usize> = (0..truncations.len()).collect();
         let sums = &sums;
         let estimate = |part: fn(&MomentSums) -> f64| {

@@ -15,14 +15,10 @@ use arrow::array::RecordBatch;
 use serde::Serialize;
 use serde_json::Value;
 
-use super::collisions::CollisionsStage;
-use super::compare::CompareStage;
-use super::fit::FitStage;
-use super::kernel::{collision_events, target_of};
-use super::moments::{MomentsStage, self_variance_at};
-use super::scan::ScanStage;
 use crate::binning::Bins;
 use crate::config::{CollisionsParams, KernelParams, MdParams, PAPER_TRUNCATION, Study};
+use crate::contract::instances;
+use crate::contract::readers::{collision_events, self_variance_at};
 use crate::contract::{self, Rows};
 use crate::kernel::equilibrium::{balance_between, self_rates};
 use crate::kernel::{Target, self_bin_feeders};
@@ -484,7 +480,7 @@ pub fn paper_stage(study: &Study, plan: &[Box<dyn Stage>]) -> Option<PaperStage>
     let planned: HashSet<InstanceId> = plan.iter().map(|stage| stage.id()).collect();
     let present = |id: &InstanceId| planned.contains(id);
     let dilute = |p: Potential| study.kernel_params(p, 0.0, 0.0);
-    let has = |p: Potential| present(&MomentsStage::instance(&dilute(p)));
+    let has = |p: Potential| present(&instances::moments(&dilute(p)));
     let mut checks = table_i_checks(study, &planned);
     if has(LJ_0_1) {
         checks.push(Check::Rate {
@@ -506,7 +502,7 @@ pub fn paper_stage(study: &Study, plan: &[Box<dyn Stage>]) -> Option<PaperStage>
         });
     }
     let compared = study.md_params().first().map(|ring| ring.potential);
-    if present(&CompareStage::instance()) && compared == Some(IPP_6) {
+    if present(&instances::compare()) && compared == Some(IPP_6) {
         checks.push(Check::RingTime {
             published: RING_TIME,
             moments: dilute(IPP_6),
@@ -518,7 +514,7 @@ pub fn paper_stage(study: &Study, plan: &[Box<dyn Stage>]) -> Option<PaperStage>
             cold: cold.clone(),
             hot: hot.clone(),
         });
-        if present(&CompareStage::instance()) {
+        if present(&instances::compare()) {
             checks.push(Check::ScalingMd {
                 published: SCALING_MD,
                 cold,
@@ -526,7 +522,7 @@ pub fn paper_stage(study: &Study, plan: &[Box<dyn Stage>]) -> Option<PaperStage>
             });
         }
     }
-    if let Some(rings) = exponent_rings(study).filter(|_| present(&CompareStage::instance())) {
+    if let Some(rings) = exponent_rings(study).filter(|_| present(&instances::compare())) {
         for (published, density) in [(DENSITY_EXPONENT, true), (TEMPERATURE_EXPONENT, false)] {
             checks.push(Check::ScalingExponent {
                 published,
@@ -573,19 +569,18 @@ fn table_i_checks(study: &Study, planned: &HashSet<InstanceId>) -> Vec<Check> {
             };
             let check = match column {
                 Column::RateConstant => {
-                    present(&MomentsStage::instance(&kernel)).then_some(Check::Rate {
+                    present(&instances::moments(&kernel)).then_some(Check::Rate {
                         published,
                         moments: kernel,
                     })
                 }
-                Column::Alpha | Column::Beta | Column::Sigma => {
-                    present(&FitStage::instance(&kernel)).then_some(Check::Shape {
+                Column::Alpha | Column::Beta | Column::Sigma => present(&instances::fit(&kernel))
+                    .then_some(Check::Shape {
                         published,
                         kernel,
                         column,
-                    })
-                }
-                Column::KickMax => (scans_symmetric && present(&ScanStage::instance(&potential)))
+                    }),
+                Column::KickMax => (scans_symmetric && present(&instances::scan(&potential)))
                     .then_some(Check::KickMax {
                         published,
                         potential,
@@ -676,7 +671,7 @@ fn rates(
     inputs: &[Input],
     params: &KernelParams,
 ) -> Result<(Estimate, Converged, String), StageError> {
-    let moments = contract::moments::TABLE.find(inputs, &MomentsStage::instance(params))?;
+    let moments = contract::moments::TABLE.find(inputs, &instances::moments(params))?;
     let paper = self_variance_at(moments, PAPER_TRUNCATION)?;
     let window = self_variance_at(moments, 0.5 * params.window)?;
     let truncated = "ours counts |u - u'| <= 0.04 like the paper";
@@ -768,7 +763,7 @@ fn exponent_row(
     density: bool,
 ) -> Result<(Estimate, Converged, String), StageError> {
     use contract::compare::finite_size::{RING, TABLE, THERMAL_MD_VARIANCE};
-    let table = TABLE.find(inputs, &CompareStage::instance())?;
+    let table = TABLE.find(inputs, &instances::compare())?;
     let variances = THERMAL_MD_VARIANCE.read(table)?;
     let rates = rings
         .iter()
@@ -843,26 +838,26 @@ impl Check {
     /// The instances it reads.
     fn inputs(&self) -> Vec<InstanceId> {
         match self {
-            Check::Rate { moments, .. } => vec![MomentsStage::instance(moments)],
-            Check::Shape { kernel, .. } => vec![FitStage::instance(kernel)],
-            Check::KickMax { potential, .. } => vec![ScanStage::instance(potential)],
+            Check::Rate { moments, .. } => vec![instances::moments(moments)],
+            Check::Shape { kernel, .. } => vec![instances::fit(kernel)],
+            Check::KickMax { potential, .. } => vec![instances::scan(potential)],
             Check::Balance {
                 sweep, collisions, ..
             } => vec![
                 InstanceId::new(contract::sweep::STAGE, sweep),
-                CollisionsStage::instance(collisions),
+                instances::collisions(collisions),
             ],
             Check::RingTime { moments, .. } => {
-                vec![MomentsStage::instance(moments), CompareStage::instance()]
+                vec![instances::moments(moments), instances::compare()]
             }
             Check::ScalingKernel { cold, .. } => {
-                vec![CollisionsStage::instance(&cold.moments.potential.id())]
+                vec![instances::collisions(&cold.moments.potential.id())]
             }
             Check::ScalingMd { .. } | Check::ScalingExponent { .. } => {
-                vec![CompareStage::instance()]
+                vec![instances::compare()]
             }
             Check::GasTime { moments, .. } => vec![
-                MomentsStage::instance(moments),
+                instances::moments(moments),
                 InstanceId::new(contract::gases::STAGE, "study"),
             ],
         }
@@ -873,13 +868,13 @@ impl Check {
         let (ours, converged, note) = match self {
             Check::Rate { moments, .. } => rates(inputs, moments)?,
             Check::Shape { kernel, column, .. } => {
-                let fit = contract::fit::TABLE.find(inputs, &FitStage::instance(kernel))?;
+                let fit = contract::fit::TABLE.find(inputs, &instances::fit(kernel))?;
                 shape_row(fit, *column)?
             }
             Check::KickMax { potential, .. } => {
                 use contract::scan::U3;
                 use contract::scan::peak::{TABLE, U1_FINAL_MAX_ABS, U2};
-                let id = ScanStage::instance(potential);
+                let id = instances::scan(potential);
                 let peaks = TABLE.find(inputs, &id)?;
                 let row = U2
                     .read(peaks)?
@@ -917,7 +912,7 @@ impl Check {
                         ))
                     })?;
                 let grid = RATIO.read(table)?[row];
-                let id = CollisionsStage::instance(collisions);
+                let id = instances::collisions(collisions);
                 let input = inputs
                     .iter()
                     .find(|input| input.id == id)
@@ -926,9 +921,9 @@ impl Check {
                 let bins = Bins::for_window(2.0 * (b - a) + 4.0 * bin_width, *bin_width);
                 let target = |u_prime: f64| Target {
                     u_prime,
-                    ..target_of(kernel)
+                    ..kernel.target()
                 };
-                let kick_floor = target_of(kernel).kick_floor;
+                let kick_floor = kernel.target().kick_floor;
                 let fed = [bins.half_bins + steps, bins.half_bins - steps]
                     .map(|k| self_bin_feeders(&events, &bins, k, kick_floor));
                 let balance =
@@ -942,7 +937,7 @@ impl Check {
             Check::RingTime { moments, .. } => {
                 use contract::compare::finite_size::{SCALED_TIME, TABLE};
                 let (paper, window, truncated) = rates(inputs, moments)?;
-                let times = SCALED_TIME.read(TABLE.find(inputs, &CompareStage::instance())?)?;
+                let times = SCALED_TIME.read(TABLE.find(inputs, &instances::compare())?)?;
                 let Some(&time) = times.first() else {
                     let note = "no ring: no [[md.system]] of the first ring's potential is at u' = 0, which this row compares";
                     return Ok(PaperRow {
@@ -964,7 +959,7 @@ impl Check {
                 (scaled(paper, time), window.map(|w| scaled(w, time)), note)
             }
             Check::ScalingKernel { cold, hot, .. } => {
-                let collisions = CollisionsStage::instance(&cold.moments.potential.id());
+                let collisions = instances::collisions(&cold.moments.potential.id());
                 let input = inputs
                     .iter()
                     .find(|input| input.id == collisions)
@@ -972,7 +967,7 @@ impl Check {
                 let (events, draws, _) = collision_events(input)?;
                 let rate = |ring: &ScalingRing| {
                     let edge = 0.5 * ring.moments.window;
-                    self_rates(&events, &target_of(&ring.moments), edge, &draws).variance
+                    self_rates(&events, &ring.moments.target(), edge, &draws).variance
                 };
                 let units = hot.rate_unit_per_ns / cold.rate_unit_per_ns;
                 let at_density = scaled(Estimate::paired_ratio(&rate(hot), &rate(cold)), units);
@@ -1000,7 +995,7 @@ impl Check {
             }
             Check::ScalingMd { cold, hot, .. } => {
                 use contract::compare::finite_size::{MD_VARIANCE, RING, TABLE};
-                let table = TABLE.find(inputs, &CompareStage::instance())?;
+                let table = TABLE.find(inputs, &instances::compare())?;
                 let variance = |ring: &ScalingRing| -> Result<Estimate, StageError> {
                     Ok(MD_VARIANCE.read(table)?[RING.row_of(table, &ring.name)?])
                 };

@@ -8,8 +8,8 @@ use rayon::prelude::*;
 use serde_json::Value;
 
 use crate::config::{NamedLaunch, ScanParams};
+use crate::contract::instances;
 use crate::contract::{self, Rows};
-use crate::physics::potential::Potential;
 use crate::physics::scan::{
     LaunchPair, Peak, ScanPoint, TIGHTEST_TOLERANCE, refine_peak, scan_point,
     special_final_velocity,
@@ -28,11 +28,6 @@ impl ScanStage {
     /// A scan with resolved parameters.
     pub fn new(params: ScanParams) -> ScanStage {
         ScanStage { params }
-    }
-
-    /// Instance id of the scan of `potential`.
-    pub fn instance(potential: &Potential) -> InstanceId {
-        InstanceId::new(contract::scan::STAGE, &potential.id())
     }
 
     fn tight_engine(&self) -> EngineSettings {
@@ -81,7 +76,7 @@ const CODE: &Code = code::of(file!());
 
 impl Stage for ScanStage {
     fn id(&self) -> InstanceId {
-        ScanStage::instance(&self.params.potential)
+        instances::scan(&self.params.potential)
     }
 
     fn code(&self) -> &'static Code {

@@ -13,10 +13,10 @@ use std::collections::HashMap;
 use rayon::prelude::*;
 use serde_json::Value;
 
-use super::collisions::CollisionsStage;
-use super::kernel::input_events;
 use crate::binning::Bins;
 use crate::config::SweepParams;
+use crate::contract::instances;
+use crate::contract::readers::input_events;
 use crate::contract::{self, Rows};
 use crate::kernel::equilibrium::{
     Balance, FokkerPlanckPoint, JointBalance, SelfRates, balance_between, fokker_planck_check,
@@ -198,7 +198,7 @@ impl Stage for SweepStage {
     }
 
     fn inputs(&self) -> Vec<InstanceId> {
-        vec![CollisionsStage::instance(&self.params.collisions)]
+        vec![instances::collisions(&self.params.collisions)]
     }
 
     fn work_units(&self) -> u64 {

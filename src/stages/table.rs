@@ -6,10 +6,9 @@
 
 use serde_json::Value;
 
-use super::fit::FitStage;
-use super::moments::{MomentsStage, self_variance_at};
-use super::scan::ScanStage;
 use crate::config::KernelParams;
+use crate::contract::instances;
+use crate::contract::readers::self_variance_at;
 use crate::contract::{self, Col, Pair, Rows, table};
 use crate::pipeline::code::{self, Code};
 use crate::pipeline::{Column, Input, InstanceId, Progress, Stage, StageError, Table};
@@ -44,10 +43,10 @@ struct PotentialRow {
 impl TableStage {
     /// The row of the potential of `params` from its inputs.
     fn row(&self, inputs: &[Input], params: &KernelParams) -> Result<PotentialRow, StageError> {
-        let moments = contract::moments::TABLE.find(inputs, &MomentsStage::instance(params))?;
-        let fit = contract::fit::TABLE.find(inputs, &FitStage::instance(params))?;
+        let moments = contract::moments::TABLE.find(inputs, &instances::moments(params))?;
+        let fit = contract::fit::TABLE.find(inputs, &instances::fit(params))?;
         let peaks =
-            contract::scan::peak::TABLE.find(inputs, &ScanStage::instance(&params.potential))?;
+            contract::scan::peak::TABLE.find(inputs, &instances::scan(&params.potential))?;
         // The study's fit (the first row), its refit error and the spread
         // over the fit protocols combined.
         let first = |pair: Pair, systematic: Col<f64>| -> Result<Estimate, StageError> {
@@ -126,9 +125,9 @@ impl Stage for TableStage {
             .iter()
             .flat_map(|params| {
                 [
-                    MomentsStage::instance(params),
-                    FitStage::instance(params),
-                    ScanStage::instance(&params.potential),
+                    instances::moments(params),
+                    instances::fit(params),
+                    instances::scan(&params.potential),
                 ]
             })
             .collect()

@@ -1,0 +1,70 @@
+//! Instance names: what each stage instance is computed for (a potential, a
+//! kernel's `u'` and density, a ring, the study), named once, here. The plan
+//! composes them; each stage names itself and its inputs through them.
+
+use super::{collisions as collisions_stage, compare as compare_stage, fit as fit_stage};
+use super::{kernel as kernel_stage, scan as scan_stage};
+use super::{launches as launches_stage, md as md_stage, moments as moments_stage};
+use crate::config::KernelParams;
+use crate::physics::potential::Potential;
+use crate::pipeline::InstanceId;
+
+/// Name of a per-`(potential, u', density)` instance, e.g. `ipp-6_u0_rho0`.
+pub fn target(params: &KernelParams) -> String {
+    format!(
+        "{}_u{}_rho{}",
+        params.potential.id(),
+        params.u_prime,
+        params.density
+    )
+}
+
+/// The `launches` instance named `name`.
+pub fn launches(name: &str) -> InstanceId {
+    InstanceId::new(launches_stage::STAGE, name)
+}
+
+/// The `collisions` instance named `name`.
+pub fn collisions(name: &str) -> InstanceId {
+    InstanceId::new(collisions_stage::STAGE, name)
+}
+
+/// The `collisions` instances of scene sets `main` and `other`, `other` left
+/// out when it is the same set (a stage then reads it once).
+pub fn collisions_of(main: &str, other: &str) -> Vec<InstanceId> {
+    let mut ids = vec![collisions(main)];
+    if other != main {
+        ids.push(collisions(other));
+    }
+    ids
+}
+
+/// The `scan` instance of `potential`.
+pub fn scan(potential: &Potential) -> InstanceId {
+    InstanceId::new(scan_stage::STAGE, &potential.id())
+}
+
+/// The `kernel` instance of kernel parameters.
+pub fn kernel(params: &KernelParams) -> InstanceId {
+    InstanceId::new(kernel_stage::STAGE, &target(params))
+}
+
+/// The `moments` instance of kernel parameters.
+pub fn moments(params: &KernelParams) -> InstanceId {
+    InstanceId::new(moments_stage::STAGE, &target(params))
+}
+
+/// The `fit` instance of kernel parameters.
+pub fn fit(params: &KernelParams) -> InstanceId {
+    InstanceId::new(fit_stage::STAGE, &target(params))
+}
+
+/// The `md` instance of the ring named `name`.
+pub fn md(name: &str) -> InstanceId {
+    InstanceId::new(md_stage::STAGE, name)
+}
+
+/// The study's one `compare` instance.
+pub fn compare() -> InstanceId {
+    InstanceId::new(compare_stage::STAGE, "study")
+}
