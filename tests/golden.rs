@@ -173,3 +173,41 @@ fn a_cpu_without_fma_or_avx_computes_the_same_bytes() {
         "content differs without FMA/AVX: {differing:?}"
     );
 }
+
+const PLAN: &str = "tests/golden/default-plan.txt";
+
+/// The default study's plan as text: each stage instance in plan order with
+/// the instances it reads, computed from `pipeline.toml` without running
+/// anything (like a query plan). A change to the DAG (a stage, an instance
+/// name, an input) shows here as a diff, rewritten with `TERNARY_BLESS=1`;
+/// the commit says why.
+#[test]
+fn the_default_plan_matches_its_snapshot() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let study = ternary::config::Study::load(&root.join("pipeline.toml")).expect("pipeline.toml");
+    let mut text = String::from("# stage[instance] <- inputs, in plan order (pipeline.toml)\n");
+    for stage in ternary::stages::plan(&study) {
+        let inputs: Vec<String> = stage.inputs().iter().map(|id| id.to_string()).collect();
+        let line = if inputs.is_empty() {
+            stage.id().to_string()
+        } else {
+            format!("{} <- {}", stage.id(), inputs.join(", "))
+        };
+        text.push_str(&line);
+        text.push('\n');
+    }
+    let golden = root.join(PLAN);
+    if std::env::var_os("TERNARY_BLESS").is_some() {
+        fs::write(&golden, &text).unwrap();
+        return;
+    }
+    let expected = fs::read_to_string(&golden).expect(PLAN);
+    let (old, new): (Vec<&str>, Vec<&str>) = (expected.lines().collect(), text.lines().collect());
+    let gone: Vec<&&str> = old.iter().filter(|l| !new.contains(l)).collect();
+    let added: Vec<&&str> = new.iter().filter(|l| !old.contains(l)).collect();
+    assert!(
+        expected == text,
+        "the default plan changed (bless with TERNARY_BLESS=1 and say why in the commit):\n\
+         gone: {gone:#?}\nadded: {added:#?}"
+    );
+}
