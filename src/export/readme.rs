@@ -168,7 +168,8 @@ fn naming_guide(out: &mut String) {
          * `<stage>/<instance>.parquet` is a stage's only table, \
          `<stage>/<instance>/<table>.parquet` one of its several tables.\n\
          * `<instance>` names what the stage was run for: `ipp-<n>` an inverse power law \
-         potential of exponent n, `lj-<eps>` Lennard-Jones at well depth eps (in kT), \
+         potential of exponent n, `lj-<theta>` Lennard-Jones at theta = kT/eps, \
+         `morse-<theta>-<x0>` Morse at theta = kT/eps with its well at x0 = a d0, \
          `_u<u'>` the velocity u' the kernel is taken at (v_th), `_rho<density>` the density \
          (0: the dilute limit), `study` the whole study; an MD ring (`md`, `compare`) is \
          named as in `pipeline.toml`, a figure by its name. Values are cut to six significant digits (`rho5.38226e-5`); the full \
