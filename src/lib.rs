@@ -12,7 +12,10 @@
 //! * [`analysis`]: molecular dynamics against the Boltzmann evolution.
 //! * [`pipeline`]: the generic content-addressed DAG (keys, store, executor,
 //!   Parquet tables); no physics.
-//! * [`stages`]: one adapter per stage between the two.
+//! * [`stages`]: one adapter per stage between the two; [`plan`]: which
+//!   stage instances a study runs, with their inputs (the DAG), built
+//!   without running anything.
+//! * [`paper`]: the paper's published numbers and how ours are computed.
 //! * [`contract`]: every output table's columns, declared once for the
 //!   stages that write and read them and for the report.
 //! * [`config`]: `pipeline.toml`, parsed strictly.
@@ -31,8 +34,10 @@ pub mod figures;
 pub mod integrate;
 pub mod kernel;
 pub mod linalg;
+pub mod paper;
 pub mod physics;
 pub mod pipeline;
+pub mod plan;
 pub mod report;
 pub mod scaling;
 pub mod slurm;

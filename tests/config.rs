@@ -742,7 +742,7 @@ fn sweep_points_share_sizes_only_the_sweep_set() {
     );
     let study = Study::parse(std::path::Path::new("pipeline.toml"), &text).expect("valid");
     let potential = Potential::inverse_power(6.0);
-    let (_, wide) = study.wide_collisions(potential);
+    let (_, wide) = ternary::plan::wide_collisions(&study, potential);
     let wide = wide.expect("the sweep has its own scene set");
     assert_eq!(wide.points, 64);
     assert_eq!(wide.sampling.launch.spread, 2.0);
@@ -752,7 +752,7 @@ fn sweep_points_share_sizes_only_the_sweep_set() {
     assert!(kernel.sampling.opposite_points >= 128);
     // A per-potential count is shared the same way.
     let lennard_jones = Potential::lennard_jones(0.1);
-    let (_, wide) = study.wide_collisions(lennard_jones);
+    let (_, wide) = ternary::plan::wide_collisions(&study, lennard_jones);
     assert_eq!(wide.expect("own set").points, 128);
 }
 
@@ -772,7 +772,9 @@ fn sweep_randomizations_and_halvings_set_only_the_sweep_set() {
         );
     let study = Study::parse(std::path::Path::new("pipeline.toml"), &text).expect("valid");
     let potential = Potential::inverse_power(6.0);
-    let wide = study.wide_collisions(potential).1.expect("own set");
+    let wide = ternary::plan::wide_collisions(&study, potential)
+        .1
+        .expect("own set");
     let kernel = study.collisions_params(potential);
     assert_eq!(wide.sampling.randomizations, 12);
     assert_eq!(kernel.sampling.randomizations, 4);

@@ -38,7 +38,6 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 
 use crate::physics::potential::Potential;
-use crate::physics::sampling::OffsetIntegration;
 use crate::physics::scene::EngineSettings;
 
 pub use check::{MAX_LIST, compact};
@@ -320,53 +319,6 @@ impl Study {
         self.config.kernel.fit(kernel)
     }
 
-    /// The collisions instance that reaches every `u'` of the sweep and of the
-    /// evolution grid: its name and, when it is not the main set, its
-    /// parameters (the main set with the sweep's launch spread, share of
-    /// points and randomizations, and under the offset quadrature one halving
-    /// more: its balance bins lie in the collision's core, where the nodes
-    /// are point masses; at the kernel's step the pairs `a -> a + 0.02` at
-    /// `|a| >= 2` fell 3.5-4 errors short of `f0(b)/f0(a)` for n = 6, and
-    /// within 1.7 with one halving more; docs/benchmarks.md).
-    pub fn wide_collisions(&self, potential: Potential) -> (String, Option<CollisionsParams>) {
-        let name = self.config.sweep.wide_collisions(potential);
-        let spread = self.config.sweep.launch_spread;
-        let params = (spread > 0.0).then(|| {
-            let mut params = self.config.collisions.params_with_share(
-                potential,
-                self.engine(),
-                self.config.sweep.points_share,
-            );
-            params.sampling.launch.spread = spread;
-            if let Some(randomizations) = self.config.sweep.randomizations {
-                params.sampling.randomizations = randomizations;
-            }
-            one_halving_finer(&mut params);
-            params
-        });
-        (name, params)
-    }
-
-    /// The collisions of `potential` drawn for a special particle at `u'`
-    /// for the sweep's balance pairs: the kernel's plan with the launch
-    /// density of `u'` (no mixture), named `<id>_u<u'>`. Under the offset
-    /// quadrature each pair takes one halving more than the kernel's (at
-    /// most 8): the balance bins lie in the collision's core (`|du| = 0.04`),
-    /// where nodes are point masses and a finer step is what lowers their
-    /// error (n = 6: +-0.035 at two halvings in 25 s, +-0.0098 at three in
-    /// 51 s, +-0.022 at three with half the points; docs/benchmarks.md).
-    pub fn tuned_collisions(
-        &self,
-        potential: Potential,
-        u_prime: f64,
-    ) -> (String, CollisionsParams) {
-        let mut params = self.collisions_params(potential);
-        params.sampling.launch.shift = u_prime;
-        params.sampling.launch.spread = 0.0;
-        one_halving_finer(&mut params);
-        (format!("{}_u{u_prime}", potential.id()), params)
-    }
-
     /// Resolved parameters of the sweep of `potential`, if enabled.
     pub fn sweep_params(&self, potential: Potential) -> Option<SweepParams> {
         let kernel = self.kernel_params(potential, 0.0, 0.0);
@@ -376,50 +328,6 @@ impl Study {
     /// Resolved parameters of every md system (empty unless enabled).
     pub fn md_params(&self) -> Vec<MdParams> {
         self.md.clone()
-    }
-
-    /// The rings `compare` sets against the Boltzmann evolution: those of the
-    /// first ring's potential at `u' = 0`, in file order.
-    pub fn compared_rings(&self) -> Vec<MdParams> {
-        let Some(first) = self.md.first() else {
-            return Vec::new();
-        };
-        self.md
-            .iter()
-            .filter(|r| r.potential == first.potential && r.u_prime == 0.0)
-            .cloned()
-            .collect()
-    }
-
-    /// The rings `compare` also sets against the Boltzmann evolution of
-    /// their own potential's kernel (`h` and the goodness of fit only): those
-    /// at `u' = 0` of another potential than the first ring's that kicks
-    /// (e.g. Lennard-Jones; not the integrable `n = 2`), in file order.
-    pub fn other_compared_rings(&self) -> Vec<MdParams> {
-        let Some(first) = self.md.first() else {
-            return Vec::new();
-        };
-        self.md
-            .iter()
-            .filter(|r| r.potential != first.potential && r.u_prime == 0.0)
-            .filter(|r| !r.potential.family().is_integrable())
-            .cloned()
-            .collect()
-    }
-
-    /// The compared rings sharing the first ring's `N` and `rho^2 l v_th t_f`
-    /// (different `rho` and `T`, the same dilute physics: the `rho^2
-    /// T^(1/2 - 1/n)` collapse), the first ring first.
-    pub fn collapse_rings(&self) -> Vec<MdParams> {
-        let compared = self.compared_rings();
-        let Some(first) = compared.first().cloned() else {
-            return Vec::new();
-        };
-        compared
-            .into_iter()
-            .filter(|r| r.particles == first.particles)
-            .filter(|r| (r.scaled_final_time() / first.scaled_final_time() - 1.0).abs() < 1e-9)
-            .collect()
     }
 
     /// Resolved parameters of the evolve stage, if enabled.
@@ -485,13 +393,6 @@ fn line_of_key(text: &str, key: &str) -> Option<usize> {
         rest = rest.strip_prefix('.').unwrap_or(rest);
     }
     line_of_span(text, Some(current.span()))
-}
-
-/// Under the offset quadrature, one halving more than `params` have (at most 8).
-fn one_halving_finer(params: &mut CollisionsParams) {
-    if let OffsetIntegration::Quadrature(rule) = &mut params.sampling.offsets {
-        rule.halvings = (rule.halvings + 1).min(8);
-    }
 }
 
 #[cfg(test)]

@@ -19,6 +19,18 @@ pub fn target(params: &KernelParams) -> String {
     )
 }
 
+/// Name of the collisions of `potential` drawn for a special particle at
+/// `u'` (no launch mixture), e.g. `ipp-6_u-3`.
+pub fn tuned_collisions(potential: &Potential, u_prime: f64) -> String {
+    format!("{}_u{u_prime}", potential.id())
+}
+
+/// Name of the collisions of the potential with id `potential_id`
+/// re-integrated at engine tolerance `tolerance`, e.g. `ipp-6_tol1e-10`.
+pub fn tolerance_collisions(potential_id: &str, tolerance: f64) -> String {
+    format!("{potential_id}_tol{tolerance:e}")
+}
+
 /// The `launches` instance named `name`.
 pub fn launches(name: &str) -> InstanceId {
     InstanceId::new(launches_stage::STAGE, name)

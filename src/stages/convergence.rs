@@ -36,11 +36,6 @@ impl ConvergenceStage {
         ConvergenceStage { params }
     }
 
-    /// Instance name of the collisions re-integrated at `tolerance`.
-    pub fn tolerance_instance(potential_id: &str, tolerance: f64) -> String {
-        format!("{potential_id}_tol{tolerance:e}")
-    }
-
     fn edge(&self) -> f64 {
         0.5 * self.params.kernel.window
     }
@@ -120,7 +115,7 @@ impl Stage for ConvergenceStage {
             self.params
                 .tolerances
                 .iter()
-                .map(|&t| instances::collisions(&Self::tolerance_instance(&id, t))),
+                .map(|&t| instances::collisions(&instances::tolerance_collisions(&id, t))),
         );
         inputs
     }

@@ -1,0 +1,164 @@
+//! The study's plan: every stage instance a study computes, with its
+//! parameters and inputs, in topological order, built from the resolved
+//! [`Study`] without running anything (like a lazy query plan; the default
+//! study's is `tests/golden/default-plan.txt`). This module is the one place
+//! that decides which instances exist: `Study` resolves values, the stages
+//! compute, and every instance name comes from [`crate::contract::instances`].
+
+mod collisions;
+mod figures;
+mod paper;
+mod rings;
+
+pub use collisions::wide_collisions;
+
+use crate::config::Study;
+use crate::contract::instances;
+use crate::physics::potential::Potential;
+use crate::pipeline::Stage;
+use crate::stages::compare::{CompareParams, CompareStage};
+use crate::stages::{convergence, evolve, fit, gases, kernel, md, moments, scan, sweep, table};
+use collisions::push_collisions;
+
+/// Every stage instance of a study, in topological order.
+pub fn plan(study: &Study) -> Vec<Box<dyn Stage>> {
+    let mut stages: Vec<Box<dyn Stage>> = Vec::new();
+    for potential in study.potentials() {
+        push_potential(&mut stages, study, potential);
+    }
+    push_gases(&mut stages, study);
+    push_convergence(&mut stages, study);
+    push_rings(&mut stages, study);
+    let rows = study
+        .potentials()
+        .iter()
+        .map(|&p| study.kernel_params(p, 0.0, 0.0))
+        .collect();
+    stages.push(Box::new(table::TableStage::new(rows)));
+    if let Some((name, params)) = paper::balance_collisions(study) {
+        push_collisions(&mut stages, params, name);
+    }
+    if let Some(paper) = paper::paper_stage(study, &stages) {
+        stages.push(Box::new(paper));
+    }
+    if study.config.figures.enabled {
+        let figures = figures::figure_stages(study, &stages);
+        stages.extend(figures.into_iter().map(|f| Box::new(f) as Box<dyn Stage>));
+    }
+    stages
+}
+
+/// Adds `stage` unless an instance with its id is planned already.
+fn push_once(stages: &mut Vec<Box<dyn Stage>>, stage: Box<dyn Stage>) {
+    if !stages.iter().any(|other| other.id() == stage.id()) {
+        stages.push(stage);
+    }
+}
+
+/// One potential's scan, collisions, kernels with their moments and fits at
+/// every `(u', density)` target, and the sweep and evolution that read its
+/// wide collisions.
+fn push_potential(stages: &mut Vec<Box<dyn Stage>>, study: &Study, potential: Potential) {
+    stages.push(Box::new(scan::ScanStage::new(study.scan_params(potential))));
+    push_collisions(stages, study.collisions_params(potential), potential.id());
+    for (u_prime, density) in study.kernel_targets() {
+        let params = study.kernel_params(potential, u_prime, density);
+        stages.push(Box::new(kernel::KernelStage::new(params)));
+        stages.push(Box::new(moments::MomentsStage::new(
+            params,
+            study.config.kernel.truncations.clone(),
+        )));
+        stages.push(Box::new(fit::FitStage::new(study.fit_params(params))));
+    }
+    let sweep = study.sweep_params(potential);
+    let evolve = study
+        .evolve_params()
+        .filter(|e| e.kernel.potential == potential);
+    let compared = study
+        .md_params()
+        .first()
+        .is_some_and(|ring| ring.potential == potential);
+    if let (true, (name, Some(wide))) = (
+        sweep.is_some() || evolve.is_some() || compared,
+        wide_collisions(study, potential),
+    ) {
+        push_collisions(stages, wide, name);
+    }
+    if let Some(params) = sweep {
+        stages.push(Box::new(sweep::SweepStage::new(params)));
+    }
+    if let Some(params) = evolve {
+        stages.push(Box::new(evolve::EvolveStage::new(params)));
+    }
+}
+
+/// The moments at each gas's own `rho l`, the kernel at each collapse ring's
+/// (figure `kernels_density`: the literal algorithm's finite-density
+/// factor), and the `gases` table.
+fn push_gases(stages: &mut Vec<Box<dyn Stage>>, study: &Study) {
+    let gases = study.gases();
+    for gas in &gases {
+        let dense = study.kernel_params(gas.potential, 0.0, gas.scaled_density());
+        let truncations = study.config.kernel.truncations.clone();
+        push_once(
+            stages,
+            Box::new(moments::MomentsStage::new(dense, truncations)),
+        );
+    }
+    for ring in rings::collapse_rings(study) {
+        let dense = study.kernel_params(ring.potential, 0.0, ring.scaled_density());
+        push_once(stages, Box::new(kernel::KernelStage::new(dense)));
+    }
+    if !gases.is_empty() {
+        let rows = gases
+            .into_iter()
+            .map(|gas| {
+                let dilute = study.kernel_params(gas.potential, 0.0, 0.0);
+                let dense = study.kernel_params(gas.potential, 0.0, gas.scaled_density());
+                (gas, dilute, dense)
+            })
+            .collect();
+        stages.push(Box::new(gases::GasesStage::new(rows)));
+    }
+}
+
+/// The collisions re-integrated at each varied tolerance and the
+/// `convergence` table, if enabled.
+fn push_convergence(stages: &mut Vec<Box<dyn Stage>>, study: &Study) {
+    let Some((params, variants)) = study.convergence() else {
+        return;
+    };
+    for variant in variants {
+        let name =
+            instances::tolerance_collisions(&variant.potential.id(), variant.engine.tolerance);
+        push_collisions(stages, variant, name);
+    }
+    stages.push(Box::new(convergence::ConvergenceStage::new(params)));
+}
+
+/// Every MD ring and, when there is one, the `compare` stage setting the
+/// compared rings against the Boltzmann evolution.
+fn push_rings(stages: &mut Vec<Box<dyn Stage>>, study: &Study) {
+    let rings = study.md_params();
+    for params in &rings {
+        stages.push(Box::new(md::MdStage::new(params.clone())));
+    }
+    let Some(first) = rings.first() else {
+        return;
+    };
+    let other_systems = rings::other_compared_rings(study);
+    let mut other_kernels = Vec::new();
+    for ring in &other_systems {
+        let kernel = study.kernel_params(ring.potential, 0.0, 0.0);
+        if !other_kernels.contains(&kernel) {
+            other_kernels.push(kernel);
+        }
+    }
+    stages.push(Box::new(CompareStage::new(CompareParams {
+        kernel: study.kernel_params(first.potential, 0.0, 0.0),
+        thermal_collisions: wide_collisions(study, first.potential).0,
+        systems: rings::compared_rings(study),
+        other_kernels,
+        other_systems,
+    })));
+}
