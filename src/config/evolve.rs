@@ -4,7 +4,7 @@ use serde::{Deserialize, Serialize};
 
 use super::check::{Invalid, check, check_length, positive, potential_named};
 use super::collisions::{REWEIGHTING_REACH, within_reach};
-use super::{GasParams, KernelConfig, KernelParams, MAX_BINS, SweepConfig};
+use super::{GasParams, KernelConfig, KernelParams, MAX_BINS};
 use crate::physics::potential::Potential;
 use crate::physics::sampling::LaunchProposal;
 
@@ -59,10 +59,6 @@ impl Default for EvolveConfig {
 pub struct EvolveParams {
     /// Kernel settings at `u'` (potential, window, bin width, kick floor).
     pub kernel: KernelParams,
-    /// Collisions instance of the early (translation-invariant) kernel.
-    pub collisions: String,
-    /// Collisions instance of the grid kernel (a launch mixture reaching the whole grid).
-    pub wide_collisions: String,
     /// Master-equation times, `1/Gamma`.
     pub times: Vec<f64>,
     /// Convolution times, `1/Gamma`.
@@ -101,8 +97,6 @@ pub(super) struct Context<'a> {
     pub gases: &'a [GasParams],
     /// `[kernel]`.
     pub kernel: &'a KernelConfig,
-    /// `[sweep]` (which names the wide collisions set).
-    pub sweep: &'a SweepConfig,
     /// The kernel's launch proposal.
     pub launch: &'a LaunchProposal,
     /// The wide launch proposal (the sweep's).
@@ -139,8 +133,6 @@ impl EvolveConfig {
         });
         Ok(Some(EvolveParams {
             kernel,
-            collisions: potential.id(),
-            wide_collisions: context.sweep.wide_collisions(potential),
             times: sorted(&self.times),
             early_times: sorted(&self.early_times),
             early_rebin: (self.early_bin_width / kernel.bin_width).round() as u32,

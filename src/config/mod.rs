@@ -263,7 +263,6 @@ impl Study {
             potentials: &potentials,
             gases: &gases,
             kernel: &config.kernel,
-            sweep: &config.sweep,
             launch: &launch,
             wide: &wide,
         })?;

@@ -5,7 +5,6 @@ use serde::{Deserialize, Serialize};
 use super::KernelParams;
 use super::check::{Invalid, MAX_LIST, check};
 use super::collisions::{MAX_RANDOMIZATIONS, within_reach};
-use crate::physics::potential::Potential;
 use crate::physics::sampling::LaunchProposal;
 
 /// `[sweep]`.
@@ -68,8 +67,6 @@ pub struct SweepParams {
     pub balance_separations: Vec<f64>,
     /// Detailed-balance bin width.
     pub balance_bin_width: f64,
-    /// Collisions instance the sweep reads (its own set when it has a launch spread).
-    pub collisions: String,
 }
 
 /// Largest `u'` points of the sweep.
@@ -154,17 +151,6 @@ impl SweepConfig {
         Ok(())
     }
 
-    /// Name of the collisions instance that reaches every `u'` of the sweep
-    /// and of the evolution grid: its own set (`<id>_sweep`) when the sweep
-    /// has a launch spread, else the kernel's.
-    pub fn wide_collisions(&self, potential: Potential) -> String {
-        if self.launch_spread > 0.0 {
-            format!("{}_sweep", potential.id())
-        } else {
-            potential.id()
-        }
-    }
-
     /// Resolved parameters of the sweep with `kernel`'s settings, if enabled.
     pub fn params(&self, kernel: KernelParams) -> Option<SweepParams> {
         self.enabled.then(|| SweepParams {
@@ -174,7 +160,6 @@ impl SweepConfig {
             points: self.points,
             balance_separations: self.balance_separations.clone(),
             balance_bin_width: self.balance_bin_width,
-            collisions: self.wide_collisions(kernel.potential),
         })
     }
 }

@@ -19,6 +19,17 @@ pub fn target(params: &KernelParams) -> String {
     )
 }
 
+/// Name of the collisions that reach every `u'` of the sweep and of the
+/// evolution grid: the potential's own wide set (`<id>_sweep`) when the
+/// sweep spreads its launches (`own_set`), else its main set (`<id>`).
+pub fn wide_collisions(potential: &Potential, own_set: bool) -> String {
+    if own_set {
+        format!("{}_sweep", potential.id())
+    } else {
+        potential.id()
+    }
+}
+
 /// Name of the collisions of `potential` drawn for a special particle at
 /// `u'` (no launch mixture), e.g. `ipp-6_u-3`.
 pub fn tuned_collisions(potential: &Potential, u_prime: f64) -> String {

@@ -42,7 +42,7 @@ pub(super) fn push_collisions(
 /// within 1.7 with one halving more; docs/benchmarks.md).
 pub fn wide_collisions(study: &Study, potential: Potential) -> (String, Option<CollisionsParams>) {
     let sweep = &study.config.sweep;
-    let name = sweep.wide_collisions(potential);
+    let name = instances::wide_collisions(&potential, sweep.launch_spread > 0.0);
     let params = (sweep.launch_spread > 0.0).then(|| {
         let mut params = study.config.collisions.params_with_share(
             potential,

@@ -78,17 +78,15 @@ fn push_potential(stages: &mut Vec<Box<dyn Stage>>, study: &Study, potential: Po
         .md_params()
         .first()
         .is_some_and(|ring| ring.potential == potential);
-    if let (true, (name, Some(wide))) = (
-        sweep.is_some() || evolve.is_some() || compared,
-        wide_collisions(study, potential),
-    ) {
-        push_collisions(stages, wide, name);
+    let (wide_name, wide) = wide_collisions(study, potential);
+    if let (true, Some(wide)) = (sweep.is_some() || evolve.is_some() || compared, wide) {
+        push_collisions(stages, wide, wide_name.clone());
     }
     if let Some(params) = sweep {
-        stages.push(Box::new(sweep::SweepStage::new(params)));
+        stages.push(Box::new(sweep::SweepStage::new(params, wide_name.clone())));
     }
     if let Some(params) = evolve {
-        stages.push(Box::new(evolve::EvolveStage::new(params)));
+        stages.push(Box::new(evolve::EvolveStage::new(params, wide_name)));
     }
 }
 

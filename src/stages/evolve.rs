@@ -45,6 +45,8 @@ use crate::stats::{Estimate, Replicated};
 /// The `evolve` stage.
 pub struct EvolveStage {
     params: EvolveParams,
+    /// The collisions instance of the grid kernel.
+    wide_collisions: String,
 }
 
 /// One output time in its three units.
@@ -59,9 +61,15 @@ struct Moment {
 }
 
 impl EvolveStage {
-    /// An evolve stage with resolved parameters.
-    pub fn new(params: EvolveParams) -> EvolveStage {
-        EvolveStage { params }
+    /// An evolve stage with resolved parameters, reading the potential's
+    /// main collisions (the early, translation-invariant kernel) and those
+    /// named `wide_collisions` (the grid kernel: a launch mixture reaching
+    /// the whole grid).
+    pub fn new(params: EvolveParams, wide_collisions: String) -> EvolveStage {
+        EvolveStage {
+            params,
+            wide_collisions,
+        }
     }
 
     /// The special particle's variance rate at `u'` (within half the window),
@@ -347,7 +355,7 @@ impl Stage for EvolveStage {
     }
 
     fn inputs(&self) -> Vec<InstanceId> {
-        instances::collisions_of(&self.params.collisions, &self.params.wide_collisions)
+        instances::collisions_of(&self.params.kernel.potential.id(), &self.wide_collisions)
     }
 
     fn work_units(&self) -> u64 {

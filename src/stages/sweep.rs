@@ -29,12 +29,15 @@ use crate::pipeline::{Input, InstanceId, Progress, Stage, StageError, Table};
 /// The `sweep` stage for one potential.
 pub struct SweepStage {
     params: SweepParams,
+    /// The collisions instance it reads (reaching every `u'` of its grid).
+    collisions: String,
 }
 
 impl SweepStage {
-    /// A sweep stage with resolved parameters.
-    pub fn new(params: SweepParams) -> SweepStage {
-        SweepStage { params }
+    /// A sweep stage with resolved parameters, reading the collisions
+    /// named `collisions`.
+    pub fn new(params: SweepParams, collisions: String) -> SweepStage {
+        SweepStage { params, collisions }
     }
 
     fn grid(&self) -> Vec<f64> {
@@ -198,7 +201,7 @@ impl Stage for SweepStage {
     }
 
     fn inputs(&self) -> Vec<InstanceId> {
-        vec![instances::collisions(&self.params.collisions)]
+        vec![instances::collisions(&self.collisions)]
     }
 
     fn work_units(&self) -> u64 {
