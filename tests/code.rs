@@ -396,3 +396,46 @@ fn no_stage_imports_another_stage() {
         }
     }
 }
+
+/// Longest function body in a stage file, in lines (issue 33: a stage
+/// decodes, calls the library and encodes; more than this is science or
+/// planning that belongs in a library module).
+const LONGEST_STAGE_FUNCTION: usize = 60;
+
+/// Every function in src/stages/ (tests included) spans at most
+/// [`LONGEST_STAGE_FUNCTION`] lines, from its `fn` line to its closing brace
+/// at the same indentation (the source is rustfmt-formatted).
+#[test]
+fn no_stage_function_is_longer_than_sixty_lines() {
+    let files = real_source();
+    let mut checked = 0;
+    for (path, bytes) in files.iter().filter(|(p, _)| p.starts_with("src/stages/")) {
+        let text = String::from_utf8_lossy(bytes);
+        let lines: Vec<&str> = text.lines().collect();
+        for (start, line) in lines.iter().enumerate() {
+            let indent = line.len() - line.trim_start().len();
+            let head = line.trim_start();
+            let head = match head.strip_prefix("pub") {
+                Some(rest) => rest.split_once(' ').map_or(rest, |(_, fun)| fun),
+                None => head,
+            };
+            let one_line = line.trim_end().ends_with(';') || line.trim_end().ends_with('}');
+            if !head.starts_with("fn ") || one_line {
+                continue;
+            }
+            let closing = format!("{}}}", " ".repeat(indent));
+            let end = lines[start..]
+                .iter()
+                .position(|l| *l == closing)
+                .unwrap_or_else(|| panic!("{path}:{}: no closing brace", start + 1));
+            checked += 1;
+            assert!(
+                end <= LONGEST_STAGE_FUNCTION,
+                "{path}:{}: `{}` spans {end} lines",
+                start + 1,
+                head.trim_end_matches(" {")
+            );
+        }
+    }
+    assert!(checked > 100, "only {checked} functions found");
+}
