@@ -14,7 +14,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 
 use super::*;
 use crate::pipeline::key::sha256_hex;
-use crate::pipeline::shards::{self};
+use crate::pipeline::shards;
 use crate::pipeline::store::{
     Depth, FileRecord, InstanceRef, Manifest, Staging, Store, table_files,
 };

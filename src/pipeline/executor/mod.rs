@@ -17,7 +17,7 @@ mod run;
 mod status;
 
 pub use plan::{check_plan, check_stage_names, estimate};
-pub use recompute::{Audit, audit_line, recompute};
+pub use recompute::{Audit, recompute};
 pub use run::run;
 pub use status::{Freshness, ShardProgress, StatusLine, status};
 
@@ -137,6 +137,46 @@ impl Action {
     }
 }
 
+/// What [`run`] and [`recompute`] report as they go, one instance at a time,
+/// for the caller to show (the command line prints [`Event::line`] on
+/// stdout); which instances are reported follows the [`Verbosity`].
+#[derive(Clone, Copy, Debug)]
+pub enum Event<'a> {
+    /// `run` dealt with an instance.
+    Ran {
+        /// The instance.
+        id: &'a InstanceId,
+        /// Its key.
+        key: &'a str,
+        /// What was done.
+        action: &'a Action,
+        /// Width of the run's id column: its longest instance id.
+        width: usize,
+    },
+    /// `recompute` audited an instance.
+    Audited {
+        /// The instance.
+        id: &'a InstanceId,
+        /// What the audit found.
+        audit: &'a Audit,
+    },
+}
+
+impl Event<'_> {
+    /// The event as one line of the console.
+    pub fn line(&self) -> String {
+        match *self {
+            Event::Ran {
+                id,
+                key,
+                action,
+                width,
+            } => run::report_line(id, width, key, action),
+            Event::Audited { id, audit } => recompute::audit_line(id, audit),
+        }
+    }
+}
+
 /// One line of a run report.
 #[derive(Clone, Debug)]
 pub struct InstanceReport {
@@ -192,7 +232,7 @@ fn as_declared(
     if written == declared {
         return Ok(());
     }
-    Err(StageError::Input(format!(
+    Err(StageError::Invariant(format!(
         "{did} [{}] but declares [{}]",
         written.join(", "),
         declared.join(", ")

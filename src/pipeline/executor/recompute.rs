@@ -2,7 +2,6 @@
 //! byte for byte with their stored artifacts.
 
 use std::collections::BTreeMap;
-use std::io::Write;
 use std::time::Instant;
 
 use super::job::{DecodedTables, Job};
@@ -30,13 +29,14 @@ pub enum Audit {
 /// Recomputes the fresh instances of the stages in `only` (all when empty)
 /// from their stored inputs, in memory, and compares every file's bytes with
 /// the stored artifact under the same key: the audit that a key means its
-/// bytes (`ternary verify --recompute`), one line per selected instance as
-/// it is checked. Instances not selected are only resolved; nothing is written.
+/// bytes (`ternary verify --recompute`), each selected instance reported to
+/// `on_event` as it is checked (unless quiet). Instances not selected are only resolved; nothing is written.
 pub fn recompute(
     store: &Store,
     stages: &[Box<dyn Stage>],
     only: &[String],
     verbosity: Verbosity,
+    on_event: &mut dyn FnMut(Event<'_>),
 ) -> Result<Vec<(InstanceId, Audit)>, ExecError> {
     check_plan(stages, only)?;
     let options = RunOptions {
@@ -75,7 +75,10 @@ pub fn recompute(
                 };
                 let audit = Audit::NotFresh(reason);
                 if verbosity != Verbosity::Quiet {
-                    let _ = writeln!(std::io::stdout().lock(), "{}", audit_line(&id, &audit));
+                    on_event(Event::Audited {
+                        id: &id,
+                        audit: &audit,
+                    });
                 }
                 audits.push((id, audit));
             }
@@ -93,7 +96,10 @@ pub fn recompute(
             let files = job.recomputed_files(&entry)?;
             let audit = compare_files(manifest, files, started.elapsed().as_secs_f64());
             if verbosity != Verbosity::Quiet {
-                let _ = writeln!(std::io::stdout().lock(), "{}", audit_line(&id, &audit));
+                on_event(Event::Audited {
+                    id: &id,
+                    audit: &audit,
+                });
             }
             audits.push((id.clone(), audit));
         }
@@ -133,7 +139,7 @@ fn compare_files(manifest: &Manifest, files: Vec<(String, Vec<u8>)>, seconds: f6
 }
 
 /// One line of `verify --recompute`.
-pub fn audit_line(id: &InstanceId, audit: &Audit) -> String {
+pub(super) fn audit_line(id: &InstanceId, audit: &Audit) -> String {
     let what = match audit {
         Audit::Same { seconds } => format!("same bytes (recomputed in {seconds:.2} s)"),
         Audit::Differs(files) => format!(

@@ -2,7 +2,7 @@
 //! ones it is asked to.
 
 use std::collections::BTreeMap;
-use std::io::{ErrorKind, Write};
+use std::io::ErrorKind;
 
 use super::job::{DecodedTables, Job};
 use super::*;
@@ -41,11 +41,13 @@ impl Access {
 
 /// Executes the stale instances in order. Every artifact is checked down to
 /// its file hashes before it is trusted; a damaged one is recomputed under
-/// the same key.
+/// the same key. Each instance is reported to `on_event` as it is dealt
+/// with (as the verbosity asks).
 pub fn run(
     store: &Store,
     stages: &[Box<dyn Stage>],
     options: &RunOptions,
+    on_event: &mut dyn FnMut(Event<'_>),
 ) -> Result<Vec<InstanceReport>, ExecError> {
     check_plan(
         stages,
@@ -151,12 +153,12 @@ pub fn run(
             Verbosity::Detailed => true,
         };
         if shown {
-            // A closed stdout must not abort a run: the line is only a log.
-            let _ = writeln!(
-                std::io::stdout().lock(),
-                "{}",
-                report_line(&id, width, &key, &action)
-            );
+            on_event(Event::Ran {
+                id: &id,
+                key: &key,
+                action: &action,
+                width,
+            });
         }
         reports.push(InstanceReport {
             id,
@@ -187,7 +189,7 @@ fn id_width(stages: &[Box<dyn Stage>]) -> usize {
 }
 
 /// One line of a run: the instance (padded to `width`), what was done, the key.
-fn report_line(id: &InstanceId, width: usize, key: &str, action: &Action) -> String {
+pub(super) fn report_line(id: &InstanceId, width: usize, key: &str, action: &Action) -> String {
     let what = match action {
         Action::Fresh => "fresh".to_string(),
         Action::Computed {
@@ -317,7 +319,7 @@ mod tests {
             verbosity: Verbosity::Quiet,
             sharding: Sharding::default(),
         };
-        run(store, stages, &options)
+        run(store, stages, &options, &mut |_| {})
             .unwrap()
             .into_iter()
             .filter(|r| matches!(r.action, Action::Computed { .. }))
@@ -390,7 +392,7 @@ mod tests {
             verbosity: Verbosity::Quiet,
             sharding: Sharding::default(),
         };
-        let error = run(&store, &plan("x", 1.0), &options).unwrap_err();
+        let error = run(&store, &plan("x", 1.0), &options, &mut |_| {}).unwrap_err();
         assert!(
             error.to_string().contains("unknown stage `sorce`"),
             "{error}"

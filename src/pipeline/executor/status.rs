@@ -8,7 +8,7 @@ use super::job::shard_manifest;
 use super::*;
 use crate::pipeline::code::CodeRecord;
 use crate::pipeline::key::{InputRecord, changed_params, stage_key};
-use crate::pipeline::shards::{self};
+use crate::pipeline::shards;
 use crate::pipeline::store::{InstanceRef, Manifest, Store};
 use crate::pipeline::{InstanceId, Stage};
 

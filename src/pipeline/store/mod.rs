@@ -49,9 +49,11 @@ pub use check::listing_problem;
 pub use names::{is_key, is_live_staging};
 pub use staging::Staging;
 
+use std::fmt;
 use std::fs::File;
 use std::io;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
@@ -237,6 +239,67 @@ pub struct Store {
     /// The id from the marker; `None` for a store read without one (a
     /// version-1 marker, or a damaged one), which then names no debris its own.
     id: Option<String>,
+    /// Where it reports waits ([`Store::reporting_to`]).
+    reporter: Reporter,
+}
+
+/// Something a store reports while it works, for its user to hear of (the
+/// command line prints it on stderr).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum StoreEvent {
+    /// A call is about to wait for the store lock.
+    WaitingForLock {
+        /// The lock file.
+        path: PathBuf,
+        /// Who holds it: `process <pid>@<host>`, or `another process`.
+        holder: String,
+        /// What the wait is for: empty, or `for gc to finish `.
+        purpose: &'static str,
+    },
+}
+
+impl fmt::Display for StoreEvent {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            StoreEvent::WaitingForLock {
+                path,
+                holder,
+                purpose,
+            } => write!(
+                f,
+                "waiting for the store lock {} (held by {holder}) {purpose}...",
+                path.display()
+            ),
+        }
+    }
+}
+
+/// Where a store sends its [`StoreEvent`]s: nowhere unless
+/// [`Store::reporting_to`] names a sink.
+#[derive(Clone, Default)]
+struct Reporter(Option<Arc<Sink>>);
+
+/// A receiver of [`StoreEvent`]s, shared by the clones of a store.
+type Sink = dyn Fn(&StoreEvent) + Send + Sync;
+
+impl Reporter {
+    /// Hands `event` to the sink, if there is one.
+    fn report(&self, event: StoreEvent) {
+        if let Some(sink) = &self.0 {
+            sink(&event);
+        }
+    }
+}
+
+impl fmt::Debug for Reporter {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let to = if self.0.is_some() {
+            "a sink"
+        } else {
+            "nowhere"
+        };
+        write!(f, "Reporter({to})")
+    }
 }
 
 /// The exclusive store lock; released on drop.

@@ -4,6 +4,7 @@
 use std::fs::{self, File, OpenOptions};
 use std::io::{self, Write};
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 use serde::{Deserialize, Serialize};
 
@@ -63,7 +64,15 @@ impl Store {
     /// store whose marker was damaged ([`Store::is_damaged_store`]), or is
     /// refused, so nothing of a user's is ever treated as debris.
     pub fn open(root: &Path) -> Result<Store, StoreError> {
-        let mut store = Store::view(root)?;
+        Store::view(root)?.writable()
+    }
+
+    /// The viewed store made writable as [`Store::open`] says: created (with
+    /// its marker) when missing or empty, its layout completed.
+    pub fn writable(self) -> Result<Store, StoreError> {
+        let root = self.root.clone();
+        let root = root.as_path();
+        let mut store = self;
         if store.id.is_none() {
             fs::create_dir_all(root).map_err(io_error(root))?;
             // Under the exclusive lock, which debris cleaning also takes: a
@@ -114,6 +123,7 @@ impl Store {
         let mut store = Store {
             root: root.to_path_buf(),
             id: None,
+            reporter: Reporter::default(),
         };
         match store.marker_state()? {
             MarkerState::Ours(id) => store.id = id,
@@ -241,25 +251,32 @@ impl Store {
         Ok((file, path))
     }
 
-    /// Says on stderr who holds the lock a call is about to wait for.
-    fn announce_wait(path: &Path, what: &str) {
+    /// The store, reporting what it does (a wait for its lock) to `sink`.
+    pub fn reporting_to(mut self, sink: impl Fn(&StoreEvent) + Send + Sync + 'static) -> Store {
+        self.reporter = Reporter(Some(Arc::new(sink)));
+        self
+    }
+
+    /// Reports who holds the lock a call is about to wait for, and `purpose`.
+    fn announce_wait(&self, path: &Path, purpose: &'static str) {
         let holder = fs::read_to_string(path).unwrap_or_default();
         let holder = match holder.trim() {
             "" => "another process".to_string(),
             writer => format!("process {writer}"),
         };
-        eprintln!(
-            "waiting for the store lock {} (held by {holder}) {what}...",
-            path.display()
-        );
+        self.reporter.report(StoreEvent::WaitingForLock {
+            path: path.to_path_buf(),
+            holder,
+            purpose,
+        });
     }
 
     /// Takes the exclusive lock (`gc`: no writer runs meanwhile), waiting
-    /// with a message on stderr while another process holds it.
+    /// (and reporting the wait) while another process holds it.
     pub fn lock(&self) -> Result<StoreLock, StoreError> {
         let (mut file, path) = self.lock_file()?;
         if file.try_lock().is_err() {
-            Store::announce_wait(&path, "");
+            self.announce_wait(&path, "");
             file.lock().map_err(io_error(&path))?;
         }
         file.set_len(0).map_err(io_error(&path))?;
@@ -279,7 +296,7 @@ impl Store {
             return Ok(lock);
         }
         if file.try_lock_shared().is_err() {
-            Store::announce_wait(&path, "for gc to finish ");
+            self.announce_wait(&path, "for gc to finish ");
             file.lock_shared().map_err(io_error(&path))?;
         }
         Ok(StoreLock { _file: file })
