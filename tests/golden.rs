@@ -186,7 +186,7 @@ fn the_default_plan_matches_its_snapshot() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let study = ternary::config::Study::load(&root.join("pipeline.toml")).expect("pipeline.toml");
     let mut text = String::from("# stage[instance] <- inputs, in plan order (pipeline.toml)\n");
-    for stage in ternary::stages::plan(&study) {
+    for stage in ternary::plan::plan(&study) {
         let inputs: Vec<String> = stage.inputs().iter().map(|id| id.to_string()).collect();
         let line = if inputs.is_empty() {
             stage.id().to_string()

@@ -73,8 +73,8 @@ fn a_clock_dependent_stage_is_caught_by_the_recompute_audit() {
         verbosity: Verbosity::Quiet,
         sharding: Sharding::default(),
     };
-    executor::run(&store, &plan, &options).unwrap();
-    let audits = executor::recompute(&store, &plan, &[], Verbosity::Quiet).unwrap();
+    executor::run(&store, &plan, &options, &mut |_| {}).unwrap();
+    let audits = executor::recompute(&store, &plan, &[], Verbosity::Quiet, &mut |_| {}).unwrap();
     assert_eq!(audits.len(), 2);
     assert!(matches!(audits[0].1, Audit::Same { .. }), "{:?}", audits[0]);
     let Audit::Differs(files) = &audits[1].1 else {
@@ -84,7 +84,14 @@ fn a_clock_dependent_stage_is_caught_by_the_recompute_audit() {
     assert_eq!(files[0].0, "value.parquet");
     assert_ne!(files[0].1, files[0].2);
     // `--only` selects stages; the others are only resolved.
-    let only = executor::recompute(&store, &plan, &["fixed".into()], Verbosity::Quiet).unwrap();
+    let only = executor::recompute(
+        &store,
+        &plan,
+        &["fixed".into()],
+        Verbosity::Quiet,
+        &mut |_| {},
+    )
+    .unwrap();
     assert_eq!(only.len(), 1);
     assert_eq!(only[0].0, InstanceId::new("fixed", "a"));
 }

@@ -270,10 +270,9 @@ impl TableSpec {
 
     /// This table of `input`.
     pub fn of<'a>(&self, input: &'a Input) -> Result<&'a RecordBatch, StageError> {
-        input
-            .tables
-            .get(self.name)
-            .ok_or_else(|| StageError::Input(format!("{} has no {} table", input.id, self.name)))
+        input.tables.get(self.name).ok_or_else(|| {
+            StageError::Invariant(format!("{} has no {} table", input.id, self.name))
+        })
     }
 
     /// This table of the input `id` among `inputs`.
@@ -285,7 +284,7 @@ impl TableSpec {
         let input = inputs
             .iter()
             .find(|input| &input.id == id)
-            .ok_or_else(|| StageError::Input(format!("missing input {id}")))?;
+            .ok_or_else(|| StageError::Invariant(format!("missing input {id}")))?;
         self.of(input)
     }
 }

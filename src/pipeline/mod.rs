@@ -63,6 +63,11 @@ pub enum StageError {
     /// An input lacked what the stage needs.
     #[error("{0}")]
     Input(String),
+    /// A stage or its wiring broke an invariant of the pipeline (wrote tables
+    /// it does not declare, read an input it does not declare): a bug, not
+    /// bad input.
+    #[error("internal error (a bug, not bad input): {0}")]
+    Invariant(String),
 }
 
 /// Progress of a running stage, in the units of [`Stage::work_units`].
@@ -181,7 +186,7 @@ pub trait Stage: Sync {
         _units: Range<u32>,
         _progress: &Progress,
     ) -> Result<Vec<Table>, StageError> {
-        Err(StageError::Input("this stage cannot be sharded".into()))
+        Err(StageError::Invariant("this stage cannot be sharded".into()))
     }
 
     /// Names of the tables a shard writes (default: the stage's own).

@@ -892,10 +892,15 @@ fn two_digits(value: f64) -> String {
 
 /// `verify --recompute`: every current artifact of the stages in `only` (all
 /// when empty) recomputed from its stored inputs and compared byte for byte
-/// (one line per instance as it is checked); the summary, and the number of
-/// instances that differ or could not be checked.
-pub fn audit(store: &Store, stages: &[Box<dyn Stage>], only: &[String]) -> Result<(String, usize)> {
-    let audits = executor::recompute(store, stages, only, Verbosity::Normal)?;
+/// (each instance reported to `on_event` as it is checked); the summary, and
+/// the number of instances that differ or could not be checked.
+pub fn audit(
+    store: &Store,
+    stages: &[Box<dyn Stage>],
+    only: &[String],
+    on_event: &mut dyn FnMut(executor::Event<'_>),
+) -> Result<(String, usize)> {
+    let audits = executor::recompute(store, stages, only, Verbosity::Normal, on_event)?;
     let count = |wanted: fn(&Audit) -> bool| audits.iter().filter(|(_, a)| wanted(a)).count();
     let same = count(|a| matches!(a, Audit::Same { .. }));
     let differ = count(|a| matches!(a, Audit::Differs(_)));

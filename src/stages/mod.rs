@@ -16,5 +16,3 @@ pub mod paper;
 pub mod scan;
 pub mod sweep;
 pub mod table;
-
-pub use crate::plan::plan;

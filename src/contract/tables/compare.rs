@@ -1,0 +1,169 @@
+//! The `compare` stage.
+
+use super::*;
+
+/// The stage, as named in instance ids and the store.
+pub const STAGE: &str = "compare";
+
+/// The md system.
+pub const RING: Col<String> = Col::text(super::RING, "md system");
+
+/// `comparison.parquet`: one row per ring and bin.
+pub mod comparison {
+    pub use super::super::DU;
+    pub use super::RING;
+    use super::*;
+
+    /// The table.
+    pub const TABLE: TableSpec = TableSpec {
+        stage: STAGE,
+        name: "comparison",
+        description: "h(u, t_f) of every ring: MD against Boltzmann",
+    };
+    /// Boltzmann `h`.
+    pub const H_BOLTZMANN: Pair = pair!(
+        "h_boltzmann",
+        DENSITY,
+        "master equation with the translation-invariant kernel at t_f, exact in Fourier space, on the ring's bins",
+        "jackknife standard error over the kernel's randomizations"
+    );
+    /// MD, published.
+    pub const H_PUBLISHED: Pair =
+        pair!("h_published", DENSITY, "MD, published estimator", OVER_RUNS);
+    /// MD, tagged.
+    pub const H_TAGGED: Pair = pair!(
+        "h_tagged",
+        DENSITY,
+        "MD, tagged-velocity estimator",
+        OVER_RUNS
+    );
+}
+
+/// `goodness.parquet`: one row per ring, reference and estimator.
+pub mod goodness {
+    pub use super::RING;
+    use super::*;
+
+    /// The table.
+    pub const TABLE: TableSpec = TableSpec {
+        stage: STAGE,
+        name: "goodness",
+        description: "goodness of fit of MD against Boltzmann, and of the scaling collapse",
+    };
+    /// Reference.
+    pub const REFERENCE: Col<String> = Col::text(
+        "reference",
+        "boltzmann, or the ring it is compared with (scaling collapse)",
+    );
+    /// The reference of MD against the Boltzmann evolution.
+    pub const BOLTZMANN: &str = "boltzmann";
+    /// MD estimator ([`estimator`](super::super::estimator)).
+    pub const ESTIMATOR: Col<String> = Col::text("estimator", "MD estimator");
+    /// Chi-square with the covariance MD would have if it followed the reference.
+    pub const CHI2: Col<f64> = Col::f64(
+        "chi2",
+        "1",
+        "d^T (C + S)^-1 d over groups of bins of at least 10 expected counts, the largest cell left out: d the group masses of MD minus the reference's, C their covariance if MD followed the reference (multinomial counts), S the reference's squared standard errors",
+    );
+    /// Degrees of freedom.
+    pub const DOF: Col<u32> = Col::u32("dof", "1", "groups of bins kept");
+    /// Reduced chi-square.
+    pub const CHI2_PER_DOF: Col<f64> = Col::f64(
+        "chi2_per_dof",
+        "1",
+        "chi2 / dof: ~1 when MD follows the reference",
+    )
+    .or_null("no degrees of freedom: no test");
+    /// p-value of `chi2` with `dof` degrees of freedom.
+    pub const P_VALUE: Col<f64> = Col::f64(
+        "p_value",
+        "1",
+        "probability of a chi2 at least this large if MD followed the reference",
+    )
+    .or_null("no degrees of freedom: no test");
+    /// Reduced chi-square with the MD runs' own spread (the published definition).
+    pub const SAMPLE_CHI2_PER_DOF: Col<f64> = Col::f64(
+        "sample_chi2_per_dof",
+        "1",
+        "chi2 / dof with the MD runs' own standard errors, over the bins where they are nonzero (the published estimator's definition)",
+    )
+    .or_null("no degrees of freedom: no test");
+    /// Its degrees of freedom.
+    pub const SAMPLE_DOF: Col<u32> = Col::u32(
+        "sample_dof",
+        "1",
+        "bins where the MD runs' standard error is nonzero",
+    );
+}
+
+/// `finite_size.parquet`: one row per ring.
+pub mod finite_size {
+    pub use super::RING;
+    use super::*;
+
+    /// Unit of window variances.
+    const VARIANCE: &str = "v_th^2";
+    /// Error of a ratio.
+    const PROPAGATED: &str = "propagated from both standard errors";
+
+    /// The table.
+    pub const TABLE: TableSpec = TableSpec {
+        stage: STAGE,
+        name: "finite_size",
+        description: "finite-size and density study: MD window variance against Boltzmann per ring",
+    };
+    /// `N`.
+    pub const PARTICLES: Col<u32> = Col::u32("particles", "1", "N");
+    /// `rho l`.
+    pub const DENSITY: Col<f64> = Col::f64("density", "1", "rho l = (N - 1) l / (2 pi R)");
+    /// `rho^2 l v_th t_f`.
+    pub const SCALED_TIME: Col<f64> = Col::f64(
+        "scaled_time",
+        "1",
+        "rho^2 l v_th t_f (Gamma t_f = a_n times this)",
+    );
+    /// Tagged MD variance.
+    pub const MD_VARIANCE: Pair = pair!(
+        "md_variance",
+        VARIANCE,
+        "tagged estimator: window variance sum (u - u')^2 h du at t_f",
+        OVER_RUNS
+    );
+    /// Boltzmann variance.
+    pub const BOLTZMANN_VARIANCE: Pair = pair!(
+        "boltzmann_variance",
+        VARIANCE,
+        "the same of the Boltzmann h (dilute kernel) on the ring's bins",
+        "jackknife over the kernel's randomizations"
+    );
+    /// Their ratio.
+    pub const RATIO: Pair = pair!(
+        "ratio",
+        "1",
+        "md_variance / boltzmann_variance: 1 at large N and small rho l",
+        PROPAGATED
+    )
+    .or_null("not estimable: the ratio's denominator is zero");
+    /// Thermal MD variance.
+    pub const THERMAL_MD_VARIANCE: Pair = pair!(
+        "thermal_md_variance",
+        VARIANCE,
+        "thermal estimator: mean over every lineage starting with |u| <= 3 of its squared change within the window",
+        OVER_RUNS
+    );
+    /// Thermal Boltzmann variance.
+    pub const THERMAL_BOLTZMANN_VARIANCE: Pair = pair!(
+        "thermal_boltzmann_variance",
+        VARIANCE,
+        "t_f times the self kernel's window variance rate averaged over thermal starts (f0 on [-3, 3]); first order in Gamma t_f",
+        "standard error over the kernel's randomizations"
+    );
+    /// Their ratio.
+    pub const THERMAL_RATIO: Pair = pair!(
+        "thermal_ratio",
+        "1",
+        "thermal_md_variance / thermal_boltzmann_variance",
+        PROPAGATED
+    )
+    .or_null("not estimable: the ratio's denominator is zero");
+}

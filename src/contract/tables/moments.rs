@@ -1,0 +1,59 @@
+//! The `moments` stage: `moments.parquet`, one row per truncation.
+
+use super::*;
+
+/// The stage, as named in instance ids and the store.
+pub const STAGE: &str = "moments";
+
+/// Standard error of every rate.
+const SPREAD: &str = "standard error from the spread of randomizations";
+
+/// The table.
+pub const TABLE: TableSpec = TableSpec {
+    stage: STAGE,
+    name: "moments",
+    description: "drift and variance rates against truncation, units of rho^2 l v_th",
+};
+/// Truncation half-width.
+pub const TRUNCATION: Col<f64> = Col::f64(
+    "truncation",
+    "v_th",
+    "half-width X: only |u - u'| <= X counts",
+)
+.or_null("no truncation: every |u - u'| counts");
+/// Self drift rate.
+pub const SELF_DRIFT: Pair = pair!(
+    "self_drift",
+    RATE,
+    "drift rate d<u - u'>/dt of the special particle",
+    SPREAD
+);
+/// Self variance rate (`a_n`).
+pub const SELF_VARIANCE: Pair = pair!(
+    "self_variance",
+    RATE,
+    "variance rate d<(u - u')^2>/dt of the special particle (a_n at u' = 0)",
+    SPREAD
+);
+/// Window drift rate.
+pub const WINDOW_DRIFT: Pair = pair!(
+    "window_drift",
+    RATE,
+    "drift rate of all particles within the truncation",
+    SPREAD
+);
+/// Window variance rate.
+pub const WINDOW_VARIANCE: Pair = pair!(
+    "window_variance",
+    RATE,
+    "variance rate of all particles within the truncation",
+    SPREAD
+);
+/// Scenes drawn.
+pub const EVENTS: Col<u32> = Col::u32(super::EVENTS, "1", "scenes drawn");
+/// Scenes failed.
+pub const FAILED_EVENTS: Col<u32> = Col::u32(
+    super::FAILED_EVENTS,
+    "1",
+    "scenes that failed (counted as drawn, contributing nothing)",
+);

@@ -1,0 +1,158 @@
+//! The `sweep` stage.
+
+use super::*;
+
+/// The stage, as named in instance ids and the store.
+pub const STAGE: &str = "sweep";
+
+/// `rates.parquet`: one row per `u'`.
+pub mod rates {
+    use super::*;
+
+    /// The table.
+    pub const TABLE: TableSpec = TableSpec {
+        stage: STAGE,
+        name: "rates",
+        description: "drift and variance rates against u', dilute limit",
+    };
+    /// Velocity of the special particle.
+    pub const U_PRIME: Col<f64> = Col::f64("u_prime", "v_th", "velocity of the special particle");
+    /// `D1`.
+    pub const SELF_DRIFT: Pair = pair!(
+        "self_drift",
+        RATE,
+        "D1 = d<u - u'>/dt of the special particle (|u - u'| <= window/2)",
+        "standard error"
+    );
+    /// `D2`.
+    pub const SELF_VARIANCE: Pair = pair!(
+        "self_variance",
+        RATE,
+        "D2 = d<(u - u')^2>/dt of the special particle",
+        "standard error"
+    );
+    /// `(D2' - u D2) / 2`.
+    pub const FOKKER_PLANCK_DRIFT: Pair = pair!(
+        "fokker_planck_drift",
+        RATE,
+        "(dD2/du - u D2) / 2: the drift for which f0 is stationary",
+        "standard error (finite differences on the grid)"
+    );
+    /// Significance of `D1 - (D2' - u D2) / 2`.
+    pub const FOKKER_PLANCK_Z: Col<f64> = Col::f64(
+        "fokker_planck_z",
+        "1",
+        "(D1 - Fokker-Planck drift) / its standard error (per-replicate differences)",
+    )
+    .or_null("not estimable: the difference has no spread over randomizations");
+}
+
+/// `detailed_balance.parquet`: one row per `(a, b)`.
+pub mod detailed_balance {
+    use super::*;
+
+    /// Unit of the self kernel.
+    const G_UNIT: &str = "rho^2 l v_th / v_th";
+
+    /// The table.
+    pub const TABLE: TableSpec = TableSpec {
+        stage: STAGE,
+        name: "detailed_balance",
+        description: "detailed balance of the self kernel for nearby velocities",
+    };
+    /// Initial velocity.
+    pub const A: Col<f64> = Col::f64("a", "v_th", "initial velocity");
+    /// Final velocity.
+    pub const B: Col<f64> = Col::f64(
+        "b",
+        "v_th",
+        "final velocity (a plus a whole number of bins)",
+    );
+    /// `G_self(a -> b)`.
+    pub const G_SELF_AB: Pair = pair!(
+        "G_self_ab",
+        G_UNIT,
+        "self kernel G(a -> b), bin centred on b",
+        "standard error"
+    );
+    /// `G_self(b -> a)`.
+    pub const G_SELF_BA: Pair = pair!(
+        "G_self_ba",
+        G_UNIT,
+        "self kernel G(b -> a)",
+        "standard error"
+    );
+    /// Their ratio.
+    pub const RATIO: Pair = pair!(
+        "ratio",
+        "1",
+        "G(a -> b) / G(b -> a)",
+        "standard error from the randomizations, the two kernels' correlation kept (first order)"
+    )
+    .or_null("not estimable: G(b -> a) is zero");
+    /// `f0(b) / f0(a)`.
+    pub const EXPECTED_RATIO: Col<f64> =
+        Col::f64("expected_ratio", "1", "f0(b) / f0(a): detailed balance");
+    /// Significance of the imbalance.
+    pub const IMBALANCE_Z: Col<f64> = Col::f64(
+        "imbalance_z",
+        "1",
+        "(f0(a) G(a->b) - f0(b) G(b->a)) / its standard error (per-replicate differences)",
+    )
+    .or_null("not estimable: the imbalance has no spread over randomizations");
+    /// Share of the imbalance's spread in one randomization.
+    pub const LARGEST_SHARE: Col<f64> = Col::f64(
+        "largest_share",
+        "1",
+        "share of the imbalance's spread over randomizations carried by the most deviant one; above 0.5 one scene makes the error and the pair is no evidence (left out of the joint test)",
+    )
+    .or_null("not estimable: the imbalance has no spread over randomizations");
+}
+
+/// `balance_tests.parquet`: one joint detailed-balance test per separation.
+pub mod balance_tests {
+    use super::*;
+
+    /// The table.
+    pub const TABLE: TableSpec = TableSpec {
+        stage: STAGE,
+        name: "balance_tests",
+        description: "joint test of detailed balance over the pairs of each separation, with their correlations",
+    };
+    /// `b - a`.
+    pub const SEPARATION: Col<f64> = Col::f64("separation", "v_th", "b - a of the pairs");
+    /// Pairs of the separation.
+    pub const PAIRS: Col<u32> = Col::u32(
+        "pairs",
+        "1",
+        "independent pairs (a, b) on the u' grid: those with a <= 0 (every scene enters with its mirror image, so a pair at a > 0 repeats its mirror's evidence)",
+    );
+    /// Pairs counted in the joint test.
+    pub const COUNTED: Col<u32> = Col::u32(
+        "counted",
+        "1",
+        "independent pairs whose error is not carried by one randomization (largest_share <= 0.5)",
+    );
+    /// The joint statistic.
+    pub const JOINT_IMBALANCE: Pair = pair!(
+        "joint_imbalance",
+        "1",
+        "sum over counted pairs of (f0(a) G(a->b) - f0(b) G(b->a)) / mean flow, 0 under detailed balance",
+        "standard error from its spread over randomizations (pairs share scenes: their correlations are in it)"
+    )
+    .or_null("not estimable: fewer than two randomizations or no counted pair");
+    /// Its z-score.
+    pub const JOINT_Z: Col<f64> = Col::f64(
+        "joint_z",
+        "1",
+        "joint_imbalance / its standard error: 0 +- 1 under detailed balance",
+    )
+    .or_null("not estimable: fewer than two randomizations or no counted pair");
+    /// Share of the joint statistic's spread in one randomization.
+    pub const JOINT_LARGEST_SHARE: Col<f64> = Col::f64(
+        "joint_largest_share",
+        "1",
+        "share of joint_imbalance's spread carried by one randomization; above 0.5 one scene makes the error (z ~ +-1 by construction) and the test is no evidence",
+    )
+    .or_null("not estimable: fewer than two randomizations or no counted pair");
+}
