@@ -528,7 +528,12 @@ fn dispatch(cli: Cli) -> Result<ExitCode> {
                     "run: {computed} computed, {fresh} fresh, {skipped} skipped (store {})\n",
                     store.root().display()
                 ));
-                emit(&report::summary(&store, &reports, details)?);
+                emit(&report::summary(
+                    &store,
+                    &reports,
+                    study.config.kernel.kick_floor,
+                    details,
+                )?);
             }
             Ok(ExitCode::SUCCESS)
         }

@@ -38,3 +38,4 @@ pub mod scaling;
 pub mod slurm;
 pub mod stages;
 pub mod stats;
+pub mod thresholds;

@@ -90,7 +90,7 @@ pub struct OffsetIntegral {
 pub const DEFAULT_END_KICK: f64 = 1e-5;
 
 /// Velocity changes below this (`v_th`) are the engine's error floor
-/// (`kernel::DEFAULT_KICK_FLOOR`): an integral made only of them is zero.
+/// (`thresholds::DEFAULT_KICK_FLOOR`): an integral made only of them is zero.
 const KICK_FLOOR: f64 = 1e-10;
 
 impl OffsetRule {
