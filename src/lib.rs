@@ -43,3 +43,4 @@ pub mod scaling;
 pub mod slurm;
 pub mod stages;
 pub mod stats;
+pub mod thresholds;

@@ -15,9 +15,9 @@ use ternary::config::{SlurmConfig, Study};
 use ternary::export::{self, ExportOptions};
 use ternary::pipeline::executor::{self, Action, Freshness, RunOptions, Verbosity};
 use ternary::pipeline::shards::Sharding;
+use ternary::plan::plan;
 use ternary::report::{self, DagFormat};
 use ternary::slurm::{self, SubmitOptions};
-use ternary::plan::plan;
 
 /// Worker threads per core a run may start (`--threads`): enough to cover
 /// waits, few enough that thread start-up stays negligible (5000 threads took
@@ -64,7 +64,12 @@ pub(super) fn run(config: &Path, args: RunArgs) -> Result<ExitCode> {
             "run: {computed} computed, {fresh} fresh, {skipped} skipped (store {})\n",
             store.root().display()
         ));
-        emit(&report::summary(&store, &reports, args.details)?);
+        emit(&report::summary(
+            &store,
+            &reports,
+            study.config.kernel.kick_floor,
+            args.details,
+        )?);
     }
     Ok(ExitCode::SUCCESS)
 }

@@ -9,8 +9,8 @@ use super::collisions::{REWEIGHTING_REACH, within_reach};
 use crate::physics::potential::Potential;
 use crate::physics::sampling::LaunchProposal;
 
-pub use crate::kernel::DEFAULT_KICK_FLOOR;
 use crate::kernel::Target;
+pub use crate::thresholds::DEFAULT_KICK_FLOOR;
 
 /// Widest velocity window (`v_th`): `u' +- 6`, beyond the largest launch
 /// speed the point sets draw (6.8 `v_th`) from any `u'` within reach.

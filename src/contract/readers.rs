@@ -11,6 +11,13 @@ use crate::physics::scan::LaunchPair;
 use crate::pipeline::{Input, StageError};
 use crate::stats::Estimate;
 
+/// The stratum whose index row `row` of a table stores (an input error
+/// naming the row when no stratum has that index).
+fn stratum_of_row(row: usize, index: u32) -> Result<Stratum, StageError> {
+    Stratum::from_index(index)
+        .ok_or_else(|| StageError::Input(format!("row {row}: unknown stratum {index}")))
+}
+
 /// The events of a `collisions` artifact, for the kernel estimators.
 pub fn read_events(input: &Input) -> Result<Vec<Event>, StageError> {
     use super::collisions::*;
@@ -30,9 +37,7 @@ pub fn read_events(input: &Input) -> Result<Vec<Event>, StageError> {
     let outcome = OUTCOME.read(batch)?;
     (0..batch.num_rows())
         .map(|k| {
-            let stratum = Stratum::from_index(stratum[k]).ok_or_else(|| {
-                StageError::Input(format!("row {k}: unknown stratum {}", stratum[k]))
-            })?;
+            let stratum = stratum_of_row(k, stratum[k])?;
             let failed = outcome[k].starts_with("failed");
             Ok(Event {
                 stratum,
@@ -66,9 +71,7 @@ pub fn read_launches(
     (0..batch.num_rows())
         .filter(|&k| randomizations.contains(&randomization[k]))
         .map(|k| {
-            let stratum = Stratum::from_index(stratum[k]).ok_or_else(|| {
-                StageError::Input(format!("row {k}: unknown stratum {}", stratum[k]))
-            })?;
+            let stratum = stratum_of_row(k, stratum[k])?;
             Ok(LaunchPoint {
                 randomization: randomization[k],
                 stratum,

@@ -15,6 +15,7 @@ use super::grid::VelocityGrid;
 use super::operator::{Generators, tagged_fokker_planck};
 use super::propagate::Generator;
 use super::spectral::Dissipative;
+use crate::linalg::EigenError;
 use crate::stats::{Estimate, Replicated, replicate_means};
 
 /// One evolved process from `delta(u - u')`.
@@ -70,14 +71,15 @@ fn difference(a: &[Vec<f64>], b: &[Vec<f64>]) -> Vec<Vec<f64>> {
 impl GridEvolution {
     /// The three processes from `delta(u - u')` at node `start` (`u'` =
     /// `u_prime`, exactly as given) at every time of `times` (ascending),
-    /// from the generators of every randomization.
+    /// from the generators of every randomization; an error when a full
+    /// generator's estimate cannot be projected ([`Dissipative::project`]).
     pub fn new(
         generators: &[Generators],
         grid: &VelocityGrid,
         start: usize,
         u_prime: f64,
         times: &[f64],
-    ) -> GridEvolution {
+    ) -> Result<GridEvolution, EigenError> {
         let pick = |part: fn(&Generators) -> &Generator| -> Vec<Generator> {
             generators.iter().map(|g| part(g).clone()).collect()
         };
@@ -86,7 +88,7 @@ impl GridEvolution {
         let diffusion = tagged.map(|m| tagged_fokker_planck(m, grid));
         let maxwellian = grid.maxwellian();
         let invariants = collision_invariants(grid);
-        let full = raw.map(|m| Dissipative::project(m, &maxwellian, &invariants));
+        let full = all_projected(raw.map(|m| Dissipative::project(m, &maxwellian, &invariants)))?;
         let mut h0 = vec![0.0; grid.len()];
         h0[start] = 1.0;
         let full_states = full.map(|m| m.propagate(&h0, times));
@@ -118,8 +120,22 @@ impl GridEvolution {
                 diagnostics: None,
             },
         ];
-        GridEvolution { processes, effect }
+        Ok(GridEvolution { processes, effect })
     }
+}
+
+/// The projections of the full and every leave-one-out estimate, or the
+/// first error among them.
+fn all_projected(
+    projected: Replicated<Result<Dissipative, EigenError>>,
+) -> Result<Replicated<Dissipative>, EigenError> {
+    Ok(Replicated {
+        full: projected.full?,
+        leave_one_out: projected
+            .leave_one_out
+            .into_iter()
+            .collect::<Result<_, _>>()?,
+    })
 }
 
 /// The moments of one process's `h` at one time (jackknife estimates).
@@ -278,7 +294,7 @@ mod tests {
     /// The grid evolution of the noisy generators from `delta(u - U_PRIME)`.
     fn evolution(grid: &VelocityGrid) -> GridEvolution {
         let start = grid.node_of(U_PRIME).unwrap();
-        GridEvolution::new(&noisy_generators(grid), grid, start, U_PRIME, &TIMES)
+        GridEvolution::new(&noisy_generators(grid), grid, start, U_PRIME, &TIMES).unwrap()
     }
 
     /// The projected full operator conserves number, momentum and energy

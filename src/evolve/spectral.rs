@@ -15,7 +15,7 @@
 //! [`Dissipative::clipped_part`] (the weight `h` keeps in the clipped modes).
 
 use super::propagate::Generator;
-use crate::linalg::{SymmetricEigen, symmetric_eigen};
+use crate::linalg::{EigenError, SymmetricEigen, symmetric_eigen};
 
 /// A generator with detailed balance, exact invariants and no growing mode.
 #[derive(Clone, Debug, PartialEq)]
@@ -40,18 +40,15 @@ impl Dissipative {
     /// Imposes detailed balance with respect to `equilibrium` (node masses of
     /// `f0`), the invariants `invariants` (velocity polynomials at the nodes,
     /// e.g. `1, u, u^2`; the operator annihilates `f0` times each) and
-    /// dissipation on the estimate `generator`.
-    ///
-    /// # Panics
-    ///
-    /// If the symmetrized estimate cannot be diagonalized (a non-finite
-    /// entry, or QR iterations that do not converge: a defect, never
-    /// seen): the projection would otherwise be silently wrong.
+    /// dissipation on the estimate `generator`. An error, never a silently
+    /// wrong projection, when the symmetrized estimate cannot be
+    /// diagonalized (a non-finite entry, or QR iterations that do not
+    /// converge).
     pub fn project(
         generator: &Generator,
         equilibrium: &[f64],
         invariants: &[Vec<f64>],
-    ) -> Dissipative {
+    ) -> Result<Dissipative, EigenError> {
         let n = generator.size();
         let root: Vec<f64> = equilibrium.iter().map(|f| f.sqrt()).collect();
         let s = |i: usize, j: usize| generator.entry(i, j) * root[j] / root[i];
@@ -91,17 +88,16 @@ impl Dissipative {
             }
         };
         project(&mut sym);
-        let eigen = symmetric_eigen(&sym, n)
-            .unwrap_or_else(|error| panic!("projecting the collision generator: {error}"));
+        let eigen = symmetric_eigen(&sym, n)?;
         let largest_clipped = eigen.values.iter().copied().fold(0.0, f64::max);
         let radius = eigen.values.iter().fold(0.0, |r: f64, l| r.max(l.abs()));
-        Dissipative {
+        Ok(Dissipative {
             root,
             eigen,
             largest_clipped,
             rounding: 1e-12 * radius,
             asymmetry: (odd / even).sqrt(),
-        }
+        })
     }
 
     /// `exp(t M) h0` at every time of `times`, with the positive eigenvalues
@@ -172,12 +168,23 @@ mod tests {
         let (a, b) = (3.0, 0.5);
         let generator = Generator::from_columns(&[vec![-a, a], vec![b, -b]]);
         let equilibrium = [b / (a + b), a / (a + b)];
-        let projected = Dissipative::project(&generator, &equilibrium, &[vec![1.0, 1.0]]);
+        let projected = Dissipative::project(&generator, &equilibrium, &[vec![1.0, 1.0]]).unwrap();
         assert!(projected.asymmetry < 1e-15 && projected.largest_clipped < 1e-15);
         for t in [0.1, 2.0, 50.0] {
             let h = &projected.propagate(&[1.0, 0.0], &[t])[0];
             let exact = b / (a + b) + a / (a + b) * libm::exp(-(a + b) * t);
             assert!((h[0] - exact).abs() < 1e-14, "{} vs {exact}", h[0]);
         }
+    }
+
+    /// An estimate with a non-finite rate has no projection: an error, not a
+    /// panic.
+    #[test]
+    fn a_non_finite_generator_is_an_error() {
+        let generator = Generator::from_columns(&[vec![f64::NAN, 1.0], vec![1.0, -1.0]]);
+        assert_eq!(
+            Dissipative::project(&generator, &[0.5, 0.5], &[vec![1.0, 1.0]]),
+            Err(EigenError::NotFinite)
+        );
     }
 }

@@ -15,6 +15,7 @@ use serde_json::Value;
 use super::{PAPER_ARXIV, PAPER_CITATION, PAPER_DOI};
 use crate::config::{AuthorConfig, PublicationConfig};
 use crate::contract::{UNIT_PER_PANEL, UNIT_PER_ROW};
+use crate::physics::potential::FAMILIES;
 use crate::pipeline::executor::tool_version;
 
 /// Stages whose (study-wide) tables summarise the study: shown first.
@@ -160,16 +161,19 @@ fn overview(
     );
 }
 
-/// How paths, instance names and units are spelled.
+/// How paths, instance names and units are spelled; the potentials' ids
+/// as every family of [`FAMILIES`] spells them.
 fn naming_guide(out: &mut String) {
+    let families: Vec<String> = FAMILIES
+        .iter()
+        .map(|family| format!("`{}` {}", family.id_pattern(), family.id_meaning))
+        .collect();
     let _ = writeln!(
         out,
         "## Naming guide\n\n\
          * `<stage>/<instance>.parquet` is a stage's only table, \
          `<stage>/<instance>/<table>.parquet` one of its several tables.\n\
-         * `<instance>` names what the stage was run for: `ipp-<n>` an inverse power law \
-         potential of exponent n, `lj-<theta>` Lennard-Jones at theta = kT/eps, \
-         `morse-<theta>-<x0>` Morse at theta = kT/eps with its well at x0 = a d0, \
+         * `<instance>` names what the stage was run for: {}, \
          `_u<u'>` the velocity u' the kernel is taken at (v_th), `_rho<density>` the density \
          (0: the dilute limit), `study` the whole study; an MD ring (`md`, `compare`) is \
          named as in `pipeline.toml`, a figure by its name. Values are cut to six significant digits (`rho5.38226e-5`); the full \
@@ -177,7 +181,8 @@ fn naming_guide(out: &mut String) {
          `datapackage.json`.\n\
          * Units: `1` is dimensionless; a label column has none; `{UNIT_PER_ROW}` means \
          the column's unit differs by row and each row's unit is in its text column `unit`; \
-         `{UNIT_PER_PANEL}` (figure data) means the unit of the panel's axis.\n"
+         `{UNIT_PER_PANEL}` (figure data) means the unit of the panel's axis.\n",
+        families.join(", ")
     );
 }
 
@@ -323,6 +328,23 @@ fn schema(out: &mut String, kind: &TableKind, variant: Option<usize>) {
 mod tests {
     use super::*;
     use serde_json::json;
+
+    /// The guide spells the potentials' ids from `FAMILIES`, as it did when
+    /// written by hand.
+    #[test]
+    fn the_naming_guide_spells_every_family_id() {
+        let mut out = String::new();
+        naming_guide(&mut out);
+        assert!(
+            out.contains(
+                "`ipp-<n>` an inverse power law potential of exponent n, \
+                 `lj-<theta>` Lennard-Jones at theta = kT/eps, \
+                 `morse-<theta>-<x0>` Morse at theta = kT/eps with its well at x0 = a d0, \
+                 `_u<u'>`"
+            ),
+            "{out}"
+        );
+    }
 
     /// Resources in the default study's shape: 253 tables of 27 kinds
     /// (the kernels' three per instance, 33 instances; 38 moments, ...),

@@ -20,6 +20,7 @@ use crate::binning::Bins;
 use crate::linalg::spline_slopes;
 use crate::physics::launch::thermal_density;
 use crate::stats::Estimate;
+use crate::thresholds::DOMINATED_SHARE;
 
 /// Self drift `D1 = d<u - u'>/dt` and variance rate `D2 = d<(u - u')^2>/dt`
 /// of the special particle at one `u'`, kicks within a truncation, one value
@@ -114,10 +115,6 @@ pub struct Balance {
     /// one heavy scene makes the error (and the z-score means nothing).
     pub largest_share: f64,
 }
-
-/// Share of the spread above which one replicate carries a pair's error: no
-/// evidence for or against detailed balance.
-pub const DOMINATED_SHARE: f64 = 0.5;
 
 impl Balance {
     /// Whether the pair's error is carried by one replicate (one scene).

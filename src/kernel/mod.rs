@@ -21,6 +21,7 @@ use crate::physics::launch::{launch_rate, thermal_density};
 use crate::physics::potential::Potential;
 use crate::physics::sampling::{OffsetIntegration, SamplingPlan, SceneRecord, Stratum};
 use crate::physics::scene::{EngineSettings, Method};
+use crate::thresholds::DEFAULT_KICK_FLOOR;
 
 /// One integrated scene as the kernel needs it (special particle's frame).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -47,10 +48,6 @@ pub struct Event {
     pub outgoing: Option<[f64; 3]>,
 }
 
-/// Default kick floor: 1000x the engine's velocity error at the default
-/// tolerance (~1e-13 v_th, docs/benchmarks.md), far below any bin.
-pub const DEFAULT_KICK_FLOOR: f64 = 1e-10;
-
 /// The `u'` and density an event set is reweighted to.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Target {
@@ -69,7 +66,8 @@ pub struct Target {
 }
 
 impl Target {
-    /// The dilute limit at `u'` with the default kick floor (`L` is then unused).
+    /// The dilute limit at `u'` with the default kick floor
+    /// ([`DEFAULT_KICK_FLOOR`]; `L` is then unused).
     pub fn dilute(u_prime: f64) -> Target {
         Target {
             u_prime,

@@ -18,6 +18,7 @@
 use super::potential::Potential;
 use super::scan::LaunchPair;
 use super::scene::{Collision, EngineSettings, collide};
+use crate::thresholds::DEFAULT_KICK_FLOOR;
 
 /// Nested trapezoid rule on `tau = T sinh(s)`, `|s| <= half_range`.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -89,9 +90,9 @@ pub struct OffsetIntegral {
 /// at its ends (99th percentile 4e-5; docs/benchmarks.md).
 pub const DEFAULT_END_KICK: f64 = 1e-5;
 
-/// Velocity changes below this (`v_th`) are the engine's error floor
-/// (`kernel::DEFAULT_KICK_FLOOR`): an integral made only of them is zero.
-const KICK_FLOOR: f64 = 1e-10;
+/// Velocity changes below this (`v_th`) are the engine's error floor: an
+/// integral made only of them is zero.
+const KICK_FLOOR: f64 = DEFAULT_KICK_FLOOR;
 
 impl OffsetRule {
     /// Nodes (scenes) of one launch pair within the range (a pair whose kicks

@@ -74,7 +74,7 @@ fn kernel_figures(study: &Study, kicked: &[Potential]) -> Vec<FiguresStage> {
         let (labels, inputs) = kernels(&members);
         let figure = Figure::KernelsAtTheta {
             family: family.name().into(),
-            prefix: family.id().split('-').next().unwrap_or_default().into(),
+            prefix: family.prefix().into(),
             unit: family.length_unit().into(),
             labels,
         };

@@ -188,7 +188,7 @@ fn page(
         ("figures", "Figures", figure_list(figures)),
         ("tables", "Every stage's tables", {
             let mut tables = Tables::default();
-            stage_tables(&mut tables, store, &reports)?;
+            stage_tables(&mut tables, store, &reports, study.config.kernel.kick_floor)?;
             tables.html
         }),
         ("stages", "What each stage computed", stage_list(instances)),

@@ -45,11 +45,12 @@ fn estimate(frame: &DataFrame, row: usize, pair: Pair, undefined: &str) -> Resul
 }
 
 /// Cells `pair` of `row`, a variance of velocities `[v_th^2]`: one whose
-/// value and error are both below the square of the kick floor (1000x the
-/// engine's velocity error) is the integrator's rounding, not a spread (the
-/// integrable n = 2 ring printed `(3.83 ± 0.72)e-23`), and says so.
-fn variance(frame: &DataFrame, row: usize, pair: Pair) -> Result<Cell> {
-    let floor = crate::kernel::DEFAULT_KICK_FLOOR.powi(2);
+/// value and error are both below the square of the study's kick floor
+/// (`kick_floor`, `v_th`: by default 1000x the engine's velocity error) is
+/// the integrator's rounding, not a spread (the integrable n = 2 ring
+/// printed `(3.83 ± 0.72)e-23`), and says so.
+fn variance(frame: &DataFrame, row: usize, pair: Pair, kick_floor: f64) -> Result<Cell> {
+    let floor = kick_floor.powi(2);
     let (value, error) = (
         number(frame, row, pair.value)?,
         number(frame, row, pair.stderr)?,
@@ -93,14 +94,21 @@ fn read_frame(path: &Path) -> Result<DataFrame> {
 /// What a run computed, readable: `a_n` and the kernel shape, the paper
 /// table and where the figures are; with `details`, then every stage's
 /// table (rates of gases, convergence, evolution, MD and its comparison,
-/// scans, detailed balance), else a line saying how to get them.
-pub fn summary(store: &Store, reports: &[InstanceReport], details: bool) -> Result<String> {
+/// scans, detailed balance), else a line saying how to get them. Velocity
+/// changes up to `kick_floor` (`v_th`, the study's `kernel.kick_floor`)
+/// are the engine's error floor.
+pub fn summary(
+    store: &Store,
+    reports: &[InstanceReport],
+    kick_floor: f64,
+    details: bool,
+) -> Result<String> {
     let mut out = String::new();
     study_table(&mut out, store, reports)?;
     paper_table(&mut out, store, reports)?;
     figures_line(&mut out, store, reports);
     if details {
-        stage_tables(&mut out, store, reports)?;
+        stage_tables(&mut out, store, reports, kick_floor)?;
     } else {
         out.title(
             "per-stage tables (gases, convergence, evolution, MD, scans, detailed balance): `ternary run --details`",
@@ -110,12 +118,18 @@ pub fn summary(store: &Store, reports: &[InstanceReport], details: bool) -> Resu
 }
 
 /// Every stage's table beyond `a_n` and the paper's: rates of gases,
-/// convergence, evolution, MD and its comparison, scans, detailed balance.
-fn stage_tables(out: &mut dyn Sink, store: &Store, reports: &[InstanceReport]) -> Result<()> {
+/// convergence, evolution, MD and its comparison, scans, detailed balance
+/// (velocity changes up to `kick_floor`, `v_th`, are the engine's error floor).
+fn stage_tables(
+    out: &mut dyn Sink,
+    store: &Store,
+    reports: &[InstanceReport],
+    kick_floor: f64,
+) -> Result<()> {
     gases_table(out, store, reports)?;
     convergence_table(out, store, reports)?;
     evolve_table(out, store, reports)?;
-    md_table(out, store, reports)?;
+    md_table(out, store, reports, kick_floor)?;
     compare_table(out, store, reports)?;
     scan_table(out, store, reports)?;
     balance_table(out, store, reports)
@@ -138,7 +152,7 @@ fn figures_line(out: &mut dyn Sink, store: &Store, reports: &[InstanceReport]) {
 
 /// The sweeps' joint detailed-balance tests.
 fn balance_table(out: &mut dyn Sink, store: &Store, reports: &[InstanceReport]) -> Result<()> {
-    use crate::kernel::equilibrium::DOMINATED_SHARE;
+    use crate::thresholds::DOMINATED_SHARE;
     use contract::sweep::balance_tests::*;
     let frames = titled_frames(
         out,
@@ -521,8 +535,14 @@ fn evolve_table(out: &mut dyn Sink, store: &Store, reports: &[InstanceReport]) -
     Ok(())
 }
 
-/// The `md` stage's summaries: moments of `h(u, t_f)` by both estimators.
-fn md_table(out: &mut dyn Sink, store: &Store, reports: &[InstanceReport]) -> Result<()> {
+/// The `md` stage's summaries: moments of `h(u, t_f)` by both estimators
+/// (variances below `kick_floor^2` are the engine's rounding, [`variance`]).
+fn md_table(
+    out: &mut dyn Sink,
+    store: &Store,
+    reports: &[InstanceReport],
+    kick_floor: f64,
+) -> Result<()> {
     use contract::md::summary::*;
     let frames = titled_frames(
         out,
@@ -546,7 +566,7 @@ fn md_table(out: &mut dyn Sink, store: &Store, reports: &[InstanceReport]) -> Re
                 Cell::text(instance.as_str()),
                 Cell::text(text(&frame, row, ESTIMATOR)?),
                 estimate(&frame, row, NUMBER, "-")?,
-                variance(&frame, row, WINDOW_VARIANCE)?,
+                variance(&frame, row, WINDOW_VARIANCE, kick_floor)?,
             ]);
         }
     }

@@ -177,7 +177,8 @@ impl EvolveStage {
             progress.advance((done - before) as u64);
         });
         let times: Vec<f64> = schedule.iter().map(|m| m.scaled).collect();
-        let evolution = GridEvolution::new(&generators, &grid, start, p.kernel.u_prime, &times);
+        let evolution = GridEvolution::new(&generators, &grid, start, p.kernel.u_prime, &times)
+            .map_err(|error| StageError::Input(format!("projecting the generator: {error}")))?;
         progress.advance(1);
         let processes = &evolution.processes;
         Ok(vec![

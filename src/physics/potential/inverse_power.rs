@@ -34,7 +34,10 @@ impl PairPotential for InversePower {
 
 impl Family for InversePower {
     fn id(&self) -> String {
-        format!("ipp-{}", self.n)
+        format!("{}-{}", self.prefix(), self.n)
+    }
+    fn prefix(&self) -> &'static str {
+        Self::LISTED.prefix
     }
     fn label(&self) -> String {
         format!("n = {}", self.n)
@@ -77,6 +80,9 @@ impl InversePower {
     pub const LISTED: Listed = Listed {
         key: "inverse_power",
         example: "inverse_power = [6]",
+        prefix: "ipp",
+        id_fields: "<n>",
+        id_meaning: "an inverse power law potential of exponent n",
         potential: |value| Ok(Potential::InversePower(Self::new(parameters(value)?)?)),
     };
 

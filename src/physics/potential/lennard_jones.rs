@@ -51,6 +51,9 @@ impl LennardJones {
     pub const LISTED: Listed = Listed {
         key: "lennard_jones",
         example: "lennard_jones = [1.0]",
+        prefix: "lj",
+        id_fields: "<theta>",
+        id_meaning: "Lennard-Jones at theta = kT/eps",
         potential: |value| Ok(Potential::LennardJones(Self::new(parameters(value)?)?)),
     };
 
@@ -69,7 +72,10 @@ impl LennardJones {
 
 impl Family for LennardJones {
     fn id(&self) -> String {
-        format!("lj-{}", self.theta)
+        format!("{}-{}", self.prefix(), self.theta)
+    }
+    fn prefix(&self) -> &'static str {
+        Self::LISTED.prefix
     }
     fn label(&self) -> String {
         format!("LJ θ = {}", self.theta)

@@ -38,8 +38,12 @@ pub trait PairPotential: Copy + Send + Sync {
 /// implementation per family, one file each, so that configuration, tables,
 /// figures and the command line ask the family instead of matching on it.
 pub trait Family {
-    /// Short stable identifier naming instances and files, e.g. `ipp-6`.
+    /// Short stable identifier naming instances and files, e.g. `ipp-6`:
+    /// [`Family::prefix`], then the parameters (its [`Listed::id_fields`]).
     fn id(&self) -> String;
+    /// The family's part of every [`Family::id`], e.g. `ipp`: its
+    /// [`Listed::prefix`].
+    fn prefix(&self) -> &'static str;
     /// Legend label of figures, e.g. `n = 6`.
     fn label(&self) -> String;
     /// The family's name in prose, e.g. `Lennard-Jones`.
@@ -74,12 +78,26 @@ pub struct Listed {
     pub key: &'static str,
     /// An entry that lists one potential, for messages: `inverse_power = [6]`.
     pub example: &'static str,
+    /// What every id of the family begins with (before a `-`), e.g. `ipp`.
+    pub prefix: &'static str,
+    /// The parameters an id spells after the prefix, e.g. `<theta>-<x0>`.
+    pub id_fields: &'static str,
+    /// What an id names, for the bundle's naming guide: `an inverse power
+    /// law potential of exponent n`.
+    pub id_meaning: &'static str,
     /// The potential one listed value describes, or why the value is refused.
     pub potential: fn(serde_json::Value) -> Result<Potential, String>,
 }
 
 /// Every family, in the order a study lists its potentials.
 pub const FAMILIES: [Listed; 3] = [InversePower::LISTED, LennardJones::LISTED, Morse::LISTED];
+
+impl Listed {
+    /// The family's ids as a pattern, e.g. `morse-<theta>-<x0>`.
+    pub fn id_pattern(&self) -> String {
+        format!("{}-{}", self.prefix, self.id_fields)
+    }
+}
 
 /// `exp(B) erf(sqrt(B))` for a pair at binding energy `B = -U >= 0` (in
 /// `kT`): the integrand of the bound-pair length `K_b` (the Boltzmann weight
@@ -166,6 +184,25 @@ pub trait PotentialVisitor {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The potential each family's `example` lists has an id of the family's
+    /// pattern: its prefix, then one value per field.
+    #[test]
+    fn listed_examples_have_ids_of_their_family_pattern() {
+        for family in FAMILIES {
+            let entry: toml::Table = toml::from_str(family.example).unwrap();
+            let value = serde_json::to_value(&entry[family.key][0]).unwrap();
+            let id = (family.potential)(value).unwrap().id();
+            let (prefix, values) = id.split_once('-').unwrap();
+            assert_eq!(prefix, family.prefix, "{id}");
+            assert_eq!(
+                values.split('-').count(),
+                family.id_fields.split('-').count(),
+                "{id} against {}",
+                family.id_pattern()
+            );
+        }
+    }
 
     /// Central difference of the energy, for checking forces.
     fn numerical_force<P: PairPotential>(potential: P, x: f64) -> f64 {

@@ -38,6 +38,9 @@ impl Morse {
     pub const LISTED: Listed = Listed {
         key: "morse",
         example: "morse = [{ theta = 1.0, x0 = 4.0 }]",
+        prefix: "morse",
+        id_fields: "<theta>-<x0>",
+        id_meaning: "Morse at theta = kT/eps with its well at x0 = a d0",
         potential: |value| {
             let Morse { theta, x0 } = parameters(value)?;
             Ok(Potential::Morse(Self::new(theta, x0)?))
@@ -98,7 +101,10 @@ impl PairPotential for Morse {
 
 impl Family for Morse {
     fn id(&self) -> String {
-        format!("morse-{}-{}", self.theta, self.x0)
+        format!("{}-{}-{}", self.prefix(), self.theta, self.x0)
+    }
+    fn prefix(&self) -> &'static str {
+        Self::LISTED.prefix
     }
     fn label(&self) -> String {
         format!("Morse θ = {}, x0 = {}", self.theta, self.x0)

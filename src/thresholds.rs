@@ -1,0 +1,16 @@
+//! Thresholds shared by the science modules, the configuration and the
+//! report: plain constants, each with its one home here, so that the
+//! configuration (a default) and the report (a verdict on a table) read the
+//! value without reaching into the modules that compute with it. No logic.
+
+/// Default kick floor (`v_th`): velocity changes up to this size are the
+/// scattering engine's error floor and count as exactly zero. 1000x the
+/// engine's velocity error at the default tolerance (~1e-13 `v_th`,
+/// docs/benchmarks.md), far below any kernel bin.
+pub const DEFAULT_KICK_FLOOR: f64 = 1e-10;
+
+/// Share of a detailed-balance imbalance's spread over randomizations above
+/// which its most deviant randomization (one heavy scene) carries the error:
+/// the pair or joint test is then no evidence for or against detailed
+/// balance (its z-score means nothing).
+pub const DOMINATED_SHARE: f64 = 0.5;
