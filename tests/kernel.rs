@@ -7,7 +7,7 @@ use ternary::binning::Bins;
 use ternary::config::DEFAULT_KICK_FLOOR;
 use ternary::kernel::{
     Draws, Event, Histogram, MomentSums, Target, contributions, histograms, moments,
-    pilot_same_side_fraction, self_bin,
+    pilot_same_side_fraction, recombination_rates, self_bin,
 };
 use ternary::physics::launch::thermal_density;
 use ternary::physics::offset_quadrature::OffsetRule;
@@ -731,4 +731,58 @@ fn leading_share_keeps_each_strata_prefix() {
     assert_eq!(kept.len(), 4 * (44 + 8));
     let tiny = leading_share(launches, 1e-6);
     assert_eq!(tiny.len(), 4 * 2, "one point per randomization and stratum");
+}
+
+/// The free-atom kernel of a gas with a well (issue 34): scenes that leave a
+/// bound pair and a free atom are no part of `G` or its moments (the moments
+/// of all events equal, bit for bit, those of the free scenes alone), they
+/// carry the recombination rate instead, which is exactly zero without a
+/// well, and reweighted to `u' = 0.5` agrees with scenes drawn for `0.5`;
+/// and the free-atom variance rate levels off once the truncation passes
+/// the largest free kick (Lennard-Jones at `theta = 0.1`).
+#[test]
+fn recombined_scenes_leave_the_free_atom_kernel_for_their_own_rate() {
+    let events = draw(Potential::lennard_jones(0.1), &plan(11, 8, 2048));
+    let draws = replicates(&events);
+    let recombined = events.iter().filter(|e| e.recombined).count();
+    assert!(recombined > 50, "{recombined} recombined scenes");
+    let free: Vec<Event> = events
+        .iter()
+        .map(|e| Event {
+            outgoing: e.outgoing.filter(|_| !e.recombined),
+            ..*e
+        })
+        .collect();
+    let truncations = [0.04, 0.1, 1.0, f64::INFINITY];
+    assert_eq!(
+        moments(&events, &dilute(0.0), &truncations, &draws),
+        moments(&free, &dilute(0.0), &truncations, &draws),
+        "recombined scenes reach the free-atom moments"
+    );
+    let rate = |u_prime: f64| recombination_rates(&events, &dilute(u_prime), &draws);
+    let at_rest = Estimate::from_replicates(&rate(0.0));
+    assert!(at_rest.mean > 5.0 * at_rest.stderr, "{at_rest:?}");
+    // The rate at u' = 0.5 from these scenes and from scenes drawn for
+    // u' = 0.5 itself (another proposal, another seed): independent.
+    let shifted = draw(
+        Potential::lennard_jones(0.1),
+        &shifted_plan(12, 8, 2048, 0.5),
+    );
+    let drawn_there = recombination_rates(&shifted, &dilute(0.5), &replicates(&shifted));
+    let (here, there) = (
+        Estimate::from_replicates(&rate(0.5)),
+        Estimate::from_replicates(&drawn_there),
+    );
+    let z = (here.mean - there.mean) / libm::hypot(here.stderr, there.stderr);
+    assert!(
+        z.abs() < 4.0,
+        "u' = 0.5: {here:?} reweighted, {there:?} drawn there"
+    );
+    let free_rates = moments(&events, &dilute(0.0), &[3.0, f64::INFINITY], &draws);
+    for replicate in &free_rates {
+        assert_eq!(replicate[0].self_variance, replicate[1].self_variance);
+    }
+    let repulsive = draw(Potential::inverse_power(6.0), &plan(11, 4, 256));
+    let none = recombination_rates(&repulsive, &dilute(0.0), &replicates(&repulsive));
+    assert!(none.iter().all(|&r| r == 0.0), "{none:?}");
 }

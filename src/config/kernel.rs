@@ -109,6 +109,18 @@ impl KernelParams {
             kick_floor: self.kick_floor,
         }
     }
+
+    /// The truncation `X` at which `a_n` has converged and is read: half
+    /// the window; none for a family with a well, whose free-atom kicks
+    /// reach O(v_th) beyond any window (Lennard-Jones at `theta = 0.1`:
+    /// `a(X)` grows 16-fold from `X = 0.1` and levels off near `X = 1.6`).
+    pub fn converged_truncation(&self) -> f64 {
+        if self.potential.family().has_well() {
+            f64::INFINITY
+        } else {
+            0.5 * self.window
+        }
+    }
 }
 
 /// Largest histogram bins of a kernel or an early evolution.

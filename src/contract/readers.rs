@@ -8,6 +8,7 @@ use arrow::array::RecordBatch;
 use crate::kernel::{Draws, Event};
 use crate::physics::sampling::{LaunchPoint, Stratum};
 use crate::physics::scan::LaunchPair;
+use crate::physics::scene::Outcome;
 use crate::pipeline::{Input, StageError};
 use crate::stats::Estimate;
 
@@ -49,6 +50,7 @@ pub fn read_events(input: &Input) -> Result<Vec<Event>, StageError> {
                 offset: offset[k],
                 proposal_density: density[k],
                 outgoing: (!failed).then(|| [outgoing[0][k], outgoing[1][k], outgoing[2][k]]),
+                recombined: outcome[k] == Outcome::Recombined.name(),
             })
         })
         .collect()

@@ -20,7 +20,7 @@ use crate::binning::Bins;
 use crate::physics::launch::{launch_rate, thermal_density};
 use crate::physics::potential::Potential;
 use crate::physics::sampling::{OffsetIntegration, SamplingPlan, SceneRecord, Stratum};
-use crate::physics::scene::{EngineSettings, Method};
+use crate::physics::scene::{EngineSettings, Method, Outcome};
 use crate::thresholds::DEFAULT_KICK_FLOOR;
 
 /// One integrated scene as the kernel needs it (special particle's frame).
@@ -46,6 +46,11 @@ pub struct Event {
     /// Outgoing velocities, ascending; `None` for a failed scene (it still
     /// counts as drawn, contributing zero: failures are reported, never dropped silently).
     pub outgoing: Option<[f64; 3]>,
+    /// Whether a bound pair and a free atom left (three-body recombination,
+    /// potentials with a well only). Such a scene is no part of the
+    /// free-atom kernel `G`, which describes three atoms that leave free;
+    /// its channel has its own rate ([`recombination_rates`]).
+    pub recombined: bool,
 }
 
 /// The `u'` and density an event set is reweighted to.
@@ -91,6 +96,7 @@ impl Event {
             offset: record.scene.offset,
             proposal_density: record.scene.proposal_density,
             outgoing: (!record.collision.outcome.is_failure()).then_some(record.collision.outgoing),
+            recombined: record.collision.outcome == Outcome::Recombined,
         }
     }
 }
@@ -140,11 +146,38 @@ pub fn contributions<'a>(
     event: &'a Event,
     target: &Target,
 ) -> impl Iterator<Item = Contribution> + 'a {
-    let weigh = Weighing::new(event, target);
-    images(event, target.kick_floor).map(move |image| Contribution {
+    weighed(event, target, images(event, target.kick_floor))
+}
+
+/// `images` of `event` weighed at `target`.
+fn weighed<'a>(
+    event: &Event,
+    target: &Target,
+    images: impl ExactSizeIterator<Item = Contribution> + 'a,
+) -> impl Iterator<Item = Contribution> + 'a {
+    let weigh = Weighing::new(event, target, images.len());
+    images.map(move |image| Contribution {
         weight: weigh.weight(&image),
         ..image
     })
+}
+
+/// Per replicate, the rate at which the special particle at `target` takes
+/// part in a three-body encounter that leaves a bound pair and a free atom
+/// (`rho^2 l v_th`): the weights of the recombined scenes' images, which the
+/// free-atom kernel leaves out. Zero without a well.
+pub fn recombination_rates(events: &[Event], target: &Target, draws: &Draws) -> Vec<f64> {
+    per_replicate(
+        events,
+        draws,
+        || 0.0,
+        |rate, event, scale| {
+            let images = images_in(event, target.kick_floor, true);
+            *rate += weighed(event, target, images)
+                .map(|c| c.weight * scale)
+                .sum::<f64>();
+        },
+    )
 }
 
 /// What turns an event's images into contributions at a target: the launch
@@ -157,7 +190,8 @@ struct Weighing {
 }
 
 impl Weighing {
-    fn new(event: &Event, target: &Target) -> Weighing {
+    /// The weighing of `event`'s `count` images at `target`.
+    fn new(event: &Event, target: &Target, count: usize) -> Weighing {
         // Dilute targets skip the factor: exp(-0) = 1 exactly.
         let survival = if target.density == 0.0 {
             1.0
@@ -166,11 +200,10 @@ impl Weighing {
                 - 0.5 * target.launch_length * (1.0 / event.u3.abs() - 1.0 / event.u2.abs());
             libm::exp(-target.density * launch_rate(target.u_prime) * delay.abs())
         };
-        let count = images(event, target.kick_floor).len() as f64;
         Weighing {
             u_prime: target.u_prime,
             survival,
-            per_image: event.proposal_density * count,
+            per_image: event.proposal_density * count as f64,
         }
     }
 
@@ -211,8 +244,9 @@ pub fn self_bin(
         draws,
         || 0.0,
         |sum, event, scale| {
-            let weigh = Weighing::new(event, target);
-            for image in images(event, target.kick_floor) {
+            let images = images(event, target.kick_floor);
+            let weigh = Weighing::new(event, target, images.len());
+            for image in images {
                 if bins.index(image.self_kick()) == Some(k) {
                     *sum += weigh.weight(&image) * scale;
                 }
@@ -257,11 +291,22 @@ pub fn self_bin_feeders(events: &[Event], bins: &Bins, k: usize, kick_floor: f64
 /// density: `E_p[f(M x) / p(x)] = int f(M x) dx = int_{M S} f`, unbiased for any
 /// proposal (the two densities coincide only when `launch_shift = 0`). The
 /// literal algorithm's scenes count once. Velocity changes within `kick_floor`
-/// count as zero. Empty for failed scenes.
-/// A lazy iterator: nothing is allocated per event.
+/// count as zero. Empty for failed scenes and for recombined ones (the
+/// free-atom kernel). A lazy iterator: nothing is allocated per event.
 pub fn images(event: &Event, kick_floor: f64) -> impl ExactSizeIterator<Item = Contribution> + '_ {
+    images_in(event, kick_floor, false)
+}
+
+/// The [`images`] of `event` if it ended in the channel `recombined` says
+/// (a bound pair and a free atom, else three free atoms), else none.
+fn images_in(
+    event: &Event,
+    kick_floor: f64,
+    recombined: bool,
+) -> impl ExactSizeIterator<Item = Contribution> + '_ {
     let signs: &'static [f64] = match (event.outgoing, event.stratum) {
         (None, _) => &[],
+        _ if event.recombined != recombined => &[],
         (Some(_), Stratum::Literal) => &[1.0],
         (Some(_), Stratum::Opposite | Stratum::SameSide) => &[1.0, -1.0],
     };

@@ -192,8 +192,6 @@ pub enum Converged {
     Same,
     /// Ours, where the definitions differ.
     Differs(Estimate),
-    /// Our definition has no converged value yet (Lennard-Jones).
-    NotYet,
     /// What it is computed from is not in the study.
     Missing,
 }
@@ -220,7 +218,6 @@ impl Converged {
         match self {
             Converged::Same => "same",
             Converged::Differs(_) => "differs",
-            Converged::NotYet => "not converged",
             Converged::Missing => "missing",
         }
     }
@@ -232,33 +229,28 @@ const MISSING: Estimate = Estimate {
     stderr: f64::NAN,
 };
 
-/// `a_n` at the paper's truncation; ours converged (the window edge; for
-/// Lennard-Jones, whose rate has not converged there, none); and a note
-/// saying which.
+/// `a_n` at the paper's truncation; ours converged (the window edge; for a
+/// family with a well, whose free-atom kicks reach O(v_th), the rate without
+/// truncation); and a note saying which.
 fn rates(
     inputs: &[Input],
     params: &KernelParams,
 ) -> Result<(Estimate, Converged, String), StageError> {
     let moments = contract::moments::TABLE.find(inputs, &instances::moments(params))?;
     let paper = self_variance_at(moments, PAPER_TRUNCATION)?;
-    let window = self_variance_at(moments, 0.5 * params.window)?;
+    let edge = 0.5 * params.window;
+    let window = self_variance_at(moments, edge)?;
     let truncated = "ours counts |u - u'| <= 0.04 like the paper";
     if params.potential.family().has_well() {
-        let untruncated = self_variance_at(moments, f64::INFINITY)?;
+        let untruncated = self_variance_at(moments, params.converged_truncation())?;
+        let recombination = contract::moments::RECOMBINATION_RATE.read(moments)?[0];
         let note = format!(
-            "{truncated}; converged: none yet, since for Lennard-Jones the rate has not converged at the window edge (X = {}: {:.4e} +- {:.1e}; without truncation {:.4e} +- {:.1e}): bound-pair events (recombination, break-up) kick beyond any window",
-            0.5 * params.window,
-            window.mean,
-            window.stderr,
-            untruncated.mean,
-            untruncated.stderr
+            "{truncated}, from scenes whose three atoms leave free; converged: the free-atom rate without truncation (its kicks reach O(v_th): X = {edge} gives {:.4e} +- {:.1e}); scenes leaving a bound pair and a free atom are no part of it (recombination rate {:.4e} +- {:.1e})",
+            window.mean, window.stderr, recombination.mean, recombination.stderr
         );
-        return Ok((paper, Converged::NotYet, note));
+        return Ok((paper, Converged::Differs(untruncated), note));
     }
-    let note = format!(
-        "{truncated}; converged: the whole window (X = {}), our a_n",
-        0.5 * params.window
-    );
+    let note = format!("{truncated}; converged: the whole window (X = {edge}), our a_n");
     Ok((paper, Converged::Differs(window), note))
 }
 
@@ -757,6 +749,6 @@ mod tests {
         assert_eq!((scaled.mean, scaled.stderr), (-6.0, 1.5));
         let converged = Converged::Differs(estimate).map(|e| super::scaled(e, 2.0));
         assert_eq!(converged.estimate().mean, 4.0);
-        assert!(Converged::NotYet.map(|e| e).estimate().mean.is_nan());
+        assert!(Converged::Same.map(|e| e).estimate().mean.is_nan());
     }
 }

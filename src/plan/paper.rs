@@ -140,12 +140,15 @@ fn table_i_checks(study: &Study, planned: &HashSet<InstanceId>) -> Vec<Check> {
 }
 
 /// The collisions the paper's detailed-balance pair is computed from, when
-/// the study offers the pair (`n = 6`, a sweep from `u' = -3` with the
+/// the study offers the pair (`n = 6` among its potentials, a sweep from `u' = -3` with the
 /// separation 0.04): launches drawn for `u' = -3` itself. The sweep's own
 /// scenes, a launch mixture for its whole grid, leave the ratio at +-0.044 with
 /// the default study's 2560 pairs; drawn for `-3`, 4096 pairs reach +-0.015
 /// (docs/benchmarks.md, `bench balance`).
 pub(super) fn balance_collisions(study: &Study) -> Option<(String, CollisionsParams)> {
+    if !study.potentials().contains(&IPP_6) {
+        return None;
+    }
     let sweep = study.sweep_params(IPP_6)?;
     let (a, b) = BALANCE_PAIR;
     let width = sweep.balance_bin_width;

@@ -385,13 +385,14 @@ fn study_table(out: &mut dyn Sink, store: &Store, reports: &[InstanceReport]) ->
         return Ok(());
     };
     out.title(
-        "thermalization constants a_n = self variance rate at u' = 0, dilute limit [rho^2 l v_th]; kernel shape near u' (+- standard errors; shape: statistical and fit-protocol errors combined)",
+        "thermalization constants a_n = self variance rate at u' = 0, dilute limit, of scenes whose three atoms leave free, where converged: |u-u'| <= window/2, untruncated with a well [rho^2 l v_th]; recombination: rate of encounters leaving a bound pair [rho^2 l v_th]; kernel shape near u' (+- standard errors; shape: statistical and fit-protocol errors combined)",
     );
     let mut table = Columns::new(&[
         (POTENTIAL.name, Align::Left),
-        ("a_n (|u-u'| <= window/2)", Align::Left),
+        ("a_n (converged)", Align::Left),
         ("rel.err", Align::Right),
         ("a_n untruncated", Align::Left),
+        ("recombination", Align::Left),
         (BETA.value.name, Align::Left),
         ("sigma [v_th]", Align::Left),
         ("failed", Align::Right),
@@ -417,6 +418,7 @@ fn study_table(out: &mut dyn Sink, store: &Store, reports: &[InstanceReport]) ->
             Cell::estimate(a, a_err, "-"),
             Cell::text(relative),
             estimate(&frame, row, A_N_UNTRUNCATED, "-")?,
+            recombination(&frame, row)?,
             estimate(&frame, row, BETA, no_shape)?,
             estimate(&frame, row, SIGMA, no_shape)?,
             Cell::text(format!(
@@ -428,6 +430,19 @@ fn study_table(out: &mut dyn Sink, store: &Store, reports: &[InstanceReport]) ->
     }
     out.table(&table);
     Ok(())
+}
+
+/// The recombination rate of a `table` row: "-" without a well (exactly
+/// zero, no scene can bind).
+fn recombination(frame: &DataFrame, row: usize) -> Result<Cell> {
+    use contract::table::RECOMBINATION_RATE;
+    let rate = number(frame, row, RECOMBINATION_RATE.value)?;
+    let error = number(frame, row, RECOMBINATION_RATE.stderr)?;
+    Ok(if rate == 0.0 && error == 0.0 {
+        Cell::text("-".to_string())
+    } else {
+        Cell::estimate(rate, error, "-")
+    })
 }
 
 /// The `gases` stage's output: rates in physical units.

@@ -27,10 +27,11 @@ impl GasesStage {
     }
 }
 
-/// `a_n` of `params` (self variance rate within half the window) from its moments table.
+/// `a_n` of `params` (the self variance rate where it has converged) from
+/// its moments table.
 fn variance_rate(inputs: &[Input], params: &KernelParams) -> Result<Estimate, StageError> {
     let table = contract::moments::TABLE.find(inputs, &instances::moments(params))?;
-    self_variance_at(table, 0.5 * params.window)
+    self_variance_at(table, params.converged_truncation())
 }
 
 /// One gas's rates.

@@ -12,7 +12,7 @@ use crate::config::KernelParams;
 use crate::contract::instances;
 use crate::contract::readers::input_events;
 use crate::contract::{self, Rows};
-use crate::kernel::{MomentSums, moments};
+use crate::kernel::{MomentSums, moments, recombination_rates};
 use crate::pipeline::code::{self, Code};
 use crate::pipeline::{Input, InstanceId, Progress, Stage, StageError, Table};
 use crate::stats::Estimate;
@@ -21,6 +21,11 @@ use crate::stats::Estimate;
 const TRUNCATIONS_PER_DECADE: u32 = 5;
 /// Decades of truncation below the window edge.
 const TRUNCATION_DECADES: u32 = 3;
+/// Decades of truncation beyond the window edge for a family with a well:
+/// its free-atom kicks reach O(v_th) (Lennard-Jones at `theta = 0.1`: 19%
+/// of the free scenes kick the special particle by more than 0.1 v_th, none
+/// by more than 3 v_th), so its `a(X)` levels off only there.
+const BEYOND_WINDOW_DECADES: u32 = 2;
 
 /// The `moments` stage for one potential, `u'` and density.
 pub struct MomentsStage {
@@ -44,17 +49,21 @@ impl MomentsStage {
         MomentsStage { params, extra }
     }
 
-    /// Log-spaced `X` from `10^-3` of the half window to the half window and
-    /// the added truncations, ascending, then infinity.
+    /// Log-spaced `X` from `10^-3` of the half window to the half window
+    /// (and, for a family with a well, on to [`BEYOND_WINDOW_DECADES`]
+    /// beyond it) and the added truncations, ascending, then infinity.
     fn truncations(&self) -> Vec<f64> {
         let edge = 0.5 * self.params.window;
-        let count = TRUNCATIONS_PER_DECADE * TRUNCATION_DECADES;
-        let mut grid: Vec<f64> = (0..=count)
+        let below = TRUNCATIONS_PER_DECADE * TRUNCATION_DECADES;
+        let above = if self.params.potential.family().has_well() {
+            TRUNCATIONS_PER_DECADE * BEYOND_WINDOW_DECADES
+        } else {
+            0
+        };
+        let mut grid: Vec<f64> = (0..=below + above)
             .map(|k| {
-                edge * libm::pow(
-                    10f64,
-                    -f64::from(count - k) / f64::from(TRUNCATIONS_PER_DECADE),
-                )
+                let decades = (f64::from(k) - f64::from(below)) / f64::from(TRUNCATIONS_PER_DECADE);
+                edge * libm::pow(10f64, decades)
             })
             .chain(self.extra.iter().copied())
             .collect();
@@ -101,7 +110,11 @@ impl Stage for MomentsStage {
         use contract::moments::*;
         let (events, draws, failed) = input_events(inputs)?;
         let truncations = self.truncations();
-        let sums = moments(&events, &self.params.target(), &truncations, &draws);
+        let target = self.params.target();
+        let sums = moments(&events, &target, &truncations, &draws);
+        let recombination =
+            Estimate::from_replicates(&recombination_rates(&events, &target, &draws));
+        let recombined = events.iter().filter(|e| e.recombined).count() as u32;
         let rows: Vec<usize> = (0..truncations.len()).collect();
         let sums = &sums;
         let estimate = |part: fn(&MomentSums) -> f64| {
@@ -123,6 +136,8 @@ impl Stage for MomentsStage {
             .estimate(SELF_VARIANCE, estimate(|m| m.self_variance))
             .estimate(WINDOW_DRIFT, estimate(|m| m.window_drift))
             .estimate(WINDOW_VARIANCE, estimate(|m| m.window_variance))
+            .estimate(RECOMBINATION_RATE, |_| recombination)
+            .with(RECOMBINED_EVENTS, |_| recombined)
             .with(EVENTS, |_| events.len() as u32)
             .with(FAILED_EVENTS, |_| failed as u32)
             .table(&TABLE)?;

@@ -32,6 +32,8 @@ struct PotentialRow {
     params: KernelParams,
     a_n: Estimate,
     a_n_untruncated: Estimate,
+    /// Rate of encounters leaving a bound pair and a free atom.
+    recombination: Estimate,
     /// `alpha`, `beta`, `sigma` of the fit.
     shape: [Estimate; 3],
     /// Scanned launch pairs with their `|u1f,max|` and its error bound.
@@ -60,8 +62,9 @@ impl TableStage {
         let maxima = contract::scan::peak::U1_FINAL_MAX_ABS.read(peaks)?;
         Ok(PotentialRow {
             params: *params,
-            a_n: self_variance_at(moments, 0.5 * params.window)?,
+            a_n: self_variance_at(moments, params.converged_truncation())?,
             a_n_untruncated: self_variance_at(moments, f64::INFINITY)?,
+            recombination: contract::moments::RECOMBINATION_RATE.read(moments)?[0],
             shape: [
                 first(contract::fit::ALPHA, contract::fit::ALPHA_SYSTEMATIC)?,
                 first(contract::fit::BETA, contract::fit::BETA_SYSTEMATIC)?,
@@ -162,6 +165,7 @@ impl Stage for TableStage {
             })
             .estimate(A_N, |r| r.a_n)
             .estimate(A_N_UNTRUNCATED, |r| r.a_n_untruncated)
+            .estimate(RECOMBINATION_RATE, |r| r.recombination)
             .estimate(ALPHA, |r| r.shape[0])
             .estimate(BETA, |r| r.shape[1])
             .estimate(SIGMA, |r| r.shape[2])

@@ -32,7 +32,7 @@ pub const SELF_DRIFT: Pair = pair!(
 pub const SELF_VARIANCE: Pair = pair!(
     "self_variance",
     RATE,
-    "variance rate d<(u - u')^2>/dt of the special particle (a_n at u' = 0)",
+    "variance rate d<(u - u')^2>/dt of the special particle in scenes whose three atoms leave free (a_n at u' = 0)",
     SPREAD
 );
 /// Window drift rate.
@@ -48,6 +48,19 @@ pub const WINDOW_VARIANCE: Pair = pair!(
     RATE,
     "variance rate of all particles within the truncation",
     SPREAD
+);
+/// Recombination rate (the same in every row).
+pub const RECOMBINATION_RATE: Pair = pair!(
+    "recombination_rate",
+    RATE,
+    "rate at which the special particle takes part in a three-body encounter that leaves a bound pair and a free atom (such scenes are no part of the free-atom rates in the other columns; 0 without a well; the same in every row)",
+    SPREAD
+);
+/// Scenes that recombined.
+pub const RECOMBINED_EVENTS: Col<u32> = Col::u32(
+    "recombined_events",
+    "1",
+    "scenes that left a bound pair and a free atom",
 );
 /// Scenes drawn.
 pub const EVENTS: Col<u32> = Col::u32(super::EVENTS, "1", "scenes drawn");

@@ -58,11 +58,11 @@ pub const OURS_CONVERGED: Pair = pair!(
     "ours under our definition where it differs from the paper's",
     "standard error"
 )
-.or_null("see converged: our definition is the paper's, or not converged or missing");
+.or_null("see converged: our definition is the paper's, or missing");
 /// Whether ours under our definition differs.
 pub const CONVERGED: Col<String> = Col::text(
     "converged",
-    "differs (ours_converged holds it), same (our definition is the paper's), not converged (ours has no converged value yet) or missing",
+    "differs (ours_converged holds it), same (our definition is the paper's) or missing",
 );
 /// Where the definitions differ, and how to read the row.
 pub const NOTE: Col<String> = Col::text("note", "where the definitions differ");

@@ -31,7 +31,7 @@ pub const A_N: Pair = Pair {
     value: Col::f64(
         super::A_N,
         RATE,
-        "self variance rate at u' = 0, dilute limit, |u - u'| <= window/2",
+        "self variance rate at u' = 0, dilute limit, of scenes whose three atoms leave free, where it has converged: |u - u'| <= window/2, or untruncated for a family with a well (its free-atom kicks reach O(v_th))",
     ),
     stderr: Col::f64(
         "a_n_stderr",
@@ -45,6 +45,13 @@ pub const A_N_UNTRUNCATED: Pair = pair!(
     RATE,
     "self variance rate without truncation",
     "standard error of a_n_untruncated"
+);
+/// The recombination rate at `u' = 0`.
+pub const RECOMBINATION_RATE: Pair = pair!(
+    "recombination_rate",
+    RATE,
+    "rate at which the special particle at u' = 0 (dilute limit) takes part in a three-body encounter that leaves a bound pair and a free atom; 0 without a well",
+    "standard error of recombination_rate (spread of randomizations)"
 );
 /// Amplitude of the shape.
 pub const ALPHA: Pair = Pair {
