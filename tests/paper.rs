@@ -447,6 +447,39 @@ fn paper_rows_recompute_from_their_sources() {
             ours[k].mean
         );
     }
+    recombination_agrees_between_scene_sets(&store);
+}
+
+/// The recombination rate at `u' = 0` from the kernel's scenes (`moments`)
+/// and from the sweep's own scene set (another launch proposal and seed):
+/// independent estimates of one number, within errors; zero without a well,
+/// its thermal average too.
+fn recombination_agrees_between_scene_sets(store: &Path) {
+    use contract::sweep::recombination::{RATE_COLUMN, U_PRIME};
+    let sweep_rate = |potential: &str| {
+        let sweep = table(store, "sweep", potential, "recombination");
+        let at = U_PRIME.optional(&sweep).unwrap();
+        let rates = RATE_COLUMN.read(&sweep).unwrap();
+        let at_rest = at.iter().position(|u| *u == Some(0.0)).expect("u' = 0");
+        let thermal = at.iter().position(Option::is_none).expect("thermal row");
+        (rates[at_rest], rates[thermal])
+    };
+    let moments = table(store, "moments", "lj-0.1_u0_rho0", "moments");
+    let kernel = contract::moments::RECOMBINATION_RATE
+        .read(&moments)
+        .unwrap()[0];
+    let (sweep, thermal) = sweep_rate("lj-0.1");
+    let z = (kernel.mean - sweep.mean) / kernel.stderr.hypot(sweep.stderr);
+    assert!(z.abs() < 4.0, "kernel {kernel:?}, sweep {sweep:?}");
+    // Together (inverse-variance weighted) they resolve a rate above zero:
+    // the agreement is between two measurements of something.
+    let weights = [kernel.stderr.powi(-2), sweep.stderr.powi(-2)];
+    let pooled = (weights[0] * kernel.mean + weights[1] * sweep.mean) / (weights[0] + weights[1]);
+    let pooled_error = (weights[0] + weights[1]).sqrt().recip();
+    assert!(pooled > 3.0 * pooled_error, "{pooled} +- {pooled_error}");
+    assert!(thermal.mean > 0.0, "{thermal:?}");
+    let (none, thermal_none) = sweep_rate("ipp-6");
+    assert_eq!((none.mean, thermal_none.mean), (0.0, 0.0));
 }
 
 /// Every ring at `u' = 0.5`: valid, so the study runs (before: 15 instances,

@@ -13,6 +13,7 @@ use std::collections::HashMap;
 use rayon::prelude::*;
 use serde_json::Value;
 
+use crate::analysis::thermal_average;
 use crate::binning::Bins;
 use crate::config::SweepParams;
 use crate::contract::instances;
@@ -22,9 +23,10 @@ use crate::kernel::equilibrium::{
     Balance, FokkerPlanckPoint, JointBalance, SelfRates, balance_between, fokker_planck_check,
     joint_balance, self_rates,
 };
-use crate::kernel::{Draws, Event, Target, self_bin_feeders};
+use crate::kernel::{Draws, Event, Target, recombination_rates, self_bin_feeders};
 use crate::pipeline::code::{self, Code};
 use crate::pipeline::{Input, InstanceId, Progress, Stage, StageError, Table};
+use crate::stats::Estimate;
 
 /// The `sweep` stage for one potential.
 pub struct SweepStage {
@@ -63,6 +65,33 @@ impl SweepStage {
         grid.par_iter()
             .map(|&u| self_rates(events, &self.target(u), edge, draws))
             .collect()
+    }
+
+    /// The recombination rate at every grid point, then its average over
+    /// thermal `u'` ([`thermal_average`], per replicate: the points share
+    /// scenes).
+    fn recombination_table(
+        &self,
+        events: &[Event],
+        draws: &Draws,
+        grid: &[f64],
+    ) -> Result<Table, StageError> {
+        use contract::sweep::recombination::*;
+        let per_point: Vec<Vec<f64>> = grid
+            .par_iter()
+            .map(|&u| recombination_rates(events, &self.target(u), draws))
+            .collect();
+        let mut rows: Vec<(Option<f64>, Estimate)> = grid
+            .iter()
+            .zip(&per_point)
+            .map(|(&u, rates)| (Some(u), Estimate::from_replicates(rates)))
+            .collect();
+        let average = thermal_average(|u| recombination_rates(events, &self.target(u), draws));
+        rows.push((None, Estimate::from_replicates(&average)));
+        Ok(Rows::new(&rows)
+            .optional(U_PRIME, |(u, _)| *u)
+            .estimate(RATE_COLUMN, |(_, rate)| *rate)
+            .table(&TABLE)?)
     }
 
     fn rates_table(&self, grid: &[f64], rates: &[SelfRates]) -> Result<Table, StageError> {
@@ -197,6 +226,7 @@ impl Stage for SweepStage {
             contract::sweep::rates::TABLE.name,
             contract::sweep::detailed_balance::TABLE.name,
             contract::sweep::balance_tests::TABLE.name,
+            contract::sweep::recombination::TABLE.name,
         ]
     }
 
@@ -215,6 +245,12 @@ impl Stage for SweepStage {
         progress.advance(1);
         let [balance, tests] = self.balance_tables(&events, &draws, &grid)?;
         progress.advance(1);
-        Ok(vec![self.rates_table(&grid, &rates)?, balance, tests])
+        let recombination = self.recombination_table(&events, &draws, &grid)?;
+        Ok(vec![
+            self.rates_table(&grid, &rates)?,
+            balance,
+            tests,
+            recombination,
+        ])
     }
 }

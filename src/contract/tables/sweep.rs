@@ -47,6 +47,28 @@ pub mod rates {
     .or_null("not estimable: the difference has no spread over randomizations");
 }
 
+/// `recombination.parquet`: one row per `u'`, then their thermal average.
+pub mod recombination {
+    use super::*;
+
+    /// The table.
+    pub const TABLE: TableSpec = TableSpec {
+        stage: STAGE,
+        name: "recombination",
+        description: "the recombination rate against u' and its thermal average, dilute limit",
+    };
+    /// Velocity of the special particle.
+    pub const U_PRIME: Col<f64> = Col::f64("u_prime", "v_th", "velocity of the special particle")
+        .or_null("the average over thermal u': int f0 r du' / int f0 du' over |u'| <= 3 (99.73% of atoms; Simpson, step 0.25)");
+    /// The recombination rate.
+    pub const RATE_COLUMN: Pair = pair!(
+        "recombination_rate",
+        RATE,
+        "rate at which the special particle takes part in a three-body encounter that leaves a bound pair and a free atom (0 without a well)",
+        "standard error (spread of randomizations)"
+    );
+}
+
 /// `detailed_balance.parquet`: one row per `(a, b)`.
 pub mod detailed_balance {
     use super::*;
