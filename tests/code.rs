@@ -346,7 +346,7 @@ fn comments_in_the_real_source_change_nothing_and_the_report_is_no_stage_code() 
     );
     assert!(
         stages_changed_by(
-            "src/report/mod.rs",
+            "src/report/summary.rs",
             "format!(\"{:.3}%\", 100.0 * a_err / a.abs())",
             "format!(\"{:.4}%\", 100.0 * a_err / a.abs())",
         )

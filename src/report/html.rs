@@ -18,8 +18,9 @@ use std::time::UNIX_EPOCH;
 
 use anyhow::{Context, Result, bail};
 
+use super::describe;
 use super::layout::{Align, Cell, Columns, Sink};
-use super::{describe, paper_table, stage_tables, study_table};
+use super::summary::{paper_table, stage_tables, study_table};
 use crate::config::Study;
 use crate::contract;
 use crate::pipeline::Stage;

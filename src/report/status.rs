@@ -1,0 +1,133 @@
+//! `ternary status`: instances by freshness and why, and the estimated CPU
+//! time and store size of what is still to compute.
+
+use std::collections::BTreeSet;
+use std::fmt::Write as _;
+
+use crate::pipeline::executor::{Freshness, StatusLine};
+use crate::pipeline::{Cost, InstanceId};
+
+/// The sum of `costs`.
+pub fn total_cost<'a>(costs: impl IntoIterator<Item = &'a Cost>) -> Cost {
+    costs.into_iter().fold(Cost::default(), |sum, cost| Cost {
+        cpu_seconds: sum.cpu_seconds + cost.cpu_seconds,
+        bytes: sum.bytes + cost.bytes,
+        rows: sum.rows + cost.rows,
+    })
+}
+
+/// `status` before its estimate: the count of instances by freshness, then
+/// one line per instance (only those not fresh when `changed`) with why, and
+/// with `shards > 1` which shards of a shardable one are done.
+pub fn status(lines: &[StatusLine], shards: u32, changed: bool) -> String {
+    let shown: Vec<&StatusLine> = lines
+        .iter()
+        .filter(|line| !changed || line.freshness != Freshness::Fresh)
+        .collect();
+    let width = shown
+        .iter()
+        .map(|line| line.id.to_string().chars().count())
+        .max()
+        .unwrap_or(0);
+    let mut out = status_summary(lines);
+    for line in shown {
+        let key = line.key.as_deref().map_or("", |key| &key[..12]);
+        let state = match &line.freshness {
+            Freshness::Fresh => format!("fresh (key {key})"),
+            Freshness::Stale(reasons) => format!("stale: {}", reasons.join("; ")),
+            Freshness::Damaged(problems) => format!(
+                "damaged (key {key}): {} (the next run recomputes it)",
+                problems.join("; ")
+            ),
+            Freshness::Missing(reason) => format!("missing: {reason}"),
+        };
+        let progress = line.shards.as_ref().map_or(String::new(), |progress| {
+            format!(
+                " (shards: {} of {shards} done, missing {:?})",
+                progress.done.len(),
+                progress.missing
+            )
+        });
+        let _ = writeln!(out, "{:<width$}  {state}{progress}", line.id.to_string());
+    }
+    out
+}
+
+/// The first line of `status`: `N instances: F fresh, S stale, M missing`,
+/// and the damaged ones when there are any.
+fn status_summary(lines: &[StatusLine]) -> String {
+    let count = |name: &str| {
+        lines
+            .iter()
+            .filter(|line| line.freshness.name() == name)
+            .count()
+    };
+    let damaged = match count("damaged") {
+        0 => String::new(),
+        damaged => format!(", {damaged} damaged"),
+    };
+    format!(
+        "{} instances: {} fresh, {} stale, {} missing{damaged}\n",
+        lines.len(),
+        count("fresh"),
+        count("stale"),
+        count("missing"),
+    )
+}
+
+/// The closing line of `status`: the estimated CPU time and store size of
+/// the whole study and of its instances in `lines` that are not fresh
+/// (still to compute).
+pub fn cost_estimate(costs: &[(InstanceId, Cost)], lines: &[StatusLine]) -> String {
+    let unfresh: BTreeSet<&InstanceId> = lines
+        .iter()
+        .filter(|line| line.freshness != Freshness::Fresh)
+        .map(|line| &line.id)
+        .collect();
+    let whole = total_cost(costs.iter().map(|(_, cost)| cost));
+    let pending = total_cost(
+        costs
+            .iter()
+            .filter(|(id, _)| unfresh.contains(id))
+            .map(|(_, cost)| cost),
+    );
+    format!(
+        "estimate: {} CPU-hours and {} of store for the whole study; {} CPU-hours of it still to compute (an order of magnitude, from the default study's speed on a 2-core VM)\n",
+        hours(whole.cpu_seconds),
+        size(whole.bytes),
+        hours(pending.cpu_seconds)
+    )
+}
+
+/// An instance's state and why: `stale: <reasons>`, `missing: <reason>`.
+pub fn describe(freshness: &Freshness) -> String {
+    match freshness {
+        Freshness::Fresh => "fresh".into(),
+        Freshness::Stale(reasons) => format!("stale: {}", reasons.join("; ")),
+        Freshness::Damaged(problems) => format!("damaged: {}", problems.join("; ")),
+        Freshness::Missing(reason) => format!("missing: {reason}"),
+    }
+}
+
+/// CPU-seconds as hours, two significant digits.
+pub fn hours(seconds: f64) -> String {
+    two_digits(seconds / 3600.0)
+}
+
+/// Bytes in MB or GB, two significant digits.
+pub fn size(bytes: f64) -> String {
+    if bytes >= 1e9 {
+        format!("{} GB", two_digits(bytes / 1e9))
+    } else {
+        format!("{} MB", two_digits(bytes / 1e6))
+    }
+}
+
+/// `value` rounded to two significant digits, in exponent form beyond 1e6.
+fn two_digits(value: f64) -> String {
+    let text = format!("{value:.1e}");
+    match text.parse::<f64>() {
+        Ok(rounded) if rounded.abs() < 1e6 => rounded.to_string(),
+        _ => text,
+    }
+}

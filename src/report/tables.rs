@@ -1,0 +1,378 @@
+//! Every stage's table beyond `a_n` and the paper's, as `ternary run
+//! --details` prints them: rates of gases, convergence, evolution, MD and
+//! its comparison, scans, bound pairs, detailed balance.
+
+use anyhow::Result;
+
+use super::layout::{Align, Cell, Columns, Sink};
+use super::numbers::{fixed, or_why, significant};
+use crate::contract;
+use crate::pipeline::executor::InstanceReport;
+use crate::pipeline::store::Store;
+
+use super::{count, estimate, number, row_of, table_frames, text, titled_frames, variance};
+
+/// The sweeps' joint detailed-balance tests.
+pub(super) fn balance_table(
+    out: &mut dyn Sink,
+    store: &Store,
+    reports: &[InstanceReport],
+) -> Result<()> {
+    use crate::thresholds::DOMINATED_SHARE;
+    use contract::sweep::balance_tests::*;
+    let frames = titled_frames(
+        out,
+        store,
+        reports,
+        &TABLE,
+        "detailed balance, joint over the pairs of each separation (sum of relative imbalances, correlations from the randomizations; pairs whose error one randomization carries left out)",
+    )?;
+    if frames.is_empty() {
+        return Ok(());
+    }
+    let mut table = Columns::new(&[
+        ("potential", Align::Left),
+        ("b - a", Align::Right),
+        ("pairs counted", Align::Right),
+        ("joint imbalance", Align::Left),
+        ("z", Align::Right),
+        ("", Align::Left),
+    ]);
+    for (instance, frame) in frames {
+        for row in 0..frame.height() {
+            let share = number(&frame, row, JOINT_LARGEST_SHARE)?;
+            let z = or_why(number(&frame, row, JOINT_Z)?, |z| fixed(z, 2), "-");
+            let verdict = if share <= DOMINATED_SHARE {
+                String::new()
+            } else if share.is_nan() {
+                "no evidence: no kicks or no pairs".to_string()
+            } else {
+                format!(
+                    "no evidence: one randomization carries {:.0}% of the spread",
+                    100.0 * share
+                )
+            };
+            table.push(vec![
+                Cell::text(instance.as_str()),
+                Cell::text(fixed(number(&frame, row, SEPARATION)?, 3)),
+                Cell::text(format!(
+                    "{}/{}",
+                    count(&frame, row, COUNTED)?,
+                    count(&frame, row, PAIRS)?
+                )),
+                estimate(&frame, row, JOINT_IMBALANCE, "-")?,
+                Cell::text(z),
+                Cell::text(verdict),
+            ]);
+        }
+    }
+    out.table(&table);
+    Ok(())
+}
+
+/// The `gases` stage's output: rates in physical units.
+pub(super) fn gases_table(
+    out: &mut dyn Sink,
+    store: &Store,
+    reports: &[InstanceReport],
+) -> Result<()> {
+    use contract::gases::*;
+    let Some((_, frame)) = table_frames(store, reports, &TABLE)?.into_iter().next() else {
+        return Ok(());
+    };
+    out.title(
+        "thermalization rates in physical units (Gamma = a_n rho^2 l v_th, +- standard error)",
+    );
+    let mut table = Columns::new(&[
+        (GAS.name, Align::Left),
+        (POTENTIAL.name, Align::Left),
+        ("kT [eV]", Align::Right),
+        ("rho l", Align::Right),
+        ("Gamma [1/ns] (dilute)", Align::Left),
+        ("paper's rule at rho l *", Align::Left),
+        ("1/Gamma [ns]", Align::Left),
+    ]);
+    for row in 0..frame.height() {
+        table.push(vec![
+            Cell::text(text(&frame, row, GAS)?),
+            Cell::text(text(&frame, row, POTENTIAL)?),
+            Cell::text(format!("{:.3e}", number(&frame, row, KT)?)),
+            Cell::text(format!("{:.3e}", number(&frame, row, RHO_L)?)),
+            estimate(&frame, row, GAMMA, "-")?,
+            estimate(&frame, row, GAMMA_AT_DENSITY, "-")?,
+            estimate(&frame, row, RELAXATION_TIME, "never: no kicks")?,
+        ]);
+    }
+    out.table(&table);
+    out.line(
+        "* Gamma times the paper's launch rule's finite-density factor exp(-r |delay|) in a box of L = kernel.launch_length: an artifact of that algorithm (it depends on L), not the gas's rate at rho l; MD's finite-density change has the opposite sign (finite_size table)",
+    );
+    Ok(())
+}
+
+/// The `convergence` stage's output: shifts of `a_n` against the defaults.
+pub(super) fn convergence_table(
+    out: &mut dyn Sink,
+    store: &Store,
+    reports: &[InstanceReport],
+) -> Result<()> {
+    use contract::convergence::*;
+    for (instance, frame) in table_frames(store, reports, &TABLE)? {
+        out.title(&format!(
+            "convergence of a_n for {} (shift = a_n - default, paired over randomizations)",
+            instance
+        ));
+        let mut table = Columns::new(&[
+            (PARAMETER.name, Align::Left),
+            (VALUE.name, Align::Right),
+            (A_N.value.name, Align::Left),
+            (SHIFT.value.name, Align::Left),
+            ("shift / a_n error", Align::Right),
+        ]);
+        for row in 0..frame.height() {
+            table.push(vec![
+                Cell::text(text(&frame, row, PARAMETER)?),
+                // The default row has no value: it is the configuration itself.
+                Cell::text(or_why(
+                    number(&frame, row, VALUE)?,
+                    |v| format!("{v:.3e}"),
+                    "-",
+                )),
+                estimate(&frame, row, A_N, "-")?,
+                estimate(&frame, row, SHIFT, "-")?,
+                Cell::text(or_why(
+                    number(&frame, row, SHIFT_OVER_ERROR)?,
+                    |z| fixed(z, 3),
+                    "-",
+                )),
+            ]);
+        }
+        out.table(&table);
+    }
+    Ok(())
+}
+
+/// The `evolve` stage's summary: spread and approach to equilibrium of `h`.
+pub(super) fn evolve_table(
+    out: &mut dyn Sink,
+    store: &Store,
+    reports: &[InstanceReport],
+) -> Result<()> {
+    use contract::evolve::evolution_summary::*;
+    for (instance, frame) in table_frames(store, reports, &TABLE)? {
+        out.title(&format!(
+            "evolution of h from delta(u - u') for {instance}: full = linearized operator, tagged = special particle, fokker_planck (+- jackknife errors)"
+        ));
+        let mut table = Columns::new(&[
+            (PROCESS.name, Align::Left),
+            ("t Gamma", Align::Right),
+            ("t [ns]", Align::Right),
+            ("<(u-u')^2>, |u-u'|<=X", Align::Left),
+            ("<(u-u')^2>", Align::Left),
+            ("L1 distance to equilibrium", Align::Left),
+        ]);
+        for row in 0..frame.height() {
+            table.push(vec![
+                Cell::text(text(&frame, row, PROCESS)?),
+                Cell::text(format!("{:.3e}", number(&frame, row, TIME_GAMMA)?)),
+                // Times given in 1/Gamma have no time in ns.
+                Cell::text(or_why(number(&frame, row, TIME_NS)?, |t| fixed(t, 0), "-")),
+                estimate(&frame, row, WINDOW_VARIANCE, "-")?,
+                estimate(&frame, row, VARIANCE, "-")?,
+                estimate(&frame, row, DISTANCE_TO_EQUILIBRIUM, "-")?,
+            ]);
+        }
+        out.table(&table);
+    }
+    Ok(())
+}
+
+/// The `md` stage's summaries: moments of `h(u, t_f)` by both estimators
+/// (variances below `kick_floor^2` are the engine's rounding, [`variance`]).
+pub(super) fn md_table(
+    out: &mut dyn Sink,
+    store: &Store,
+    reports: &[InstanceReport],
+    kick_floor: f64,
+) -> Result<()> {
+    use contract::md::summary::*;
+    let frames = titled_frames(
+        out,
+        store,
+        reports,
+        &TABLE,
+        "ring molecular dynamics: h(u, t_f) within the window (+- standard errors over runs)",
+    )?;
+    if frames.is_empty() {
+        return Ok(());
+    }
+    let mut table = Columns::new(&[
+        (contract::compare::RING.name, Align::Left),
+        (ESTIMATOR.name, Align::Left),
+        ("sum h du", Align::Left),
+        ("<(u-u')^2>_window [v_th^2]", Align::Left),
+    ]);
+    for (instance, frame) in frames {
+        for row in 0..frame.height() {
+            table.push(vec![
+                Cell::text(instance.as_str()),
+                Cell::text(text(&frame, row, ESTIMATOR)?),
+                estimate(&frame, row, NUMBER, "-")?,
+                variance(&frame, row, WINDOW_VARIANCE, kick_floor)?,
+            ]);
+        }
+    }
+    out.table(&table);
+    bound_pairs_table(out, store, reports)?;
+    Ok(())
+}
+
+/// The `compare` stage: goodness of fit of MD against Boltzmann and of the
+/// scaling collapse, and the finite-size and density study.
+pub(super) fn compare_table(
+    out: &mut dyn Sink,
+    store: &Store,
+    reports: &[InstanceReport],
+) -> Result<()> {
+    use contract::compare::{finite_size, goodness};
+    use contract::estimator;
+    for (_, frame) in table_frames(store, reports, &goodness::TABLE)? {
+        out.title(
+            "MD against Boltzmann and the scaling collapse: chi2 per degree of freedom with the variance MD would have if it followed the reference, its p-value, and (sample) with the runs' own errors",
+        );
+        let mut table = Columns::new(&[
+            (goodness::RING.name, Align::Left),
+            (goodness::REFERENCE.name, Align::Left),
+            (goodness::ESTIMATOR.name, Align::Left),
+            ("chi2/dof", Align::Right),
+            (goodness::DOF.name, Align::Right),
+            ("p", Align::Right),
+            ("sample chi2/dof", Align::Right),
+        ]);
+        for row in 0..frame.height() {
+            // No bin with a variance: nothing to compare.
+            let reduced = |col| -> Result<String> {
+                Ok(or_why(
+                    number(&frame, row, col)?,
+                    |c| fixed(c, 2),
+                    "no bins",
+                ))
+            };
+            table.push(vec![
+                Cell::text(text(&frame, row, goodness::RING)?),
+                Cell::text(text(&frame, row, goodness::REFERENCE)?),
+                Cell::text(text(&frame, row, goodness::ESTIMATOR)?),
+                Cell::text(reduced(goodness::CHI2_PER_DOF)?),
+                Cell::text(count(&frame, row, goodness::DOF)?.to_string()),
+                Cell::text(or_why(
+                    number(&frame, row, goodness::P_VALUE)?,
+                    |p| format!("{p:.2e}"),
+                    "-",
+                )),
+                Cell::text(format!(
+                    "{} ({})",
+                    reduced(goodness::SAMPLE_CHI2_PER_DOF)?,
+                    count(&frame, row, goodness::SAMPLE_DOF)?
+                )),
+            ]);
+        }
+        out.table(&table);
+    }
+    for (_, frame) in table_frames(store, reports, &finite_size::TABLE)? {
+        out.title(
+            "finite size and density: window variance at t_f, MD / Boltzmann (+- standard errors); tagged: starts near u', thermal: every start",
+        );
+        let mut table = Columns::new(&[
+            (finite_size::RING.name, Align::Left),
+            ("N", Align::Right),
+            ("rho l", Align::Right),
+            ("rho^2 l v_th t_f", Align::Right),
+            (estimator::TAGGED, Align::Left),
+            (estimator::THERMAL, Align::Left),
+        ]);
+        for row in 0..frame.height() {
+            table.push(vec![
+                Cell::text(text(&frame, row, finite_size::RING)?),
+                Cell::text(count(&frame, row, finite_size::PARTICLES)?.to_string()),
+                Cell::text(format!(
+                    "{:.3e}",
+                    number(&frame, row, finite_size::DENSITY)?
+                )),
+                Cell::text(format!(
+                    "{:.4e}",
+                    number(&frame, row, finite_size::SCALED_TIME)?
+                )),
+                estimate(&frame, row, finite_size::RATIO, "0/0: no spread")?,
+                estimate(&frame, row, finite_size::THERMAL_RATIO, "0/0: no spread")?,
+            ]);
+        }
+        out.table(&table);
+    }
+    Ok(())
+}
+
+/// The `scan` stages' peaks: largest `|u1f|` per launch pair.
+pub(super) fn scan_table(
+    out: &mut dyn Sink,
+    store: &Store,
+    reports: &[InstanceReport],
+) -> Result<()> {
+    use contract::scan::{LAUNCH, peak::*};
+    let frames = titled_frames(
+        out,
+        store,
+        reports,
+        &TABLE,
+        "mono-energetic scans: largest |u1f| (error bound) and its arrival offset",
+    )?;
+    if frames.is_empty() {
+        return Ok(());
+    }
+    let mut table = Columns::new(&[
+        (contract::POTENTIAL.name, Align::Left),
+        (LAUNCH.name, Align::Left),
+        ("|u1f,max| [v_th]", Align::Left),
+        ("offset [l/v_th]", Align::Left),
+        ("failed", Align::Right),
+        ("max |dE/E|", Align::Right),
+    ]);
+    for (instance, frame) in frames {
+        for row in 0..frame.height() {
+            table.push(vec![
+                Cell::text(instance.as_str()),
+                Cell::text(text(&frame, row, LAUNCH)?),
+                estimate(&frame, row, U1_FINAL_MAX_ABS, "-")?,
+                estimate(&frame, row, ARRIVAL_OFFSET_AT_MAX, "no peak")?,
+                Cell::text(count(&frame, row, FAILED_SCENES)?.to_string()),
+                Cell::text(format!("{:.1e}", number(&frame, row, WORST_ENERGY_ERROR)?)),
+            ]);
+        }
+    }
+    out.table(&table);
+    Ok(())
+}
+
+/// Bound neighbour pairs of the rings with a well: sampled, after the
+/// dynamics, and the dilute limit.
+fn bound_pairs_table(out: &mut dyn Sink, store: &Store, reports: &[InstanceReport]) -> Result<()> {
+    use contract::md::pairs::*;
+    for (instance, frame) in table_frames(store, reports, &TABLE)? {
+        let bound = |state: &str| -> Result<Cell> {
+            estimate(&frame, row_of(&frame, STATE, state)?, BOUND_FRACTION, "-")
+        };
+        let dilute = number(
+            &frame,
+            row_of(&frame, STATE, DILUTE_LIMIT)?,
+            BOUND_FRACTION.value,
+        )?;
+        if dilute > 0.0 {
+            out.line(&format!(
+                "{instance}: bound neighbour pairs per gap {} initial, {} final, {} dilute limit rho K_b",
+                bound(INITIAL)?,
+                bound(FINAL)?,
+                significant(dilute),
+            ));
+        }
+    }
+    Ok(())
+}
