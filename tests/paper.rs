@@ -469,7 +469,7 @@ fn recombination_agrees_between_scene_sets(store: &Path) {
         .read(&moments)
         .unwrap()[0];
     let (sweep, thermal) = sweep_rate("lj-0.1");
-    let z = (kernel.mean - sweep.mean) / kernel.stderr.hypot(sweep.stderr);
+    let z = (kernel.mean - sweep.mean) / libm::hypot(kernel.stderr, sweep.stderr);
     assert!(z.abs() < 4.0, "kernel {kernel:?}, sweep {sweep:?}");
     // Together (inverse-variance weighted) they resolve a rate above zero:
     // the agreement is between two measurements of something.
