@@ -172,6 +172,9 @@ pub fn recombination_rates(events: &[Event], target: &Target, draws: &Draws) -> 
         draws,
         || 0.0,
         |rate, event, scale| {
+            if !event.recombined {
+                return;
+            }
             let images = images_in(event, target.kick_floor, true);
             *rate += weighed(event, target, images)
                 .map(|c| c.weight * scale)
