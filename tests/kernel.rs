@@ -3,12 +3,14 @@
 //! the importance sampler with the literal algorithm, and honest error bars.
 
 use rayon::prelude::*;
+use ternary::analysis::thermal_average;
 use ternary::binning::Bins;
 use ternary::config::DEFAULT_KICK_FLOOR;
 use ternary::kernel::{
     Draws, Event, Histogram, MomentSums, Target, contributions, histograms, moments,
     pilot_same_side_fraction, recombination_rates, self_bin,
 };
+use ternary::physics::dissociation::{dissociation_rate, dissociation_scenes};
 use ternary::physics::launch::thermal_density;
 use ternary::physics::offset_quadrature::OffsetRule;
 use ternary::physics::potential::Potential;
@@ -785,4 +787,41 @@ fn recombined_scenes_leave_the_free_atom_kernel_for_their_own_rate() {
     let repulsive = draw(Potential::inverse_power(6.0), &plan(11, 4, 256));
     let none = recombination_rates(&repulsive, &dilute(0.0), &replicates(&repulsive));
     assert!(none.iter().all(|&r| r == 0.0), "{none:?}");
+    recombination_balances_dissociation(&events, &draws);
+}
+
+/// Detailed balance between three-body recombination and collision-induced
+/// dissociation (Lennard-Jones, `theta = 0.1`), an identity of equilibrium
+/// with nothing to tune: recombination events `rho^3 l v_th R / 3` per length
+/// (`R` the thermal average of the rate per atom, three atoms each) equal
+/// dissociation events `(K_b rho^2) rho v_th k_d`, so `R = 3 K_b k_d`. `R`
+/// comes from the three-body scenes, `k_d` from bound pairs hit by atoms:
+/// two independent integrations of different initial states.
+fn recombination_balances_dissociation(events: &[Event], draws: &Draws) {
+    let potential = Potential::lennard_jones(0.1);
+    let thermal = Estimate::from_replicates(&thermal_average(|u| {
+        recombination_rates(events, &dilute(u), draws)
+    }));
+    assert!(thermal.mean > 3.0 * thermal.stderr, "{thermal:?}");
+    let rates: Vec<f64> = (0..4)
+        .map(|randomization| {
+            let sobol = ScrambledSobol::new(34, randomization);
+            let points: Vec<[f64; 3]> = (0..2048).map(|k| sobol.point(k)).collect();
+            let scenes = dissociation_scenes(&potential, &engine(), &points, || ()).unwrap();
+            assert!(scenes.iter().all(|(pair, _)| pair.internal_energy < 0.0));
+            dissociation_rate(&scenes)
+        })
+        .collect();
+    let k_d = Estimate::from_replicates(&rates);
+    assert!(k_d.mean > 10.0 * k_d.stderr, "{k_d:?}");
+    let bound = 3.0 * potential.family().bound_pair_length();
+    let balanced = Estimate {
+        mean: bound * k_d.mean,
+        stderr: bound * k_d.stderr,
+    };
+    let z = (thermal.mean - balanced.mean) / libm::hypot(thermal.stderr, balanced.stderr);
+    assert!(
+        z.abs() < 4.0,
+        "recombination {thermal:?} against 3 K_b k_d {balanced:?}: z = {z}"
+    );
 }

@@ -478,6 +478,19 @@ fn recombination_agrees_between_scene_sets(store: &Path) {
     let pooled_error = (weights[0] + weights[1]).sqrt().recip();
     assert!(pooled > 3.0 * pooled_error, "{pooled} +- {pooled_error}");
     assert!(thermal.mean > 0.0, "{thermal:?}");
+    // Detailed balance: the thermal recombination rate against the one the
+    // dissociation stage predicts, 3 K_b k_d (tests/kernel.rs holds the
+    // test with power; the reduced study's sweep resolves R only to ~50%).
+    let dissociation = table(store, "dissociation", "lj-0.1", "dissociation");
+    let balanced = contract::dissociation::BALANCED_RECOMBINATION
+        .read(&dissociation)
+        .unwrap()[0];
+    assert!(balanced.mean > 10.0 * balanced.stderr, "{balanced:?}");
+    let z = (thermal.mean - balanced.mean) / libm::hypot(thermal.stderr, balanced.stderr);
+    assert!(
+        z.abs() < 4.0,
+        "recombination {thermal:?}, 3 K_b k_d {balanced:?}"
+    );
     let (none, thermal_none) = sweep_rate("ipp-6");
     assert_eq!((none.mean, thermal_none.mean), (0.0, 0.0));
 }

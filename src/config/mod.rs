@@ -2,7 +2,7 @@
 //! resolved into per-stage parameters in one pass.
 //!
 //! One module per section (`[store]`, `[potentials]`, `[engine]`, `[scan]`,
-//! `[collisions]`, `[kernel]`, `[sweep]`, `[convergence]`, `[evolve]`,
+//! `[collisions]`, `[kernel]`, `[sweep]`, `[dissociation]`, `[convergence]`, `[evolve]`,
 //! `[md]`, `[[gas]]`, `[figures]`, `[publication]`, `[limits]`, `[slurm]`), each owning its schema with defaults, the check of
 //! every documented range, and the parameters of the stages it configures.
 //! Unknown keys, wrong types and out-of-range values are rejected with a
@@ -18,6 +18,7 @@
 mod check;
 mod collisions;
 mod convergence;
+mod dissociation;
 mod engine;
 mod evolve;
 mod figures;
@@ -46,6 +47,7 @@ pub use collisions::{
     MAX_SCENES, OffsetMethod,
 };
 pub use convergence::{ConvergenceConfig, ConvergenceParams};
+pub use dissociation::{DissociationConfig, DissociationParams, MAX_DISSOCIATION_POINTS};
 pub use engine::EngineConfig;
 pub use evolve::{EvolveConfig, EvolveParams, MAX_EVOLVE_HALF_NODES, PhysicalTimes};
 pub use figures::FiguresConfig;
@@ -122,6 +124,9 @@ pub struct Config {
     /// The `u'` sweep: rates, Fokker-Planck consistency, detailed balance.
     #[serde(default)]
     pub sweep: SweepConfig,
+    /// Collision-induced dissociation of bound pairs (potentials with a well).
+    #[serde(default)]
+    pub dissociation: DissociationConfig,
     /// The convergence study of `a_n` under numerical settings.
     #[serde(default)]
     pub convergence: ConvergenceConfig,
@@ -252,6 +257,7 @@ impl Study {
         config.kernel.validate(&launch)?;
         let wide = config.sweep.wide_launch(&launch);
         config.sweep.validate(&wide)?;
+        config.dissociation.validate()?;
         let gases = gas::resolve(&config.gas, &potentials)?;
         let convergence = config.convergence.resolve(&convergence::Context {
             potentials: &potentials,
@@ -322,6 +328,12 @@ impl Study {
     pub fn sweep_params(&self, potential: Potential) -> Option<SweepParams> {
         let kernel = self.kernel_params(potential, 0.0, 0.0);
         self.config.sweep.params(kernel)
+    }
+
+    /// Resolved parameters of the dissociation of `potential`, if enabled
+    /// and its family has a well.
+    pub fn dissociation_params(&self, potential: Potential) -> Option<DissociationParams> {
+        self.config.dissociation.params(potential, self.engine())
     }
 
     /// Resolved parameters of every md system (empty unless enabled).

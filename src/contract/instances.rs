@@ -2,6 +2,7 @@
 //! kernel's `u'` and density, a ring, the study), named once, here. The plan
 //! composes them; each stage names itself and its inputs through them.
 
+use super::dissociation as dissociation_stage;
 use super::{collisions as collisions_stage, compare as compare_stage, fit as fit_stage};
 use super::{kernel as kernel_stage, scan as scan_stage};
 use super::{launches as launches_stage, md as md_stage, moments as moments_stage};
@@ -65,6 +66,11 @@ pub fn collisions_of(main: &str, other: &str) -> Vec<InstanceId> {
 /// The `scan` instance of `potential`.
 pub fn scan(potential: &Potential) -> InstanceId {
     InstanceId::new(scan_stage::STAGE, &potential.id())
+}
+
+/// The `dissociation` instance of a potential with a well.
+pub fn dissociation(potential: &Potential) -> InstanceId {
+    InstanceId::new(dissociation_stage::STAGE, &potential.id())
 }
 
 /// The `kernel` instance of kernel parameters.

@@ -2,6 +2,7 @@
 //! `v_th`, times in `l / v_th`, energies in `kT`. No IO, no tables, no CLI.
 
 pub mod clusters;
+pub mod dissociation;
 pub mod launch;
 pub mod md;
 pub mod offset_quadrature;

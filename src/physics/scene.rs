@@ -137,7 +137,7 @@ pub struct Collision {
     pub outcome: Outcome,
     /// Internal energy `w^2/4 + U` of the recombined pair in `kT` (0 otherwise).
     pub binding_energy: f64,
-    /// `(E_out - E_in) / (E_in + D)`: `E` the relative-motion energy, `D` the
+    /// `(E_out - E_in) / (abs(E_in) + D)`: `E` the relative-motion energy, `D` the
     /// well depth (0 for inverse power laws), so that the scale is the largest
     /// kinetic energy a pair reaches.
     pub energy_error: f64,
@@ -467,12 +467,69 @@ fn run_scene<P: PairPotential, I: Integrator>(
     settings: &EngineSettings,
     lines: [FreeLine; 3],
 ) -> Collision {
-    let epsilon = settings.tail_level();
-    let Some(start) = in_state(potential, lines, epsilon) else {
+    let Some(start) = in_state(potential, lines, settings.tail_level()) else {
         let mut incoming = lines.map(|line| line.velocity);
         incoming.sort_by(f64::total_cmp);
         return failed(incoming, Outcome::ParallelAsymptotes, Counters::default());
     };
+    let energy_in = relative_kinetic_energy(&start.incoming);
+    drive_scene::<P, I>(potential, settings, start, energy_in)
+}
+
+/// A moment of a scene: the gaps `x_b - x_a`, `x_c - x_b`, their rates and the
+/// centre-of-mass velocity (scaled units), for scenes that do not start as
+/// three free particles (a bound pair hit by an atom).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SceneState {
+    /// Gaps `x_b - x_a`, `x_c - x_b`, `l`.
+    pub gaps: [f64; 2],
+    /// Gap rates, `v_th`.
+    pub rates: [f64; 2],
+    /// Centre-of-mass velocity, `v_th`.
+    pub centre: f64,
+}
+
+/// Integrates a scene from `state` until its outcome is final, as [`collide`]
+/// does from the asymptotic-in lines (generic: callers that draw states
+/// with the concrete potential dispatch once). `incoming` of the result
+/// holds the particle velocities at `state`, and the energy error is
+/// measured against its relative-motion energy (kinetic plus potential).
+/// The caller places any free particle where it no longer feels the others:
+/// its tail is not corrected at the start.
+pub fn collide_from<P: PairPotential>(
+    potential: P,
+    settings: &EngineSettings,
+    state: SceneState,
+) -> Collision {
+    let SceneState {
+        gaps,
+        rates,
+        centre,
+    } = state;
+    let mut incoming = velocities(centre, &rates);
+    incoming.sort_by(f64::total_cmp);
+    let start = InState {
+        incoming,
+        centre,
+        gaps,
+        rates,
+    };
+    let energy_in = relative_energy(potential, centre, &gaps, &rates);
+    match settings.method {
+        Method::Dopri5 => drive_scene::<P, Dopri5>(potential, settings, start, energy_in),
+        Method::Dop853 => drive_scene::<P, Dop853>(potential, settings, start, energy_in),
+        Method::Dprkn12 => drive_scene::<P, Dprkn12>(potential, settings, start, energy_in),
+    }
+}
+
+/// Integrates a scene from its start state (relative-motion energy `energy_in`) to its end.
+fn drive_scene<P: PairPotential, I: Integrator>(
+    potential: P,
+    settings: &EngineSettings,
+    start: InState,
+    energy_in: f64,
+) -> Collision {
+    let epsilon = settings.tail_level();
     let InState {
         incoming,
         centre,
@@ -514,7 +571,7 @@ fn run_scene<P: PairPotential, I: Integrator>(
     );
     let counters = Counters::new(work, jumps);
     match ending {
-        Ending::Stopped(end) => end.into_collision(incoming, scales, counters),
+        Ending::Stopped(end) => end.into_collision(incoming, energy_in, scales, counters),
         Ending::BudgetExhausted => failed(incoming, Outcome::StepBudgetExhausted, counters),
         Ending::Collapse => failed(incoming, Outcome::Breakdown, counters),
         Ending::Elapsed => unreachable!("a scene has no end time"),
@@ -625,15 +682,21 @@ struct End {
 }
 
 impl End {
-    fn into_collision(self, incoming: [f64; 3], scales: Scales, counters: Counters) -> Collision {
+    /// The collision that ends so, from `incoming` velocities with relative-motion energy `energy_in`.
+    fn into_collision(
+        self,
+        incoming: [f64; 3],
+        energy_in: f64,
+        scales: Scales,
+        counters: Counters,
+    ) -> Collision {
         let momentum = |v: &[f64; 3]| v.iter().sum::<f64>();
-        let energy_in = relative_kinetic_energy(&incoming);
         Collision {
             incoming,
             outgoing: self.outgoing,
             outcome: self.outcome,
             binding_energy: self.binding_energy,
-            energy_error: (self.energy - energy_in) / (energy_in + scales.well_depth),
+            energy_error: (self.energy - energy_in) / (energy_in.abs() + scales.well_depth),
             momentum_error: (momentum(&self.outgoing) - momentum(&incoming)).abs() / scales.speed,
             steps: counters.steps,
             rejected_steps: counters.rejected_steps,

@@ -17,7 +17,9 @@ use crate::contract::instances;
 use crate::physics::potential::Potential;
 use crate::pipeline::Stage;
 use crate::stages::compare::{CompareParams, CompareStage};
-use crate::stages::{convergence, evolve, fit, gases, kernel, md, moments, scan, sweep, table};
+use crate::stages::{
+    convergence, dissociation, evolve, fit, gases, kernel, md, moments, scan, sweep, table,
+};
 use collisions::push_collisions;
 
 /// Every stage instance of a study, in topological order.
@@ -34,7 +36,13 @@ pub fn plan(study: &Study) -> Vec<Box<dyn Stage>> {
         .iter()
         .map(|&p| study.kernel_params(p, 0.0, 0.0))
         .collect();
-    stages.push(Box::new(table::TableStage::new(rows)));
+    let dissociations = study
+        .potentials()
+        .iter()
+        .filter(|&&p| study.dissociation_params(p).is_some())
+        .map(instances::dissociation)
+        .collect();
+    stages.push(Box::new(table::TableStage::new(rows, dissociations)));
     if let Some((name, params)) = paper::balance_collisions(study) {
         push_collisions(&mut stages, params, name);
     }
@@ -56,8 +64,8 @@ fn push_once(stages: &mut Vec<Box<dyn Stage>>, stage: Box<dyn Stage>) {
 }
 
 /// One potential's scan, collisions, kernels with their moments and fits at
-/// every `(u', density)` target, and the sweep and evolution that read its
-/// wide collisions.
+/// every `(u', density)` target, the sweep and evolution that read its
+/// wide collisions, and the dissociation of its bound pairs if it has a well.
 fn push_potential(stages: &mut Vec<Box<dyn Stage>>, study: &Study, potential: Potential) {
     stages.push(Box::new(scan::ScanStage::new(study.scan_params(potential))));
     push_collisions(stages, study.collisions_params(potential), potential.id());
@@ -87,6 +95,9 @@ fn push_potential(stages: &mut Vec<Box<dyn Stage>>, study: &Study, potential: Po
     }
     if let Some(params) = evolve {
         stages.push(Box::new(evolve::EvolveStage::new(params, wide_name)));
+    }
+    if let Some(params) = study.dissociation_params(potential) {
+        stages.push(Box::new(dissociation::DissociationStage::new(params)));
     }
 }
 

@@ -224,7 +224,7 @@ pub(super) fn study_table(
         return Ok(());
     };
     out.title(
-        "thermalization constants a_n = self variance rate at u' = 0, dilute limit, of scenes whose three atoms leave free, where converged: |u-u'| <= window/2, untruncated with a well [rho^2 l v_th]; recombination: rate of encounters leaving a bound pair [rho^2 l v_th]; kernel shape near u' (+- standard errors; shape: statistical and fit-protocol errors combined)",
+        "thermalization constants a_n = self variance rate at u' = 0, dilute limit, of scenes whose three atoms leave free, where converged: |u-u'| <= window/2, untruncated with a well [rho^2 l v_th]; recombination: rate of encounters leaving a bound pair [rho^2 l v_th]; dissociation: rate at which atoms break a bound pair, per pair; kernel shape near u' (+- standard errors; shape: statistical and fit-protocol errors combined)",
     );
     let mut table = Columns::new(&[
         (POTENTIAL.name, Align::Left),
@@ -232,6 +232,7 @@ pub(super) fn study_table(
         ("rel.err", Align::Right),
         ("a_n untruncated", Align::Left),
         ("recombination", Align::Left),
+        ("dissociation [rho v_th]", Align::Left),
         (BETA.value.name, Align::Left),
         ("sigma [v_th]", Align::Left),
         ("failed", Align::Right),
@@ -258,6 +259,7 @@ pub(super) fn study_table(
             Cell::text(relative),
             estimate(&frame, row, A_N_UNTRUNCATED, "-")?,
             recombination(&frame, row)?,
+            estimate(&frame, row, DISSOCIATION_RATE, "-")?,
             estimate(&frame, row, BETA, no_shape)?,
             estimate(&frame, row, SIGMA, no_shape)?,
             Cell::text(format!(

@@ -4,6 +4,7 @@
 pub mod collisions;
 pub mod compare;
 pub mod convergence;
+pub mod dissociation;
 pub mod evolve;
 pub mod figures;
 pub mod fit;

@@ -18,12 +18,35 @@ use crate::stats::Estimate;
 pub struct TableStage {
     /// The `u' = 0`, dilute-limit moments parameters of every potential.
     rows: Vec<KernelParams>,
+    /// The `dissociation` instances the study runs (potentials with a well).
+    dissociations: Vec<InstanceId>,
 }
 
 impl TableStage {
-    /// A table over these potentials.
-    pub fn new(rows: Vec<KernelParams>) -> TableStage {
-        TableStage { rows }
+    /// A table over these potentials, with the dissociation rates of those
+    /// whose `dissociation` instance is listed.
+    pub fn new(rows: Vec<KernelParams>, dissociations: Vec<InstanceId>) -> TableStage {
+        TableStage {
+            rows,
+            dissociations,
+        }
+    }
+
+    /// The dissociation rate of `params`' potential, NaN where none runs.
+    fn dissociation(
+        &self,
+        inputs: &[Input],
+        params: &KernelParams,
+    ) -> Result<Estimate, StageError> {
+        let instance = instances::dissociation(&params.potential);
+        if !self.dissociations.contains(&instance) {
+            return Ok(Estimate {
+                mean: f64::NAN,
+                stderr: f64::NAN,
+            });
+        }
+        let table = contract::dissociation::TABLE.find(inputs, &instance)?;
+        Ok(contract::dissociation::DISSOCIATION_RATE.read(table)?[0])
     }
 }
 
@@ -34,6 +57,8 @@ struct PotentialRow {
     a_n_untruncated: Estimate,
     /// Rate of encounters leaving a bound pair and a free atom.
     recombination: Estimate,
+    /// Rate at which thermal atoms break a bound pair (NaN: not computed).
+    dissociation: Estimate,
     /// `alpha`, `beta`, `sigma` of the fit.
     shape: [Estimate; 3],
     /// Scanned launch pairs with their `|u1f,max|` and its error bound.
@@ -65,6 +90,7 @@ impl TableStage {
             a_n: self_variance_at(moments, params.converged_truncation())?,
             a_n_untruncated: self_variance_at(moments, f64::INFINITY)?,
             recombination: contract::moments::RECOMBINATION_RATE.read(moments)?[0],
+            dissociation: self.dissociation(inputs, params)?,
             shape: [
                 first(contract::fit::ALPHA, contract::fit::ALPHA_SYSTEMATIC)?,
                 first(contract::fit::BETA, contract::fit::BETA_SYSTEMATIC)?,
@@ -116,7 +142,10 @@ impl Stage for TableStage {
     }
 
     fn params(&self) -> Value {
-        serde_json::to_value(&self.rows).unwrap_or(Value::Null)
+        serde_json::json!({
+            "rows": self.rows,
+            "dissociations": self.dissociations.iter().map(ToString::to_string).collect::<Vec<_>>(),
+        })
     }
 
     fn tables(&self) -> &'static [&'static str] {
@@ -133,6 +162,7 @@ impl Stage for TableStage {
                     instances::scan(&params.potential),
                 ]
             })
+            .chain(self.dissociations.iter().cloned())
             .collect()
     }
 
@@ -166,6 +196,7 @@ impl Stage for TableStage {
             .estimate(A_N, |r| r.a_n)
             .estimate(A_N_UNTRUNCATED, |r| r.a_n_untruncated)
             .estimate(RECOMBINATION_RATE, |r| r.recombination)
+            .estimate(DISSOCIATION_RATE, |r| r.dissociation)
             .estimate(ALPHA, |r| r.shape[0])
             .estimate(BETA, |r| r.shape[1])
             .estimate(SIGMA, |r| r.shape[2])

@@ -201,6 +201,10 @@ density = [0.0, 1e-3]
 points = 5
 balance_separations = [0.02, 0.04]
 
+[dissociation]
+points = 1024
+randomizations = 4
+
 [convergence]
 enabled = true
 inverse_power = 6

@@ -7,6 +7,7 @@
 pub mod collisions;
 pub mod compare;
 pub mod convergence;
+pub mod dissociation;
 pub mod estimator;
 pub mod evolve;
 pub mod figures;

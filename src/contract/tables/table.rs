@@ -53,6 +53,14 @@ pub const RECOMBINATION_RATE: Pair = pair!(
     "rate at which the special particle at u' = 0 (dilute limit) takes part in a three-body encounter that leaves a bound pair and a free atom; 0 without a well",
     "standard error of recombination_rate (spread of randomizations)"
 );
+/// The dissociation rate `k_d`.
+pub const DISSOCIATION_RATE: Pair = pair!(
+    "dissociation_rate",
+    "rho v_th",
+    "k_d: rate at which thermal atoms break a thermal bound pair into three free atoms, per pair, dilute limit (the dissociation stage)",
+    "standard error of dissociation_rate (spread of randomizations)"
+)
+.or_null("no well (nothing binds), or the dissociation stage is disabled");
 /// Amplitude of the shape.
 pub const ALPHA: Pair = Pair {
     value: Col::f64(

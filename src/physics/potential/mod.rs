@@ -103,7 +103,7 @@ impl Listed {
 /// `kT`): the integrand of the bound-pair length `K_b` (the Boltzmann weight
 /// of the gap times the probability that a relative velocity `w ~ N(0, 2)`
 /// binds it, `w^2/4 < B`).
-fn bound_weight(binding: f64) -> f64 {
+pub fn bound_weight(binding: f64) -> f64 {
     let erf = 1.0 - 2.0 * standard_normal_cdf(-(2.0 * binding).sqrt());
     libm::exp(binding) * erf
 }
