@@ -10,7 +10,9 @@ use ternary::kernel::{
     Draws, Event, Histogram, MomentSums, Target, contributions, histograms, moments,
     pilot_same_side_fraction, recombination_rates, self_bin,
 };
-use ternary::physics::dissociation::{dissociation_rate, dissociation_scenes};
+use ternary::physics::dissociation::{
+    balanced_recombination, dissociation_rate, dissociation_scenes,
+};
 use ternary::physics::launch::thermal_density;
 use ternary::physics::offset_quadrature::OffsetRule;
 use ternary::physics::potential::Potential;
@@ -794,34 +796,49 @@ fn recombined_scenes_leave_the_free_atom_kernel_for_their_own_rate() {
 /// dissociation (Lennard-Jones, `theta = 0.1`), an identity of equilibrium
 /// with nothing to tune: recombination events `rho^3 l v_th R / 3` per length
 /// (`R` the thermal average of the rate per atom, three atoms each) equal
-/// dissociation events `(K_b rho^2) rho v_th k_d`, so `R = 3 K_b k_d`. `R`
-/// comes from the three-body scenes, `k_d` from bound pairs hit by atoms:
-/// two independent integrations of different initial states.
+/// dissociation events `(K_b rho^2) rho v_th k_d`, so `R = 3 K_b k_d`; and
+/// atom by atom, the rate `R(u')` at which an atom at `u'` recombines equals
+/// what the dissociations that release an atom at `u'` predict (time
+/// reversal and the mirror). `R` comes from the three-body scenes, `k_d`
+/// from bound pairs hit by atoms: two independent integrations of
+/// different initial states.
 fn recombination_balances_dissociation(events: &[Event], draws: &Draws) {
     let potential = Potential::lennard_jones(0.1);
+    let bound_length = potential.family().bound_pair_length();
     let thermal = Estimate::from_replicates(&thermal_average(|u| {
         recombination_rates(events, &dilute(u), draws)
     }));
-    assert!(thermal.mean > 3.0 * thermal.stderr, "{thermal:?}");
-    let rates: Vec<f64> = (0..4)
-        .map(|randomization| {
-            let sobol = ScrambledSobol::new(34, randomization);
-            let points: Vec<[f64; 3]> = (0..2048).map(|k| sobol.point(k)).collect();
-            let scenes = dissociation_scenes(&potential, &engine(), &points, || ()).unwrap();
-            assert!(scenes.iter().all(|(pair, _)| pair.internal_energy < 0.0));
-            dissociation_rate(&scenes)
-        })
-        .collect();
+    let at_rest = Estimate::from_replicates(&recombination_rates(events, &dilute(0.0), draws));
+    let mut rates = Vec::new();
+    let mut balanced_at_rest = Vec::new();
+    for randomization in 0..4 {
+        let sobol = ScrambledSobol::new(34, randomization);
+        let points: Vec<[f64; 3]> = (0..2048).map(|k| sobol.point(k)).collect();
+        let scenes = dissociation_scenes(&potential, &engine(), &points, || ()).unwrap();
+        assert!(scenes.iter().all(|(pair, _)| pair.internal_energy < 0.0));
+        rates.push(dissociation_rate(&scenes));
+        balanced_at_rest.extend(balanced_recombination(&scenes, bound_length, &[0.0]));
+    }
     let k_d = Estimate::from_replicates(&rates);
     assert!(k_d.mean > 10.0 * k_d.stderr, "{k_d:?}");
-    let bound = 3.0 * potential.family().bound_pair_length();
     let balanced = Estimate {
-        mean: bound * k_d.mean,
-        stderr: bound * k_d.stderr,
+        mean: 3.0 * bound_length * k_d.mean,
+        stderr: 3.0 * bound_length * k_d.stderr,
     };
-    let z = (thermal.mean - balanced.mean) / libm::hypot(thermal.stderr, balanced.stderr);
-    assert!(
-        z.abs() < 4.0,
-        "recombination {thermal:?} against 3 K_b k_d {balanced:?}: z = {z}"
-    );
+    for (name, scenes, dissociations) in [
+        ("thermal", thermal, balanced),
+        (
+            "u' = 0",
+            at_rest,
+            Estimate::from_replicates(&balanced_at_rest),
+        ),
+    ] {
+        assert!(scenes.mean > 3.0 * scenes.stderr, "{name}: {scenes:?}");
+        let z =
+            (scenes.mean - dissociations.mean) / libm::hypot(scenes.stderr, dissociations.stderr);
+        assert!(
+            z.abs() < 4.0,
+            "{name}: recombination {scenes:?} against dissociation {dissociations:?}: z = {z}"
+        );
+    }
 }

@@ -22,7 +22,7 @@
 //! `rho R_rec rho^2 l v_th / 3 = (K_b rho^2) (rho v_th k_d)`, i.e.
 //! `3 K_b k_d = R_rec l`.
 
-use super::launch::thermal_launch_speed;
+use super::launch::{thermal_density, thermal_launch_speed};
 use rayon::prelude::*;
 
 use super::potential::{PairPotential, Potential, PotentialVisitor, bound_weight};
@@ -239,6 +239,56 @@ pub fn dissociation_rate(hits: &[(BoundPair, Collision)]) -> f64 {
         }
     }
     meeting_speed() * broken / total
+}
+
+/// Per randomization, the recombination rate `R(u')` (`rho^2 l v_th` per
+/// atom at `u'`) that detailed balance predicts at each of `u_primes`:
+/// time reversal and the mirror turn an atom at `u'` taking part in a
+/// recombination into an atom leaving a dissociation at `u'`, so
+///
+/// `f0(u') R(u') = K_b k_d <sum_i N(u'; v_i, 1/3)>_dissociating`,
+///
+/// `v_i` the three outgoing velocities in the centre-of-mass frame (the
+/// scenes start at total momentum zero) and `N(.; v, 1/3)` the normal
+/// density of the centre-of-mass velocity `C ~ N(0, 1/3)` of a pair and an
+/// atom that meet (independent of their relative velocity under the flux
+/// weighting), integrated out exactly. Its thermal average is `3 K_b k_d`.
+/// `bound_length` is `K_b` in `l`.
+pub fn balanced_recombination(
+    hits: &[(BoundPair, Collision)],
+    bound_length: f64,
+    u_primes: &[f64],
+) -> Vec<f64> {
+    let mut sums = vec![0.0; u_primes.len()];
+    let mut total = 0.0;
+    for (pair, collision) in hits {
+        let Some(broke) = dissociated(collision) else {
+            continue;
+        };
+        total += pair.weight;
+        if !broke {
+            continue;
+        }
+        for (sum, &u) in sums.iter_mut().zip(u_primes) {
+            *sum += pair.weight
+                * collision
+                    .outgoing
+                    .iter()
+                    .map(|&v| centre_density(u - v))
+                    .sum::<f64>();
+        }
+    }
+    sums.iter()
+        .zip(u_primes)
+        .map(|(sum, &u)| bound_length * meeting_speed() * sum / total / thermal_density(u))
+        .collect()
+}
+
+/// Density of the centre-of-mass velocity `C ~ N(0, 1/3)` of three unit
+/// masses at `c`.
+fn centre_density(c: f64) -> f64 {
+    let variance = 1.0 / 3.0;
+    libm::exp(-0.5 * c * c / variance) / (2.0 * std::f64::consts::PI * variance).sqrt()
 }
 
 /// The scenes of one randomization, one per uniform point `(gap, rate,

@@ -1,14 +1,16 @@
 //! `dissociation`: the rate at which thermal atoms break thermal bound pairs
 //! (`A2 + A -> 3A`) for one potential with a well, from scrambled Sobol'
 //! scenes (`physics::dissociation`), with the recombination rate detailed
-//! balance predicts from it.
+//! balance predicts from it, thermally averaged and against `u'`.
 
 use serde_json::Value;
 
 use crate::config::DissociationParams;
 use crate::contract::instances;
 use crate::contract::{self, Rows};
-use crate::physics::dissociation::{BoundPair, dissociation_rate, dissociation_scenes};
+use crate::physics::dissociation::{
+    BoundPair, balanced_recombination, dissociation_rate, dissociation_scenes,
+};
 use crate::physics::quasi_random::ScrambledSobol;
 use crate::physics::scene::Collision;
 use crate::pipeline::code::{self, Code};
@@ -46,6 +48,18 @@ impl DissociationStage {
     }
 }
 
+/// The `u'` grid of `recombination.parquet`: `-3 .. 3` in steps of 0.25
+/// (the sweep's default grid), `v_th`.
+fn u_prime_grid() -> Vec<f64> {
+    (-12..=12).map(|k| 0.25 * f64::from(k)).collect()
+}
+
+/// Per randomization: `k_d`, then `R(u')` on the grid.
+struct Replicate {
+    rate: f64,
+    recombination: Vec<f64>,
+}
+
 /// The code this stage runs (fingerprinted by the build script).
 const CODE: &Code = code::of(file!());
 
@@ -63,7 +77,10 @@ impl Stage for DissociationStage {
     }
 
     fn tables(&self) -> &'static [&'static str] {
-        &[contract::dissociation::TABLE.name]
+        &[
+            contract::dissociation::TABLE.name,
+            contract::dissociation::recombination::TABLE.name,
+        ]
     }
 
     fn inputs(&self) -> Vec<InstanceId> {
@@ -86,12 +103,16 @@ impl Stage for DissociationStage {
     }
 
     fn run(&self, _inputs: &[Input], progress: &Progress) -> Result<Vec<Table>, StageError> {
-        use contract::dissociation::*;
-        let mut rates = Vec::new();
+        let bound_length = self.params.potential.family().bound_pair_length();
+        let grid = u_prime_grid();
+        let mut replicates = Vec::new();
         let (mut failed, mut max_energy_error) = (0_u32, 0.0_f64);
         for randomization in 0..self.params.randomizations {
             let scenes = self.scenes(randomization, progress)?;
-            rates.push(dissociation_rate(&scenes));
+            replicates.push(Replicate {
+                rate: dissociation_rate(&scenes),
+                recombination: balanced_recombination(&scenes, bound_length, &grid),
+            });
             for (_, collision) in &scenes {
                 if collision.outcome.is_failure() {
                     failed += 1;
@@ -100,22 +121,66 @@ impl Stage for DissociationStage {
                 }
             }
         }
-        let family = self.params.potential.family();
-        let bound_length = family.bound_pair_length();
-        let rate = Estimate::from_replicates(&rates);
-        let balanced = Estimate {
-            mean: 3.0 * bound_length * rate.mean,
-            stderr: 3.0 * bound_length * rate.stderr,
-        };
-        let table = Rows::new(&[()])
-            .optional(THETA, |_| family.theta())
+        let rate =
+            Estimate::from_replicates(&replicates.iter().map(|r| r.rate).collect::<Vec<_>>());
+        Ok(vec![
+            self.rate_table(bound_length, rate, failed, max_energy_error)?,
+            recombination_table(&grid, &replicates, 3.0 * bound_length, rate)?,
+        ])
+    }
+}
+
+impl DissociationStage {
+    /// `dissociation.parquet`.
+    fn rate_table(
+        &self,
+        bound_length: f64,
+        rate: Estimate,
+        failed: u32,
+        max_energy_error: f64,
+    ) -> Result<Table, StageError> {
+        use contract::dissociation::*;
+        let balanced = scaled(rate, 3.0 * bound_length);
+        Ok(Rows::new(&[()])
+            .optional(THETA, |_| self.params.potential.family().theta())
             .with(BOUND_PAIR_LENGTH, |_| bound_length)
             .estimate(DISSOCIATION_RATE, |_| rate)
             .estimate(BALANCED_RECOMBINATION, |_| balanced)
             .with(SCENES, |_| self.work_units() as u32)
             .with(FAILED_SCENES, |_| failed)
             .with(MAX_ENERGY_ERROR, |_| max_energy_error)
-            .table(&TABLE)?;
-        Ok(vec![table])
+            .table(&TABLE)?)
     }
+}
+
+/// `estimate` times `factor`.
+fn scaled(estimate: Estimate, factor: f64) -> Estimate {
+    Estimate {
+        mean: factor * estimate.mean,
+        stderr: factor * estimate.stderr,
+    }
+}
+
+/// `recombination.parquet`: `R(u')` on the grid, then its thermal average
+/// `3 K_b k_d` (`balance` is `3 K_b`).
+fn recombination_table(
+    grid: &[f64],
+    replicates: &[Replicate],
+    balance: f64,
+    rate: Estimate,
+) -> Result<Table, StageError> {
+    use contract::dissociation::recombination::*;
+    let rows: Vec<(Option<f64>, Estimate)> = grid
+        .iter()
+        .enumerate()
+        .map(|(k, &u)| {
+            let values: Vec<f64> = replicates.iter().map(|r| r.recombination[k]).collect();
+            (Some(u), Estimate::from_replicates(&values))
+        })
+        .chain([(None, scaled(rate, balance))])
+        .collect();
+    Ok(Rows::new(&rows)
+        .optional(U_PRIME, |r| r.0)
+        .estimate(RATE_COLUMN, |r| r.1)
+        .table(&TABLE)?)
 }

@@ -1,4 +1,6 @@
-//! The `dissociation` stage: `dissociation.parquet`, one row.
+//! The `dissociation` stage: `dissociation.parquet`, one row, and
+//! `recombination.parquet`, the recombination rate detailed balance predicts
+//! against `u'`.
 
 use super::*;
 
@@ -51,3 +53,25 @@ pub const MAX_ENERGY_ERROR: Col<f64> = Col::f64(
     "1",
     "largest |E_out - E_in| / (|E_in| + D) over the scenes (E relative-motion energy, D well depth)",
 );
+
+/// `recombination.parquet`: one row per `u'`, then the thermal average.
+pub mod recombination {
+    use super::*;
+
+    /// The table.
+    pub const TABLE: TableSpec = TableSpec {
+        stage: STAGE,
+        name: "recombination",
+        description: "the recombination rate against u' that detailed balance predicts from the dissociating scenes (compare sweep's recombination table)",
+    };
+    /// Velocity of the atom.
+    pub const U_PRIME: Col<f64> = Col::f64("u_prime", "v_th", "velocity of the atom")
+        .or_null("the thermal average, 3 K_b k_d (over every u')");
+    /// `R(u')`.
+    pub const RATE_COLUMN: Pair = pair!(
+        "recombination_rate",
+        RATE,
+        "rate at which an atom at u' takes part in a three-body encounter leaving a bound pair and a free atom, from detailed balance: f0(u') R(u') = K_b k_d <sum of the densities at u' of the three outgoing velocities>, the centre-of-mass velocity N(0, 1/3) integrated out",
+        SPREAD
+    );
+}
