@@ -20,7 +20,7 @@ use crate::binning::Bins;
 use crate::physics::launch::{launch_rate, thermal_density};
 use crate::physics::potential::Potential;
 use crate::physics::sampling::{OffsetIntegration, SamplingPlan, SceneRecord, Stratum};
-use crate::physics::scene::{EngineSettings, Method, Outcome};
+use crate::physics::scene::{Collision, EngineSettings, Method, Outcome};
 use crate::thresholds::DEFAULT_KICK_FLOOR;
 
 /// One integrated scene as the kernel needs it (special particle's frame).
@@ -46,11 +46,12 @@ pub struct Event {
     /// Outgoing velocities, ascending; `None` for a failed scene (it still
     /// counts as drawn, contributing zero: failures are reported, never dropped silently).
     pub outgoing: Option<[f64; 3]>,
-    /// Whether a bound pair and a free atom left (three-body recombination,
-    /// potentials with a well only). Such a scene is no part of the
-    /// free-atom kernel `G`, which describes three atoms that leave free;
-    /// its channel has its own rate ([`recombination_rates`]).
-    pub recombined: bool,
+    /// Internal energy `w^2/4 + U` (`kT`, in `(-D, 0)`) of the bound pair
+    /// when a bound pair and a free atom left (three-body recombination,
+    /// potentials with a well only), `None` otherwise. Such a scene is no
+    /// part of the free-atom kernel `G`, which describes three atoms that
+    /// leave free; its channel has its own rate ([`recombination_rates`]).
+    pub bound_pair_energy: Option<f64>,
 }
 
 /// The `u'` and density an event set is reweighted to.
@@ -96,9 +97,20 @@ impl Event {
             offset: record.scene.offset,
             proposal_density: record.scene.proposal_density,
             outgoing: (!record.collision.outcome.is_failure()).then_some(record.collision.outgoing),
-            recombined: record.collision.outcome == Outcome::Recombined,
+            bound_pair_energy: bound_pair_energy(&record.collision),
         }
     }
+
+    /// Whether a bound pair and a free atom left (three-body recombination).
+    pub fn recombined(&self) -> bool {
+        self.bound_pair_energy.is_some()
+    }
+}
+
+/// Internal energy `w^2/4 + U` (`kT`) of the pair `collision` left bound, if
+/// it recombined.
+pub fn bound_pair_energy(collision: &Collision) -> Option<f64> {
+    (collision.outcome == Outcome::Recombined).then_some(collision.binding_energy)
 }
 
 /// A scene's contribution seen from `u'`: velocities relative to `u'`.
@@ -172,7 +184,7 @@ pub fn recombination_rates(events: &[Event], target: &Target, draws: &Draws) -> 
         draws,
         || 0.0,
         |rate, event, scale| {
-            if !event.recombined {
+            if !event.recombined() {
                 return;
             }
             let images = images_in(event, target.kick_floor, true);
@@ -309,7 +321,7 @@ fn images_in(
 ) -> impl ExactSizeIterator<Item = Contribution> + '_ {
     let signs: &'static [f64] = match (event.outgoing, event.stratum) {
         (None, _) => &[],
-        _ if event.recombined != recombined => &[],
+        _ if event.recombined() != recombined => &[],
         (Some(_), Stratum::Literal) => &[1.0],
         (Some(_), Stratum::Opposite | Stratum::SameSide) => &[1.0, -1.0],
     };
