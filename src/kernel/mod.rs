@@ -9,6 +9,7 @@
 //! of the scaled moments `d<u - u'>/dt`, `d<(u - u')^2>/dt` in `rho^2 l v_th`
 //! (physics.md §3: `Gamma = a_n rho^2 l v_th`).
 
+pub mod binding;
 pub mod equilibrium;
 pub mod fit;
 pub mod segments;
@@ -179,18 +180,38 @@ fn weighed<'a>(
 /// (`rho^2 l v_th`): the weights of the recombined scenes' images, which the
 /// free-atom kernel leaves out. Zero without a well.
 pub fn recombination_rates(events: &[Event], target: &Target, draws: &Draws) -> Vec<f64> {
+    recombination_sums(events, target, draws, 1, |sums, _, rate| sums[0] += rate)
+        .into_iter()
+        .map(|sums| sums[0])
+        .collect()
+}
+
+/// Per replicate, `slots` sums over the scenes that recombined: `add(sums,
+/// E, rate)` adds one scene, of bound-pair internal energy `E` (`kT`) and
+/// recombination rate `rate` at `target` (`rho^2 l v_th`: its images'
+/// weights over the stratum's draws), into its replicate's `sums` (the
+/// rate itself, its share in a bin of `E`, `E` times it). The rates of
+/// [`recombination_rates`] split by the bound pair's energy.
+pub fn recombination_sums(
+    events: &[Event],
+    target: &Target,
+    draws: &Draws,
+    slots: usize,
+    add: impl Fn(&mut [f64], f64, f64) + Sync,
+) -> Vec<Vec<f64>> {
     per_replicate(
         events,
         draws,
-        || 0.0,
-        |rate, event, scale| {
-            if !event.recombined() {
+        || vec![0.0; slots],
+        |sums, event, scale| {
+            let Some(energy) = event.bound_pair_energy else {
                 return;
-            }
+            };
             let images = images_in(event, target.kick_floor, true);
-            *rate += weighed(event, target, images)
+            let rate = weighed(event, target, images)
                 .map(|c| c.weight * scale)
                 .sum::<f64>();
+            add(sums, energy, rate);
         },
     )
 }
