@@ -72,7 +72,9 @@ impl SweepStage {
 
     /// The recombination sums ([`binding_sums`]) at every grid point, and
     /// averaged over thermal `u'` ([`thermal_average`], per replicate: the
-    /// points share scenes).
+    /// points share scenes). Where the average's nodes are grid points (on
+    /// the default grid, all of them) it takes the grid's sums, bit for bit
+    /// the ones it would compute.
     fn recombination_sums(
         &self,
         events: &[Event],
@@ -82,7 +84,10 @@ impl SweepStage {
     ) -> (Vec<BindingSums>, BindingSums) {
         let at = |u: f64| binding_sums(events, &self.target(u), draws, bins);
         let per_point: Vec<BindingSums> = grid.par_iter().map(|&u| at(u)).collect();
-        let average = thermal_average(|u| at(u).flat());
+        let average = thermal_average(|u| match grid.iter().position(|&node| node == u) {
+            Some(k) => per_point[k].flat(),
+            None => at(u).flat(),
+        });
         (per_point, BindingSums::from_flat(&average, bins))
     }
 
