@@ -748,12 +748,12 @@ fn leading_share_keeps_each_strata_prefix() {
 fn recombined_scenes_leave_the_free_atom_kernel_for_their_own_rate() {
     let events = draw(Potential::lennard_jones(0.1), &plan(11, 8, 2048));
     let draws = replicates(&events);
-    let recombined = events.iter().filter(|e| e.recombined).count();
+    let recombined = events.iter().filter(|e| e.recombined()).count();
     assert!(recombined > 50, "{recombined} recombined scenes");
     let free: Vec<Event> = events
         .iter()
         .map(|e| Event {
-            outgoing: e.outgoing.filter(|_| !e.recombined),
+            outgoing: e.outgoing.filter(|_| !e.recombined()),
             ..*e
         })
         .collect();

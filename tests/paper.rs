@@ -493,6 +493,75 @@ fn recombination_agrees_between_scene_sets(store: &Path) {
     );
     let (none, thermal_none) = sweep_rate("ipp-6");
     assert_eq!((none.mean, thermal_none.mean), (0.0, 0.0));
+    binding_energies_of_recombination(store);
+}
+
+/// The bound pairs of recombination: every recombined scene of the sweep's
+/// Lennard-Jones scenes (`theta = 0.1`) records an internal energy inside
+/// the well, `(-D, 0)`, every other scene none; the distribution of the
+/// binding energy `B` (`binding`) is nowhere negative and, times the bin
+/// widths, sums to the thermal recombination rate (the same per-replicate
+/// sum split by `B`: equal to rounding); the mean `B` lies within half a
+/// bin of the histogram's (every pair lies within half a bin of its bin's
+/// centre). Without a well (`ipp-6`) no scene records one, the
+/// distribution has no bins and the mean no value.
+fn binding_energies_of_recombination(store: &Path) {
+    use contract::sweep::binding::{BINDING_HIGH, BINDING_LOW, RATE_DENSITY};
+    use contract::sweep::recombination::{MEAN_BINDING, RATE_COLUMN, U_PRIME};
+    // U/kT = theta x^-12 - x^-6 bottoms out at -1 / (4 theta).
+    let depth = 0.25 / 0.1;
+    let energies = |collisions: &str| {
+        let events = table(store, "collisions", collisions, "events");
+        let outcome = contract::collisions::OUTCOME.read(&events).unwrap();
+        let energy = contract::collisions::BINDING_ENERGY
+            .optional(&events)
+            .unwrap();
+        outcome.into_iter().zip(energy).collect::<Vec<_>>()
+    };
+    let scenes = energies("lj-0.1_sweep");
+    for (outcome, energy) in &scenes {
+        let recombined = outcome == "recombined";
+        let inside = energy.is_some_and(|e| -depth < e && e < 0.0);
+        assert!(
+            recombined == inside && recombined == energy.is_some(),
+            "{outcome}: {energy:?}"
+        );
+    }
+    assert!(scenes.iter().any(|(_, energy)| energy.is_some()));
+    assert!(energies("ipp-6_sweep").iter().all(|(_, e)| e.is_none()));
+    let thermal = |potential: &str| {
+        let recombination = table(store, "sweep", potential, "recombination");
+        let at = U_PRIME.optional(&recombination).unwrap();
+        let row = at.iter().position(Option::is_none).expect("thermal row");
+        let rate = RATE_COLUMN.read(&recombination).unwrap()[row];
+        (rate, MEAN_BINDING.read(&recombination).unwrap()[row])
+    };
+    let (rate, mean) = thermal("lj-0.1");
+    let binding = table(store, "sweep", "lj-0.1", "binding");
+    let low = BINDING_LOW.read(&binding).unwrap();
+    let high = BINDING_HIGH.read(&binding).unwrap();
+    let density = RATE_DENSITY.read(&binding).unwrap();
+    assert_eq!((low[0], high[high.len() - 1]), (0.0, depth));
+    let bins = || low.iter().zip(&high).zip(&density);
+    assert!(bins().all(|(_, d)| d.mean >= 0.0), "{density:?}");
+    let integral: f64 = bins().map(|((a, b), d)| d.mean * (b - a)).sum();
+    assert!(close(integral, rate.mean), "{integral} vs {rate:?}");
+    let centred: f64 = bins()
+        .map(|((a, b), d)| 0.5 * (a + b) * d.mean * (b - a))
+        .sum();
+    let half_bin = 0.5 * (high[0] - low[0]);
+    assert!(
+        (mean.mean - centred / integral).abs() <= half_bin,
+        "{mean:?}"
+    );
+    assert!(
+        0.0 < mean.mean && mean.mean < depth && mean.stderr > 0.0,
+        "{mean:?}"
+    );
+    let (none, mean_none) = thermal("ipp-6");
+    assert_eq!(none.mean, 0.0);
+    assert!(mean_none.mean.is_nan());
+    assert_eq!(table(store, "sweep", "ipp-6", "binding").num_rows(), 0);
 }
 
 /// Every ring at `u' = 0.5`: valid, so the study runs (before: 15 instances,

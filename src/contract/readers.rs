@@ -8,7 +8,6 @@ use arrow::array::RecordBatch;
 use crate::kernel::{Draws, Event};
 use crate::physics::sampling::{LaunchPoint, Stratum};
 use crate::physics::scan::LaunchPair;
-use crate::physics::scene::Outcome;
 use crate::pipeline::{Input, StageError};
 use crate::stats::Estimate;
 
@@ -36,6 +35,7 @@ pub fn read_events(input: &Input) -> Result<Vec<Event>, StageError> {
         OUT_FAST.read(batch)?,
     ];
     let outcome = OUTCOME.read(batch)?;
+    let binding = BINDING_ENERGY.optional(batch)?;
     (0..batch.num_rows())
         .map(|k| {
             let stratum = stratum_of_row(k, stratum[k])?;
@@ -50,7 +50,7 @@ pub fn read_events(input: &Input) -> Result<Vec<Event>, StageError> {
                 offset: offset[k],
                 proposal_density: density[k],
                 outgoing: (!failed).then(|| [outgoing[0][k], outgoing[1][k], outgoing[2][k]]),
-                recombined: outcome[k] == Outcome::Recombined.name(),
+                bound_pair_energy: binding[k],
             })
         })
         .collect()

@@ -9,6 +9,7 @@
 //! of the scaled moments `d<u - u'>/dt`, `d<(u - u')^2>/dt` in `rho^2 l v_th`
 //! (physics.md §3: `Gamma = a_n rho^2 l v_th`).
 
+pub mod binding;
 pub mod equilibrium;
 pub mod fit;
 pub mod segments;
@@ -20,7 +21,7 @@ use crate::binning::Bins;
 use crate::physics::launch::{launch_rate, thermal_density};
 use crate::physics::potential::Potential;
 use crate::physics::sampling::{OffsetIntegration, SamplingPlan, SceneRecord, Stratum};
-use crate::physics::scene::{EngineSettings, Method, Outcome};
+use crate::physics::scene::{Collision, EngineSettings, Method, Outcome};
 use crate::thresholds::DEFAULT_KICK_FLOOR;
 
 /// One integrated scene as the kernel needs it (special particle's frame).
@@ -46,11 +47,12 @@ pub struct Event {
     /// Outgoing velocities, ascending; `None` for a failed scene (it still
     /// counts as drawn, contributing zero: failures are reported, never dropped silently).
     pub outgoing: Option<[f64; 3]>,
-    /// Whether a bound pair and a free atom left (three-body recombination,
-    /// potentials with a well only). Such a scene is no part of the
-    /// free-atom kernel `G`, which describes three atoms that leave free;
-    /// its channel has its own rate ([`recombination_rates`]).
-    pub recombined: bool,
+    /// Internal energy `w^2/4 + U` (`kT`, in `(-D, 0)`) of the bound pair
+    /// when a bound pair and a free atom left (three-body recombination,
+    /// potentials with a well only), `None` otherwise. Such a scene is no
+    /// part of the free-atom kernel `G`, which describes three atoms that
+    /// leave free; its channel has its own rate ([`recombination_rates`]).
+    pub bound_pair_energy: Option<f64>,
 }
 
 /// The `u'` and density an event set is reweighted to.
@@ -96,9 +98,20 @@ impl Event {
             offset: record.scene.offset,
             proposal_density: record.scene.proposal_density,
             outgoing: (!record.collision.outcome.is_failure()).then_some(record.collision.outgoing),
-            recombined: record.collision.outcome == Outcome::Recombined,
+            bound_pair_energy: bound_pair_energy(&record.collision),
         }
     }
+
+    /// Whether a bound pair and a free atom left (three-body recombination).
+    pub fn recombined(&self) -> bool {
+        self.bound_pair_energy.is_some()
+    }
+}
+
+/// Internal energy `w^2/4 + U` (`kT`) of the pair `collision` left bound, if
+/// it recombined.
+pub fn bound_pair_energy(collision: &Collision) -> Option<f64> {
+    (collision.outcome == Outcome::Recombined).then_some(collision.binding_energy)
 }
 
 /// A scene's contribution seen from `u'`: velocities relative to `u'`.
@@ -167,18 +180,38 @@ fn weighed<'a>(
 /// (`rho^2 l v_th`): the weights of the recombined scenes' images, which the
 /// free-atom kernel leaves out. Zero without a well.
 pub fn recombination_rates(events: &[Event], target: &Target, draws: &Draws) -> Vec<f64> {
+    recombination_sums(events, target, draws, 1, |sums, _, rate| sums[0] += rate)
+        .into_iter()
+        .map(|sums| sums[0])
+        .collect()
+}
+
+/// Per replicate, `slots` sums over the scenes that recombined: `add(sums,
+/// E, rate)` adds one scene, of bound-pair internal energy `E` (`kT`) and
+/// recombination rate `rate` at `target` (`rho^2 l v_th`: its images'
+/// weights over the stratum's draws), into its replicate's `sums` (the
+/// rate itself, its share in a bin of `E`, `E` times it). The rates of
+/// [`recombination_rates`] split by the bound pair's energy.
+pub fn recombination_sums(
+    events: &[Event],
+    target: &Target,
+    draws: &Draws,
+    slots: usize,
+    add: impl Fn(&mut [f64], f64, f64) + Sync,
+) -> Vec<Vec<f64>> {
     per_replicate(
         events,
         draws,
-        || 0.0,
-        |rate, event, scale| {
-            if !event.recombined {
+        || vec![0.0; slots],
+        |sums, event, scale| {
+            let Some(energy) = event.bound_pair_energy else {
                 return;
-            }
+            };
             let images = images_in(event, target.kick_floor, true);
-            *rate += weighed(event, target, images)
+            let rate = weighed(event, target, images)
                 .map(|c| c.weight * scale)
                 .sum::<f64>();
+            add(sums, energy, rate);
         },
     )
 }
@@ -309,7 +342,7 @@ fn images_in(
 ) -> impl ExactSizeIterator<Item = Contribution> + '_ {
     let signs: &'static [f64] = match (event.outgoing, event.stratum) {
         (None, _) => &[],
-        _ if event.recombined != recombined => &[],
+        _ if event.recombined() != recombined => &[],
         (Some(_), Stratum::Literal) => &[1.0],
         (Some(_), Stratum::Opposite | Stratum::SameSide) => &[1.0, -1.0],
     };

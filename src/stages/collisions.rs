@@ -17,6 +17,7 @@ use crate::config::CollisionsParams;
 use crate::contract::instances;
 use crate::contract::readers::read_launches;
 use crate::contract::{self, Rows};
+use crate::kernel::bound_pair_energy;
 use crate::physics::sampling::{OffsetIntegration, SceneRecord, leading_share};
 use crate::pipeline::code::{self, Code};
 use crate::pipeline::{Cost, Input, InstanceId, Progress, Stage, StageError, Table};
@@ -141,6 +142,7 @@ pub fn events_table(rows: &[SceneRecord]) -> Result<Table, StageError> {
         .with(OUT_FAST, |r| r.collision.outgoing[2])
         .with(SELF_KICK, |r| r.collision.self_kick(0.0))
         .with(OUTCOME, |r| r.collision.outcome.name().to_string())
+        .optional(BINDING_ENERGY, |r| bound_pair_energy(&r.collision))
         .with(ENERGY_ERROR, |r| r.collision.energy_error)
         .with(FORCE_EVALUATIONS, |r| r.collision.evaluations)
         .table(&TABLE)?)

@@ -114,7 +114,7 @@ impl Stage for MomentsStage {
         let sums = moments(&events, &target, &truncations, &draws);
         let recombination =
             Estimate::from_replicates(&recombination_rates(&events, &target, &draws));
-        let recombined = events.iter().filter(|e| e.recombined).count() as u32;
+        let recombined = events.iter().filter(|e| e.recombined()).count() as u32;
         let rows: Vec<usize> = (0..truncations.len()).collect();
         let sums = &sums;
         let estimate = |part: fn(&MomentSums) -> f64| {

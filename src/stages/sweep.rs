@@ -6,7 +6,10 @@
 //! the correlation of quantities computed from the same events is kept).
 //! The Fokker-Planck reading `D1 = (D2' - u D2) / 2` and the balance
 //! arithmetic are `kernel::equilibrium`'s; the table gives both sides of
-//! each and their difference.
+//! each and their difference. For a potential with a well, the rate of
+//! three-body recombination against `u'` and averaged over thermal `u'`,
+//! and the distribution of the bound pairs' binding energy
+//! (`kernel::binding`).
 
 use std::collections::HashMap;
 
@@ -19,14 +22,14 @@ use crate::config::SweepParams;
 use crate::contract::instances;
 use crate::contract::readers::input_events;
 use crate::contract::{self, Rows};
+use crate::kernel::binding::{BindingBins, BindingSums, binding_sums};
 use crate::kernel::equilibrium::{
     Balance, FokkerPlanckPoint, JointBalance, SelfRates, balance_between, fokker_planck_check,
     joint_balance, self_rates,
 };
-use crate::kernel::{Draws, Event, Target, recombination_rates, self_bin_feeders};
+use crate::kernel::{Draws, Event, Target, self_bin_feeders};
 use crate::pipeline::code::{self, Code};
 use crate::pipeline::{Input, InstanceId, Progress, Stage, StageError, Table};
-use crate::stats::Estimate;
 
 /// The `sweep` stage for one potential.
 pub struct SweepStage {
@@ -67,30 +70,56 @@ impl SweepStage {
             .collect()
     }
 
-    /// The recombination rate at every grid point, then its average over
-    /// thermal `u'` ([`thermal_average`], per replicate: the points share
-    /// scenes).
-    fn recombination_table(
+    /// The recombination sums ([`binding_sums`]) at every grid point, and
+    /// averaged over thermal `u'` ([`thermal_average`], per replicate: the
+    /// points share scenes). Where the average's nodes are grid points (on
+    /// the default grid, all of them) it takes the grid's sums, bit for bit
+    /// the ones it would compute.
+    fn recombination_sums(
         &self,
         events: &[Event],
         draws: &Draws,
         grid: &[f64],
+        bins: &BindingBins,
+    ) -> (Vec<BindingSums>, BindingSums) {
+        let at = |u: f64| binding_sums(events, &self.target(u), draws, bins);
+        let per_point: Vec<BindingSums> = grid.par_iter().map(|&u| at(u)).collect();
+        let average = thermal_average(|u| match grid.iter().position(|&node| node == u) {
+            Some(k) => per_point[k].flat(),
+            None => at(u).flat(),
+        });
+        (per_point, BindingSums::from_flat(&average, bins))
+    }
+
+    /// The recombination rate and the mean binding energy of its pairs at
+    /// every grid point, then averaged over thermal `u'` (a null `u'`).
+    fn recombination_table(
+        grid: &[f64],
+        per_point: &[BindingSums],
+        thermal: &BindingSums,
     ) -> Result<Table, StageError> {
         use contract::sweep::recombination::*;
-        let per_point: Vec<Vec<f64>> = grid
-            .par_iter()
-            .map(|&u| recombination_rates(events, &self.target(u), draws))
-            .collect();
-        let mut rows: Vec<(Option<f64>, Estimate)> = grid
+        let rows: Vec<(Option<f64>, &BindingSums)> = grid
             .iter()
-            .zip(&per_point)
-            .map(|(&u, rates)| (Some(u), Estimate::from_replicates(rates)))
+            .map(|&u| Some(u))
+            .zip(per_point)
+            .chain([(None, thermal)])
             .collect();
-        let average = thermal_average(|u| recombination_rates(events, &self.target(u), draws));
-        rows.push((None, Estimate::from_replicates(&average)));
         Ok(Rows::new(&rows)
             .optional(U_PRIME, |(u, _)| *u)
-            .estimate(RATE_COLUMN, |(_, rate)| *rate)
+            .estimate(RATE_COLUMN, |(_, sums)| sums.rate())
+            .estimate(MEAN_BINDING, |(_, sums)| sums.mean_binding())
+            .table(&TABLE)?)
+    }
+
+    /// The thermally averaged recombination rate per unit binding energy on `bins`.
+    fn binding_table(bins: &BindingBins, thermal: &BindingSums) -> Result<Table, StageError> {
+        use contract::sweep::binding::*;
+        let rows: Vec<usize> = (0..bins.count).collect();
+        Ok(Rows::new(&rows)
+            .with(BINDING_LOW, |&k| bins.edge(k))
+            .with(BINDING_HIGH, |&k| bins.edge(k + 1))
+            .estimate(RATE_DENSITY, |&k| thermal.density(bins, k))
             .table(&TABLE)?)
     }
 
@@ -227,6 +256,7 @@ impl Stage for SweepStage {
             contract::sweep::detailed_balance::TABLE.name,
             contract::sweep::balance_tests::TABLE.name,
             contract::sweep::recombination::TABLE.name,
+            contract::sweep::binding::TABLE.name,
         ]
     }
 
@@ -245,12 +275,14 @@ impl Stage for SweepStage {
         progress.advance(1);
         let [balance, tests] = self.balance_tables(&events, &draws, &grid)?;
         progress.advance(1);
-        let recombination = self.recombination_table(&events, &draws, &grid)?;
+        let bins = BindingBins::of_well(self.params.kernel.potential.well_depth());
+        let (per_point, thermal) = self.recombination_sums(&events, &draws, &grid, &bins);
         Ok(vec![
             self.rates_table(&grid, &rates)?,
             balance,
             tests,
-            recombination,
+            Self::recombination_table(&grid, &per_point, &thermal)?,
+            Self::binding_table(&bins, &thermal)?,
         ])
     }
 }

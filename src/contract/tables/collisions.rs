@@ -73,3 +73,10 @@ pub const ENERGY_ERROR: Col<f64> = Col::f64(
     "(E_out - E_in) / (E_in + well depth) of the relative motion",
 )
 .or_null("the scene failed (see outcome): no outgoing state");
+/// Internal energy of the bound pair.
+pub const BINDING_ENERGY: Col<f64> = Col::f64(
+    "binding_energy",
+    "kT",
+    "internal energy w^2/4 + U of the pair left bound (w its members' relative velocity), in (-D, 0) with D the well depth: minus the energy that binds it",
+)
+.or_null("the scene did not recombine (see outcome): no bound pair");

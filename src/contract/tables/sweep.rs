@@ -67,6 +67,45 @@ pub mod recombination {
         "rate at which the special particle takes part in a three-body encounter that leaves a bound pair and a free atom (0 without a well)",
         "standard error (spread of randomizations)"
     );
+    /// The mean binding energy of the bound pairs.
+    pub const MEAN_BINDING: Pair = pair!(
+        "mean_binding",
+        "kT",
+        "rate-weighted mean binding energy B = -(w^2/4 + U) of the pairs this rate leaves bound (minus the events' binding_energy; 0 at the dissociation threshold, the well depth at the bottom of the well)",
+        "standard error (spread of randomizations, first order, the correlation of the B-weighted rate and the rate kept)"
+    )
+    .or_null("not estimable: no scene recombined (no well, or none drawn)");
+}
+
+/// `binding.parquet`: one row per bin of the binding energy.
+pub mod binding {
+    use super::*;
+
+    /// The table.
+    pub const TABLE: TableSpec = TableSpec {
+        stage: STAGE,
+        name: "binding",
+        description: "the distribution of the binding energy of the pairs three-body recombination leaves bound, rate per unit binding energy averaged over thermal u', dilute limit (no rows without a well)",
+    };
+    /// Lower edge of the bin.
+    pub const BINDING_LOW: Col<f64> = Col::f64(
+        "binding_low",
+        "kT",
+        "lower edge of the bin of binding energy B = -(w^2/4 + U) of the bound pair (minus the events' binding_energy; 0 at the dissociation threshold)",
+    );
+    /// Upper edge of the bin.
+    pub const BINDING_HIGH: Col<f64> = Col::f64(
+        "binding_high",
+        "kT",
+        "upper edge of the bin: the bins are uniform in B/D, the last ending at the well depth D",
+    );
+    /// The rate per unit binding energy.
+    pub const RATE_DENSITY: Pair = pair!(
+        "rate_density",
+        "rho^2 l v_th / kT",
+        "recombination rate into pairs bound by B in the bin, per unit B, averaged over thermal u' like the thermal row of recombination.parquet: summed times the bin widths, its recombination_rate",
+        "standard error (spread of randomizations)"
+    );
 }
 
 /// `detailed_balance.parquet`: one row per `(a, b)`.

@@ -163,6 +163,18 @@ impl Potential {
         self.family().id()
     }
 
+    /// Depth `D` of the well, `kT` (0 without one).
+    pub fn well_depth(&self) -> f64 {
+        struct WellDepth;
+        impl PotentialVisitor for WellDepth {
+            type Output = f64;
+            fn visit<P: PairPotential>(self, potential: P) -> f64 {
+                potential.well_depth()
+            }
+        }
+        self.visit(WellDepth)
+    }
+
     /// Calls `visitor` with the concrete potential: the one dispatch point.
     pub fn visit<V: PotentialVisitor>(&self, visitor: V) -> V::Output {
         match *self {
