@@ -11,4 +11,5 @@ pub mod ring;
 pub mod sampling;
 pub mod scan;
 pub mod scene;
+pub mod species;
 pub mod units;
