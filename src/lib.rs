@@ -10,6 +10,8 @@
 //! * [`kernel`]: the collision kernel and its moments from integrated scenes.
 //! * [`evolve`]: the evolution of `h(u, t)` under the kernel.
 //! * [`analysis`]: molecular dynamics against the Boltzmann evolution.
+//! * [`rates`]: a Lennard-Jones gas's rates in physical units, interpolated
+//!   in `theta` from the study's table (`ternary rate`).
 //! * [`pipeline`]: the generic content-addressed DAG (keys, store, executor,
 //!   Parquet tables); no physics.
 //! * [`stages`]: one adapter per stage between the two; [`plan`]: which
@@ -38,6 +40,7 @@ pub mod paper;
 pub mod physics;
 pub mod pipeline;
 pub mod plan;
+pub mod rates;
 pub mod report;
 pub mod scaling;
 pub mod slurm;

@@ -19,7 +19,7 @@ use ternary::stats::Estimate;
 
 mod common;
 
-use common::{REDUCED_STUDY, stdout, ternary, workspace, write_config};
+use common::{REDUCED_STUDY, stderr, stdout, ternary, workspace, write_config};
 
 /// The table `name` of the artifact a ref names (`<stage>/<instance>`).
 fn table(store: &Path, stage: &str, instance: &str, name: &str) -> RecordBatch {
@@ -446,8 +446,109 @@ fn paper_rows_recompute_from_their_sources() {
             "{} s != {seconds} s",
             ours[k].mean
         );
+        rate_reproduces_the_nitrogen_row(&config, &store, (ours[k], converged[k]));
     }
     recombination_agrees_between_scene_sets(&store);
+}
+
+/// `ternary rate` on the study's store: N2 at the `N2_10K` gas's theta =
+/// 0.1052 (T = 0.1052 x 95.05 K), one atom per 10 um, is that table row
+/// itself and gives the paper row's 1/Gamma under both definitions (`paper`:
+/// `(ours, converged)` in s); the atom's mass scales 1/Gamma by
+/// sqrt(m_N / m_N2); 10 K (theta = 0.105208) lies above the reduced
+/// study's table [0.1, 0.1052] and is refused, as is the 4 eps reading
+/// (theta = 0.026).
+fn rate_reproduces_the_nitrogen_row(config: &Path, store: &Path, paper: (Estimate, Estimate)) {
+    use ternary::physics::species;
+    use ternary::physics::units::{Mass, PhysicalGas};
+    use ternary::rates::{gas_rates, time_of};
+    let study = ternary::config::Study::load(config).unwrap();
+    let opened = ternary::pipeline::store::Store::open_existing(store).unwrap();
+    let sourced =
+        ternary::report::theta_table(&study, &opened, &ternary::plan::plan(&study)).unwrap();
+    assert_eq!(sourced.table.thetas, [0.1, 0.1052]);
+    let n2 = species::species("N2").unwrap();
+    let temperature = 0.1052 * n2.eps_over_k;
+    let gas = |mass_amu: f64| {
+        PhysicalGas::from_kelvin(
+            n2.eps_over_k,
+            n2.sigma_angstrom,
+            temperature,
+            Mass::AtomicMassUnits(mass_amu),
+            0.1,
+        )
+    };
+    let molecule = gas_rates(&sourced.table, &gas(28.0134)).unwrap();
+    // The exact row: the table's own a_n, its own error, no interpolation.
+    let rows = table(store, "table", "study", "table");
+    let k = contract::table::POTENTIAL
+        .row_of(&rows, "lj-0.1052")
+        .unwrap();
+    let a_n = contract::table::A_N.read(&rows).unwrap()[k];
+    let constant = molecule.thermalization;
+    assert_eq!(
+        (constant.value, constant.statistical, constant.interpolation),
+        (a_n.mean, a_n.stderr, 0.0)
+    );
+    // 1/Gamma from the formula, worked here: l = sigma theta^(-1/6),
+    // v_th = sqrt(kT/m), Gamma = a rho^2 l v_th.
+    let kt_joule = temperature * 1.380_649e-23;
+    let v_th = (kt_joule / (28.0134 * 1.660_539_066_60e-27)).sqrt() * 1e6; // um/s
+    let l = 3.698e-4 * libm::pow(0.1052, -1.0 / 6.0); // um
+    let formula = 1.0 / (a_n.mean * 0.01 * l * v_th);
+    let time = |rate| time_of(molecule.per_second(rate).estimate());
+    // The gas's eps_ev in pipeline.toml has 9 digits: agreement to 1e-8.
+    for (ours, expected) in [
+        (time(constant).mean, formula),
+        (time(constant).mean, paper.1.mean),
+        (time(constant).stderr, paper.1.stderr),
+        (time(molecule.paper_thermalization).mean, paper.0.mean),
+        (time(molecule.paper_thermalization).stderr, paper.0.stderr),
+    ] {
+        assert!((ours / expected - 1.0).abs() < 1e-8, "{ours} != {expected}");
+    }
+    // The paper's example, about 10 s (one significant digit: +- 5 s).
+    let published = ternary::paper::published::NITROGEN;
+    let paper_time = time(molecule.paper_thermalization).mean;
+    assert!(
+        (paper_time - published.value).abs() <= published.uncertainty,
+        "{paper_time} s"
+    );
+    // The atom's mass: v_th grows by sqrt(2), 1/Gamma shrinks by it.
+    let atom = gas_rates(&sourced.table, &gas(14.0067)).unwrap();
+    let ratio = time_of(atom.per_second(atom.thermalization).estimate()).mean / time(constant).mean;
+    assert!(
+        (ratio - (14.0067f64 / 28.0134).sqrt()).abs() < 1e-12,
+        "{ratio}"
+    );
+    // The command line prints the same row, with its sources.
+    let temperature = format!("{temperature}");
+    let rate = |temperature: &str, extra: &[&str]| {
+        let mut args = vec!["rate", "--species", "N2", "--spacing-um", "10"];
+        args.extend_from_slice(&["--temperature", temperature]);
+        args.extend_from_slice(extra);
+        ternary(config, &args)
+    };
+    let printed = rate(&temperature, &[]);
+    assert!(printed.status.success(), "{}", stderr(&printed));
+    let text = stdout(&printed);
+    assert!(text.contains("theta = kT/eps = 0.105200"), "{text}");
+    assert!(text.contains("from: table[study] "), "{text}");
+    assert!(text.contains("1/Gamma = "), "{text}");
+    for (extra, outside) in [
+        (&[][..], "0.10520"),
+        (&["--reading", "four-eps"][..], "0.0263"),
+    ] {
+        let refused = rate("10", extra);
+        assert!(!refused.status.success());
+        let message = stderr(&refused);
+        assert!(
+            message.contains(&format!("theta = kT/eps = {outside}"))
+                && message
+                    .contains("outside the study's Lennard-Jones table, theta in [0.1, 0.1052]"),
+            "{message}"
+        );
+    }
 }
 
 /// The recombination rate at `u' = 0` from the kernel's scenes (`moments`)

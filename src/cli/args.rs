@@ -3,7 +3,7 @@
 
 use std::path::PathBuf;
 
-use clap::{Args, Parser, Subcommand};
+use clap::{Args, Parser, Subcommand, ValueEnum};
 
 use ternary::physics::potential::{InversePower, LennardJones};
 
@@ -40,6 +40,10 @@ pub(super) enum Command {
     Gc,
     /// Show a stage's instances and files, or an artifact or Parquet file: metadata and first rows.
     Show(ShowArgs),
+    /// Thermalization and recombination rates and times of a Lennard-Jones gas
+    /// (a species of the table or given eps, sigma and mass) at a temperature
+    /// and density, interpolated in theta = kT/eps from the study's table.
+    Rate(RateArgs),
     /// Run the shardable stages as a Slurm array job, then merge and run the rest.
     Slurm {
         #[command(subcommand)]
@@ -183,6 +187,61 @@ pub(super) struct ShowArgs {
     /// Rows to print per table.
     #[arg(long, default_value_t = 10)]
     pub(super) rows: usize,
+}
+
+/// Arguments of `ternary rate`.
+#[derive(Args)]
+pub(super) struct RateArgs {
+    /// A species of the Lennard-Jones table: He, Ne, Ar, Kr, Xe, H2, N2, O2, CH4.
+    #[arg(long, required_unless_present = "eps_k", conflicts_with_all = ["eps_k", "sigma_angstrom", "mass_amu"])]
+    pub(super) species: Option<String>,
+    /// The mass of a species' gas: its particle's (the molecule for N2) or
+    /// one atom's (of a homonuclear diatomic molecule: the paper's "nitrogen
+    /// atom gas").
+    #[arg(long, value_enum, default_value_t = MassArg::Particle)]
+    pub(super) mass: MassArg,
+    /// Well depth eps/k_B of 4 eps ((sigma/d)^12 - (sigma/d)^6), K (with
+    /// --sigma-angstrom and --mass-amu, instead of --species).
+    #[arg(long, value_parser = positive, requires_all = ["sigma_angstrom", "mass_amu"])]
+    pub(super) eps_k: Option<f64>,
+    /// sigma, Angstrom.
+    #[arg(long, value_parser = positive, requires = "eps_k")]
+    pub(super) sigma_angstrom: Option<f64>,
+    /// Particle mass, amu.
+    #[arg(long, value_parser = positive, requires = "eps_k")]
+    pub(super) mass_amu: Option<f64>,
+    /// How the well depth eps becomes the eps of U = eps ((l0/d)^12 -
+    /// (l0/d)^6): as it is (the paper's N2 example, theta = kT/eps) or 4 eps
+    /// (the compilation's own potential, theta = kT/(4 eps)); l0 = sigma.
+    #[arg(long, value_enum, default_value_t = ReadingArg::Paper)]
+    pub(super) reading: ReadingArg,
+    /// Temperature, K.
+    #[arg(long, value_parser = positive)]
+    pub(super) temperature: f64,
+    /// Mean spacing of the particles, um (density 1/spacing).
+    #[arg(long, value_parser = positive, required_unless_present = "density_per_um", conflicts_with = "density_per_um")]
+    pub(super) spacing_um: Option<f64>,
+    /// Linear density, particles per um.
+    #[arg(long, value_parser = positive)]
+    pub(super) density_per_um: Option<f64>,
+}
+
+/// `--mass` of `ternary rate`.
+#[derive(Clone, Copy, ValueEnum)]
+pub(super) enum MassArg {
+    /// The particle the parameters describe (atom or molecule).
+    Particle,
+    /// One atom of a homonuclear diatomic molecule.
+    Atom,
+}
+
+/// `--reading` of `ternary rate`.
+#[derive(Clone, Copy, ValueEnum)]
+pub(super) enum ReadingArg {
+    /// eps = the table's well depth (the paper's N2 example).
+    Paper,
+    /// eps = 4 x the table's well depth (the 4 eps form itself).
+    FourEps,
 }
 
 /// Arguments of `ternary slurm submit`.

@@ -1,5 +1,5 @@
 //! One function per subcommand of the study (`run`, `status`, `dag`,
-//! `verify`, `export`, `report`, `gc`, `show`, `slurm submit`): each loads
+//! `verify`, `export`, `report`, `gc`, `show`, `rate`, `slurm submit`): each loads
 //! what it needs, calls the library and prints its result.
 
 use std::path::Path;
@@ -8,14 +8,18 @@ use std::process::ExitCode;
 use anyhow::{Result, bail};
 
 use super::args::{
-    DagArgs, ExportArgs, ReportArgs, RunArgs, ShowArgs, SlurmSubmitArgs, StatusArgs, VerifyArgs,
+    DagArgs, ExportArgs, MassArg, RateArgs, ReadingArg, ReportArgs, RunArgs, ShowArgs,
+    SlurmSubmitArgs, StatusArgs, VerifyArgs,
 };
 use super::{Opening, emit, exit_code, load, open, print_event, within_limits};
 use ternary::config::{SlurmConfig, Study};
 use ternary::export::{self, ExportOptions};
+use ternary::physics::species::{self, MassChoice, Particle, Reading};
+use ternary::physics::units::{Mass, PhysicalGas};
 use ternary::pipeline::executor::{self, Action, Freshness, RunOptions, Verbosity};
 use ternary::pipeline::shards::Sharding;
 use ternary::plan::plan;
+use ternary::rates::gas_rates;
 use ternary::report::{self, DagFormat};
 use ternary::slurm::{self, SubmitOptions};
 
@@ -173,6 +177,72 @@ pub(super) fn show(config: &Path, args: ShowArgs) -> Result<ExitCode> {
     let (text, problems) = report::show(store.as_ref(), &plan, &args.target, args.rows)?;
     emit(&text);
     Ok(exit_code(problems))
+}
+
+/// `ternary rate`: a Lennard-Jones gas's rates from the study's theta table.
+pub(super) fn rate(config: &Path, args: RateArgs) -> Result<ExitCode> {
+    let (gas, description) = rate_gas(&args)?;
+    let (study, store) = load(config, Opening::Existing)?;
+    let sourced = report::theta_table(&study, &store, &plan(&study))?;
+    let rates = gas_rates(&sourced.table, &gas)?;
+    emit(&report::rate_text(&description, &rates, &sourced.sources));
+    Ok(ExitCode::SUCCESS)
+}
+
+/// The gas `ternary rate` is asked about, and a line saying what it is.
+fn rate_gas(args: &RateArgs) -> Result<(PhysicalGas, String)> {
+    let (eps_over_k, sigma, mass_amu, what) = match (&args.species, args.eps_k) {
+        (Some(name), _) => {
+            let species = species::species(name).map_err(anyhow::Error::msg)?;
+            let choice = match args.mass {
+                MassArg::Particle => MassChoice::Particle,
+                MassArg::Atom => MassChoice::Atom,
+            };
+            let mass = species.mass(choice).map_err(anyhow::Error::msg)?;
+            let (particle, whose) = match (species.particle, choice) {
+                (Particle::Atom, _) => ("atom", "the atom's"),
+                (Particle::Molecule, MassChoice::Particle) => ("molecule", "the molecule's"),
+                (Particle::Molecule, MassChoice::Atom) => ("molecule", "one atom's"),
+            };
+            let what = format!(
+                "{} ({particle}; mass {mass} amu, {whose}) [{}]",
+                species.name,
+                species::SOURCE
+            );
+            (species.eps_over_k, species.sigma_angstrom, mass, what)
+        }
+        (None, Some(eps)) => match (args.sigma_angstrom, args.mass_amu) {
+            (Some(sigma), Some(mass)) => (eps, sigma, mass, format!("mass {mass} amu")),
+            _ => bail!("--eps-k needs --sigma-angstrom and --mass-amu"),
+        },
+        (None, None) => bail!("give --species or --eps-k, --sigma-angstrom and --mass-amu"),
+    };
+    let reading = match args.reading {
+        ReadingArg::Paper => Reading::Paper,
+        ReadingArg::FourEps => Reading::FourEps,
+    };
+    let eps = reading.eps_over_k(eps_over_k);
+    let density = match (args.density_per_um, args.spacing_um) {
+        (Some(density), _) => density,
+        (None, Some(spacing)) => 1.0 / spacing,
+        (None, None) => bail!("give --density-per-um or --spacing-um"),
+    };
+    let gas = PhysicalGas::from_kelvin(
+        eps,
+        sigma,
+        args.temperature,
+        Mass::AtomicMassUnits(mass_amu),
+        density,
+    );
+    let description = format!(
+        "{what}\nwell depth eps/k_B = {eps_over_k} K, sigma = {sigma} A; U = eps ((l0/d)^12 - (l0/d)^6) with l0 = sigma, eps/k_B = {eps} K ({}); T = {} K, rho = {density} /um",
+        match reading {
+            Reading::Paper => "the paper's reading: eps = the well depth",
+            Reading::FourEps => "the 4 eps form: eps = 4 x the well depth",
+        },
+        args.temperature
+    );
+    Ok((gas, description))
 }
 
 /// `ternary slurm submit`: the shardable stages as an array job and a

@@ -43,6 +43,7 @@ fn dispatch(cli: Cli) -> Result<ExitCode> {
         Command::Report(args) => commands::report(config, args),
         Command::Gc => commands::gc(config),
         Command::Show(args) => commands::show(config, args),
+        Command::Rate(args) => commands::rate(config, args),
         Command::Slurm {
             which: SlurmCommand::Submit(args),
         } => commands::slurm_submit(config, args),

@@ -12,4 +12,5 @@ pub mod ring;
 pub mod sampling;
 pub mod scan;
 pub mod scene;
+pub mod species;
 pub mod units;

@@ -14,6 +14,10 @@ pub const ELECTRON_MASS_KG: f64 = 9.109_383_701_5e-31;
 pub const ATOMIC_MASS_UNIT_KG: f64 = 1.660_539_066_60e-27;
 /// Electron volt, J (exact).
 pub const ELECTRON_VOLT_J: f64 = 1.602_176_634e-19;
+/// Boltzmann constant, J/K (exact).
+pub const BOLTZMANN_J_PER_K: f64 = 1.380_649e-23;
+/// Angstrom, um.
+pub const ANGSTROM_UM: f64 = 1e-4;
 
 /// Particle mass.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -51,6 +55,26 @@ pub struct PhysicalGas {
 }
 
 impl PhysicalGas {
+    /// A gas whose energies are given as temperatures (K) and its length in
+    /// Angstrom: `eps = k_B eps_over_k`, `kT = k_B temperature_k`,
+    /// `l0 = sigma` (a Lennard-Jones species, `physics::species`).
+    pub fn from_kelvin(
+        eps_over_k: f64,
+        sigma_angstrom: f64,
+        temperature_k: f64,
+        mass: Mass,
+        density_per_um: f64,
+    ) -> PhysicalGas {
+        let electron_volts = |kelvin: f64| kelvin * BOLTZMANN_J_PER_K / ELECTRON_VOLT_J;
+        PhysicalGas {
+            l0_um: sigma_angstrom * ANGSTROM_UM,
+            eps_ev: electron_volts(eps_over_k),
+            kt_ev: electron_volts(temperature_k),
+            mass,
+            density_per_um,
+        }
+    }
+
     /// Length unit `l = l0 (eps/kT)^(1/n)`, um (`n` the length exponent;
     /// `l = l0` without one).
     pub fn length_unit_um(&self, length_exponent: Option<f64>) -> f64 {
@@ -118,6 +142,17 @@ mod tests {
         assert!(
             (gas.time_unit_ns(Some(6.0)) * gas.thermal_speed_um_per_ns() / l - 1.0).abs() < 1e-14
         );
+    }
+
+    /// N2's well depth 95.05 K and sigma 3.698 A give the study's `N2_10K`
+    /// gas (pipeline.toml: eps_ev = 8.19077526e-3, to its 9 digits).
+    #[test]
+    fn kelvin_and_angstrom_convert_to_electron_volts_and_micrometres() {
+        let mass = Mass::AtomicMassUnits(28.0134);
+        let gas = PhysicalGas::from_kelvin(95.05, 3.698, 0.1052 * 95.05, mass, 0.1);
+        assert!((gas.eps_ev / 8.190_775_26e-3 - 1.0).abs() < 1e-9);
+        assert!((gas.kt_ev / 8.616_695_573_52e-4 - 1.0).abs() < 1e-9);
+        assert_eq!(gas.l0_um, 3.698e-4);
     }
 
     /// The published collapse (physics.md §7): `(rho, T, t_f)`,

@@ -1,5 +1,5 @@
 //! What the command line prints: the run summary, the DAG, verification and
-//! garbage-collection reports, and artifact listings. Reads artifacts with
+//! garbage-collection reports, artifact listings and a gas's rates. Reads artifacts with
 //! polars, as any user would, by the columns the stages declare
 //! (`contract`). Numbers are printed to the digits their errors justify
 //! ([`with_error`]); a number that does not exist says why.
@@ -8,6 +8,7 @@ mod dag;
 pub mod html;
 mod layout;
 mod numbers;
+mod rates;
 mod show;
 mod status;
 mod store;
@@ -16,6 +17,7 @@ mod tables;
 
 pub use dag::{DagFormat, dag};
 pub use numbers::with_error;
+pub use rates::{SourcedTable, rate_text, theta_table};
 pub use show::show;
 pub use status::{cost_estimate, describe, hours, size, status, total_cost};
 pub use store::{audit, gc, verify};

@@ -131,7 +131,7 @@ fn show_stage(store: &Store, plan: &[Box<dyn Stage>], stage: &str) -> Result<Str
 
 /// The stage and current key of instance `id` of `plan` when its artifact
 /// exists (intact or damaged); otherwise why there is none.
-fn current_artifact(
+pub(super) fn current_artifact(
     store: &Store,
     plan: &[Box<dyn Stage>],
     id: &InstanceId,
