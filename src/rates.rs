@@ -1,7 +1,7 @@
 //! Rates of a Lennard-Jones gas in physical units from the study's theta
 //! table (`ternary rate`): the table's rate constants, measured at a few
 //! `theta = kT/eps`, interpolated to the gas's `theta` and turned into
-//! `Gamma = a rho^2 l v_th` (physics.md §2) and recombination times.
+//! `Gamma = a rho^2 l v_th` (physics.md §2), recombination and dissociation times.
 //!
 //! Owns the interpolation and its error; not the reading of the store
 //! (`report::rates`) nor the units (`physics::units`). Pure math: no IO.
@@ -34,8 +34,12 @@ pub struct ThetaTable {
     /// The same rate counting only `|u - u'| <= 0.04`, the paper's
     /// definition (its N2 example), `rho^2 l v_th`.
     pub paper_thermalization: Vec<Estimate>,
-    /// Recombination rate of the special particle at `u' = 0`, `rho^2 l v_th`.
+    /// Recombination rate per atom averaged over thermal atoms (from
+    /// detailed balance with dissociation, `3 K_b k_d`), `rho^2 l v_th`.
     pub recombination: Vec<Estimate>,
+    /// Dissociation rate `k_d` of a bound pair by thermal atoms, per pair,
+    /// `rho v_th`.
+    pub dissociation: Vec<Estimate>,
 }
 
 /// An interpolated rate constant: its value, the table's standard error
@@ -222,14 +226,22 @@ pub struct GasRates {
     pub thermalization: Interpolated,
     /// The paper's `a` (`|u - u'| <= 0.04`), `rho^2 l v_th`.
     pub paper_thermalization: Interpolated,
-    /// Recombination rate per atom at `u' = 0`, `rho^2 l v_th`.
+    /// Thermal recombination rate per atom, `rho^2 l v_th`.
     pub recombination: Interpolated,
+    /// Dissociation rate of a bound pair, per pair, `rho v_th`.
+    pub dissociation: Interpolated,
 }
 
 impl GasRates {
     /// A rate constant in 1/s: `Gamma = a rho^2 l v_th` (physics.md §2).
     pub fn per_second(&self, constant: Interpolated) -> Interpolated {
         constant.scaled(self.rate_unit_per_s)
+    }
+
+    /// A pair's rate constant in `rho v_th` (one atom at a time meets it)
+    /// in 1/s: `k rho v_th = k (rho^2 l v_th) / (rho l)`.
+    pub fn per_pair_per_second(&self, constant: Interpolated) -> Interpolated {
+        constant.scaled(self.rate_unit_per_s / self.scaled_density)
     }
 }
 
@@ -251,6 +263,7 @@ pub fn gas_rates(table: &ThetaTable, gas: &PhysicalGas) -> Result<GasRates, Rate
         thermalization: at(&table.thermalization)?,
         paper_thermalization: at(&table.paper_thermalization)?,
         recombination: at(&table.recombination)?,
+        dissociation: at(&table.dissociation)?,
     })
 }
 

@@ -496,6 +496,16 @@ fn rate_reproduces_the_nitrogen_row(config: &Path, store: &Path, paper: (Estimat
     let v_th = (kt_joule / (28.0134 * 1.660_539_066_60e-27)).sqrt() * 1e6; // um/s
     let l = 3.698e-4 * libm::pow(0.1052, -1.0 / 6.0); // um
     let formula = 1.0 / (a_n.mean * 0.01 * l * v_th);
+    // A bound pair lives 1 / (k_d rho v_th), k_d the table row's own.
+    let k_d = contract::table::DISSOCIATION_RATE.read(&rows).unwrap()[k];
+    let dissociation = molecule.dissociation;
+    assert_eq!(
+        (dissociation.value, dissociation.statistical),
+        (k_d.mean, k_d.stderr)
+    );
+    let life = time_of(molecule.per_pair_per_second(dissociation).estimate()).mean;
+    let expected_life = 1.0 / (k_d.mean * 0.1 * v_th);
+    assert!((life / expected_life - 1.0).abs() < 1e-8, "{life} s");
     let time = |rate| time_of(molecule.per_second(rate).estimate());
     // The gas's eps_ev in pipeline.toml has 9 digits: agreement to 1e-8.
     for (ours, expected) in [
@@ -535,6 +545,7 @@ fn rate_reproduces_the_nitrogen_row(config: &Path, store: &Path, paper: (Estimat
     assert!(text.contains("theta = kT/eps = 0.105200"), "{text}");
     assert!(text.contains("from: table[study] "), "{text}");
     assert!(text.contains("1/Gamma = "), "{text}");
+    assert!(text.contains("  life    = "), "{text}");
     for (extra, outside) in [
         (&[][..], "0.10520"),
         (&["--reading", "four-eps"][..], "0.0263"),

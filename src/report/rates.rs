@@ -18,6 +18,7 @@ use crate::pipeline::store::{Depth, Manifest, Store};
 use crate::pipeline::table::read_parquet;
 use crate::pipeline::{InstanceId, Stage};
 use crate::rates::{GasRates, Interpolated, ThetaTable, time_of};
+use crate::stats::Estimate;
 
 /// A theta table and the artifacts it was read from (`stage[instance] key`).
 pub struct SourcedTable {
@@ -37,15 +38,22 @@ pub fn theta_table(study: &Study, store: &Store, plan: &[Box<dyn Stage>]) -> Res
     let manifest = intact(store, &stage, &key)?;
     let batch = table_of(store, &manifest, contract::table::TABLE.name)?;
     let mut rows = lennard_jones_rows(&batch)?;
-    rows.sort_by(|a, b| a.0.total_cmp(&b.0));
+    rows.sort_by(|a, b| a.theta.total_cmp(&b.theta));
     let mut table = ThetaTable {
         thetas: Vec::new(),
         thermalization: Vec::new(),
         paper_thermalization: Vec::new(),
         recombination: Vec::new(),
+        dissociation: Vec::new(),
     };
     let mut sources = vec![format!("{id} {key}")];
-    for (theta, thermalization, recombination) in rows {
+    for LennardJonesRow {
+        theta,
+        thermalization,
+        recombination,
+        dissociation,
+    } in rows
+    {
         let dilute = study.kernel_params(Potential::lennard_jones(theta), 0.0, 0.0);
         let moments = instances::moments(&dilute);
         let input = manifest
@@ -61,25 +69,40 @@ pub fn theta_table(study: &Study, store: &Store, plan: &[Box<dyn Stage>]) -> Res
             .paper_thermalization
             .push(self_variance_at(&batch, PAPER_TRUNCATION)?);
         table.recombination.push(recombination);
+        table.dissociation.push(dissociation);
         sources.push(format!("{moments} {}", input.key));
     }
     Ok(SourcedTable { table, sources })
 }
 
-/// `(theta, a_n, recombination rate)` of every Lennard-Jones row of a `table`.
-fn lennard_jones_rows(
-    batch: &RecordBatch,
-) -> Result<Vec<(f64, crate::stats::Estimate, crate::stats::Estimate)>> {
-    use contract::table::{A_N, RECOMBINATION_RATE, THETA};
-    let (thetas, rates, recombination) = (
-        THETA.optional(batch)?,
-        A_N.read(batch)?,
-        RECOMBINATION_RATE.read(batch)?,
-    );
+/// One Lennard-Jones row of a `table`.
+struct LennardJonesRow {
+    theta: f64,
+    /// `a_n`, `rho^2 l v_th`.
+    thermalization: Estimate,
+    /// Thermal recombination rate per atom, `rho^2 l v_th`.
+    recombination: Estimate,
+    /// Dissociation rate per pair, `rho v_th`.
+    dissociation: Estimate,
+}
+
+/// Every Lennard-Jones row of a `table`.
+fn lennard_jones_rows(batch: &RecordBatch) -> Result<Vec<LennardJonesRow>> {
+    use contract::table::{A_N, DISSOCIATION_RATE, THERMAL_RECOMBINATION, THETA};
+    let (thetas, rates) = (THETA.optional(batch)?, A_N.read(batch)?);
+    let recombination = THERMAL_RECOMBINATION.read(batch)?;
+    let dissociation = DISSOCIATION_RATE.read(batch)?;
     Ok(thetas
         .into_iter()
         .enumerate()
-        .filter_map(|(row, theta)| theta.map(|theta| (theta, rates[row], recombination[row])))
+        .filter_map(|(row, theta)| {
+            Some(LennardJonesRow {
+                theta: theta?,
+                thermalization: rates[row],
+                recombination: recombination[row],
+                dissociation: dissociation[row],
+            })
+        })
         .collect())
 }
 
@@ -120,18 +143,40 @@ pub fn rate_text(description: &str, rates: &GasRates, sources: &[String]) -> Str
         ),
     ] {
         let _ = writeln!(out, "{title}:");
-        let _ = writeln!(out, "  a       = {}", constant_text(constant));
+        let _ = writeln!(
+            out,
+            "  a       = {}",
+            constant_text(constant, "rho^2 l v_th")
+        );
         write_rate(&mut out, ("Gamma", "1/Gamma"), rates.per_second(constant));
     }
     let _ = writeln!(
         out,
-        "recombination of the special atom at u' = 0 (a bound pair and a free atom leave):"
+        "recombination, per atom averaged over thermal atoms (three atoms meet, a bound pair and a free atom leave; from detailed balance with dissociation, 3 K_b k_d):"
     );
-    let _ = writeln!(out, "  rate    = {}", constant_text(rates.recombination));
+    let _ = writeln!(
+        out,
+        "  rate    = {}",
+        constant_text(rates.recombination, "rho^2 l v_th")
+    );
     write_rate(
         &mut out,
         ("rate", "time"),
         rates.per_second(rates.recombination),
+    );
+    let _ = writeln!(
+        out,
+        "dissociation of a bound pair by the gas's atoms (three free atoms leave), per pair:"
+    );
+    let _ = writeln!(
+        out,
+        "  k_d     = {}",
+        constant_text(rates.dissociation, "rho v_th")
+    );
+    write_rate(
+        &mut out,
+        ("rate", "life"),
+        rates.per_pair_per_second(rates.dissociation),
     );
     let _ = writeln!(
         out,
@@ -141,11 +186,11 @@ pub fn rate_text(description: &str, rates: &GasRates, sources: &[String]) -> Str
     out
 }
 
-/// A scaled constant with its combined error and both parts.
-fn constant_text(constant: Interpolated) -> String {
+/// A scaled constant in `unit` with its combined error and both parts.
+fn constant_text(constant: Interpolated, unit: &str) -> String {
     let estimate = constant.estimate();
     format!(
-        "{} [rho^2 l v_th] (statistical {:.2e}, interpolation {:.2e})",
+        "{} [{unit}] (statistical {:.2e}, interpolation {:.2e})",
         with_error(estimate.mean, estimate.stderr, "undefined"),
         constant.statistical,
         constant.interpolation

@@ -32,21 +32,27 @@ impl TableStage {
         }
     }
 
-    /// The dissociation rate of `params`' potential, NaN where none runs.
+    /// The dissociation rate of `params`' potential and the thermal
+    /// recombination rate detailed balance gives from it, NaN where none runs.
     fn dissociation(
         &self,
         inputs: &[Input],
         params: &KernelParams,
-    ) -> Result<Estimate, StageError> {
+    ) -> Result<[Estimate; 2], StageError> {
+        use contract::dissociation::{BALANCED_RECOMBINATION, DISSOCIATION_RATE, TABLE};
         let instance = instances::dissociation(&params.potential);
         if !self.dissociations.contains(&instance) {
-            return Ok(Estimate {
+            let none = Estimate {
                 mean: f64::NAN,
                 stderr: f64::NAN,
-            });
+            };
+            return Ok([none; 2]);
         }
-        let table = contract::dissociation::TABLE.find(inputs, &instance)?;
-        Ok(contract::dissociation::DISSOCIATION_RATE.read(table)?[0])
+        let table = TABLE.find(inputs, &instance)?;
+        Ok([
+            DISSOCIATION_RATE.read(table)?[0],
+            BALANCED_RECOMBINATION.read(table)?[0],
+        ])
     }
 }
 
@@ -57,8 +63,9 @@ struct PotentialRow {
     a_n_untruncated: Estimate,
     /// Rate of encounters leaving a bound pair and a free atom.
     recombination: Estimate,
-    /// Rate at which thermal atoms break a bound pair (NaN: not computed).
-    dissociation: Estimate,
+    /// Rate at which thermal atoms break a bound pair, and the thermal
+    /// recombination rate detailed balance gives from it (NaN: not computed).
+    dissociation: [Estimate; 2],
     /// `alpha`, `beta`, `sigma` of the fit.
     shape: [Estimate; 3],
     /// Scanned launch pairs with their `|u1f,max|` and its error bound.
@@ -196,7 +203,8 @@ impl Stage for TableStage {
             .estimate(A_N, |r| r.a_n)
             .estimate(A_N_UNTRUNCATED, |r| r.a_n_untruncated)
             .estimate(RECOMBINATION_RATE, |r| r.recombination)
-            .estimate(DISSOCIATION_RATE, |r| r.dissociation)
+            .estimate(THERMAL_RECOMBINATION, |r| r.dissociation[1])
+            .estimate(DISSOCIATION_RATE, |r| r.dissociation[0])
             .estimate(ALPHA, |r| r.shape[0])
             .estimate(BETA, |r| r.shape[1])
             .estimate(SIGMA, |r| r.shape[2])

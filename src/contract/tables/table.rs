@@ -61,6 +61,14 @@ pub const DISSOCIATION_RATE: Pair = pair!(
     "standard error of dissociation_rate (spread of randomizations)"
 )
 .or_null("no well (nothing binds), or the dissociation stage is disabled");
+/// The thermal recombination rate from detailed balance.
+pub const THERMAL_RECOMBINATION: Pair = pair!(
+    "thermal_recombination_rate",
+    RATE,
+    "recombination rate per atom averaged over thermal atoms, from detailed balance with dissociation: 3 K_b k_d (the dissociation stage; the sweep's scenes measure it directly, less precisely)",
+    "standard error of thermal_recombination_rate (spread of randomizations)"
+)
+.or_null("no well (nothing binds), or the dissociation stage is disabled");
 /// Amplitude of the shape.
 pub const ALPHA: Pair = Pair {
     value: Col::f64(
