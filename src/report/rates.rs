@@ -132,58 +132,73 @@ pub fn rate_text(description: &str, rates: &GasRates, sources: &[String]) -> Str
         "theta = kT/eps = {:.6}, rho l = {:.4e} (l = l0 (eps/kT)^(1/6)), rho^2 l v_th = {:.4e} /s",
         rates.theta, rates.scaled_density, rates.rate_unit_per_s
     );
-    for (title, constant) in [
-        (
-            "thermalization, the table's a_n (free atoms, untruncated: converged)",
-            rates.thermalization,
-        ),
-        (
-            "thermalization as the paper counts it (|u - u'| <= 0.04)",
-            rates.paper_thermalization,
-        ),
-    ] {
-        let _ = writeln!(out, "{title}:");
-        let _ = writeln!(
-            out,
-            "  a       = {}",
-            constant_text(constant, "rho^2 l v_th")
-        );
-        write_rate(&mut out, ("Gamma", "1/Gamma"), rates.per_second(constant));
+    let gas = |constant| rates.per_second(constant);
+    let pair = |constant| rates.per_pair_per_second(constant);
+    let sections: [Section; 4] = [
+        Section {
+            title: "thermalization, the table's a_n (free atoms, untruncated: converged)",
+            names: ["a", "Gamma", "1/Gamma"],
+            unit: "rho^2 l v_th",
+            constant: rates.thermalization,
+            rate: gas(rates.thermalization),
+        },
+        Section {
+            title: "thermalization as the paper counts it (|u - u'| <= 0.04)",
+            names: ["a", "Gamma", "1/Gamma"],
+            unit: "rho^2 l v_th",
+            constant: rates.paper_thermalization,
+            rate: gas(rates.paper_thermalization),
+        },
+        Section {
+            title: "recombination, per atom averaged over thermal atoms (three atoms meet, a bound pair and a free atom leave; from detailed balance with dissociation, 3 K_b k_d)",
+            names: ["rate", "rate", "time"],
+            unit: "rho^2 l v_th",
+            constant: rates.recombination,
+            rate: gas(rates.recombination),
+        },
+        Section {
+            title: "dissociation of a bound pair by the gas's atoms (three free atoms leave), per pair",
+            names: ["k_d", "rate", "life"],
+            unit: "rho v_th",
+            constant: rates.dissociation,
+            rate: pair(rates.dissociation),
+        },
+    ];
+    for section in sections {
+        section.write(&mut out);
     }
-    let _ = writeln!(
-        out,
-        "recombination, per atom averaged over thermal atoms (three atoms meet, a bound pair and a free atom leave; from detailed balance with dissociation, 3 K_b k_d):"
-    );
-    let _ = writeln!(
-        out,
-        "  rate    = {}",
-        constant_text(rates.recombination, "rho^2 l v_th")
-    );
-    write_rate(
-        &mut out,
-        ("rate", "time"),
-        rates.per_second(rates.recombination),
-    );
-    let _ = writeln!(
-        out,
-        "dissociation of a bound pair by the gas's atoms (three free atoms leave), per pair:"
-    );
-    let _ = writeln!(
-        out,
-        "  k_d     = {}",
-        constant_text(rates.dissociation, "rho v_th")
-    );
-    write_rate(
-        &mut out,
-        ("rate", "life"),
-        rates.per_pair_per_second(rates.dissociation),
-    );
     let _ = writeln!(
         out,
         "errors: the table's standard errors and the interpolation's (log-log between the neighbouring thetas, against the quadratic through a third row) in quadrature; 0 interpolation at a row"
     );
     let _ = writeln!(out, "from: {}", sources.join(", "));
     out
+}
+
+/// One rate constant of `ternary rate`: its scaled value and its rate in 1/s.
+struct Section {
+    title: &'static str,
+    /// Names of the constant, its rate and its time.
+    names: [&'static str; 3],
+    /// Unit of the scaled constant.
+    unit: &'static str,
+    constant: Interpolated,
+    /// The constant in 1/s.
+    rate: Interpolated,
+}
+
+impl Section {
+    /// The title, the constant, its rate and its time.
+    fn write(&self, out: &mut String) {
+        let _ = writeln!(out, "{}:", self.title);
+        let _ = writeln!(
+            out,
+            "  {:<7} = {}",
+            self.names[0],
+            constant_text(self.constant, self.unit)
+        );
+        write_rate(out, (self.names[1], self.names[2]), self.rate);
+    }
 }
 
 /// A scaled constant in `unit` with its combined error and both parts.
