@@ -818,6 +818,11 @@ fn recombination_balances_dissociation(events: &[Event], draws: &Draws) {
         assert!(scenes.iter().all(|(pair, _)| pair.internal_energy < 0.0));
         rates.push(dissociation_rate(&scenes));
         balanced_at_rest.extend(balanced_recombination(&scenes, bound_length, &[0.0]));
+        // Mirror symmetry: an atom at u' and one at -u' recombine alike.
+        let [right, left] = balanced_recombination(&scenes, bound_length, &[0.7, -0.7])[..] else {
+            unreachable!()
+        };
+        assert!((right / left - 1.0).abs() < 1e-12, "{right} {left}");
     }
     let k_d = Estimate::from_replicates(&rates);
     assert!(k_d.mean > 10.0 * k_d.stderr, "{k_d:?}");

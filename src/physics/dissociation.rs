@@ -249,7 +249,10 @@ pub fn dissociation_rate(hits: &[(BoundPair, Collision)]) -> f64 {
 /// `f0(u') R(u') = K_b k_d <sum_i N(u'; v_i, 1/3)>_dissociating`,
 ///
 /// `v_i` the three outgoing velocities in the centre-of-mass frame (the
-/// scenes start at total momentum zero) and `N(.; v, 1/3)` the normal
+/// scenes start at total momentum zero), each with its mirror image `-v_i`
+/// at half weight (the atoms here all come from the right; those from the
+/// left are the mirror images, whose outgoing velocities are reversed), and
+/// `N(.; v, 1/3)` the normal
 /// density of the centre-of-mass velocity `C ~ N(0, 1/3)` of a pair and an
 /// atom that meet (independent of their relative velocity under the flux
 /// weighting), integrated out exactly. Its thermal average is `3 K_b k_d`.
@@ -274,7 +277,7 @@ pub fn balanced_recombination(
                 * collision
                     .outgoing
                     .iter()
-                    .map(|&v| centre_density(u - v))
+                    .map(|&v| 0.5 * (centre_density(u - v) + centre_density(u + v)))
                     .sum::<f64>();
         }
     }
