@@ -195,12 +195,18 @@ pub fn fit_shape(data: &FitData) -> Option<ShapeFit> {
     if p.iter().any(|v| !v.is_finite()) || p[2] <= 0.0 {
         return None;
     }
+    let shape = Shape {
+        alpha: libm::exp(p[0]),
+        beta: p[1],
+        sigma: p[2].sqrt().recip(),
+    };
+    // ln alpha beyond ~709 overflows: no shape a table can hold (seen for
+    // Lennard-Jones at theta = 300, u' = -3, whose few kicks fit nothing).
+    if !(shape.alpha.is_finite() && shape.sigma.is_finite()) {
+        return None;
+    }
     Some(ShapeFit {
-        shape: Shape {
-            alpha: libm::exp(p[0]),
-            beta: p[1],
-            sigma: p[2].sqrt().recip(),
-        },
+        shape,
         chi2_per_dof: chi2(data, &bins, &p) / (bins.len() - 3) as f64,
         bins: bins.len(),
     })
