@@ -4,14 +4,15 @@
 use super::rings::{collapse_rings, compared_rings};
 use crate::config::{MdParams, Study};
 use crate::contract::{self, instances};
-use crate::figures::{DILUTE, Figure};
+use crate::figures::{DILUTE, Figure, PALETTE};
 use crate::physics::potential::{Family, Potential};
 use crate::pipeline::{InstanceId, Stage};
 use crate::stages::figures::FiguresStage;
 
 /// The figures of a study whose inputs `plan` computes: kernels of every
 /// scale-free potential with kicks (the inverse power laws) and, per family
-/// with a temperature in its shape, of its every `theta`; for `n = 6` (or
+/// with a temperature in its shape, of its `theta`s (at most one per colour,
+/// spread over them); for `n = 6` (or
 /// the first such potential) the kernel with its fit, `a_n(X)`, the rates
 /// against `u'`, the kernels at each `u'` and the kicks; the evolution; MD
 /// against Boltzmann for the compared rings.
@@ -71,7 +72,7 @@ fn kernel_figures(study: &Study, kicked: &[Potential]) -> Vec<FiguresStage> {
         }
     }
     for (family, members) in families {
-        let (labels, inputs) = kernels(&members);
+        let (labels, inputs) = kernels(&spread(&members, PALETTE.len()));
         let figure = Figure::KernelsAtTheta {
             family: family.name().into(),
             prefix: family.prefix().into(),
@@ -263,13 +264,15 @@ fn md_times(compared: &[&MdParams]) -> Option<Figure> {
 /// Curves of `h(u, t)` in the evolution figure, at most.
 const EVOLUTION_CURVES: usize = 5;
 
-/// At most `count` of `values`, spread evenly over them, first and last included.
-fn spread(values: &[f64], count: usize) -> Vec<f64> {
+/// At most `count` of `values`, spread evenly over them, first and last
+/// included (more curves than colours, or than a panel shows, cannot be
+/// told apart).
+fn spread<T: Copy + PartialEq>(values: &[T], count: usize) -> Vec<T> {
     if values.len() <= count {
         return values.to_vec();
     }
     let last = values.len() - 1;
-    let mut picked: Vec<f64> = (0..count)
+    let mut picked: Vec<T> = (0..count)
         .map(|k| values[(k * last + (count - 1) / 2) / (count - 1)])
         .collect();
     picked.dedup();
