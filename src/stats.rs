@@ -40,6 +40,14 @@ impl Estimate {
         }
     }
 
+    /// `self` times an exact `factor` (a unit or a known constant).
+    pub fn scaled(self, factor: f64) -> Estimate {
+        Estimate {
+            mean: self.mean * factor,
+            stderr: self.stderr * factor.abs(),
+        }
+    }
+
     /// `self / other`, with the two relative standard errors combined to
     /// first order (the two estimates treated as independent):
     /// `s_r = |r| hypot(s_a / a, s_b / b)`. A ratio without a finite value

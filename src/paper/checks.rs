@@ -331,10 +331,7 @@ fn exponent_row(
             Ok(MeasuredRate {
                 density: ring.density_per_um,
                 temperature: ring.kt_ev,
-                rate: scaled(
-                    variances[RING.row_of(table, &ring.name)?],
-                    1.0 / ring.final_time_ns,
-                ),
+                rate: variances[RING.row_of(table, &ring.name)?].scaled(1.0 / ring.final_time_ns),
             })
         })
         .collect::<Result<Vec<_>, StageError>>()?;
@@ -371,13 +368,6 @@ fn exponent_row(
         law.temperature_exponent
     };
     Ok((exponent, Converged::Same, note))
-}
-
-fn scaled(estimate: Estimate, factor: f64) -> Estimate {
-    Estimate {
-        mean: estimate.mean * factor,
-        stderr: estimate.stderr * factor.abs(),
-    }
 }
 
 impl Check {
@@ -579,8 +569,8 @@ fn ring_time(inputs: &[Input], moments: &KernelParams) -> Result<Option<Computed
         times.len()
     );
     Ok(Some((
-        scaled(paper, time),
-        window.map(|w| scaled(w, time)),
+        paper.scaled(time),
+        window.map(|w| w.scaled(time)),
         note,
     )))
 }
@@ -600,7 +590,7 @@ fn scaling_kernel(
         self_rates(&events, &ring.moments.target(), edge, &draws).variance
     };
     let units = hot.rate_unit_per_ns / cold.rate_unit_per_ns;
-    let at_density = scaled(Estimate::paired_ratio(&rate(hot), &rate(cold)), units);
+    let at_density = Estimate::paired_ratio(&rate(hot), &rate(cold)).scaled(units);
     let note = format!(
         "by construction, so no z: {} over {} from the scaled kernel (the same a_6 times each gas's rho^2 l v_th) gives exactly {units:.6}; the kernels at each ring's own rho l ({:.4e} and {:.4e}) give {:.7} +- {:.1e} (paired over the randomizations), the paper's launch-rule finite-density factor exp(-r |delay|) in a box of L = {}: an artifact of that algorithm, not the gas's (the MD row measures the ratio independently)",
         hot.name,
@@ -635,10 +625,9 @@ fn scaling_md(
     let variance = |ring: &ScalingRing| -> Result<Estimate, StageError> {
         Ok(MD_VARIANCE.read(table)?[RING.row_of(table, &ring.name)?])
     };
-    let ratio = scaled(
-        variance(hot)?.ratio(variance(cold)?),
-        cold.final_time_ns / hot.final_time_ns,
-    );
+    let ratio = variance(hot)?
+        .ratio(variance(cold)?)
+        .scaled(cold.final_time_ns / hot.final_time_ns);
     let note = format!(
         "tagged MD window variance at t_f over t_f: {} ({} ns) over {} ({} ns), independent runs; MD does not assume the scaling, and includes whatever its rings' own rho l does",
         hot.name, hot.final_time_ns, cold.name, cold.final_time_ns
@@ -745,9 +734,9 @@ mod tests {
             mean: 2.0,
             stderr: 0.5,
         };
-        let scaled = scaled(estimate, -3.0);
+        let scaled = estimate.scaled(-3.0);
         assert_eq!((scaled.mean, scaled.stderr), (-6.0, 1.5));
-        let converged = Converged::Differs(estimate).map(|e| super::scaled(e, 2.0));
+        let converged = Converged::Differs(estimate).map(|e| e.scaled(2.0));
         assert_eq!(converged.estimate().mean, 4.0);
         assert!(Converged::Same.map(|e| e).estimate().mean.is_nan());
     }

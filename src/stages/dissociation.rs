@@ -140,7 +140,7 @@ impl DissociationStage {
         max_energy_error: f64,
     ) -> Result<Table, StageError> {
         use contract::dissociation::*;
-        let balanced = scaled(rate, 3.0 * bound_length);
+        let balanced = rate.scaled(3.0 * bound_length);
         Ok(Rows::new(&[()])
             .optional(THETA, |_| self.params.potential.family().theta())
             .with(BOUND_PAIR_LENGTH, |_| bound_length)
@@ -150,14 +150,6 @@ impl DissociationStage {
             .with(FAILED_SCENES, |_| failed)
             .with(MAX_ENERGY_ERROR, |_| max_energy_error)
             .table(&TABLE)?)
-    }
-}
-
-/// `estimate` times `factor`.
-fn scaled(estimate: Estimate, factor: f64) -> Estimate {
-    Estimate {
-        mean: factor * estimate.mean,
-        stderr: factor * estimate.stderr,
     }
 }
 
@@ -177,7 +169,7 @@ fn recombination_table(
             let values: Vec<f64> = replicates.iter().map(|r| r.recombination[k]).collect();
             (Some(u), Estimate::from_replicates(&values))
         })
-        .chain([(None, scaled(rate, balance))])
+        .chain([(None, rate.scaled(balance))])
         .collect();
     Ok(Rows::new(&rows)
         .optional(U_PRIME, |r| r.0)
