@@ -44,6 +44,9 @@ pub(super) enum Command {
     /// (a species of the table or given eps, sigma and mass) at a temperature
     /// and density, interpolated in theta = kT/eps from the study's table.
     Rate(RateArgs),
+    /// Bound pairs forming and breaking in equilibrium ring MD, against what
+    /// K_b and the dissociation scenes predict (a potential with a well).
+    Pairs(PairsArgs),
     /// Run the shardable stages as a Slurm array job, then merge and run the rest.
     Slurm {
         #[command(subcommand)]
@@ -224,6 +227,40 @@ pub(super) struct RateArgs {
     /// Linear density, particles per um.
     #[arg(long, value_parser = positive)]
     pub(super) density_per_um: Option<f64>,
+}
+
+/// Arguments of `ternary pairs`.
+#[derive(Args)]
+pub(super) struct PairsArgs {
+    /// A potential of the study whose family has a well, by id (e.g. lj-1).
+    #[arg(long)]
+    pub(super) potential: String,
+    /// Particles on each ring (at least 16).
+    #[arg(long, default_value_t = 128, value_parser = clap::value_parser!(u32).range(16..=100_000))]
+    pub(super) particles: u32,
+    /// Linear density, particles per l (l = l0 (eps/kT)^(1/6)).
+    #[arg(long, default_value_t = 0.02, value_parser = positive)]
+    pub(super) density: f64,
+    /// Time each ring is watched, l/v_th (many relaxation times 1/(k_d rho)).
+    #[arg(long, default_value_t = 20000.0, value_parser = positive)]
+    pub(super) duration: f64,
+    /// Time between two counts of the bound pairs, l/v_th.
+    #[arg(long, default_value_t = 1.0, value_parser = positive)]
+    pub(super) interval: f64,
+    /// The fit of the count's autocorrelation starts at this lag, l/v_th
+    /// (past the collisions in progress: a few l/v_th).
+    #[arg(long, default_value_t = 20.0, value_parser = positive)]
+    pub(super) fit_from: f64,
+    /// Integrator tolerance of the rings (1e-6 and 1e-8 gave the same rates
+    /// at theta = 1; [md]'s 1e-10 costs 2x more than 1e-8).
+    #[arg(long, default_value_t = 1e-8, value_parser = positive)]
+    pub(super) tolerance: f64,
+    /// Independent rings (at least 2, for the errors).
+    #[arg(long, default_value_t = 32, value_parser = clap::value_parser!(u32).range(2..=100_000))]
+    pub(super) runs: u32,
+    /// Seed of the rings' initial states.
+    #[arg(long, default_value_t = 1)]
+    pub(super) seed: u64,
 }
 
 /// `--mass` of `ternary rate`.

@@ -1,19 +1,26 @@
 //! One function per subcommand of the study (`run`, `status`, `dag`,
-//! `verify`, `export`, `report`, `gc`, `show`, `rate`, `slurm submit`): each loads
+//! `verify`, `export`, `report`, `gc`, `show`, `rate`, `pairs`, `slurm submit`): each loads
 //! what it needs, calls the library and prints its result.
 
 use std::path::Path;
 use std::process::ExitCode;
 
-use anyhow::{Result, bail};
+use std::sync::atomic::{AtomicU32, Ordering};
+
+use anyhow::{Context, Result, bail};
 
 use super::args::{
-    DagArgs, ExportArgs, MassArg, RateArgs, ReadingArg, ReportArgs, RunArgs, ShowArgs,
+    DagArgs, ExportArgs, MassArg, PairsArgs, RateArgs, ReadingArg, ReportArgs, RunArgs, ShowArgs,
     SlurmSubmitArgs, StatusArgs, VerifyArgs,
 };
 use super::{Opening, emit, exit_code, load, open, print_event, within_limits};
 use ternary::config::{SlurmConfig, Study};
 use ternary::export::{self, ExportOptions};
+use ternary::physics::dissociation::{dissociation_rate, sobol_dissociation_scenes};
+use ternary::physics::md::CLUSTER_STEP_BUDGET;
+use ternary::physics::pair_kinetics::{
+    KineticsSettings, RelaxationSettings, dense_bound_length, equilibrium_runs, pair_relaxation,
+};
 use ternary::physics::species::{self, MassChoice, Particle, Reading};
 use ternary::physics::units::{Mass, PhysicalGas};
 use ternary::pipeline::executor::{self, Action, Freshness, RunOptions, Verbosity};
@@ -22,6 +29,7 @@ use ternary::plan::plan;
 use ternary::rates::gas_rates;
 use ternary::report::{self, DagFormat};
 use ternary::slurm::{self, SubmitOptions};
+use ternary::stats::Estimate;
 
 /// Worker threads per core a run may start (`--threads`): enough to cover
 /// waits, few enough that thread start-up stays negligible (5000 threads took
@@ -186,6 +194,104 @@ pub(super) fn rate(config: &Path, args: RateArgs) -> Result<ExitCode> {
     let sourced = report::theta_table(&study, &store, &plan(&study))?;
     let rates = gas_rates(&sourced.table, &gas)?;
     emit(&report::rate_text(&description, &rates, &sourced.sources));
+    Ok(ExitCode::SUCCESS)
+}
+
+/// The fit of the bound-pair autocorrelation ends where it falls below this
+/// (a fifth of a relaxation time): later lags carry the one-dimensional
+/// gas's slow memory (docs/lennard-jones.md), not the rate equation's decay.
+const FIT_DOWN_TO: f64 = 0.8;
+
+/// `ternary pairs`: equilibrium rings of a potential with a well, their bound
+/// pairs' number and its relaxation, against the equilibrium constant `K_b`
+/// and the dissociation rate of the study's scenes.
+pub(super) fn pairs(config: &Path, args: PairsArgs) -> Result<ExitCode> {
+    let study = Study::load(config)?;
+    let potentials = study.potentials();
+    let potential = potentials
+        .iter()
+        .find(|p| p.id() == args.potential)
+        .copied()
+        .with_context(|| {
+            let ids: Vec<String> = potentials.iter().map(|p| p.id()).collect();
+            format!(
+                "--potential {}: not a potential of {} (it has {})",
+                args.potential,
+                config.display(),
+                ids.join(", ")
+            )
+        })?;
+    let Some(dissociation) = study.dissociation_params(potential) else {
+        bail!(
+            "--potential {}: no dissociation to compare with (its family has no well, or [dissociation] is disabled)",
+            args.potential
+        );
+    };
+    let mut dissociation_rates = Vec::new();
+    for randomization in 0..dissociation.randomizations {
+        eprintln!(
+            "dissociation scenes: randomization {}/{}",
+            randomization + 1,
+            dissociation.randomizations
+        );
+        let net = (dissociation.seed, randomization, dissociation.points);
+        let scenes = sobol_dissociation_scenes(&potential, &dissociation.engine, net, || {})
+            .context("a potential with a well has bound pairs")?;
+        dissociation_rates.push(dissociation_rate(&scenes));
+    }
+    let particles = args.particles as usize;
+    let circumference = f64::from(args.particles) / args.density;
+    let md = &study.config.md;
+    let settings = KineticsSettings {
+        particles,
+        duration: args.duration,
+        interval: args.interval,
+        tolerance: args.tolerance,
+        max_steps: CLUSTER_STEP_BUDGET,
+    };
+    let seeds: Vec<u64> = (0..u64::from(args.runs))
+        .map(|r| args.seed.wrapping_shl(32).wrapping_add(r))
+        .collect();
+    let finished = AtomicU32::new(0);
+    let runs = equilibrium_runs(
+        &potential,
+        circumference,
+        md.neighbours as usize,
+        &settings,
+        &seeds,
+        || {
+            let done = finished.fetch_add(1, Ordering::Relaxed) + 1;
+            eprintln!("rings: {done}/{} watched", args.runs);
+        },
+    )?;
+    let relaxation = RelaxationSettings {
+        particles,
+        circumference,
+        interval: args.interval,
+        fit_from: args.fit_from,
+        fit_down_to: FIT_DOWN_TO,
+    };
+    let measured = pair_relaxation(&runs, &relaxation).with_context(|| {
+        format!(
+            "the bound-pair count's autocorrelation did not fall below {FIT_DOWN_TO} between --fit-from {} and half of --duration {}: watch longer",
+            args.fit_from, args.duration
+        )
+    })?;
+    let predicted = report::PairPrediction {
+        bound_length: potential.family().bound_pair_length(),
+        dense_bound_length: dense_bound_length(&potential, args.density),
+        dissociation: Estimate::from_replicates(&dissociation_rates),
+    };
+    let ring = format!(
+        "{}: {} rings of N = {particles}, rho l = {}, watched {} l/v_th each (every {} l/v_th), tolerance {}",
+        potential.id(),
+        args.runs,
+        args.density,
+        args.duration,
+        args.interval,
+        settings.tolerance
+    );
+    emit(&report::pairs_text(&ring, &measured, &predicted));
     Ok(ExitCode::SUCCESS)
 }
 

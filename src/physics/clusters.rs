@@ -215,6 +215,11 @@ impl<P: PairPotential> ClusterRing<P> {
         self.cutoff
     }
 
+    /// Gaps shorter than this arc (`l`) are within collision range.
+    pub fn collision_arc(&self) -> f64 {
+        self.collision_arc
+    }
+
     /// Total energy with the forces' reach, `kT`.
     pub fn energy(&self) -> f64 {
         let kinetic: f64 = self.velocities.iter().map(|u| 0.5 * u * u).sum();

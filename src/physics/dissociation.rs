@@ -26,7 +26,7 @@ use super::launch::{thermal_density, thermal_launch_speed};
 use rayon::prelude::*;
 
 use super::potential::{PairPotential, Potential, PotentialVisitor, bound_weight};
-use super::quasi_random::{standard_normal_cdf, standard_normal_quantile};
+use super::quasi_random::{ScrambledSobol, standard_normal_cdf, standard_normal_quantile};
 use super::scene::{Collision, EngineSettings, Outcome, SceneState, collide_from};
 
 /// Cells of the bound-gap proposal on the unit interval of `t` (gap
@@ -292,6 +292,19 @@ pub fn balanced_recombination(
 fn centre_density(c: f64) -> f64 {
     let variance = 1.0 / 3.0;
     libm::exp(-0.5 * c * c / variance) / (2.0 * std::f64::consts::PI * variance).sqrt()
+}
+
+/// The scenes of randomization `randomization` of the scrambled Sobol' net
+/// of `points` points seeded `seed` ([`dissociation_scenes`]).
+pub fn sobol_dissociation_scenes(
+    potential: &Potential,
+    settings: &EngineSettings,
+    (seed, randomization, points): (u64, u32, u32),
+    done: impl Fn() + Sync,
+) -> Option<Vec<(BoundPair, Collision)>> {
+    let sobol = ScrambledSobol::new(seed, u64::from(randomization));
+    let points: Vec<[f64; 3]> = (0..points).map(|k| sobol.point(k)).collect();
+    dissociation_scenes(potential, settings, &points, done)
 }
 
 /// The scenes of one randomization, one per uniform point `(gap, rate,

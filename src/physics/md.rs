@@ -186,8 +186,11 @@ pub enum RunError {
     NonFinite,
 }
 
+/// Step budget of one cluster over one macro step.
+pub const CLUSTER_STEP_BUDGET: u64 = 10_000_000;
+
 /// Initial draws tried before a ring counts as too crowded.
-const MAX_DRAWS: u32 = 10_000;
+pub const MAX_DRAWS: u32 = 10_000;
 
 /// Runs one ring from the initial state drawn with `seed` (physics.md §7).
 pub fn run<P: PairPotential>(

@@ -6,6 +6,7 @@ pub mod dissociation;
 pub mod launch;
 pub mod md;
 pub mod offset_quadrature;
+pub mod pair_kinetics;
 pub mod potential;
 pub mod quasi_random;
 pub mod ring;

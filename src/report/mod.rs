@@ -8,6 +8,7 @@ mod dag;
 pub mod html;
 mod layout;
 mod numbers;
+mod pairs;
 mod rates;
 mod show;
 mod status;
@@ -17,6 +18,7 @@ mod tables;
 
 pub use dag::{DagFormat, dag};
 pub use numbers::with_error;
+pub use pairs::{PairPrediction, pairs_text};
 pub use rates::{SourcedTable, rate_text, theta_table};
 pub use show::show;
 pub use status::{cost_estimate, describe, hours, size, status, total_cost};

@@ -9,9 +9,8 @@ use crate::config::DissociationParams;
 use crate::contract::instances;
 use crate::contract::{self, Rows};
 use crate::physics::dissociation::{
-    BoundPair, balanced_recombination, dissociation_rate, dissociation_scenes,
+    BoundPair, balanced_recombination, dissociation_rate, sobol_dissociation_scenes,
 };
-use crate::physics::quasi_random::ScrambledSobol;
 use crate::physics::scene::Collision;
 use crate::pipeline::code::{self, Code};
 use crate::pipeline::{Cost, Input, InstanceId, Progress, Stage, StageError, Table};
@@ -34,17 +33,16 @@ impl DissociationStage {
         randomization: u32,
         progress: &Progress,
     ) -> Result<Vec<(BoundPair, Collision)>, StageError> {
-        let sobol = ScrambledSobol::new(self.params.seed, u64::from(randomization));
-        let points: Vec<[f64; 3]> = (0..self.params.points).map(|k| sobol.point(k)).collect();
-        dissociation_scenes(&self.params.potential, &self.params.engine, &points, || {
-            progress.advance(1)
-        })
-        .ok_or_else(|| {
-            StageError::Invariant(format!(
-                "{} has no well: no bound pairs to break",
-                self.params.potential.id()
-            ))
-        })
+        let p = &self.params;
+        let net = (p.seed, randomization, p.points);
+        sobol_dissociation_scenes(&p.potential, &p.engine, net, || progress.advance(1)).ok_or_else(
+            || {
+                StageError::Invariant(format!(
+                    "{} has no well: no bound pairs to break",
+                    self.params.potential.id()
+                ))
+            },
+        )
     }
 }
 

@@ -17,7 +17,7 @@ use crate::binning::Bins;
 use crate::config::MdParams;
 use crate::contract::instances;
 use crate::contract::{self, Col, Rows, TableSpec};
-use crate::physics::md::{RunResult, RunSettings, ThermalLineages, run};
+use crate::physics::md::{CLUSTER_STEP_BUDGET, RunResult, RunSettings, ThermalLineages, run};
 use crate::physics::potential::{PairPotential, PotentialVisitor};
 use crate::physics::ring::{Reach, RingForces};
 use crate::pipeline::code::{self, Code};
@@ -28,9 +28,6 @@ use crate::stats::Estimate;
 pub struct MdStage {
     params: MdParams,
 }
-
-/// Step budget of one cluster over one macro step.
-const MAX_STEPS: u64 = 10_000_000;
 
 impl MdStage {
     /// An md stage with resolved parameters.
@@ -47,7 +44,7 @@ impl MdStage {
             sample_times: p.sample_times.clone(),
             bins: Bins::for_window(p.window, p.bin_width),
             start_band: p.start_band,
-            max_steps: MAX_STEPS,
+            max_steps: CLUSTER_STEP_BUDGET,
         }
     }
 
