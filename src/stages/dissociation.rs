@@ -89,12 +89,18 @@ impl Stage for DissociationStage {
         u64::from(self.params.points) * u64::from(self.params.randomizations)
     }
 
-    /// One scene per point: ~0.9 ms at `theta = 0.1`, ~0.05 ms at `theta = 10`
-    /// (deep wells oscillate many times while the atom approaches).
+    /// One scene per point, its CPU time growing with the well depth `D`
+    /// (`kT`; a deep well oscillates many times while the atom approaches):
+    /// `1.7e-4 s (4D)^0.75` for `4D > 1`, `(4D)^0.4` below, within 30% of
+    /// the default study's Lennard-Jones scenes (measured 2026-11-27 on 2
+    /// cores: 1.84 ms at `D = 5` (`theta = 0.05`), 0.17 ms at `D = 1/4`,
+    /// 0.031 ms at `D = 1/400`).
     fn cost(&self, _inputs: &[Cost]) -> Cost {
         let scenes = self.work_units() as f64;
+        let depth = 4.0 * self.params.potential.well_depth();
+        let exponent = if depth > 1.0 { 0.75 } else { 0.4 };
         Cost {
-            cpu_seconds: scenes * 9e-4,
+            cpu_seconds: scenes * 1.7e-4 * libm::pow(depth, exponent),
             bytes: 200.0,
             rows: 1.0,
         }
