@@ -254,31 +254,25 @@ pub const LOCAL_RATE_LAGS: [f64; 8] = [10.0, 20.0, 50.0, 100.0, 200.0, 500.0, 10
 pub fn pair_relaxation(runs: &[Vec<u32>], settings: &RelaxationSettings) -> Option<PairRelaxation> {
     let full: Vec<&[u32]> = runs.iter().map(Vec::as_slice).collect();
     let first = (settings.fit_from / settings.interval).ceil() as usize;
-    let last = first
-        + autocorrelation(&full, first, usize::MAX)
-            .iter()
-            .position(|&c| c < settings.fit_down_to)
-            .filter(|&lags| lags >= 2)?;
-    let shortest = runs.iter().map(Vec::len).min().unwrap_or(0);
+    let fluctuations = Fluctuations::new(&full);
+    let last = (first..fluctuations.longest_lag)
+        .find(|&lag| fluctuations.correlation(lag) < settings.fit_down_to)
+        .filter(|&lag| lag >= first + 2)?;
     let local_lags: Vec<usize> = LOCAL_RATE_LAGS
         .iter()
         .map(|lag| (lag / settings.interval).round() as usize)
-        .filter(|&lag| lag < shortest / 2)
+        .filter(|&lag| lag < fluctuations.longest_lag)
         .collect();
     let measure = |runs: &[&[u32]]| {
-        let correlation = autocorrelation(runs, first, last);
+        let fluctuations = Fluctuations::new(runs);
         let lags: Vec<f64> = (first..last)
             .map(|k| k as f64 * settings.interval)
             .collect();
-        let logs: Vec<f64> = correlation.iter().map(|&c| -libm::log(c)).collect();
+        let logs: Vec<f64> = (first..last)
+            .map(|lag| -libm::log(fluctuations.correlation(lag)))
+            .collect();
         let rate = slope(&lags, &logs);
-        let samples: usize = runs.iter().map(|r| r.len()).sum();
-        let total: u64 = runs
-            .iter()
-            .flat_map(|r| r.iter())
-            .map(|&c| u64::from(c))
-            .sum();
-        let bound = total as f64 / samples as f64 / settings.circumference;
+        let bound = fluctuations.mean / settings.circumference;
         let free = settings.particles as f64 / settings.circumference - 2.0 * bound;
         let dissociation = rate / (free + 4.0 * bound);
         let mut values = vec![
@@ -290,8 +284,8 @@ pub fn pair_relaxation(runs: &[Vec<u32>], settings: &RelaxationSettings) -> Opti
             dissociation * bound / (free * free),
         ];
         values.extend(local_lags.windows(2).map(|pair| {
-            let c = autocorrelation(runs, pair[0], pair[1] + 1);
-            libm::log(c[0] / c[c.len() - 1]) / ((pair[1] - pair[0]) as f64 * settings.interval)
+            let ratio = fluctuations.correlation(pair[0]) / fluctuations.correlation(pair[1]);
+            libm::log(ratio) / ((pair[1] - pair[0]) as f64 * settings.interval)
         }));
         values
     };
@@ -328,39 +322,60 @@ pub fn pair_relaxation(runs: &[Vec<u32>], settings: &RelaxationSettings) -> Opti
     })
 }
 
-/// Normalized autocorrelation of the counts at lags `first..last` (at most
-/// half a run), deviations from the mean over all runs pooled.
-fn autocorrelation(runs: &[&[u32]], first: usize, last: usize) -> Vec<f64> {
-    let samples: usize = runs.iter().map(|r| r.len()).sum();
-    let mean = runs
-        .iter()
-        .flat_map(|r| r.iter())
-        .map(|&c| f64::from(c))
-        .sum::<f64>()
-        / samples as f64;
-    let deviations: Vec<Vec<f64>> = runs
-        .iter()
-        .map(|r| r.iter().map(|&c| f64::from(c) - mean).collect())
-        .collect();
-    let covariance = |lag: usize| {
+/// The bound-pair counts of several runs as deviations from the mean over
+/// all of them, pooled.
+struct Fluctuations {
+    /// Mean count over every run and observation.
+    mean: f64,
+    /// Each run's deviations from `mean`.
+    deviations: Vec<Vec<f64>>,
+    /// Variance of the pooled deviations.
+    variance: f64,
+    /// Lags below half the shortest run.
+    longest_lag: usize,
+}
+
+impl Fluctuations {
+    fn new(runs: &[&[u32]]) -> Fluctuations {
+        let samples: usize = runs.iter().map(|r| r.len()).sum();
+        let mean = runs
+            .iter()
+            .flat_map(|r| r.iter())
+            .map(|&c| f64::from(c))
+            .sum::<f64>()
+            / samples as f64;
+        let deviations = runs
+            .iter()
+            .map(|r| r.iter().map(|&c| f64::from(c) - mean).collect())
+            .collect();
+        let mut fluctuations = Fluctuations {
+            mean,
+            deviations,
+            variance: 1.0,
+            longest_lag: runs.iter().map(|r| r.len()).min().unwrap_or(0) / 2,
+        };
+        fluctuations.variance = fluctuations.covariance(0);
+        fluctuations
+    }
+
+    /// Pooled autocovariance at `lag` (observations).
+    fn covariance(&self, lag: usize) -> f64 {
         let (mut sum, mut pairs) = (0.0, 0usize);
-        for d in &deviations {
-            if d.len() > lag {
-                sum += d[..d.len() - lag]
-                    .iter()
-                    .zip(&d[lag..])
-                    .map(|(a, b)| a * b)
-                    .sum::<f64>();
-                pairs += d.len() - lag;
-            }
+        for d in self.deviations.iter().filter(|d| d.len() > lag) {
+            sum += d[..d.len() - lag]
+                .iter()
+                .zip(&d[lag..])
+                .map(|(a, b)| a * b)
+                .sum::<f64>();
+            pairs += d.len() - lag;
         }
         sum / pairs as f64
-    };
-    let variance = covariance(0);
-    let shortest = runs.iter().map(|r| r.len()).min().unwrap_or(0);
-    (first..last.min(shortest / 2))
-        .map(|lag| covariance(lag) / variance)
-        .collect()
+    }
+
+    /// Normalized autocorrelation `C` at `lag` (observations).
+    fn correlation(&self, lag: usize) -> f64 {
+        self.covariance(lag) / self.variance
+    }
 }
 
 /// Least-squares slope of `y` against `x`.
