@@ -687,7 +687,7 @@ fn shipped_studies_are_valid() {
 /// quadrature supports: each potential it samples is one that the study
 /// refuses to integrate by quadrature (naming the key), and it gives every
 /// estimate at least 3x smaller errors than `pipeline.toml` (9x the launch
-/// pairs or scenes, 9x the MD runs).
+/// pairs or scenes, 9x the simulated MD time: runs times duration).
 #[test]
 fn the_publication_study_integrates_by_quadrature_wherever_it_can() {
     use ternary::physics::sampling::OffsetIntegration;
@@ -726,9 +726,17 @@ fn the_publication_study_integrates_by_quadrature_wherever_it_can() {
         }
     }
     assert!(sampled > 0 && sampled < publication.potentials().len());
+    for potential in publication.potentials() {
+        if let Some(params) = publication.dissociation_params(potential) {
+            let base = default.dissociation_params(potential).expect("lj in both");
+            let scenes = |p: &ternary::config::DissociationParams| p.points * p.randomizations;
+            assert!(scenes(&params) >= 9 * scenes(&base), "{}", potential.id());
+        }
+    }
+    let simulated = |ring: &ternary::config::MdParams| f64::from(ring.runs) * ring.final_time_ns;
     for (ring, base) in publication.md_params().iter().zip(default.md_params()) {
         assert_eq!(ring.name, base.name);
-        assert!(ring.runs >= 9 * base.runs, "{}", ring.name);
+        assert!(simulated(ring) >= 9.0 * simulated(&base), "{}", ring.name);
     }
 }
 
