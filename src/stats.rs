@@ -217,6 +217,17 @@ impl<T: Sync> Replicated<T> {
     }
 }
 
+impl<T, E> Replicated<Result<T, E>> {
+    /// Every member, or the first error (the full estimate's, then the
+    /// leave-one-out members' in order).
+    pub fn transpose(self) -> Result<Replicated<T>, E> {
+        Ok(Replicated {
+            full: self.full?,
+            leave_one_out: self.leave_one_out.into_iter().collect::<Result<_, _>>()?,
+        })
+    }
+}
+
 impl<T: Entries> Replicated<T> {
     /// Jackknife estimates, entry by entry.
     pub fn values(&self) -> Vec<Estimate> {

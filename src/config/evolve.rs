@@ -171,9 +171,8 @@ impl EvolveConfig {
     fn validate(&self, context: &Context) -> Result<(), Invalid> {
         let evolve = self;
         let (launch, wide) = (context.launch, context.wide);
+        check_grid("evolve", evolve.velocity_range, evolve.grid_step, wide)?;
         for (name, value) in [
-            ("grid_step", evolve.grid_step),
-            ("velocity_range", evolve.velocity_range),
             ("early_bin_width", evolve.early_bin_width),
             ("early_range", evolve.early_range),
         ] {
@@ -184,30 +183,9 @@ impl EvolveConfig {
             )?;
         }
         check(
-            evolve.velocity_range >= 2.0 * evolve.grid_step,
-            "evolve.velocity_range",
-            "must span at least two grid steps",
-        )?;
-        check(
-            evolve.velocity_range / evolve.grid_step <= MAX_EVOLVE_HALF_NODES,
-            "evolve.grid_step",
-            format!(
-                "more than {} grid nodes (dense generators of n^2 entries, exponentials in n^3): widen the step",
-                2.0 * MAX_EVOLVE_HALF_NODES + 1.0
-            ),
-        )?;
-        check(
             evolve.early_range / evolve.early_bin_width <= MAX_BINS,
             "evolve.early_bin_width",
             "more than a million early bins: widen the bins or narrow evolve.early_range",
-        )?;
-        check(
-            within_reach(wide, evolve.velocity_range) && within_reach(wide, -evolve.velocity_range),
-            "evolve.velocity_range",
-            format!(
-                "{} is beyond the reach of the wide launch proposal (+- (sweep.launch_spread {} + {REWEIGHTING_REACH})): widen sweep.launch_spread",
-                evolve.velocity_range, wide.spread
-            ),
         )?;
         let nodes = evolve.u_prime / evolve.grid_step;
         check(
@@ -250,4 +228,44 @@ impl EvolveConfig {
             "lists no time (give times or gas with times_ns)",
         )
     }
+}
+
+/// Checks a master-equation grid `[-range, range]` of spacing `step` given
+/// as `{section}.velocity_range` and `{section}.grid_step`: both positive, at
+/// least two steps, at most [`MAX_EVOLVE_HALF_NODES`] per side, and within
+/// reach of the wide launch proposal `wide` (whose scenes fill it).
+pub(super) fn check_grid(
+    section: &str,
+    range: f64,
+    step: f64,
+    wide: &LaunchProposal,
+) -> Result<(), Invalid> {
+    for (name, value) in [("grid_step", step), ("velocity_range", range)] {
+        check(
+            positive(value),
+            format!("{section}.{name}"),
+            format!("{value} must be > 0"),
+        )?;
+    }
+    check(
+        range >= 2.0 * step,
+        format!("{section}.velocity_range"),
+        "must span at least two grid steps",
+    )?;
+    check(
+        range / step <= MAX_EVOLVE_HALF_NODES,
+        format!("{section}.grid_step"),
+        format!(
+            "more than {} grid nodes (dense generators of n^2 entries, exponentials in n^3): widen the step",
+            2.0 * MAX_EVOLVE_HALF_NODES + 1.0
+        ),
+    )?;
+    check(
+        within_reach(wide, range) && within_reach(wide, -range),
+        format!("{section}.velocity_range"),
+        format!(
+            "{range} is beyond the reach of the wide launch proposal (+- (sweep.launch_spread {} + {REWEIGHTING_REACH})): widen sweep.launch_spread",
+            wide.spread
+        ),
+    )
 }

@@ -2,7 +2,7 @@
 //! resolved into per-stage parameters in one pass.
 //!
 //! One module per section (`[store]`, `[potentials]`, `[engine]`, `[scan]`,
-//! `[collisions]`, `[kernel]`, `[sweep]`, `[dissociation]`, `[convergence]`, `[evolve]`,
+//! `[collisions]`, `[kernel]`, `[sweep]`, `[dissociation]`, `[convergence]`, `[evolve]`, `[spectrum]`,
 //! `[md]`, `[[gas]]`, `[figures]`, `[publication]`, `[limits]`, `[slurm]`), each owning its schema with defaults, the check of
 //! every documented range, and the parameters of the stages it configures.
 //! Unknown keys, wrong types and out-of-range values are rejected with a
@@ -30,6 +30,7 @@ mod potentials;
 mod publication;
 mod scan;
 mod slurm;
+mod spectrum;
 mod store;
 mod sweep;
 
@@ -67,6 +68,7 @@ pub use scan::{
     ScanGridOverride, ScanParams,
 };
 pub use slurm::SlurmConfig;
+pub use spectrum::{MAX_SPECTRUM_MODES, SpectrumConfig, SpectrumParams};
 pub use store::StoreConfig;
 pub use sweep::{MAX_SWEEP_POINTS, SweepConfig, SweepParams};
 
@@ -133,6 +135,9 @@ pub struct Config {
     /// Evolution of `h(u, t)` by the master and Fokker-Planck equations.
     #[serde(default)]
     pub evolve: EvolveConfig,
+    /// The relaxation spectrum of the collision generators.
+    #[serde(default)]
+    pub spectrum: SpectrumConfig,
     /// Molecular dynamics of rings.
     #[serde(default)]
     pub md: MdConfig,
@@ -272,6 +277,7 @@ impl Study {
             launch: &launch,
             wide: &wide,
         })?;
+        config.spectrum.validate(&wide)?;
         let md = config.md.resolve(&config.gas, &gases)?;
         config.publication.validate()?;
         config.limits.validate()?;
@@ -334,6 +340,11 @@ impl Study {
     /// and its family has a well.
     pub fn dissociation_params(&self, potential: Potential) -> Option<DissociationParams> {
         self.config.dissociation.params(potential, self.engine())
+    }
+
+    /// Resolved parameters of the spectrum of `potential`, if enabled.
+    pub fn spectrum_params(&self, potential: Potential) -> Option<SpectrumParams> {
+        self.config.spectrum.params(&self.config.kernel, potential)
     }
 
     /// Resolved parameters of every md system (empty unless enabled).

@@ -3,6 +3,7 @@
 //! composes them; each stage names itself and its inputs through them.
 
 use super::dissociation as dissociation_stage;
+use super::spectrum as spectrum_stage;
 use super::{collisions as collisions_stage, compare as compare_stage, fit as fit_stage};
 use super::{kernel as kernel_stage, scan as scan_stage};
 use super::{launches as launches_stage, md as md_stage, moments as moments_stage};
@@ -71,6 +72,11 @@ pub fn scan(potential: &Potential) -> InstanceId {
 /// The `dissociation` instance of a potential with a well.
 pub fn dissociation(potential: &Potential) -> InstanceId {
     InstanceId::new(dissociation_stage::STAGE, &potential.id())
+}
+
+/// The `spectrum` instance of a potential.
+pub fn spectrum(potential: &Potential) -> InstanceId {
+    InstanceId::new(spectrum_stage::STAGE, &potential.id())
 }
 
 /// The `kernel` instance of kernel parameters.

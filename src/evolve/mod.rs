@@ -4,7 +4,8 @@
 //! [`early`]), the full `u'`-dependent master equation on a velocity
 //! grid ([`operator`], [`grid`]) with its exact exponential ([`propagate`]),
 //! and the Fokker-Planck equation of the same drift and variance rates (the
-//! three processes and the projection's effect in [`processes`]).
+//! three processes and the projection's effect in [`processes`]); the
+//! relaxation spectrum of the same generators ([`spectrum`]).
 //! Uncertainties come from the jackknife over the Monte Carlo randomizations
 //! (`stats::Replicated`): every quantity here is computed once on the mean
 //! kernel and once with each randomization left out. Pure math: no IO.
@@ -17,3 +18,4 @@ pub mod operator;
 pub mod processes;
 pub mod propagate;
 pub mod spectral;
+pub mod spectrum;

@@ -88,7 +88,9 @@ impl GridEvolution {
         let diffusion = tagged.map(|m| tagged_fokker_planck(m, grid));
         let maxwellian = grid.maxwellian();
         let invariants = collision_invariants(grid);
-        let full = all_projected(raw.map(|m| Dissipative::project(m, &maxwellian, &invariants)))?;
+        let full = raw
+            .map(|m| Dissipative::project(m, &maxwellian, &invariants))
+            .transpose()?;
         let mut h0 = vec![0.0; grid.len()];
         h0[start] = 1.0;
         let full_states = full.map(|m| m.propagate(&h0, times));
@@ -122,20 +124,6 @@ impl GridEvolution {
         ];
         Ok(GridEvolution { processes, effect })
     }
-}
-
-/// The projections of the full and every leave-one-out estimate, or the
-/// first error among them.
-fn all_projected(
-    projected: Replicated<Result<Dissipative, EigenError>>,
-) -> Result<Replicated<Dissipative>, EigenError> {
-    Ok(Replicated {
-        full: projected.full?,
-        leave_one_out: projected
-            .leave_one_out
-            .into_iter()
-            .collect::<Result<_, _>>()?,
-    })
 }
 
 /// The moments of one process's `h` at one time (jackknife estimates).

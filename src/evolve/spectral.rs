@@ -51,43 +51,8 @@ impl Dissipative {
     ) -> Result<Dissipative, EigenError> {
         let n = generator.size();
         let root: Vec<f64> = equilibrium.iter().map(|f| f.sqrt()).collect();
-        let s = |i: usize, j: usize| generator.entry(i, j) * root[j] / root[i];
-        let mut sym = vec![0.0; n * n];
-        let (mut odd, mut even) = (0.0, 0.0);
-        for i in 0..n {
-            for j in 0..n {
-                let (a, b) = (s(i, j), s(j, i));
-                sym[i * n + j] = 0.5 * (a + b);
-                odd += (a - b).powi(2);
-                even += (a + b).powi(2);
-            }
-        }
-        // Orthonormal basis of the invariant directions root * p(u).
-        let mut basis: Vec<Vec<f64>> = Vec::new();
-        for p in invariants {
-            let mut q: Vec<f64> = p.iter().zip(&root).map(|(x, r)| x * r).collect();
-            for b in &basis {
-                let dot: f64 = q.iter().zip(b).map(|(x, y)| x * y).sum();
-                q.iter_mut().zip(b).for_each(|(x, y)| *x -= dot * y);
-            }
-            let norm = q.iter().map(|x| x * x).sum::<f64>().sqrt();
-            q.iter_mut().for_each(|x| *x /= norm);
-            basis.push(q);
-        }
-        // P S P with P = 1 - sum q q^T.
-        let project = |m: &mut Vec<f64>| {
-            for q in &basis {
-                for i in 0..n {
-                    let dot: f64 = (0..n).map(|j| m[i * n + j] * q[j]).sum();
-                    (0..n).for_each(|j| m[i * n + j] -= dot * q[j]);
-                }
-                for j in 0..n {
-                    let dot: f64 = (0..n).map(|i| m[i * n + j] * q[i]).sum();
-                    (0..n).for_each(|i| m[i * n + j] -= dot * q[i]);
-                }
-            }
-        };
-        project(&mut sym);
+        let (mut sym, asymmetry) = symmetrized(generator, &root);
+        project_out(&mut sym, &invariant_basis(invariants, &root));
         let eigen = symmetric_eigen(&sym, n)?;
         let largest_clipped = eigen.values.iter().copied().fold(0.0, f64::max);
         let radius = eigen.values.iter().fold(0.0, |r: f64, l| r.max(l.abs()));
@@ -96,7 +61,7 @@ impl Dissipative {
             eigen,
             largest_clipped,
             rounding: 1e-12 * radius,
-            asymmetry: (odd / even).sqrt(),
+            asymmetry,
         })
     }
 
@@ -154,6 +119,58 @@ impl Dissipative {
             g.iter_mut().zip(v).for_each(|(x, y)| *x += weight * y);
         }
         g.iter().zip(&self.root).map(|(x, r)| x * r).collect()
+    }
+}
+
+/// The symmetric part `(S + S^T) / 2` of `S = D^(-1/2) M D^(1/2)` (`root`:
+/// `sqrt(f0)` at the nodes; row-major), and the estimate's detailed-balance
+/// violation `||S - S^T||_F / ||S + S^T||_F`.
+pub(super) fn symmetrized(generator: &Generator, root: &[f64]) -> (Vec<f64>, f64) {
+    let n = generator.size();
+    let s = |i: usize, j: usize| generator.entry(i, j) * root[j] / root[i];
+    let mut sym = vec![0.0; n * n];
+    let (mut odd, mut even) = (0.0, 0.0);
+    for i in 0..n {
+        for j in 0..n {
+            let (a, b) = (s(i, j), s(j, i));
+            sym[i * n + j] = 0.5 * (a + b);
+            odd += (a - b).powi(2);
+            even += (a + b).powi(2);
+        }
+    }
+    (sym, (odd / even).sqrt())
+}
+
+/// Orthonormal basis (Gram-Schmidt, in the order given) of the invariant
+/// directions `root * p(u)`: in the symmetrized frame, `f0 p(u)`.
+pub(super) fn invariant_basis(invariants: &[Vec<f64>], root: &[f64]) -> Vec<Vec<f64>> {
+    let mut basis: Vec<Vec<f64>> = Vec::new();
+    for p in invariants {
+        let mut q: Vec<f64> = p.iter().zip(root).map(|(x, r)| x * r).collect();
+        for b in &basis {
+            let dot: f64 = q.iter().zip(b).map(|(x, y)| x * y).sum();
+            q.iter_mut().zip(b).for_each(|(x, y)| *x -= dot * y);
+        }
+        let norm = q.iter().map(|x| x * x).sum::<f64>().sqrt();
+        q.iter_mut().for_each(|x| *x /= norm);
+        basis.push(q);
+    }
+    basis
+}
+
+/// `P A P` in place, `P = 1 - sum_q q q^T` over the orthonormal `basis`
+/// (`a`: row-major, square).
+pub(super) fn project_out(a: &mut [f64], basis: &[Vec<f64>]) {
+    let n = basis.first().map_or(0, Vec::len);
+    for q in basis {
+        for i in 0..n {
+            let dot: f64 = (0..n).map(|j| a[i * n + j] * q[j]).sum();
+            (0..n).for_each(|j| a[i * n + j] -= dot * q[j]);
+        }
+        for j in 0..n {
+            let dot: f64 = (0..n).map(|i| a[i * n + j] * q[i]).sum();
+            (0..n).for_each(|i| a[i * n + j] -= dot * q[i]);
+        }
     }
 }
 

@@ -18,7 +18,8 @@ use crate::physics::potential::Potential;
 use crate::pipeline::Stage;
 use crate::stages::compare::{CompareParams, CompareStage};
 use crate::stages::{
-    convergence, dissociation, evolve, fit, gases, kernel, md, moments, scan, sweep, table,
+    convergence, dissociation, evolve, fit, gases, kernel, md, moments, scan, spectrum, sweep,
+    table,
 };
 use collisions::push_collisions;
 
@@ -64,8 +65,8 @@ fn push_once(stages: &mut Vec<Box<dyn Stage>>, stage: Box<dyn Stage>) {
 }
 
 /// One potential's scan, collisions, kernels with their moments and fits at
-/// every `(u', density)` target, the sweep and evolution that read its
-/// wide collisions, and the dissociation of its bound pairs if it has a well.
+/// every `(u', density)` target, the sweep, spectrum and evolution that read
+/// its wide collisions, and the dissociation of its bound pairs if it has a well.
 fn push_potential(stages: &mut Vec<Box<dyn Stage>>, study: &Study, potential: Potential) {
     stages.push(Box::new(scan::ScanStage::new(study.scan_params(potential))));
     push_collisions(stages, study.collisions_params(potential), potential.id());
@@ -86,12 +87,20 @@ fn push_potential(stages: &mut Vec<Box<dyn Stage>>, study: &Study, potential: Po
         .md_params()
         .first()
         .is_some_and(|ring| ring.potential == potential);
+    let spectrum = study.spectrum_params(potential);
     let (wide_name, wide) = wide_collisions(study, potential);
-    if let (true, Some(wide)) = (sweep.is_some() || evolve.is_some() || compared, wide) {
+    let reads_wide = sweep.is_some() || evolve.is_some() || spectrum.is_some() || compared;
+    if let (true, Some(wide)) = (reads_wide, wide) {
         push_collisions(stages, wide, wide_name.clone());
     }
     if let Some(params) = sweep {
         stages.push(Box::new(sweep::SweepStage::new(params, wide_name.clone())));
+    }
+    if let Some(params) = spectrum {
+        stages.push(Box::new(spectrum::SpectrumStage::new(
+            params,
+            wide_name.clone(),
+        )));
     }
     if let Some(params) = evolve {
         stages.push(Box::new(evolve::EvolveStage::new(params, wide_name)));

@@ -15,5 +15,6 @@ pub mod md;
 pub mod moments;
 pub mod paper;
 pub mod scan;
+pub mod spectrum;
 pub mod sweep;
 pub mod table;

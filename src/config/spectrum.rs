@@ -1,0 +1,74 @@
+//! `[spectrum]`: the relaxation spectrum of the linearized three-body
+//! collision operator and of the tagged particle's generator, per potential.
+
+use serde::{Deserialize, Serialize};
+
+use super::check::{Invalid, check};
+use super::evolve::check_grid;
+use super::{KernelConfig, KernelParams};
+use crate::physics::potential::Potential;
+use crate::physics::sampling::LaunchProposal;
+
+/// `[spectrum]`.
+#[derive(Clone, Copy, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SpectrumConfig {
+    /// Run the spectrum stage for every potential.
+    pub enabled: bool,
+    /// The grid spans `[-velocity_range, velocity_range]`, `v_th`.
+    pub velocity_range: f64,
+    /// Node spacing, `v_th`.
+    pub grid_step: f64,
+    /// Slowest modes whose shapes `g(u)` are written, per generator.
+    pub modes: u32,
+}
+
+impl Default for SpectrumConfig {
+    fn default() -> Self {
+        SpectrumConfig {
+            enabled: true,
+            velocity_range: 4.0,
+            grid_step: 0.05,
+            modes: 4,
+        }
+    }
+}
+
+/// Largest `spectrum.modes`.
+pub const MAX_SPECTRUM_MODES: u32 = 50;
+
+/// Resolved parameters of one `spectrum` instance.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct SpectrumParams {
+    /// Kernel settings at `u' = 0`, dilute (potential, kick floor).
+    pub kernel: KernelParams,
+    /// Grid half-range, `v_th`.
+    pub velocity_range: f64,
+    /// Grid step, `v_th`.
+    pub grid_step: f64,
+    /// Shapes written per generator.
+    pub modes: u32,
+}
+
+impl SpectrumConfig {
+    /// Checks the grid (as `[evolve]`'s: within reach of the wide launch
+    /// proposal `wide`) and the number of shapes.
+    pub(super) fn validate(&self, wide: &LaunchProposal) -> Result<(), Invalid> {
+        check_grid("spectrum", self.velocity_range, self.grid_step, wide)?;
+        check(
+            (1..=MAX_SPECTRUM_MODES).contains(&self.modes),
+            "spectrum.modes",
+            format!("{} is outside [1, {MAX_SPECTRUM_MODES}]", self.modes),
+        )
+    }
+
+    /// The spectrum of `potential`, if enabled.
+    pub fn params(&self, kernel: &KernelConfig, potential: Potential) -> Option<SpectrumParams> {
+        self.enabled.then(|| SpectrumParams {
+            kernel: kernel.params(potential, 0.0, 0.0),
+            velocity_range: self.velocity_range,
+            grid_step: self.grid_step,
+            modes: self.modes,
+        })
+    }
+}
