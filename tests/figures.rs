@@ -474,6 +474,79 @@ fn expected(store: &Path, figure: &Artifact) -> Vec<Row> {
             }
             rows
         }
+        "spectrum" => {
+            use contract::spectrum::{modes, rates, scenes, summary};
+            let input = figure.input(store, 0);
+            let (rate_table, mode_table) = (input.table("spectrum"), input.table("spectrum_modes"));
+            let (scene_table, summary_table) = (
+                input.table("spectrum_scenes"),
+                input.table("spectrum_summary"),
+            );
+            let generators = summary::GENERATOR.read(&summary_table).unwrap();
+            let gammas = summary::VARIANCE_RATE.read(&summary_table).unwrap();
+            let mut rows = Vec::new();
+            for (name, title) in [("full", "linearized operator"), ("tagged", "one particle")] {
+                let gamma = gammas[generators.iter().position(|g| g == name).unwrap()].mean;
+                let of = |batch: &RecordBatch, col: contract::Col<String>| -> Vec<bool> {
+                    col.read(batch).unwrap().iter().map(|g| g == name).collect()
+                };
+                let (mine, k) = (
+                    of(&rate_table, rates::GENERATOR),
+                    rates::MODE.read(&rate_table).unwrap(),
+                );
+                let ratio = rates::RATE_OVER_VARIANCE_RATE.read(&rate_table).unwrap();
+                for i in (0..k.len()).filter(|&i| mine[i] && k[i] <= 10) {
+                    rows.push((
+                        "rates".into(),
+                        title.into(),
+                        f64::from(k[i]),
+                        ratio[i].mean,
+                        ratio[i].stderr,
+                    ));
+                }
+                let (mine, k) = (
+                    of(&mode_table, modes::GENERATOR),
+                    modes::MODE.read(&mode_table).unwrap(),
+                );
+                let (u, density) = (
+                    modes::U.read(&mode_table).unwrap(),
+                    modes::DENSITY.read(&mode_table).unwrap(),
+                );
+                for mode in 1..=2 {
+                    let series = format!("{title}, mode {mode}");
+                    for i in (0..k.len()).filter(|&i| mine[i] && k[i] == mode) {
+                        rows.push((
+                            "modes".into(),
+                            series.clone(),
+                            u[i],
+                            density[i].mean,
+                            density[i].stderr,
+                        ));
+                    }
+                }
+                let (mine, k) = (
+                    of(&scene_table, scenes::GENERATOR),
+                    scenes::MODE.read(&scene_table).unwrap(),
+                );
+                let sizes = scenes::RANDOMIZATIONS.read(&scene_table).unwrap();
+                let rate = scenes::RATE.read(&scene_table).unwrap();
+                for i in (0..k.len()).filter(|&i| mine[i] && k[i] == 1) {
+                    let error = if rate[i].stderr.is_finite() {
+                        rate[i].stderr / gamma
+                    } else {
+                        0.0
+                    };
+                    rows.push((
+                        "scenes".into(),
+                        title.into(),
+                        f64::from(sizes[i]),
+                        rate[i].mean / gamma,
+                        error,
+                    ));
+                }
+            }
+            rows
+        }
         other => panic!("figure kind `{other}` has no check here"),
     }
 }

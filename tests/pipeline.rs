@@ -58,12 +58,12 @@ fn python_check(script: &str, artifact: &Path) {
 }
 
 /// Every instance of the default DAG: per potential scan, launches and
-/// collisions, the sweep's own launches and collisions, sweep, and kernel,
-/// moments and fit at (u' = 0, dilute), plus the table, the launches and
-/// collisions drawn for the paper's balance pair (u' = -3), the paper table,
-/// and the figures of the kicked potential (kernels, kernel with fit, rates,
-/// truncation, kicks).
-const INSTANCES: usize = 27;
+/// collisions, the sweep's own launches and collisions, sweep, spectrum, and
+/// kernel, moments and fit at (u' = 0, dilute), plus the table, the launches
+/// and collisions drawn for the paper's balance pair (u' = -3), the paper
+/// table, and the figures of the kicked potential (kernels, kernel with fit,
+/// rates, truncation, kicks, spectrum).
+const INSTANCES: usize = 30;
 
 fn stage_dirs(store: &Path, stage: &str) -> Vec<PathBuf> {
     let mut dirs: Vec<PathBuf> = fs::read_dir(store.join("artifacts").join(stage))
@@ -86,6 +86,7 @@ fn all_artifact_dirs(store: &Path) -> Vec<PathBuf> {
         "moments",
         "fit",
         "sweep",
+        "spectrum",
         "table",
         "paper",
         "figures",

@@ -590,8 +590,8 @@ fn counts_ranges_and_ids_are_bounded_at_load() {
             "collisions.points_per_potential.ipp-6",
         ),
         (
-            "enabled = false",
-            "enabled = false\npoints = 100000",
+            "[sweep]\nenabled = false",
+            "[sweep]\nenabled = false\npoints = 100000",
             "sweep.points",
         ),
     ];

@@ -36,6 +36,10 @@ pub struct Spectrum {
     /// Relaxation rates `r_k = -lambda_k` of the modes orthogonal to the
     /// invariants, ascending, `rho^2 l v_th` (grid nodes minus invariants).
     pub rates: Vec<f64>,
+    /// Mirror parity of each mode in the order of `rates`: `sum_i v_i
+    /// v_(n-1-i)` of its unit eigenvector `v`, +1 for an even shape
+    /// (`g(-u) = g(u)`), -1 for an odd one (the grid is symmetric about 0).
+    pub parities: Vec<f64>,
     /// `g_k(u)` at the nodes of the slowest modes (`df_k = f0 g_k`), in the
     /// order of `rates`, normalized to `sum_i f0_i g_k(u_i)^2 = 1`; the sign
     /// is arbitrary (see [`Spectrum::aligned`]).
@@ -98,6 +102,7 @@ pub fn spectrum(
     let (rates, vectors) = relaxing_modes(&symmetric_eigen(&projected, n)?, &basis);
     Ok(Spectrum {
         rates,
+        parities: vectors.iter().map(|v| parity(v)).collect(),
         shapes: vectors
             .iter()
             .take(shapes)
@@ -165,6 +170,11 @@ fn relaxing_modes(eigen: &SymmetricEigen, basis: &[Vec<f64>]) -> (Vec<f64>, Vec<
         .collect();
     modes.sort_by(|a, b| a.0.total_cmp(&b.0));
     modes.into_iter().map(|(r, v)| (r, v.clone())).unzip()
+}
+
+/// `sum_i v_i v_(n-1-i)`: the overlap of `v` with its mirror image.
+fn parity(v: &[f64]) -> f64 {
+    v.iter().zip(v.iter().rev()).map(|(a, b)| a * b).sum()
 }
 
 fn dot(a: &[f64], b: &[f64]) -> f64 {

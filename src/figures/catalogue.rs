@@ -107,6 +107,15 @@ pub enum Figure {
         /// Legend label of each kernel input, the dilute one ([`DILUTE`]) first.
         labels: Vec<String>,
     },
+    /// The relaxation spectrum of one potential: the slowest rates over
+    /// `Gamma` (a), the shapes of the slowest modes (b), the slowest rate
+    /// against the randomizations it is estimated from (c).
+    Spectrum {
+        /// The potential's id.
+        id: String,
+        /// Its legend label.
+        label: String,
+    },
     /// `h(u, t)` of one ring at several final times: MD (tagged) and Boltzmann.
     MdTimes {
         /// The ring's name (the figure's).
@@ -122,7 +131,7 @@ pub enum Figure {
 pub const DILUTE: &str = "dilute";
 
 /// Names of every figure kind, for documentation and tests.
-pub const FIGURES: [&str; 13] = [
+pub const FIGURES: [&str; 14] = [
     "kernels",
     "kernels_lj",
     "kernel_fit",
@@ -136,6 +145,7 @@ pub const FIGURES: [&str; 13] = [
     "md_times",
     "kernels_u_prime",
     "kernels_density",
+    "spectrum",
 ];
 
 impl Figure {
@@ -155,6 +165,7 @@ impl Figure {
             Figure::MdTimes { ring, .. } => format!("md_times_{ring}"),
             Figure::KernelsAtUPrime { id, .. } => format!("kernels_u_prime_{id}"),
             Figure::KernelsAtDensity { id, .. } => format!("kernels_density_{id}"),
+            Figure::Spectrum { id, .. } => format!("spectrum_{id}"),
         }
     }
 
@@ -199,6 +210,9 @@ impl Figure {
             }
             Figure::KernelsAtUPrime { .. } => {
                 "G(u' -> u) at each u' (dilute) against |u - u'| on both sides of u', log axes, +- standard error; bins grouped 20 per decade, groups with relative error above 0.5 left out".into()
+            }
+            Figure::Spectrum { label, .. } => {
+                format!("relaxation spectrum of {label}: the slowest rates r_k over Gamma (the tagged variance rate at u' = 0) of the linearized three-body operator and of the tagged particle's generator, +- jackknife error (a); the shapes f0 g_k(u) of the two slowest modes of each (b); the slowest rate of each from disjoint groups of randomizations against the group size, +- spread of the groups (c: noise pulls the lowest rate down until the estimate converges)")
             }
         }
     }
@@ -313,6 +327,26 @@ impl Figure {
                     vec![("", Style::Band)],
                 )
             }],
+            Figure::Spectrum { .. } => vec![
+                panel(
+                    "rates",
+                    linear("mode k (slowest first)"),
+                    linear("r_k / Γ"),
+                    vec![("", Style::Markers)],
+                ),
+                panel(
+                    "modes",
+                    linear("u [v_th]"),
+                    linear("f0 g_k(u) [1 / v_th]"),
+                    vec![("", Style::Band)],
+                ),
+                panel(
+                    "scenes",
+                    log("randomizations per estimate"),
+                    linear("r_1 / Γ"),
+                    vec![("", Style::Markers)],
+                ),
+            ],
             Figure::MdTimes { .. } => vec![Panel {
                 paired: true,
                 ..panel(
@@ -369,6 +403,7 @@ impl Figure {
                 rings, times_ns, ..
             } => md_times(&inputs[0], rings, times_ns),
             Figure::KernelsAtDensity { labels, .. } => kernels_at_density(inputs, labels),
+            Figure::Spectrum { .. } => spectrum(&inputs[0]),
             Figure::KernelsAtUPrime { u_primes, .. } => {
                 let mut parts = Vec::new();
                 for (input, u_prime) in inputs.iter().zip(u_primes) {
@@ -535,6 +570,113 @@ fn rates(input: &Input) -> Result<DataFrame, StageError> {
             pair(&FOKKER_PLANCK_DRIFT),
         )?,
     ])
+}
+
+/// Slowest modes drawn in [`Figure::Spectrum`]'s panel (a).
+const SPECTRUM_MODES: u32 = 10;
+/// Mode shapes drawn per generator in its panel (b).
+const SPECTRUM_SHAPES: u32 = 2;
+
+/// The spectrum figure's three panels, per generator (full, tagged).
+fn spectrum(input: &Input) -> Result<DataFrame, StageError> {
+    use contract::spectrum::{modes, rates, scenes, summary};
+    let rates_table = rates::TABLE.of(input)?;
+    let modes_table = modes::TABLE.of(input)?;
+    let scenes_table = scenes::TABLE.of(input)?;
+    let summary_table = summary::TABLE.of(input)?;
+    let gammas = summary::VARIANCE_RATE.read(summary_table).map_err(failed)?;
+    let generators = summary::GENERATOR.read(summary_table).map_err(failed)?;
+    let mut parts = Vec::new();
+    for (name, title) in [("full", "linearized operator"), ("tagged", "one particle")] {
+        let Some(row) = generators.iter().position(|g| g == name) else {
+            continue;
+        };
+        let gamma = gammas[row].mean;
+        parts.push(generator_rates(rates_table, name, title)?);
+        parts.extend(mode_shapes(modes_table, name, title)?);
+        let (sizes, rate) = slowest_by_group(scenes_table, name)?;
+        let ys = rate.iter().map(|r| r.mean / gamma).collect();
+        let errors = rate.iter().map(|r| r.stderr / gamma).collect();
+        parts.push(series_of("scenes", title, sizes, ys, Some(errors))?);
+    }
+    stack(parts)
+}
+
+/// The slowest [`SPECTRUM_MODES`] rates of `generator` over `Gamma` against
+/// the mode number, as the series `title`.
+fn generator_rates(
+    table: &arrow::array::RecordBatch,
+    generator: &str,
+    title: &str,
+) -> Result<DataFrame, StageError> {
+    use contract::spectrum::rates::{GENERATOR, MODE, RATE_OVER_VARIANCE_RATE};
+    let names = GENERATOR.read(table).map_err(failed)?;
+    let modes = MODE.read(table).map_err(failed)?;
+    let ratios = RATE_OVER_VARIANCE_RATE.read(table).map_err(failed)?;
+    let rows: Vec<usize> = (0..names.len())
+        .filter(|&i| names[i] == generator && modes[i] <= SPECTRUM_MODES)
+        .collect();
+    series_of(
+        "rates",
+        title,
+        rows.iter().map(|&i| f64::from(modes[i])).collect(),
+        rows.iter().map(|&i| ratios[i].mean).collect(),
+        Some(rows.iter().map(|&i| ratios[i].stderr).collect()),
+    )
+}
+
+/// `f0 g_k(u)` of the slowest [`SPECTRUM_SHAPES`] modes of `generator`.
+fn mode_shapes(
+    table: &arrow::array::RecordBatch,
+    generator: &str,
+    title: &str,
+) -> Result<Vec<DataFrame>, StageError> {
+    use contract::spectrum::modes::{DENSITY, GENERATOR, MODE, U};
+    let names = GENERATOR.read(table).map_err(failed)?;
+    let modes = MODE.read(table).map_err(failed)?;
+    let (u, density) = (
+        U.read(table).map_err(failed)?,
+        DENSITY.read(table).map_err(failed)?,
+    );
+    (1..=SPECTRUM_SHAPES)
+        .map(|k| {
+            let rows: Vec<usize> = (0..names.len())
+                .filter(|&i| names[i] == generator && modes[i] == k)
+                .collect();
+            series_of(
+                "modes",
+                &format!("{title}, mode {k}"),
+                rows.iter().map(|&i| u[i]).collect(),
+                rows.iter().map(|&i| density[i].mean).collect(),
+                Some(rows.iter().map(|&i| density[i].stderr).collect()),
+            )
+        })
+        .collect()
+}
+
+/// The slowest rate of `generator` from groups of each size: sizes and the
+/// groups' mean rate (the all-randomization estimate has no spread: error 0).
+fn slowest_by_group(
+    table: &arrow::array::RecordBatch,
+    generator: &str,
+) -> Result<(Vec<f64>, Vec<Estimate>), StageError> {
+    use contract::spectrum::scenes::{GENERATOR, MODE, RANDOMIZATIONS, RATE};
+    let names = GENERATOR.read(table).map_err(failed)?;
+    let modes = MODE.read(table).map_err(failed)?;
+    let sizes = RANDOMIZATIONS.read(table).map_err(failed)?;
+    let rates = RATE.read(table).map_err(failed)?;
+    Ok((0..names.len())
+        .filter(|&i| names[i] == generator && modes[i] == 1)
+        .map(|i| {
+            let rate = rates[i];
+            let stderr = if rate.stderr.is_finite() {
+                rate.stderr
+            } else {
+                0.0
+            };
+            (f64::from(sizes[i]), Estimate { stderr, ..rate })
+        })
+        .unzip())
 }
 
 fn md_boltzmann(input: &Input, ring: &str) -> Result<DataFrame, StageError> {

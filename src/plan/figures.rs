@@ -14,7 +14,7 @@ use crate::stages::figures::FiguresStage;
 /// with a temperature in its shape, of its `theta`s (at most one per colour,
 /// spread over them); for `n = 6` (or
 /// the first such potential) the kernel with its fit, `a_n(X)`, the rates
-/// against `u'`, the kernels at each `u'` and the kicks; the evolution; MD
+/// against `u'`, the kernels at each `u'`, the spectrum and the kicks; the evolution; MD
 /// against Boltzmann for the compared rings.
 pub(super) fn figure_stages(study: &Study, plan: &[Box<dyn Stage>]) -> Vec<FiguresStage> {
     let present = |id: &InstanceId| plan.iter().any(|stage| stage.id() == *id);
@@ -85,8 +85,8 @@ fn kernel_figures(study: &Study, kicked: &[Potential]) -> Vec<FiguresStage> {
 }
 
 /// The main potential's kernel with its fit, `a_n(X)`, its rates against
-/// `u'` (with a sweep), its kernels at each dilute `u'` (more than one) and
-/// its kicks (with a scan).
+/// `u'` (with a sweep), its kernels at each dilute `u'` (more than one), its
+/// relaxation spectrum (with a spectrum) and its kicks (with a scan).
 fn main_figures(
     study: &Study,
     p: &Potential,
@@ -136,6 +136,14 @@ fn main_figures(
             u_primes,
         };
         figures.push(FiguresStage::new(figure, inputs));
+    }
+    let spectrum = instances::spectrum(p);
+    if present(&spectrum) {
+        let figure = Figure::Spectrum {
+            id: id.clone(),
+            label: p.family().label(),
+        };
+        figures.push(FiguresStage::new(figure, vec![spectrum]));
     }
     let scan = instances::scan(p);
     if present(&scan) {

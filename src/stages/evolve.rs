@@ -238,10 +238,15 @@ impl EvolveStage {
         for (&name, process) in names.iter().zip(processes) {
             let [clipped, asymmetry] = process.diagnostics.unwrap_or([none, none]);
             for (k, &at) in schedule.iter().enumerate() {
+                let decay = match k {
+                    0 => none,
+                    _ => process.entropy_decay(grid, k, at.scaled - schedule[k - 1].scaled),
+                };
                 rows.push(ProcessRow {
                     process: name,
                     at,
                     moments: process.moments(grid, k, u_prime, reach),
+                    decay,
                     clipped,
                     asymmetry,
                 });
@@ -257,6 +262,8 @@ impl EvolveStage {
             .estimate(VARIANCE, |r| r.moments.variance)
             .estimate(WINDOW_VARIANCE, |r| r.moments.window_variance)
             .estimate(DISTANCE_TO_EQUILIBRIUM, |r| r.moments.distance)
+            .estimate(ENTROPY, |r| r.moments.entropy)
+            .estimate(ENTROPY_DECAY_RATE, |r| r.decay)
             .estimate(LARGEST_CLIPPED_RATE, |r| r.clipped)
             .estimate(ASYMMETRY, |r| r.asymmetry)
             .table(&TABLE)?)
@@ -285,6 +292,8 @@ struct ProcessRow {
     process: &'static str,
     at: Moment,
     moments: ProcessMoments,
+    /// The entropy's decay rate since the previous time (NaN at the first).
+    decay: Estimate,
     clipped: Estimate,
     asymmetry: Estimate,
 }

@@ -240,9 +240,15 @@ fn rates_table(analysed: &[Analysed]) -> Result<Table, StageError> {
     let mut rows = Vec::new();
     for a in analysed {
         for k in 0..a.spectra.full.rates.len() {
+            let parity = if a.spectra.full.parities[k] > 0.0 {
+                "even"
+            } else {
+                "odd"
+            };
             rows.push((
                 a.name,
                 k as u32 + 1,
+                parity,
                 of(&a.spectra, |s| s.rates[k]),
                 over_gamma(a, |s| s.rates[k]),
             ));
@@ -251,8 +257,9 @@ fn rates_table(analysed: &[Analysed]) -> Result<Table, StageError> {
     Ok(Rows::new(&rows)
         .with(GENERATOR, |r| r.0.to_string())
         .with(MODE, |r| r.1)
-        .estimate(RATE, |r| r.2)
-        .estimate(RATE_OVER_VARIANCE_RATE, |r| r.3)
+        .with(PARITY, |r| r.2.to_string())
+        .estimate(RATE, |r| r.3)
+        .estimate(RATE_OVER_VARIANCE_RATE, |r| r.4)
         .table(&TABLE)?)
 }
 

@@ -89,6 +89,9 @@ pilot_points = 0
 
 [sweep]
 enabled = false
+
+[spectrum]
+enabled = false
 "#
     )
 }

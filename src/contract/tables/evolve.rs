@@ -134,7 +134,7 @@ pub mod evolution {
     pub const EQUILIBRIUM_FULL: Col<f64> = Col::f64(
         "equilibrium_full",
         DENSITY,
-        "f0 (1 + u u' + (u'^2 - 1)(u^2 - 1)/2): the limit of h_full (number, momentum, energy conserved)",
+        "f0 (a + b u + c u^2) with the number, momentum and energy of delta(u - u') on the grid (f0 (1 + u u' + (u'^2 - 1)(u^2 - 1)/2) on an unbounded one): the limit of h_full",
     );
     /// Limit of `h_tagged`.
     pub const EQUILIBRIUM_TAGGED: Col<f64> = Col::f64(
@@ -213,6 +213,21 @@ pub mod evolution_summary {
         "sum |h - h_eq| over the nodes (L1), h_eq the process's limit",
         JACKKNIFE
     );
+    /// Linearized relative entropy.
+    pub const ENTROPY: Pair = pair!(
+        "entropy",
+        "1",
+        "linearized relative entropy to the limit, sum_i (h_i - h_eq,i)^2 / (2 f0_i) over the grid's node masses (H[f0 + df] - H[f0] to second order): non-increasing by the H-theorem",
+        JACKKNIFE
+    );
+    /// Its decay rate.
+    pub const ENTROPY_DECAY_RATE: Pair = pair!(
+        "entropy_decay_rate",
+        "rho^2 l v_th",
+        "-(d ln entropy / dt) / 2 between the previous output time and this one: late in the relaxation, the rate of the slowest spectrum mode the start excites (spectrum.parquet: from u' = 0 the slowest even mode)",
+        JACKKNIFE
+    )
+    .or_null("the first output time (no previous one)");
     /// Clipped eigenvalue.
     pub const LARGEST_CLIPPED_RATE: Pair = pair!(
         "largest_clipped_rate",

@@ -46,6 +46,11 @@ pub mod rates {
         name: "spectrum",
         description: "relaxation rates of the collision generators, slowest first, in rho^2 l v_th and in units of the variance rate Gamma at u' = 0",
     };
+    /// Mirror parity.
+    pub const PARITY: Col<String> = Col::text(
+        "parity",
+        "even (g(-u) = g(u)) or odd (g(-u) = -g(u)) in the estimate on all randomizations (every scene enters with its mirror image, so each mode has one); a start h(u, 0) excites only the modes of its own parity (from u' = 0: the even ones)",
+    );
     /// The rate over `Gamma`.
     pub const RATE_OVER_VARIANCE_RATE: Pair = pair!(
         "rate_over_variance_rate",
