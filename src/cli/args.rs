@@ -94,7 +94,7 @@ pub(super) struct RunArgs {
     #[arg(long)]
     pub(super) quiet: bool,
     /// Also print a line for every fresh instance and, after the summary,
-    /// the per-stage tables (gases, convergence, evolution, MD, scans, balance).
+    /// the per-stage tables (gases, convergence, evolution, spectra, MD, scans, balance).
     #[arg(long, conflicts_with = "quiet")]
     pub(super) details: bool,
     /// Split shardable stages (collisions) into N shards, computing

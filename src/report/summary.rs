@@ -13,7 +13,7 @@ use crate::pipeline::store::Store;
 
 use super::tables::{
     balance_table, compare_table, convergence_table, evolve_table, gases_table, md_table,
-    scan_table,
+    scan_table, spectrum_table,
 };
 use super::{count, estimate, number, table_frames, text};
 
@@ -37,14 +37,14 @@ pub fn summary(
         stage_tables(&mut out, store, reports, kick_floor)?;
     } else {
         out.title(
-            "per-stage tables (gases, convergence, evolution, MD, scans, detailed balance): `ternary run --details`",
+            "per-stage tables (gases, convergence, evolution, spectra, MD, scans, detailed balance): `ternary run --details`",
         );
     }
     Ok(out)
 }
 
 /// Every stage's table beyond `a_n` and the paper's: rates of gases,
-/// convergence, evolution, MD and its comparison, scans, detailed balance
+/// convergence, evolution, spectra, MD and its comparison, scans, detailed balance
 /// (velocity changes up to `kick_floor`, `v_th`, are the engine's error floor).
 pub(super) fn stage_tables(
     out: &mut dyn Sink,
@@ -55,6 +55,7 @@ pub(super) fn stage_tables(
     gases_table(out, store, reports)?;
     convergence_table(out, store, reports)?;
     evolve_table(out, store, reports)?;
+    spectrum_table(out, store, reports)?;
     md_table(out, store, reports, kick_floor)?;
     compare_table(out, store, reports)?;
     scan_table(out, store, reports)?;

@@ -170,6 +170,7 @@ pub(super) fn evolve_table(
             ("<(u-u')^2>, |u-u'|<=X", Align::Left),
             ("<(u-u')^2>", Align::Left),
             ("L1 distance to equilibrium", Align::Left),
+            ("relative entropy", Align::Left),
         ]);
         for row in 0..frame.height() {
             table.push(vec![
@@ -180,10 +181,53 @@ pub(super) fn evolve_table(
                 estimate(&frame, row, WINDOW_VARIANCE, "-")?,
                 estimate(&frame, row, VARIANCE, "-")?,
                 estimate(&frame, row, DISTANCE_TO_EQUILIBRIUM, "-")?,
+                estimate(&frame, row, ENTROPY, "-")?,
             ]);
         }
         out.table(&table);
     }
+    Ok(())
+}
+
+/// The `spectrum` stage's summaries: per potential and generator the
+/// variance rate, the gap and the gap over it, and the modes noise makes grow.
+pub(super) fn spectrum_table(
+    out: &mut dyn Sink,
+    store: &Store,
+    reports: &[InstanceReport],
+) -> Result<()> {
+    use contract::spectrum::summary::*;
+    let frames = titled_frames(
+        out,
+        store,
+        reports,
+        &TABLE,
+        "relaxation spectrum: the slowest rate r_1 of the linearized operator (full: the gas) and of the tagged particle, over Gamma = the tagged variance rate at u' = 0 [rho^2 l v_th] (+- jackknife errors; docs/spectrum.md)",
+    )?;
+    if frames.is_empty() {
+        return Ok(());
+    }
+    let mut table = Columns::new(&[
+        ("potential", Align::Left),
+        (GENERATOR.name, Align::Left),
+        ("Gamma", Align::Left),
+        ("r_1", Align::Left),
+        ("r_1 / Gamma", Align::Left),
+        ("growing modes", Align::Right),
+    ]);
+    for (instance, frame) in frames {
+        for row in 0..frame.height() {
+            table.push(vec![
+                Cell::text(instance.as_str()),
+                Cell::text(text(&frame, row, GENERATOR)?),
+                estimate(&frame, row, VARIANCE_RATE, "-")?,
+                estimate(&frame, row, GAP, "-")?,
+                estimate(&frame, row, GAP_OVER_VARIANCE_RATE, "-: no kicks")?,
+                Cell::text(count(&frame, row, GROWING_MODES)?.to_string()),
+            ]);
+        }
+    }
+    out.table(&table);
     Ok(())
 }
 
