@@ -183,7 +183,9 @@ fn evolution_keeps_the_invariants_and_relaxes_to_equilibrium() {
     // estimate violates detailed balance by ~30%, its noise modes (clipped to
     // rate 0) keeping h_full ~0.3 from equilibrium. At the default study's
     // 1.2e6 scenes neither happens (distances 0.05 and 0.0035 at 8/Gamma,
-    // docs/benchmarks.md). Here only the approach is asserted.
+    // docs/benchmarks.md; the 0.0035 was the continuum limit's miss on the
+    // grid, which conserving_equilibrium now takes from the grid's own sums).
+    // Here only the approach is asserted.
     assert!(
         tagged_distances[0] > 1.0 && tagged_distances[1] < 0.1,
         "{tagged_distances:?}"

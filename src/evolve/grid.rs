@@ -189,7 +189,7 @@ impl VelocityGrid {
     /// or cools and drifts by the special particle's share). On an unbounded
     /// grid `f0 (1 + u u' + (u'^2 - 1)(u^2 - 1)/2)`; here the grid's own sums
     /// of `f0 u^p` fix `a, b, c`, so that the projected evolution reaches it
-    /// exactly (the continuum form missed it by ~1e-3 in L1 at `|u| <= 4`).
+    /// exactly (the continuum form missed it by 0.0035 in L1 at `|u| <= 4`).
     pub fn conserving_equilibrium(&self, u_prime: f64) -> Vec<f64> {
         let f0 = self.maxwellian();
         let powers = |u: f64| [1.0, u, u * u];
