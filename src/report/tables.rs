@@ -202,7 +202,7 @@ pub(super) fn spectrum_table(
         store,
         reports,
         &TABLE,
-        "relaxation spectrum: the slowest rate r_1 of the linearized operator (full: the gas) and of the tagged particle, over Gamma = the tagged variance rate at u' = 0 [rho^2 l v_th] (+- jackknife errors; docs/spectrum.md)",
+        "relaxation spectrum: the gap (slowest rate above the growing noise modes) of the linearized operator (full: the gas) and of the tagged particle, over Gamma = the tagged variance rate at u' = 0 [rho^2 l v_th] (+- jackknife errors; docs/spectrum.md)",
     )?;
     if frames.is_empty() {
         return Ok(());
@@ -211,8 +211,8 @@ pub(super) fn spectrum_table(
         ("potential", Align::Left),
         (GENERATOR.name, Align::Left),
         ("Gamma", Align::Left),
-        ("r_1", Align::Left),
-        ("r_1 / Gamma", Align::Left),
+        ("gap", Align::Left),
+        ("gap / Gamma", Align::Left),
         ("growing modes", Align::Right),
     ]);
     for (instance, frame) in frames {

@@ -249,6 +249,12 @@ fn over_gamma(a: &Analysed, f: impl Fn(&Spectrum) -> f64 + Sync) -> Estimate {
     a.spectra.zip(&a.gamma, |s, g| f(s) / g).scalar(|x| *x)
 }
 
+/// Modes of the estimate on all randomizations with a negative rate: noise
+/// (the operator has none), ranked below the physical spectrum.
+fn growing(a: &Analysed) -> usize {
+    a.spectra.full.rates.iter().filter(|&&r| r < 0.0).count()
+}
+
 /// `spectrum.parquet`.
 fn rates_table(analysed: &[Analysed]) -> Result<Table, StageError> {
     use contract::spectrum::rates::*;
@@ -293,11 +299,11 @@ impl SpectrumStage {
             .with(GRID_STEP, |_| p.grid_step)
             .with(RANDOMIZATIONS, |_| randomizations as u32)
             .estimate(VARIANCE_RATE, |a| a.gamma.scalar(|g| *g))
-            .estimate(GAP, |a| of(&a.spectra, |s| s.rates[0]))
-            .estimate(GAP_OVER_VARIANCE_RATE, |a| over_gamma(a, |s| s.rates[0]))
-            .with(GROWING_MODES, |a| {
-                a.spectra.full.rates.iter().filter(|&&r| r < 0.0).count() as u32
+            .estimate(GAP, |a| of(&a.spectra, |s| s.rates[growing(a)]))
+            .estimate(GAP_OVER_VARIANCE_RATE, |a| {
+                over_gamma(a, |s| s.rates[growing(a)])
             })
+            .with(GROWING_MODES, |a| growing(a) as u32)
             .with(FASTEST_GROWTH, |a| (-a.spectra.full.rates[0]).max(0.0))
             .estimate(ASYMMETRY, |a| of(&a.spectra, |s| s.asymmetry))
             .table(&TABLE)?)

@@ -97,14 +97,14 @@ pub mod summary {
     pub const GAP: Pair = pair!(
         "gap",
         RATE_UNIT,
-        "the slowest relaxation rate r_1",
+        "the slowest relaxation rate: r_1, or with growing modes (noise) the slowest mode above them, r_(growing_modes + 1) (same rank in every replicate)",
         JACKKNIFE
     );
     /// The gap over `Gamma`.
     pub const GAP_OVER_VARIANCE_RATE: Pair = pair!(
         "gap_over_variance_rate",
         "1",
-        "r_1 / Gamma, per replicate",
+        "gap / Gamma, per replicate",
         JACKKNIFE
     )
     .or_null(NO_GAMMA);
