@@ -547,6 +547,43 @@ fn expected(store: &Path, figure: &Artifact) -> Vec<Row> {
             }
             rows
         }
+        "gaps" => {
+            use contract::table::{
+                A_N_UNTRUNCATED, GAP, GAP_OVER_VARIANCE_RATE, N, PARTICLE_GAP,
+                PARTICLE_GAP_OVER_VARIANCE_RATE, THETA,
+            };
+            let table = figure.input(store, 0).table("table");
+            let n = N.optional(&table).unwrap();
+            let theta = THETA.optional(&table).unwrap();
+            let mut rows = Vec::new();
+            for (panel, series, pair, positive) in [
+                (
+                    "ratio",
+                    "gas (linearized operator)",
+                    GAP_OVER_VARIANCE_RATE,
+                    false,
+                ),
+                (
+                    "ratio",
+                    "one particle",
+                    PARTICLE_GAP_OVER_VARIANCE_RATE,
+                    false,
+                ),
+                ("rates", "gas (linearized operator)", GAP, true),
+                ("rates", "one particle", PARTICLE_GAP, true),
+                ("rates", "a_n untruncated (Γ)", A_N_UNTRUNCATED, true),
+            ] {
+                for (i, value) in pair.read(&table).unwrap().into_iter().enumerate() {
+                    let drawn = theta[i].is_none()
+                        && value.mean.is_finite()
+                        && (!positive || value.mean > 0.0);
+                    if let (true, Some(n)) = (drawn, n[i]) {
+                        rows.push((panel.into(), series.into(), n, value.mean, value.stderr));
+                    }
+                }
+            }
+            rows
+        }
         other => panic!("figure kind `{other}` has no check here"),
     }
 }

@@ -61,9 +61,10 @@ fn python_check(script: &str, artifact: &Path) {
 /// collisions, the sweep's own launches and collisions, sweep, spectrum, and
 /// kernel, moments and fit at (u' = 0, dilute), plus the table, the launches
 /// and collisions drawn for the paper's balance pair (u' = -3), the paper
-/// table, and the figures of the kicked potential (kernels, kernel with fit,
-/// rates, truncation, kicks, spectrum).
-const INSTANCES: usize = 30;
+/// table, the figures of the kicked potential (kernels, kernel with fit,
+/// rates, truncation, kicks, spectrum) and the gaps across `n` (both potentials
+/// have a spectrum).
+const INSTANCES: usize = 31;
 
 fn stage_dirs(store: &Path, stage: &str) -> Vec<PathBuf> {
     let mut dirs: Vec<PathBuf> = fs::read_dir(store.join("artifacts").join(stage))
@@ -141,9 +142,10 @@ fn changing_one_potentials_scan_setting_reruns_only_that_instance() {
     let output = ternary(&path, &["run"]);
     let text = stdout(&output);
     // The changed scan, the table, the paper table (Table I's |u1f,max|) and
-    // the kicks figure that read it; nothing else.
+    // the kicks figure that read it, and the gaps figure that reads the
+    // table; nothing else.
     assert!(
-        text.contains(&format!("run: 4 computed, {} fresh", INSTANCES - 4)),
+        text.contains(&format!("run: 5 computed, {} fresh", INSTANCES - 5)),
         "{text}"
     );
     let computed = |prefix: &str| {
@@ -154,14 +156,15 @@ fn changing_one_potentials_scan_setting_reruns_only_that_instance() {
         computed("scan[ipp-6]")
             && computed("table[study]")
             && computed("paper[study]")
-            && computed("figures[kicks_ipp-6]"),
+            && computed("figures[kicks_ipp-6]")
+            && computed("figures[gaps]"),
         "{text}"
     );
-    // The old ipp-6 scan, table, paper table and kicks figure are no longer
-    // referenced: gc removes exactly them.
+    // The old ipp-6 scan, table, paper table, kicks and gaps figures are no
+    // longer referenced: gc removes exactly them.
     assert_eq!(artifact_dirs(&dir.join("data")).len(), 3);
     let gc = stdout(&ternary(&path, &["gc"]));
-    assert!(gc.contains("removed 4 artifacts"), "{gc}");
+    assert!(gc.contains("removed 5 artifacts"), "{gc}");
     assert_eq!(artifact_dirs(&dir.join("data")).len(), 2);
     assert_eq!(run_counts(&path, &[]), (0, INSTANCES));
 }

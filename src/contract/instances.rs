@@ -4,6 +4,7 @@
 
 use super::dissociation as dissociation_stage;
 use super::spectrum as spectrum_stage;
+use super::table as table_stage;
 use super::{collisions as collisions_stage, compare as compare_stage, fit as fit_stage};
 use super::{kernel as kernel_stage, scan as scan_stage};
 use super::{launches as launches_stage, md as md_stage, moments as moments_stage};
@@ -102,4 +103,9 @@ pub fn md(name: &str) -> InstanceId {
 /// The study's one `compare` instance.
 pub fn compare() -> InstanceId {
     InstanceId::new(compare_stage::STAGE, "study")
+}
+
+/// The study's one `table` instance.
+pub fn table() -> InstanceId {
+    InstanceId::new(table_stage::STAGE, "study")
 }

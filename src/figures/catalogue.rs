@@ -116,6 +116,9 @@ pub enum Figure {
         /// Its legend label.
         label: String,
     },
+    /// The relaxation gaps of every inverse power law with a spectrum against
+    /// `n`: over `Gamma` (a) and in rate units beside `Gamma` (b).
+    Gaps,
     /// `h(u, t)` of one ring at several final times: MD (tagged) and Boltzmann.
     MdTimes {
         /// The ring's name (the figure's).
@@ -131,7 +134,7 @@ pub enum Figure {
 pub const DILUTE: &str = "dilute";
 
 /// Names of every figure kind, for documentation and tests.
-pub const FIGURES: [&str; 14] = [
+pub const FIGURES: [&str; 15] = [
     "kernels",
     "kernels_lj",
     "kernel_fit",
@@ -146,6 +149,7 @@ pub const FIGURES: [&str; 14] = [
     "kernels_u_prime",
     "kernels_density",
     "spectrum",
+    "gaps",
 ];
 
 impl Figure {
@@ -166,6 +170,7 @@ impl Figure {
             Figure::KernelsAtUPrime { id, .. } => format!("kernels_u_prime_{id}"),
             Figure::KernelsAtDensity { id, .. } => format!("kernels_density_{id}"),
             Figure::Spectrum { id, .. } => format!("spectrum_{id}"),
+            Figure::Gaps => "gaps".into(),
         }
     }
 
@@ -213,6 +218,9 @@ impl Figure {
             }
             Figure::Spectrum { label, .. } => {
                 format!("relaxation spectrum of {label}: the slowest rates r_k over Gamma (the tagged variance rate at u' = 0) of the linearized three-body operator and of the tagged particle's generator, +- jackknife error (a); the shapes f0 g_k(u) of the two slowest modes of each (b); the slowest rate of each from disjoint groups of randomizations against the group size, +- spread of the groups (c: noise pulls the lowest rate down until the estimate converges)")
+            }
+            Figure::Gaps => {
+                "relaxation gaps of the inverse power laws against n (the table's rows with a spectrum): the slowest relaxation rate of the gas (linearized three-body operator) and of one particle (tagged generator) over Gamma, the tagged variance rate at u' = 0 (a), and in rate units with Gamma (b, log axis: rates that vanish, n = 2, are left out), +- jackknife standard error".into()
             }
         }
     }
@@ -347,6 +355,20 @@ impl Figure {
                     vec![("", Style::Markers)],
                 ),
             ],
+            Figure::Gaps => vec![
+                panel(
+                    "ratio",
+                    linear("n"),
+                    linear("gap / Γ"),
+                    vec![("", Style::Markers)],
+                ),
+                panel(
+                    "rates",
+                    linear("n"),
+                    log("rate [ρ² l v_th]"),
+                    vec![("", Style::Markers)],
+                ),
+            ],
             Figure::MdTimes { .. } => vec![Panel {
                 paired: true,
                 ..panel(
@@ -404,6 +426,7 @@ impl Figure {
             } => md_times(&inputs[0], rings, times_ns),
             Figure::KernelsAtDensity { labels, .. } => kernels_at_density(inputs, labels),
             Figure::Spectrum { .. } => spectrum(&inputs[0]),
+            Figure::Gaps => gaps(&inputs[0]),
             Figure::KernelsAtUPrime { u_primes, .. } => {
                 let mut parts = Vec::new();
                 for (input, u_prime) in inputs.iter().zip(u_primes) {
@@ -576,6 +599,51 @@ fn rates(input: &Input) -> Result<DataFrame, StageError> {
 const SPECTRUM_MODES: u32 = 10;
 /// Mode shapes drawn per generator in its panel (b).
 const SPECTRUM_SHAPES: u32 = 2;
+
+/// The gaps figure's panels from the `table` stage's rows of inverse power
+/// laws (no `theta`) with a gap; panel (b) only its positive rates.
+fn gaps(input: &Input) -> Result<DataFrame, StageError> {
+    use contract::table::{
+        A_N_UNTRUNCATED, GAP, GAP_OVER_VARIANCE_RATE, N, PARTICLE_GAP,
+        PARTICLE_GAP_OVER_VARIANCE_RATE, TABLE, THETA,
+    };
+    let table = frame(TABLE.of(input)?)?;
+    let (n, theta) = (numbers(&table, N.name)?, numbers(&table, THETA.name)?);
+    let power_law = |i: usize| n[i].is_finite() && theta[i].is_nan();
+    let panel = |panel: &str, title: &str, pair: contract::Pair, positive: bool| {
+        let (values, errors) = (
+            numbers(&table, pair.value.name)?,
+            numbers(&table, pair.stderr.name)?,
+        );
+        let rows: Vec<usize> = (0..n.len())
+            .filter(|&i| power_law(i) && values[i].is_finite() && (!positive || values[i] > 0.0))
+            .collect();
+        series_of(
+            panel,
+            title,
+            rows.iter().map(|&i| n[i]).collect(),
+            rows.iter().map(|&i| values[i]).collect(),
+            Some(rows.iter().map(|&i| errors[i]).collect()),
+        )
+    };
+    stack(vec![
+        panel("ratio", GAS, GAP_OVER_VARIANCE_RATE, false)?,
+        panel(
+            "ratio",
+            ONE_PARTICLE,
+            PARTICLE_GAP_OVER_VARIANCE_RATE,
+            false,
+        )?,
+        panel("rates", GAS, GAP, true)?,
+        panel("rates", ONE_PARTICLE, PARTICLE_GAP, true)?,
+        panel("rates", "a_n untruncated (Γ)", A_N_UNTRUNCATED, true)?,
+    ])
+}
+
+/// Series title of the linearized operator's rates.
+const GAS: &str = "gas (linearized operator)";
+/// Series title of the tagged generator's rates.
+const ONE_PARTICLE: &str = "one particle";
 
 /// The spectrum figure's three panels, per generator (full, tagged).
 fn spectrum(input: &Input) -> Result<DataFrame, StageError> {

@@ -31,6 +31,7 @@ pub(super) fn figure_stages(study: &Study, plan: &[Box<dyn Stage>]) -> Vec<Figur
     if let Some(p) = main {
         figures.extend(main_figures(study, p, &present));
     }
+    figures.extend(gaps_figure(&study.potentials(), &present));
     figures.extend(evolution_figure(study, &present));
     figures.extend(kernels_at_density(study));
     figures.extend(md_figures(study, &present));
@@ -150,6 +151,20 @@ fn main_figures(
         figures.push(FiguresStage::new(Figure::Kicks { id }, vec![scan]));
     }
     figures
+}
+
+/// The gaps against `n`, when at least two inverse power laws (kicked,
+/// without a `theta`) have a spectrum; from the `table` stage's rows.
+fn gaps_figure(
+    kicked: &[Potential],
+    present: &dyn Fn(&InstanceId) -> bool,
+) -> Option<FiguresStage> {
+    let with_spectrum = kicked
+        .iter()
+        .filter(|p| p.family().theta().is_none() && present(&instances::spectrum(p)))
+        .count();
+    let table = instances::table();
+    (with_spectrum >= 2 && present(&table)).then(|| FiguresStage::new(Figure::Gaps, vec![table]))
 }
 
 /// `h(u, t)` at up to [`EVOLUTION_CURVES`] of the evolution's times.

@@ -15,7 +15,7 @@ pub use collisions::wide_collisions;
 use crate::config::Study;
 use crate::contract::instances;
 use crate::physics::potential::Potential;
-use crate::pipeline::Stage;
+use crate::pipeline::{InstanceId, Stage};
 use crate::stages::compare::{CompareParams, CompareStage};
 use crate::stages::{
     convergence, dissociation, evolve, fit, gases, kernel, md, moments, scan, spectrum, sweep,
@@ -37,13 +37,22 @@ pub fn plan(study: &Study) -> Vec<Box<dyn Stage>> {
         .iter()
         .map(|&p| study.kernel_params(p, 0.0, 0.0))
         .collect();
-    let dissociations = study
-        .potentials()
-        .iter()
-        .filter(|&&p| study.dissociation_params(p).is_some())
-        .map(instances::dissociation)
-        .collect();
-    stages.push(Box::new(table::TableStage::new(rows, dissociations)));
+    // Each potential's instance of a stage, where the plan holds one.
+    let planned = |instance: fn(&Potential) -> InstanceId| -> Vec<InstanceId> {
+        let potentials = study.potentials();
+        let ids = potentials.iter().map(instance);
+        ids.filter(|id| stages.iter().any(|stage| stage.id() == *id))
+            .collect()
+    };
+    let (dissociations, spectra) = (
+        planned(instances::dissociation),
+        planned(instances::spectrum),
+    );
+    stages.push(Box::new(table::TableStage::new(
+        rows,
+        dissociations,
+        spectra,
+    )));
     if let Some((name, params)) = paper::balance_collisions(study) {
         push_collisions(&mut stages, params, name);
     }

@@ -14,9 +14,9 @@ use crate::config::{PAPER_TRUNCATION, Study};
 use crate::contract::readers::self_variance_at;
 use crate::contract::{self, instances};
 use crate::physics::potential::Potential;
+use crate::pipeline::Stage;
 use crate::pipeline::store::{Depth, Manifest, Store};
 use crate::pipeline::table::read_parquet;
-use crate::pipeline::{InstanceId, Stage};
 use crate::rates::{GasRates, Interpolated, ThetaTable, time_of};
 use crate::stats::Estimate;
 
@@ -33,7 +33,7 @@ pub struct SourcedTable {
 /// with the paper's `|u - u'| <= 0.04` rate read from the moments artifact
 /// that table row was computed from.
 pub fn theta_table(study: &Study, store: &Store, plan: &[Box<dyn Stage>]) -> Result<SourcedTable> {
-    let id = InstanceId::new(contract::table::STAGE, "study");
+    let id = instances::table();
     let (stage, key) = current_artifact(store, plan, &id)?;
     let manifest = intact(store, &stage, &key)?;
     let batch = table_of(store, &manifest, contract::table::TABLE.name)?;

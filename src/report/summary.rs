@@ -225,7 +225,7 @@ pub(super) fn study_table(
         return Ok(());
     };
     out.title(
-        "thermalization constants a_n = self variance rate at u' = 0, dilute limit, of scenes whose three atoms leave free, where converged: |u-u'| <= window/2, untruncated with a well [rho^2 l v_th]; recombination: rate of encounters leaving a bound pair [rho^2 l v_th]; dissociation: rate at which atoms break a bound pair, per pair; kernel shape near u' (+- standard errors; shape: statistical and fit-protocol errors combined)",
+        "thermalization constants a_n = self variance rate at u' = 0, dilute limit, of scenes whose three atoms leave free, where converged: |u-u'| <= window/2, untruncated with a well [rho^2 l v_th]; recombination: rate of encounters leaving a bound pair [rho^2 l v_th]; dissociation: rate at which atoms break a bound pair, per pair; kernel shape near u' (+- standard errors; shape: statistical and fit-protocol errors combined); relaxation gap of the gas (linearized operator) and of one particle over Gamma (the tagged variance rate at u' = 0, untruncated)",
     );
     let mut table = Columns::new(&[
         (POTENTIAL.name, Align::Left),
@@ -236,6 +236,8 @@ pub(super) fn study_table(
         ("dissociation [rho v_th]", Align::Left),
         (BETA.value.name, Align::Left),
         ("sigma [v_th]", Align::Left),
+        ("gap/Gamma gas", Align::Left),
+        ("1 particle", Align::Left),
         ("failed", Align::Right),
     ]);
     for row in 0..frame.height() {
@@ -263,6 +265,8 @@ pub(super) fn study_table(
             estimate(&frame, row, DISSOCIATION_RATE, "-")?,
             estimate(&frame, row, BETA, no_shape)?,
             estimate(&frame, row, SIGMA, no_shape)?,
+            estimate(&frame, row, GAP_OVER_VARIANCE_RATE, "-")?,
+            estimate(&frame, row, PARTICLE_GAP_OVER_VARIANCE_RATE, "-")?,
             Cell::text(format!(
                 "{}/{}",
                 count(&frame, row, FAILED_EVENTS)?,

@@ -1,8 +1,9 @@
 //! `table`: the study's summary, one row per potential: the thermalization
 //! constant `a_n` (self variance rate at `u' = 0`, dilute limit, within the
 //! kernel window) with its standard error, the untruncated value, the kernel shape `alpha, beta,
-//! sigma` with standard errors, and `|u1f,max|` of every scanned launch pair
-//! with its error bound.
+//! sigma` with standard errors, the relaxation gaps of the gas and of one
+//! particle (rate units and over `Gamma`), and `|u1f,max|` of every scanned
+//! launch pair with its error bound.
 
 use serde_json::Value;
 
@@ -20,15 +21,29 @@ pub struct TableStage {
     rows: Vec<KernelParams>,
     /// The `dissociation` instances the study runs (potentials with a well).
     dissociations: Vec<InstanceId>,
+    /// The `spectrum` instances the study runs.
+    spectra: Vec<InstanceId>,
 }
+
+/// A quantity the study does not compute (null in the table).
+const NOT_COMPUTED: Estimate = Estimate {
+    mean: f64::NAN,
+    stderr: f64::NAN,
+};
 
 impl TableStage {
     /// A table over these potentials, with the dissociation rates of those
-    /// whose `dissociation` instance is listed.
-    pub fn new(rows: Vec<KernelParams>, dissociations: Vec<InstanceId>) -> TableStage {
+    /// whose `dissociation` instance is listed and the gaps of those whose
+    /// `spectrum` instance is.
+    pub fn new(
+        rows: Vec<KernelParams>,
+        dissociations: Vec<InstanceId>,
+        spectra: Vec<InstanceId>,
+    ) -> TableStage {
         TableStage {
             rows,
             dissociations,
+            spectra,
         }
     }
 
@@ -42,11 +57,7 @@ impl TableStage {
         use contract::dissociation::{BALANCED_RECOMBINATION, DISSOCIATION_RATE, TABLE};
         let instance = instances::dissociation(&params.potential);
         if !self.dissociations.contains(&instance) {
-            let none = Estimate {
-                mean: f64::NAN,
-                stderr: f64::NAN,
-            };
-            return Ok([none; 2]);
+            return Ok([NOT_COMPUTED; 2]);
         }
         let table = TABLE.find(inputs, &instance)?;
         Ok([
@@ -54,7 +65,31 @@ impl TableStage {
             BALANCED_RECOMBINATION.read(table)?[0],
         ])
     }
+
+    /// The gap of the linearized operator and of the tagged generator of
+    /// `params`' potential, each in rate units and over `Gamma`
+    /// (`[gap, gap / Gamma]` per generator), NaN where no spectrum runs.
+    fn gaps(&self, inputs: &[Input], params: &KernelParams) -> Result<Gaps, StageError> {
+        use contract::spectrum::summary::{GAP, GAP_OVER_VARIANCE_RATE, GENERATOR, TABLE};
+        let instance = instances::spectrum(&params.potential);
+        if !self.spectra.contains(&instance) {
+            return Ok([[NOT_COMPUTED; 2]; 2]);
+        }
+        let table = TABLE.find(inputs, &instance)?;
+        let (gaps, ratios) = (GAP.read(table)?, GAP_OVER_VARIANCE_RATE.read(table)?);
+        let of = |generator: &str| -> Result<[Estimate; 2], StageError> {
+            let row = GENERATOR.row_of(table, generator)?;
+            Ok([gaps[row], ratios[row]])
+        };
+        Ok([
+            of(contract::spectrum::FULL)?,
+            of(contract::spectrum::TAGGED)?,
+        ])
+    }
 }
+
+/// `[gap, gap / Gamma]` of the linearized operator and of the tagged generator.
+type Gaps = [[Estimate; 2]; 2];
 
 /// One potential's row.
 struct PotentialRow {
@@ -68,6 +103,8 @@ struct PotentialRow {
     dissociation: [Estimate; 2],
     /// `alpha`, `beta`, `sigma` of the fit.
     shape: [Estimate; 3],
+    /// The relaxation gaps (NaN: no spectrum).
+    gaps: Gaps,
     /// Scanned launch pairs with their `|u1f,max|` and its error bound.
     maxima: Vec<(String, Estimate)>,
     events: u32,
@@ -103,6 +140,7 @@ impl TableStage {
                 first(contract::fit::BETA, contract::fit::BETA_SYSTEMATIC)?,
                 first(contract::fit::SIGMA, contract::fit::SIGMA_SYSTEMATIC)?,
             ],
+            gaps: self.gaps(inputs, params)?,
             maxima: launches.into_iter().zip(maxima).collect(),
             events: contract::moments::EVENTS.read(moments)?[0],
             failed_events: contract::moments::FAILED_EVENTS.read(moments)?[0],
@@ -141,7 +179,7 @@ const CODE: &Code = code::of(file!());
 
 impl Stage for TableStage {
     fn id(&self) -> InstanceId {
-        InstanceId::new(contract::table::STAGE, "study")
+        instances::table()
     }
 
     fn code(&self) -> &'static Code {
@@ -152,6 +190,7 @@ impl Stage for TableStage {
         serde_json::json!({
             "rows": self.rows,
             "dissociations": self.dissociations.iter().map(ToString::to_string).collect::<Vec<_>>(),
+            "spectra": self.spectra.iter().map(ToString::to_string).collect::<Vec<_>>(),
         })
     }
 
@@ -170,6 +209,7 @@ impl Stage for TableStage {
                 ]
             })
             .chain(self.dissociations.iter().cloned())
+            .chain(self.spectra.iter().cloned())
             .collect()
     }
 
@@ -208,6 +248,10 @@ impl Stage for TableStage {
             .estimate(ALPHA, |r| r.shape[0])
             .estimate(BETA, |r| r.shape[1])
             .estimate(SIGMA, |r| r.shape[2])
+            .estimate(GAP, |r| r.gaps[0][0])
+            .estimate(GAP_OVER_VARIANCE_RATE, |r| r.gaps[0][1])
+            .estimate(PARTICLE_GAP, |r| r.gaps[1][0])
+            .estimate(PARTICLE_GAP_OVER_VARIANCE_RATE, |r| r.gaps[1][1])
             .columns(scan_maxima(&rows)?)
             .with(EVENTS, |r| r.events)
             .with(FAILED_EVENTS, |r| r.failed_events)

@@ -21,6 +21,10 @@ pub const GENERATOR: Col<String> = Col::text(
     "generator",
     "full: the linearized three-body collision operator (all three particles; conserves number, momentum and energy); tagged: the special particle's velocity alone (conserves number)",
 );
+/// The linearized three-body operator (a value of [`GENERATOR`]).
+pub const FULL: &str = "full";
+/// The tagged particle's generator (a value of [`GENERATOR`]).
+pub const TAGGED: &str = "tagged";
 /// Rank of a mode (spectrum, modes and scenes tables).
 pub const MODE: Col<u32> = Col::u32(
     "mode",

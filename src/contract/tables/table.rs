@@ -14,7 +14,7 @@ const REFITS: &str = "the study's fit: its standard error from refitting each ra
 pub const TABLE: TableSpec = TableSpec {
     stage: STAGE,
     name: "table",
-    description: "thermalization constants a_n and scan maxima per potential",
+    description: "thermalization constants a_n, kernel shapes, relaxation gaps and scan maxima per potential",
 };
 /// Exponent.
 pub const N: Col<f64> = Col::f64(
@@ -69,6 +69,41 @@ pub const THERMAL_RECOMBINATION: Pair = pair!(
     "standard error of thermal_recombination_rate (spread of randomizations)"
 )
 .or_null("no well (nothing binds), or the dissociation stage is disabled");
+/// Why a gap is null.
+const NO_SPECTRUM: &str =
+    "the spectrum stage is disabled, or Gamma = 0 (n = 2: every rate vanishes)";
+/// The gap of the linearized operator.
+pub const GAP: Pair = pair!(
+    "gap",
+    RATE,
+    "relaxation gap of the gas: the slowest relaxation rate of the linearized three-body operator on the spectrum's grid, above any growing (noise) modes (spectrum_summary: gap and growing_modes)",
+    "jackknife standard error over randomizations"
+)
+.or_null(NO_SPECTRUM);
+/// The gap over `Gamma`.
+pub const GAP_OVER_VARIANCE_RATE: Pair = pair!(
+    "gap_over_variance_rate",
+    "1",
+    "gap / Gamma, Gamma = the tagged variance rate at u' = 0 from the same scenes (a_n without a window), per replicate",
+    "jackknife standard error over randomizations"
+)
+.or_null(NO_SPECTRUM);
+/// The gap of the tagged generator.
+pub const PARTICLE_GAP: Pair = pair!(
+    "particle_gap",
+    RATE,
+    "relaxation gap of one particle: the slowest relaxation rate of the tagged particle's generator (how fast one particle forgets its velocity), above any growing (noise) modes",
+    "jackknife standard error over randomizations"
+)
+.or_null(NO_SPECTRUM);
+/// The particle gap over `Gamma`.
+pub const PARTICLE_GAP_OVER_VARIANCE_RATE: Pair = pair!(
+    "particle_gap_over_variance_rate",
+    "1",
+    "particle_gap / Gamma, per replicate",
+    "jackknife standard error over randomizations"
+)
+.or_null(NO_SPECTRUM);
 /// Amplitude of the shape.
 pub const ALPHA: Pair = Pair {
     value: Col::f64(
