@@ -30,7 +30,10 @@ fn events(seed: u64, randomizations: u32, spread: f64) -> Vec<Event> {
         same_side_points: 512,
         proposal: OffsetProposal::default(),
         quasi_random: true,
-        launch: LaunchProposal { shift: 0.0, spread },
+        launch: LaunchProposal {
+            spread,
+            ..LaunchProposal::THERMAL
+        },
         offsets: OffsetIntegration::Sampled,
     };
     let engine = EngineSettings::new(Method::Dprkn12, 1e-12, 100_000);

@@ -44,7 +44,7 @@ fn shifted_plan(seed: u64, randomizations: u32, points: u32, launch_shift: f64) 
         quasi_random: true,
         launch: LaunchProposal {
             shift: launch_shift,
-            spread: 0.0,
+            ..LaunchProposal::THERMAL
         },
         offsets: OffsetIntegration::Sampled,
     }

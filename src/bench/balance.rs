@@ -116,10 +116,13 @@ fn run(variant: &Variant, options: &BalanceBenchOptions) -> BalanceRun {
 pub fn balance(options: &BalanceBenchOptions) -> String {
     let sampled = OffsetIntegration::Sampled;
     let quadrature = OffsetIntegration::Quadrature(options.study.quadrature);
-    let mixture = |spread: f64| LaunchProposal { shift: 0.0, spread };
+    let mixture = |spread: f64| LaunchProposal {
+        spread,
+        ..LaunchProposal::THERMAL
+    };
     let at_pair = LaunchProposal {
         shift: options.from,
-        spread: 0.0,
+        ..LaunchProposal::THERMAL
     };
     let pairs = |scenes: u32| scenes / options.study.quadrature.nodes();
     let mut variants = vec![Variant {

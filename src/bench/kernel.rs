@@ -17,6 +17,7 @@ use ternary::physics::sampling::{
 use ternary::physics::scene::{EngineSettings, Method};
 use ternary::stats::Estimate;
 
+use super::far_kernel::{far_group_error, largest_tail_z};
 use super::integrators::{MAX_STEPS, velocity_error};
 use super::quadrature::{inner_rule_convergence, quadrature_work_precision, run_quadrature};
 use super::*;
@@ -84,7 +85,13 @@ pub(super) struct Variant {
     pub(super) same_side_fraction: f64,
     pub(super) quasi_random: bool,
     pub(super) offsets: OffsetIntegration,
+    /// Share of the launch coordinates drawn from the slow component.
+    pub(super) slow_share: f64,
 }
+
+/// Upper end of the slow launch stratum's speeds in the benchmarks, `v_th`
+/// (the study's default `collisions.slow_launch_speed`).
+const SLOW_SPEED: f64 = 0.1;
 
 /// Precision and cost of one sampler run.
 #[derive(Clone, Copy)]
@@ -92,9 +99,15 @@ pub(super) struct KernelRun {
     pub(super) seconds: f64,
     pub(super) scenes: u64,
     pub(super) a_n: Estimate,
+    /// `a_n` within the kernel window, `|du| <= window / 2` (the study's).
+    pub(super) a_n_window: Estimate,
     /// Median relative standard error of `G` over bins with `|du|` in a band.
     pub(super) near_bins: f64,
     pub(super) far_bins: f64,
+    /// Median relative standard error of the far log-spaced groups.
+    pub(super) far_groups: f64,
+    /// Largest `|z|` of a randomization's far-band sum (heavy tails).
+    pub(super) tail_z: f64,
     /// Relative standard errors of `alpha`, `beta`, `sigma`.
     pub(super) shape: [f64; 3],
     /// Chi-square per degree of freedom of the mean shape fit.
@@ -125,7 +138,15 @@ pub(super) fn plan_for(
         same_side_points: 0,
         proposal: variant.proposal,
         quasi_random: variant.quasi_random,
-        launch: LaunchProposal::THERMAL,
+        launch: LaunchProposal {
+            slow_share: variant.slow_share,
+            slow_speed: if variant.slow_share > 0.0 {
+                SLOW_SPEED
+            } else {
+                0.0
+            },
+            ..LaunchProposal::THERMAL
+        },
         offsets: variant.offsets,
     };
     plan.allocate(points, variant.same_side_fraction);
@@ -186,9 +207,16 @@ pub(super) fn run_sampler(
     let scenes = events.len() as u64;
     let draws = Draws::count(&events);
     let target = Target::dilute(0.0);
-    let sums = moments(&events, &target, &[f64::INFINITY], &draws);
-    let a_n =
-        Estimate::from_replicates(&sums.iter().map(|r| r[0].self_variance).collect::<Vec<_>>());
+    let sums = moments(
+        &events,
+        &target,
+        &[f64::INFINITY, study.window / 2.0],
+        &draws,
+    );
+    let a_n_at = |k: usize| {
+        Estimate::from_replicates(&sums.iter().map(|r| r[k].self_variance).collect::<Vec<_>>())
+    };
+    let (a_n, a_n_window) = (a_n_at(0), a_n_at(1));
     let seconds = started.elapsed().as_secs_f64();
     let bins = Bins::for_window(study.window, study.bin_width);
     let replicates = histograms(&events, &target, &bins, &draws);
@@ -197,8 +225,11 @@ pub(super) fn run_sampler(
         seconds,
         scenes,
         a_n,
+        a_n_window,
         near_bins: median_relative_error(&replicates, &bins, 1e-4, 2e-3),
         far_bins: median_relative_error(&replicates, &bins, 1e-2, 5e-2),
+        far_groups: far_group_error(&replicates, &bins),
+        tail_z: largest_tail_z(&replicates, &bins),
         shape,
         chi2_per_dof,
     }
@@ -243,6 +274,7 @@ pub fn kernel(options: &KernelBenchOptions) -> (String, BenchFigure) {
             same_side_fraction: 0.5,
             quasi_random: false,
             offsets: OffsetIntegration::Sampled,
+            slow_share: 0.0,
         },
         Variant {
             name: "+ mixture offset proposal",
@@ -250,6 +282,7 @@ pub fn kernel(options: &KernelBenchOptions) -> (String, BenchFigure) {
             same_side_fraction: 0.5,
             quasi_random: false,
             offsets: OffsetIntegration::Sampled,
+            slow_share: 0.0,
         },
         Variant {
             name: "+ strata 85/15 (opposite/same side)",
@@ -257,6 +290,7 @@ pub fn kernel(options: &KernelBenchOptions) -> (String, BenchFigure) {
             same_side_fraction: 0.15,
             quasi_random: false,
             offsets: OffsetIntegration::Sampled,
+            slow_share: 0.0,
         },
         Variant {
             name: "+ scrambled Sobol' points",
@@ -264,6 +298,7 @@ pub fn kernel(options: &KernelBenchOptions) -> (String, BenchFigure) {
             same_side_fraction: 0.15,
             quasi_random: true,
             offsets: OffsetIntegration::Sampled,
+            slow_share: 0.0,
         },
     ];
     let mut out = String::new();
@@ -318,6 +353,7 @@ pub fn kernel(options: &KernelBenchOptions) -> (String, BenchFigure) {
         same_side_fraction: fraction,
         quasi_random: true,
         offsets: OffsetIntegration::Sampled,
+        slow_share: 0.0,
     };
     let piloted_plan = plan_for(
         &piloted,

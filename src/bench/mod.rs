@@ -4,7 +4,7 @@
 //! the command line, not of the library; the kernel benchmark takes the
 //! study's engine, offset proposal, bins and fit range from `--config`.
 //!
-//! One benchmark per file (integrators, kernel, quadrature, md, balance);
+//! One benchmark per file (integrators, kernel, quadrature, far kernel, md, balance);
 //! this file holds the work-precision figure they share.
 
 use std::path::{Path, PathBuf};
@@ -12,12 +12,14 @@ use std::path::{Path, PathBuf};
 use ternary::figures::{Axis, Layout, Panel, Point, Style, render};
 
 mod balance;
+mod far_kernel;
 mod integrators;
 mod kernel;
 mod md;
 mod quadrature;
 
 pub use balance::{BalanceBenchOptions, balance};
+pub use far_kernel::far_kernel;
 pub use integrators::{WorkPrecisionOptions, integrators};
 pub use kernel::{KernelBenchOptions, StudySettings, kernel};
 pub use md::{MdBenchOptions, md};

@@ -72,6 +72,8 @@ pub(super) enum BenchCommand {
     Integrators(BenchIntegratorsArgs),
     /// Precision of a_n and of the kernel per CPU second: what each sampling measure gains.
     Kernel(BenchKernelArgs),
+    /// The far kernel (0.01 <= |du| <= 0.05) on the offset quadrature: the launch proposal's slow stratum (shares 0, 1/64, 1/32, 1/16 of each coordinate, speeds below 0.1) at P and 4P pairs.
+    FarKernel(BenchFarKernelArgs),
     /// Detailed balance far from u' = 0 (the paper's pair at -3.00, -2.96): its precision per second for the sweep's scene sets.
     Balance(BenchBalanceArgs),
     /// Ring MD: cluster stepping against whole-ring stepping on one run of the published ring.
@@ -364,6 +366,23 @@ pub(super) struct BenchKernelArgs {
     /// Also draw the work-precision figure (SVG, PNG) into this directory.
     #[arg(long, value_name = "DIR")]
     pub(super) figures: Option<PathBuf>,
+}
+
+/// Arguments of `ternary bench far-kernel`.
+#[derive(Args)]
+pub(super) struct BenchFarKernelArgs {
+    /// Potential exponent n of U = x^-n, in (1, 100].
+    #[arg(long, default_value_t = 6.0, value_parser = exponent)]
+    pub(super) n: f64,
+    /// Randomizations (replicates), 2 to 256.
+    #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(2..=256))]
+    pub(super) randomizations: u32,
+    /// Launch pairs per randomization of the smaller runs (the larger take 4x), 16 to 16384.
+    #[arg(long, default_value_t = 1024, value_parser = clap::value_parser!(u32).range(16..=16384))]
+    pub(super) pairs: u32,
+    /// Seed.
+    #[arg(long, default_value_t = 1)]
+    pub(super) seed: u64,
 }
 
 /// Arguments of `ternary bench balance`.

@@ -6,7 +6,9 @@ use std::process::ExitCode;
 
 use anyhow::{Result, bail};
 
-use super::args::{BenchBalanceArgs, BenchIntegratorsArgs, BenchKernelArgs, BenchMdArgs};
+use super::args::{
+    BenchBalanceArgs, BenchFarKernelArgs, BenchIntegratorsArgs, BenchKernelArgs, BenchMdArgs,
+};
 use super::emit;
 use crate::bench::{
     self, BalanceBenchOptions, KernelBenchOptions, MdBenchOptions, StudySettings,
@@ -43,6 +45,19 @@ pub(super) fn kernel(config: &Path, args: BenchKernelArgs) -> Result<ExitCode> {
     let (report, figure) = bench::kernel(&options);
     emit(&report);
     write_bench_figure(&figure, args.figures.as_deref())?;
+    Ok(ExitCode::SUCCESS)
+}
+
+/// `ternary bench far-kernel`, with the study's engine, offset rule and bins from `config`.
+pub(super) fn far_kernel(config: &Path, args: BenchFarKernelArgs) -> Result<ExitCode> {
+    let options = KernelBenchOptions {
+        potential: Potential::inverse_power(args.n),
+        randomizations: args.randomizations,
+        points: args.pairs,
+        seed: args.seed,
+        study: bench_study(config)?,
+    };
+    emit(&bench::far_kernel(&options));
     Ok(ExitCode::SUCCESS)
 }
 

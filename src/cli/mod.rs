@@ -51,6 +51,7 @@ fn dispatch(cli: Cli) -> Result<ExitCode> {
         Command::Bench { which } => match which {
             BenchCommand::Integrators(args) => benches::integrators(args),
             BenchCommand::Kernel(args) => benches::kernel(config, args),
+            BenchCommand::FarKernel(args) => benches::far_kernel(config, args),
             BenchCommand::Balance(args) => benches::balance(config, args),
             BenchCommand::Md(args) => benches::md(args),
         },

@@ -34,6 +34,13 @@ pub struct CollisionsConfig {
     pub launch_shift: f64,
     /// Side components of the launch proposal at `launch_shift +- launch_spread` (0: none).
     pub launch_spread: f64,
+    /// Share of each launch coordinate in the slow stratum (speeds uniform
+    /// below `slow_launch_speed`: bounded weights for pairs with a slow
+    /// launch, whose bath part feeds the far kernel); 0 or a power of 1/2
+    /// from 1/2 to 1/1024.
+    pub slow_launch_share: f64,
+    /// Upper end of the slow stratum's speeds, `v_th`, in (0, 1].
+    pub slow_launch_speed: f64,
     /// Mixture proposal of the arrival offset (`[collisions.proposal]`, sampled offsets).
     pub proposal: OffsetProposal,
     /// The nested offset rule (`[collisions.quadrature]`, `method = "quadrature"`).
@@ -58,6 +65,8 @@ impl Default for CollisionsConfig {
             quasi_random: true,
             launch_shift: 0.0,
             launch_spread: 0.0,
+            slow_launch_share: 0.0625,
+            slow_launch_speed: 0.1,
             proposal: OffsetProposal::default(),
             quadrature: OffsetRule::default(),
             points_per_potential: BTreeMap::new(),
@@ -160,6 +169,11 @@ fn check_scenes(
     )
 }
 
+/// `true` for 0 and `2^-k`, `k = 1..=10`.
+fn is_dyadic_share(share: f64) -> bool {
+    share == 0.0 || (1..=10).any(|k| share == libm::pow(0.5, f64::from(k)))
+}
+
 /// Largest `|u' - launch_shift|` that reweighting covers: beyond it the launch
 /// speeds that matter lie past the largest speed the point set can draw (6.8
 /// v_th), biasing the kernel by > 0.5%, and the weights' variance explodes.
@@ -244,6 +258,19 @@ impl CollisionsConfig {
             sampling.launch_spread.is_finite() && (0.0..=3.0).contains(&sampling.launch_spread),
             "collisions.launch_spread",
             format!("{} is outside [0, 3]", sampling.launch_spread),
+        )?;
+        check(
+            is_dyadic_share(sampling.slow_launch_share),
+            "collisions.slow_launch_share",
+            format!(
+                "{} must be 0 or a power of 1/2 from 1/2 to 1/1024 (whole elementary intervals of the Sobol' points)",
+                sampling.slow_launch_share
+            ),
+        )?;
+        check(
+            sampling.slow_launch_speed > 0.0 && sampling.slow_launch_speed <= 1.0,
+            "collisions.slow_launch_speed",
+            format!("{} is outside (0, 1]", sampling.slow_launch_speed),
         )?;
         let proposal = &sampling.proposal;
         for (key, value) in [
@@ -341,6 +368,12 @@ impl CollisionsConfig {
         LaunchProposal {
             shift: self.launch_shift,
             spread: self.launch_spread,
+            slow_share: self.slow_launch_share,
+            slow_speed: if self.slow_launch_share > 0.0 {
+                self.slow_launch_speed
+            } else {
+                0.0
+            },
         }
     }
 

@@ -82,9 +82,54 @@ pub fn shifted_launch_speed(uniform: f64, shift: f64) -> f64 {
     speed
 }
 
+/// Inverse CDF of the shifted launch-speed density truncated to speeds at or
+/// above `floor` (`v_th`): the launch density's own map on the part of its
+/// range above `floor`, `v = F^-1(F(floor) + U (1 - F(floor)))`.
+pub fn shifted_launch_speed_above(uniform: f64, shift: f64, floor: f64) -> f64 {
+    let below = shifted_speed_cdf(floor, shift);
+    shifted_launch_speed(below + uniform * (1.0 - below), shift)
+}
+
+/// Density of [`shifted_launch_speed_above`] at `speed >= floor`:
+/// [`shifted_speed_density`] over the probability above `floor` (`1 / v_th`).
+pub fn shifted_speed_density_above(speed: f64, shift: f64, floor: f64) -> f64 {
+    shifted_speed_density(speed, shift) / (1.0 - shifted_speed_cdf(floor, shift))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The truncated map draws only speeds above the floor, with the
+    /// truncated density: the fraction of a fine coordinate grid mapped below
+    /// `v` is the density's integral from the floor to `v`.
+    #[test]
+    fn truncated_launch_speeds_follow_their_density() {
+        let (floor, grid) = (0.1, 100_000);
+        for &shift in &[-3.0, 0.0, 0.5] {
+            let speeds: Vec<f64> = (0..grid)
+                .map(|k| {
+                    shifted_launch_speed_above((f64::from(k) + 0.5) / f64::from(grid), shift, floor)
+                })
+                .collect();
+            assert!(speeds.iter().all(|&v| v >= floor));
+            for v in [0.15, 0.5, 2.0] {
+                let fraction = speeds.iter().filter(|&&s| s <= v).count() as f64 / f64::from(grid);
+                let h = 1e-5;
+                let steps = ((v - floor) / h) as u32;
+                let integral: f64 = (0..steps)
+                    .map(|k| {
+                        shifted_speed_density_above(floor + h * (f64::from(k) + 0.5), shift, floor)
+                    })
+                    .sum::<f64>()
+                    * h;
+                assert!(
+                    (fraction - integral).abs() < 3e-5,
+                    "{shift} {v}: {fraction} vs {integral}"
+                );
+            }
+        }
+    }
 
     /// The shifted density is normalized, has the target shape, and the inverse
     /// CDF inverts it.

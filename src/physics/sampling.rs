@@ -26,7 +26,10 @@ use std::collections::HashMap;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use super::launch::{shifted_launch_speed, shifted_speed_density, thermal_launch_speed};
+use super::launch::{
+    shifted_launch_speed, shifted_launch_speed_above, shifted_speed_density,
+    shifted_speed_density_above, thermal_launch_speed,
+};
 use super::offset_quadrature::OffsetRule;
 use super::potential::Potential;
 use super::quasi_random::{ScrambledSobol, standard_normal_quantile};
@@ -160,6 +163,16 @@ pub struct SampledScene {
 /// `shift`, or, with `spread > 0`, an equal mixture of those for `shift - spread`,
 /// `shift` and `shift + spread` (defensive: reweighting to any `u'` within reach
 /// of one component stays efficient; the density is the whole mixture's).
+/// With `slow_share > 0`, the coordinates below `slow_share` form a stratum
+/// of their own: speeds uniform in `[0, slow_speed)`; the rest map through the
+/// mixture truncated to speeds above `slow_speed`. A launch pair with a slow
+/// launch (speed `v`) has an offset integral growing like `1 / v` (the slow
+/// particle lingers near the special one for a time `~ l / v`): under the
+/// launch density alone (`~ v` near 0) its weight has unbounded variance,
+/// which the far kernel's bath part inherits; in the slow stratum the weight
+/// falls like `v` and the product stays bounded, while every weight stays
+/// smooth within its stratum (the strata meet at a dyadic coordinate, so
+/// each holds whole elementary intervals of the Sobol' points).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct LaunchProposal {
@@ -167,6 +180,19 @@ pub struct LaunchProposal {
     pub shift: f64,
     /// Distance of the side components (0: a single component).
     pub spread: f64,
+    /// Share of each launch coordinate, `[0, slow_share)`, in the slow stratum
+    /// (0: none; absent from the serialized proposal then). A power of 1/2.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub slow_share: f64,
+    /// Upper end of the slow stratum's speeds, `v_th` (in units of the
+    /// widened speeds where a width applies).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub slow_speed: f64,
+}
+
+/// `true` for an exact 0 (serde's `skip_serializing_if`).
+fn is_zero(value: &f64) -> bool {
+    *value == 0.0
 }
 
 impl LaunchProposal {
@@ -174,7 +200,18 @@ impl LaunchProposal {
     pub const THERMAL: LaunchProposal = LaunchProposal {
         shift: 0.0,
         spread: 0.0,
+        slow_share: 0.0,
+        slow_speed: 0.0,
     };
+
+    /// The same proposal without a slow stratum.
+    pub fn without_slow_stratum(&self) -> LaunchProposal {
+        LaunchProposal {
+            slow_share: 0.0,
+            slow_speed: 0.0,
+            ..*self
+        }
+    }
 
     fn components(&self) -> &'static [f64] {
         if self.spread == 0.0 {
@@ -185,31 +222,52 @@ impl LaunchProposal {
     }
 
     /// Speed of a particle arriving from side `side` (+1: moving right) for a
-    /// uniform coordinate: the coordinate selects the component, its remainder
-    /// is inverted within it. `width` scales every component's speeds (1: the
-    /// launch densities themselves; see [`LaunchProposal::density`]).
+    /// uniform coordinate: below `slow_share` linear in the slow stratum, else
+    /// the rest of the coordinate selects the component and its remainder is
+    /// inverted within it (above `slow_speed`). `width` scales every speed (1:
+    /// the launch densities themselves; see [`LaunchProposal::density`]).
     pub fn speed(&self, coordinate: f64, side: f64, width: f64) -> f64 {
+        if coordinate < self.slow_share {
+            return width * self.slow_speed * coordinate / self.slow_share;
+        }
+        let coordinate = (coordinate - self.slow_share) / (1.0 - self.slow_share);
         let components = self.components();
         let scaled = coordinate * components.len() as f64;
         let k = (scaled as usize).min(components.len() - 1);
-        let shift = self.shift + components[k] * self.spread;
-        width * shifted_launch_speed(scaled - k as f64, side * shift / width)
+        let shift = side * (self.shift + components[k] * self.spread) / width;
+        let remainder = scaled - k as f64;
+        width
+            * if self.slow_share > 0.0 {
+                shifted_launch_speed_above(remainder, shift, self.slow_speed)
+            } else {
+                shifted_launch_speed(remainder, shift)
+            }
     }
 
-    /// Density of `speed` on side `side` under the whole mixture, each
+    /// Density of `speed` on side `side` under the whole proposal, each
     /// component widened by `width`: `v exp(-(v + b)^2 / (2 width^2))`
-    /// normalized, i.e. the launch density of a gas `width^2` times hotter
-    /// (`1 / v_th`).
+    /// normalized, i.e. the launch density of a gas `width^2` times hotter,
+    /// and with a slow stratum `slow_share / slow_speed` below `slow_speed`
+    /// and the components truncated above it (`1 / v_th`).
     pub fn density(&self, speed: f64, side: f64, width: f64) -> f64 {
+        let scaled = speed / width;
+        if scaled < self.slow_speed {
+            return self.slow_share / self.slow_speed / width;
+        }
         let components = self.components();
-        components
+        let launched = components
             .iter()
             .map(|c| {
-                let shift = side * (self.shift + c * self.spread);
-                shifted_speed_density(speed / width, shift / width) / width
+                let shift = side * (self.shift + c * self.spread) / width;
+                if self.slow_share > 0.0 {
+                    shifted_speed_density_above(scaled, shift, self.slow_speed)
+                } else {
+                    shifted_speed_density(scaled, shift)
+                }
             })
             .sum::<f64>()
-            / components.len() as f64
+            / components.len() as f64;
+        (1.0 - self.slow_share) * launched / width
     }
 }
 
@@ -230,7 +288,10 @@ pub const SAME_SIDE_QUADRATURE_WIDTH: f64 = 1.25;
 /// integrand is symmetric under exchanging the two launches, as a launch
 /// pair's offset integral over a symmetric range is. The density stays that
 /// of the unordered pair (the folded points have twice it on their half, and
-/// each stands for both orderings).
+/// each stands for both orderings). Folded points draw no slow stratum:
+/// folding bends the stratum's dyadic edge into a curve across the square,
+/// and the weight's jump there cost `a_n` 2-5x in error (n = 6, docs/benchmarks.md,
+/// "The far kernel's heavy tail"); unfolded, the stratum costs it nothing.
 pub fn sample_launch(
     point: [f64; 2],
     stratum: Stratum,
@@ -243,10 +304,15 @@ pub fn sample_launch(
         1.0
     };
     let fold = fold_same_side && stratum == Stratum::SameSide;
-    let ([x_first, x_second], width) = if fold {
-        (folded_coordinates(point), SAME_SIDE_QUADRATURE_WIDTH)
+    let ([x_first, x_second], width, launch) = if fold {
+        let unstratified = launch.without_slow_stratum();
+        (
+            folded_coordinates(point),
+            SAME_SIDE_QUADRATURE_WIDTH,
+            unstratified,
+        )
     } else {
-        (point, 1.0)
+        (point, 1.0, *launch)
     };
     let first = launch.speed(x_first, 1.0, width);
     let second = launch.speed(x_second, third_sign, width);
@@ -604,19 +670,29 @@ mod tests {
     /// Speeds drawn through the launch mixture follow its density: the fraction
     /// of a fine coordinate grid mapped below `v` equals the integral of the
     /// density up to `v`, on both sides, for the launch densities and for
-    /// the widened same-side speeds of the quadrature.
+    /// the widened same-side speeds of the quadrature, without and with the
+    /// slow component.
     #[test]
     fn launch_mixture_speeds_follow_its_density() {
-        let launch = LaunchProposal {
-            shift: 0.5,
-            spread: 2.0,
-        };
+        for (slow_share, slow_speed) in [(0.0, 0.0), (1.0 / 32.0, 0.1)] {
+            let launch = LaunchProposal {
+                shift: 0.5,
+                spread: 2.0,
+                slow_share,
+                slow_speed,
+            };
+            speeds_follow_the_density(&launch);
+        }
+    }
+
+    /// The check of [`launch_mixture_speeds_follow_its_density`] for one proposal.
+    fn speeds_follow_the_density(launch: &LaunchProposal) {
         let grid = 200_000;
         for (side, width) in [(1.0, 1.0), (-1.0, 1.0), (1.0, SAME_SIDE_QUADRATURE_WIDTH)] {
             let speeds: Vec<f64> = (0..grid)
                 .map(|k| launch.speed((f64::from(k) + 0.5) / f64::from(grid), side, width))
                 .collect();
-            for v in [0.3, 1.0, 2.0, 3.5] {
+            for v in [0.02, 0.3, 1.0, 2.0, 3.5] {
                 let fraction = speeds.iter().filter(|&&s| s <= v).count() as f64 / f64::from(grid);
                 let h = 1e-5;
                 let steps = (v / h) as u32;
