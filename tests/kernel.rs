@@ -602,6 +602,65 @@ fn offset_quadrature_agrees_with_sampled_offsets() {
     );
 }
 
+/// The slow launch stratum is another proposal for the same integral: with
+/// it (speeds below 0.1 in 1/16 of each opposite-side coordinate) and
+/// without it, independent seeds agree within their combined errors on
+/// `a_n` and on the kernel in coarse bins across the window, and on the far
+/// band that the stratum is for (bins 0.01 wide centred at `|du|` = 0.01 ..
+/// 0.05, summed).
+#[test]
+fn the_slow_launch_stratum_agrees_with_the_launch_density() {
+    let potential = Potential::inverse_power(6.0);
+    let without = draw(potential, &quadrature_plan(41, 16, OffsetRule::default()));
+    let stratified = SamplingPlan {
+        launch: LaunchProposal {
+            slow_share: 1.0 / 16.0,
+            slow_speed: 0.1,
+            ..LaunchProposal::THERMAL
+        },
+        ..quadrature_plan(43, 16, OffsetRule::default())
+    };
+    let with = draw(potential, &stratified);
+    let target = dilute(0.0);
+    let (a, b) = (
+        self_variance(&with, &target, 0.1),
+        self_variance(&without, &target, 0.1),
+    );
+    assert!(a.stderr < 0.01 * a.mean, "too noisy to test: {a:?}");
+    assert!(
+        (a.mean - b.mean).abs() <= 4.0 * libm::hypot(a.stderr, b.stderr),
+        "a_n with {a:?} vs without {b:?}"
+    );
+    let bins = Bins::for_window(0.2, 0.004);
+    let (chi2, worst, dof) = compare(
+        &kernel(&with, &target, &bins, total),
+        &kernel(&without, &target, &bins, total),
+    );
+    assert!(
+        dof > 40 && chi2 < 2.0 && worst < 5.0,
+        "chi2/dof {chi2} worst {worst} dof {dof}"
+    );
+    let band = Bins::for_window(0.1, 0.01);
+    let far = |events: &[Event]| -> Estimate {
+        let per = histograms(events, &target, &band, &replicates(events));
+        let sums: Vec<f64> = per
+            .iter()
+            .map(|h| {
+                (0..band.len())
+                    .filter(|&k| (0.01..=0.05).contains(&band.centre(k).abs()))
+                    .map(|k| total(h, k))
+                    .sum()
+            })
+            .collect();
+        Estimate::from_replicates(&sums)
+    };
+    let (a, b) = (far(&with), far(&without));
+    assert!(
+        (a.mean - b.mean).abs() <= 4.0 * libm::hypot(a.stderr, b.stderr),
+        "far band with {a:?} vs without {b:?}"
+    );
+}
+
 /// The quadrature's error bars are honest: `a_n` from 12 independent seeds
 /// scatters about the weighted mean as its standard errors say (the chi-square
 /// of the 12 has 11 degrees of freedom; p outside [0.001, 0.999] fails).

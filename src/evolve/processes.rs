@@ -224,6 +224,20 @@ fn l1(x: &[f64]) -> f64 {
     x.iter().map(|v| v.abs()).sum()
 }
 
+/// `estimate`, or NaN (null in the table: overflow) where a replicate's
+/// unprojected evolution left the floating-point range: a noise mode
+/// growing as `exp(lambda t)` with `lambda t > 709` makes the change infinite.
+fn unless_overflowed(estimate: Estimate) -> Estimate {
+    if estimate.mean.is_finite() && estimate.stderr.is_finite() {
+        estimate
+    } else {
+        Estimate {
+            mean: f64::NAN,
+            stderr: f64::NAN,
+        }
+    }
+}
+
 impl ProjectionEffect {
     /// The sizes at time index `k`, `states` those of `h_full`.
     pub fn sizes(
@@ -234,14 +248,16 @@ impl ProjectionEffect {
     ) -> ProjectionSizes {
         let error: f64 = states.states(k).iter().map(|e| e.stderr).sum();
         let moment = |p: usize| {
-            self.clipping
-                .estimate(k, |d| grid.moments(d, 0.0, f64::INFINITY)[p])
+            unless_overflowed(
+                self.clipping
+                    .estimate(k, |d| grid.moments(d, 0.0, f64::INFINITY)[p]),
+            )
         };
         ProjectionSizes {
-            clipping: self.clipping.estimate(k, l1),
+            clipping: unless_overflowed(self.clipping.estimate(k, l1)),
             clipped: self.clipped.scalar(|part| l1(part)),
             moments: [0, 1, 2].map(moment),
-            projection: self.projection.estimate(k, l1),
+            projection: unless_overflowed(self.projection.estimate(k, l1)),
             error,
             over_error: [
                 self.clipping.largest(|d| l1(&d[k])),
