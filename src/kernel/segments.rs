@@ -181,7 +181,14 @@ fn turns_once(track: &[f64], i: usize) -> bool {
 /// second / first` (exact for `dtau/ds ~ e^|s|` in the tails, where the
 /// trapezoid's `(first + second) / 2` is `h^2 / 12` too large), in the ratio
 /// `r`.
+///
+/// An end of weight 0 (a survival factor `exp(-r |delay|)` that underflowed:
+/// a finite-density target and a launch so slow that its delay is ~1e6)
+/// gives the segment no mass, the exponential's limit.
 fn segment_masses(first: f64, second: f64) -> [f64; 2] {
+    if first == 0.0 || second == 0.0 {
+        return [0.0; 2];
+    }
     let ratio = second / first;
     let log_ratio = libm::log(ratio);
     let mass = if log_ratio.abs() < 1e-9 {
@@ -577,6 +584,20 @@ impl Profile {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A segment with an end of weight 0 (an underflowed survival factor)
+    /// has no mass, not NaN; between equal weights it is their mean, and the
+    /// exponential's integral otherwise (`(b - a) / ln(b / a)`).
+    #[test]
+    fn segment_masses_are_finite_with_an_end_of_weight_zero() {
+        assert_eq!(segment_masses(0.0, 1.0), [0.0; 2]);
+        assert_eq!(segment_masses(2.0, 0.0), [0.0; 2]);
+        assert_eq!(segment_masses(0.0, 0.0), [0.0; 2]);
+        let [a, b] = segment_masses(1.0, 1.0);
+        assert!((a + b - 1.0).abs() < 1e-15);
+        let [a, b] = segment_masses(1.0, 4.0);
+        assert!((a + b - 3.0 / libm::log(4.0)).abs() < 1e-15);
+    }
 
     /// A power-law tail `kick = c e^(-7 s)` with `dtau/ds ~ e^s`: segments
     /// between nodes 0.125 apart, each carrying its exact measure, put into

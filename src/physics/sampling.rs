@@ -288,10 +288,13 @@ pub const SAME_SIDE_QUADRATURE_WIDTH: f64 = 1.25;
 /// integrand is symmetric under exchanging the two launches, as a launch
 /// pair's offset integral over a symmetric range is. The density stays that
 /// of the unordered pair (the folded points have twice it on their half, and
-/// each stands for both orderings). Folded points draw no slow stratum:
-/// folding bends the stratum's dyadic edge into a curve across the square,
-/// and the weight's jump there cost `a_n` 2-5x in error (n = 6, docs/benchmarks.md,
-/// "The far kernel's heavy tail"); unfolded, the stratum costs it nothing.
+/// each stands for both orderings). Only opposite-side pairs integrated over
+/// the offset (`fold_same_side`) draw the slow stratum: folding bends the
+/// stratum's dyadic edge into a curve across the square, and the weight's
+/// jump there cost `a_n` 2-5x in error (n = 6, docs/benchmarks.md, "The far
+/// kernel's heavy tail"), while on opposite-side pairs it costs nothing; with
+/// sampled offsets (Lennard-Jones) it doubled the error of `a` and is not
+/// used until measured further.
 pub fn sample_launch(
     point: [f64; 2],
     stratum: Stratum,
@@ -304,15 +307,16 @@ pub fn sample_launch(
         1.0
     };
     let fold = fold_same_side && stratum == Stratum::SameSide;
-    let ([x_first, x_second], width, launch) = if fold {
-        let unstratified = launch.without_slow_stratum();
-        (
-            folded_coordinates(point),
-            SAME_SIDE_QUADRATURE_WIDTH,
-            unstratified,
-        )
+    let stratified = fold_same_side && stratum == Stratum::Opposite;
+    let launch = if stratified {
+        *launch
     } else {
-        (point, 1.0, *launch)
+        launch.without_slow_stratum()
+    };
+    let ([x_first, x_second], width) = if fold {
+        (folded_coordinates(point), SAME_SIDE_QUADRATURE_WIDTH)
+    } else {
+        (point, 1.0)
     };
     let first = launch.speed(x_first, 1.0, width);
     let second = launch.speed(x_second, third_sign, width);
