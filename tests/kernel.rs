@@ -98,6 +98,21 @@ fn total(h: &Histogram, k: usize) -> f64 {
     h.self_part[k] + h.bath_part[k]
 }
 
+/// Two event sets' kernels at `target` agree on bins 0.004 wide across the
+/// window: chi-square per degree of freedom below 2 and no bin beyond 5
+/// combined errors, over more than 40 bins.
+fn coarse_kernels_agree(a: &[Event], b: &[Event], target: &Target) {
+    let bins = Bins::for_window(0.2, 0.004);
+    let (chi2, worst, dof) = compare(
+        &kernel(a, target, &bins, total),
+        &kernel(b, target, &bins, total),
+    );
+    assert!(
+        dof > 40 && chi2 < 2.0 && worst < 5.0,
+        "chi2/dof {chi2} worst {worst} dof {dof}"
+    );
+}
+
 /// Chi-square per degree of freedom and largest |z| of differences `a - b` over
 /// bins where either estimate has a non-zero error.
 fn compare(a: &[Estimate], b: &[Estimate]) -> (f64, f64, usize) {
@@ -422,15 +437,7 @@ fn reweighted_kernel_agrees_with_direct_sampling_at_the_same_velocity() {
         (a.mean - b.mean).abs() < 4.0 * libm::hypot(a.stderr, b.stderr),
         "reweighted {a:?} vs direct {b:?}"
     );
-    let bins = Bins::for_window(0.2, 0.004);
-    let (chi2, worst, dof) = compare(
-        &kernel(&reweighted, &target, &bins, total),
-        &kernel(&direct, &target, &bins, total),
-    );
-    assert!(
-        dof > 40 && chi2 < 2.0 && worst < 5.0,
-        "chi2/dof {chi2} worst {worst} dof {dof}"
-    );
+    coarse_kernels_agree(&reweighted, &direct, &target);
 }
 
 #[test]
@@ -591,15 +598,7 @@ fn offset_quadrature_agrees_with_sampled_offsets() {
             );
         }
     }
-    let bins = Bins::for_window(0.2, 0.004);
-    let (chi2, worst, dof) = compare(
-        &kernel(&integrated, &dilute(0.0), &bins, total),
-        &kernel(&sampled, &dilute(0.0), &bins, total),
-    );
-    assert!(
-        dof > 40 && chi2 < 2.0 && worst < 5.0,
-        "chi2/dof {chi2} worst {worst} dof {dof}"
-    );
+    coarse_kernels_agree(&integrated, &sampled, &dilute(0.0));
 }
 
 /// The slow launch stratum is another proposal for the same integral: with
@@ -631,15 +630,7 @@ fn the_slow_launch_stratum_agrees_with_the_launch_density() {
         (a.mean - b.mean).abs() <= 4.0 * libm::hypot(a.stderr, b.stderr),
         "a_n with {a:?} vs without {b:?}"
     );
-    let bins = Bins::for_window(0.2, 0.004);
-    let (chi2, worst, dof) = compare(
-        &kernel(&with, &target, &bins, total),
-        &kernel(&without, &target, &bins, total),
-    );
-    assert!(
-        dof > 40 && chi2 < 2.0 && worst < 5.0,
-        "chi2/dof {chi2} worst {worst} dof {dof}"
-    );
+    coarse_kernels_agree(&with, &without, &target);
     let band = Bins::for_window(0.1, 0.01);
     let far = |events: &[Event]| -> Estimate {
         let per = histograms(events, &target, &band, &replicates(events));

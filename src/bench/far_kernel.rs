@@ -10,7 +10,7 @@
 use std::fmt::Write as _;
 
 use ternary::binning::Bins;
-use ternary::kernel::tail::{GROUPS_PER_DECADE, group_mean, log_groups};
+use ternary::kernel::tail::{group_mean, sided_log_groups};
 use ternary::kernel::{Histogram, Target};
 use ternary::physics::sampling::OffsetIntegration;
 use ternary::stats::Estimate;
@@ -30,17 +30,16 @@ const TAIL_BANDS: [(f64, f64); 3] = [(0.01, 0.02), (0.02, 0.03), (0.03, 0.05)];
 /// `kernel_log.parquet` has them) lying within [`FAR`], both sides of `u'`.
 pub(super) fn far_group_error(replicates: &[Histogram], bins: &Bins) -> f64 {
     let totals: Vec<Vec<f64>> = replicates.iter().map(Histogram::total).collect();
-    let mut errors = Vec::new();
-    for side in [1.0, -1.0] {
-        let x: Vec<f64> = (0..bins.len()).map(|k| side * bins.centre(k)).collect();
-        for members in log_groups(&x, GROUPS_PER_DECADE) {
-            let (low, high) = (x[members[0]], x[members[members.len() - 1]]);
-            if low >= FAR.0 && high <= FAR.1 {
-                let group = group_mean(&totals, &members);
-                errors.push(group.stderr / group.mean.abs());
-            }
-        }
-    }
+    let centres: Vec<f64> = (0..bins.len()).map(|k| bins.centre(k)).collect();
+    let in_band = |k: usize| (FAR.0..=FAR.1).contains(&centres[k].abs());
+    let mut errors: Vec<f64> = sided_log_groups(&centres)
+        .into_iter()
+        .filter(|(_, members)| members.iter().all(|&k| in_band(k)))
+        .map(|(_, members)| {
+            let group = group_mean(&totals, &members);
+            group.stderr / group.mean.abs()
+        })
+        .collect();
     errors.sort_by(f64::total_cmp);
     errors.get(errors.len() / 2).copied().unwrap_or(f64::NAN)
 }

@@ -35,6 +35,23 @@ pub fn log_groups(x: &[f64], per_decade: f64) -> Vec<Vec<usize>> {
     groups.into_iter().map(|(_, members)| members).collect()
 }
 
+/// The log-spaced groups ([`log_groups`], [`GROUPS_PER_DECADE`]) of the
+/// bin centres `centres` on each side of `u'`: below (`-1`) then above
+/// (`+1`), each side's groups in ascending `du`, with the side; members
+/// nearest `u'` first.
+pub fn sided_log_groups(centres: &[f64]) -> Vec<(f64, Vec<usize>)> {
+    let mut groups = Vec::new();
+    for side in [-1.0, 1.0] {
+        let distance: Vec<f64> = centres.iter().map(|c| side * c).collect();
+        let mut sided = log_groups(&distance, GROUPS_PER_DECADE);
+        if side < 0.0 {
+            sided.reverse();
+        }
+        groups.extend(sided.into_iter().map(|members| (side, members)));
+    }
+    groups
+}
+
 /// Mean over a group's bins of a per-bin quantity, per randomization
 /// (`replicates[randomization][bin]`), with its standard error from the
 /// spread of those means. Neighbouring bins share scenes (one slow launch

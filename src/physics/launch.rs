@@ -84,14 +84,16 @@ pub fn shifted_launch_speed(uniform: f64, shift: f64) -> f64 {
 
 /// Inverse CDF of the shifted launch-speed density truncated to speeds at or
 /// above `floor` (`v_th`): the launch density's own map on the part of its
-/// range above `floor`, `v = F^-1(F(floor) + U (1 - F(floor)))`.
+/// range above `floor`, `v = F^-1(F(floor) + U (1 - F(floor)))`; at `floor = 0`
+/// exactly [`shifted_launch_speed`] (`F(0) = 0`).
 pub fn shifted_launch_speed_above(uniform: f64, shift: f64, floor: f64) -> f64 {
     let below = shifted_speed_cdf(floor, shift);
     shifted_launch_speed(below + uniform * (1.0 - below), shift)
 }
 
 /// Density of [`shifted_launch_speed_above`] at `speed >= floor`:
-/// [`shifted_speed_density`] over the probability above `floor` (`1 / v_th`).
+/// [`shifted_speed_density`] over the probability above `floor` (`1 / v_th`);
+/// at `floor = 0` exactly that density.
 pub fn shifted_speed_density_above(speed: f64, shift: f64, floor: f64) -> f64 {
     shifted_speed_density(speed, shift) / (1.0 - shifted_speed_cdf(floor, shift))
 }

@@ -27,8 +27,8 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use super::launch::{
-    shifted_launch_speed, shifted_launch_speed_above, shifted_speed_density,
-    shifted_speed_density_above, thermal_launch_speed,
+    shifted_launch_speed_above, shifted_speed_density, shifted_speed_density_above,
+    thermal_launch_speed,
 };
 use super::offset_quadrature::OffsetRule;
 use super::potential::Potential;
@@ -235,13 +235,9 @@ impl LaunchProposal {
         let scaled = coordinate * components.len() as f64;
         let k = (scaled as usize).min(components.len() - 1);
         let shift = side * (self.shift + components[k] * self.spread) / width;
-        let remainder = scaled - k as f64;
-        width
-            * if self.slow_share > 0.0 {
-                shifted_launch_speed_above(remainder, shift, self.slow_speed)
-            } else {
-                shifted_launch_speed(remainder, shift)
-            }
+        // Without a stratum `slow_speed` is 0, below which nothing lies: the
+        // launch density's own map, to the bit.
+        width * shifted_launch_speed_above(scaled - k as f64, shift, self.slow_speed)
     }
 
     /// Density of `speed` on side `side` under the whole proposal, each
@@ -259,11 +255,7 @@ impl LaunchProposal {
             .iter()
             .map(|c| {
                 let shift = side * (self.shift + c * self.spread) / width;
-                if self.slow_share > 0.0 {
-                    shifted_speed_density_above(scaled, shift, self.slow_speed)
-                } else {
-                    shifted_speed_density(scaled, shift)
-                }
+                shifted_speed_density_above(scaled, shift, self.slow_speed)
             })
             .sum::<f64>()
             / components.len() as f64;

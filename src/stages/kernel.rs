@@ -137,21 +137,13 @@ fn replicates_table(total: &[Vec<f64>], bins: &Bins) -> Result<Table, StageError
 /// the side and the members' bin indices, nearest `u'` first.
 type Group = (f64, Vec<usize>);
 
-/// The kernel on log-spaced groups of bins ([`tail::log_groups`]), below
+/// The kernel on log-spaced groups of bins ([`tail::sided_log_groups`]), below
 /// `u'` then above in ascending `du`: each group's edges, width and mean
 /// parts, with errors from the spread of the randomizations' group means.
 fn log_table(parts: &Parts, bins: &Bins) -> Result<Table, StageError> {
     use contract::kernel::log::*;
     let centres: Vec<f64> = (0..bins.len()).map(|k| bins.centre(k)).collect();
-    let mut groups: Vec<Group> = Vec::new();
-    for side in [-1.0, 1.0] {
-        let distance: Vec<f64> = centres.iter().map(|c| side * c).collect();
-        let mut sided = tail::log_groups(&distance, tail::GROUPS_PER_DECADE);
-        if side < 0.0 {
-            sided.reverse();
-        }
-        groups.extend(sided.into_iter().map(|members| (side, members)));
-    }
+    let groups: Vec<Group> = tail::sided_log_groups(&centres);
     let edge = |side: f64, k: usize| centres[k] + side * 0.5 * bins.width;
     let inner = |(side, members): &Group| edge(-side, members[0]);
     let outer = |(side, members): &Group| edge(*side, members[members.len() - 1]);
