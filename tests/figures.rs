@@ -584,6 +584,7 @@ fn expected(store: &Path, figure: &Artifact) -> Vec<Row> {
             }
             rows
         }
+        "near_integrable" => near_integrable_rows(&figure.input(store, 0)),
         other => panic!("figure kind `{other}` has no check here"),
     }
 }
@@ -596,6 +597,71 @@ fn texts(array: &Value) -> Vec<&str> {
         .iter()
         .map(|text| text.as_str().unwrap())
         .collect()
+}
+
+/// The near-integrable figure's rows from its stage's tables: per quantity
+/// the rates positive by three standard errors, then its law `A x^p e^(q x)`
+/// on 49 log-spaced `x = n - 2` across them, where fitted.
+fn near_integrable_rows(input: &Artifact) -> Vec<Row> {
+    use contract::near_integrable::{fits, rates};
+    let (points, laws) = (
+        input.table(rates::TABLE.name),
+        input.table(fits::TABLE.name),
+    );
+    let excess = rates::EXCESS.read(&points).unwrap();
+    let mut rows = Vec::new();
+    for (k, (panel, label, pair)) in [
+        ("rates", "Γ", rates::VARIANCE_RATE),
+        ("rates", "gas (linearized operator)", rates::GAP),
+        ("rates", "one particle", rates::PARTICLE_GAP),
+        (
+            "ratio",
+            "gas (linearized operator)",
+            rates::GAP_OVER_VARIANCE_RATE,
+        ),
+        (
+            "ratio",
+            "one particle",
+            rates::PARTICLE_GAP_OVER_VARIANCE_RATE,
+        ),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let values = pair.read(&points).unwrap();
+        let resolved: Vec<usize> = (0..values.len())
+            .filter(|&i| values[i].stderr > 0.0 && values[i].mean > 3.0 * values[i].stderr)
+            .collect();
+        for &i in &resolved {
+            let series = format!("spectrum, {label}");
+            rows.push((
+                panel.into(),
+                series,
+                excess[i],
+                values[i].mean,
+                values[i].stderr,
+            ));
+        }
+        let exponent = fits::EXPONENT.read(&laws).unwrap()[k];
+        if !exponent.mean.is_finite() {
+            continue;
+        }
+        let amplitude = fits::AMPLITUDE.read(&laws).unwrap()[k].mean;
+        let correction = fits::CORRECTION.read(&laws).unwrap()[k].mean;
+        let xs: Vec<f64> = resolved.iter().map(|&i| excess[i]).collect();
+        let low = xs.iter().copied().fold(f64::INFINITY, f64::min);
+        let high = xs.iter().copied().fold(0.0, f64::max);
+        let series = format!(
+            "fit, p = {:.3} ± {:.3}, {label}",
+            exponent.mean, exponent.stderr
+        );
+        for j in 0..=48 {
+            let x = low * libm::pow(high / low, j as f64 / 48.0);
+            let y = amplitude * libm::pow(x, exponent.mean) * libm::exp(correction * x);
+            rows.push((panel.into(), series.clone(), x, y, 0.0));
+        }
+    }
+    rows
 }
 
 /// The distinct values of `values` in order of first appearance.

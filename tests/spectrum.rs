@@ -263,3 +263,82 @@ fn the_entropy_decays_at_the_rate_of_the_slowest_excited_mode() {
         );
     }
 }
+
+/// Four inverse power laws near the Calogero point, each with a wide set of
+/// 32 randomizations of 32 launch pairs and nothing else; the
+/// `near_integrable` stage over all four.
+const NEAR_INTEGRABLE_STUDY: &str = r#"
+[store]
+path = "store"
+
+[potentials]
+inverse_power = [2.05, 2.1, 2.25, 2.5]
+lennard_jones = []
+
+[scan]
+offset_min = -3.0
+offset_max = 3.0
+points = 7
+
+[[scan.launch]]
+name = "symmetric"
+u2 = 1.0
+u3 = -1.0
+
+[collisions]
+method = "quadrature"
+randomizations = 8
+points = 32
+pilot_points = 16
+
+[sweep]
+points_share = 1.0
+randomizations = 32
+
+[convergence]
+enabled = false
+
+[evolve]
+enabled = false
+
+[md]
+enabled = false
+"#;
+
+/// Near the Calogero point `n = 2` every collision is a permutation of the
+/// velocities plus kicks of `O(n - 2)` (first-order perturbation theory
+/// about the integrable trajectories), so `Gamma = O((n - 2)^2)`: the
+/// `near_integrable` fit of `Gamma` over `n - 2 = 0.05 .. 0.5` gives the
+/// exponent 2 within four of its errors, which are small enough (< 0.05) to
+/// tell it from the 1.72 that `n - 2 = 0.5 .. 1` alone gives (the gaps
+/// need the study's scenes: docs/spectrum.md).
+#[test]
+fn the_rates_vanish_quadratically_at_the_calogero_point() {
+    use contract::near_integrable::fits::*;
+    let dir = workspace("near-integrable");
+    let config = write_config(&dir, NEAR_INTEGRABLE_STUDY);
+    let stages = ["launches", "collisions", "spectrum", "near_integrable"];
+    let mut args = vec!["run", "--quiet"];
+    stages.iter().for_each(|s| args.extend(["--only", s]));
+    let output = ternary(&config, &args);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let reference: serde_json::Value = serde_json::from_str(
+        &fs::read_to_string(dir.join("store/refs/near_integrable/study.json")).unwrap(),
+    )
+    .unwrap();
+    let artifact = dir
+        .join("store/artifacts/near_integrable")
+        .join(reference["key"].as_str().unwrap());
+    let fits = read_parquet(&artifact.join(format!("{}.parquet", TABLE.name)))
+        .unwrap()
+        .0;
+    let quantities = QUANTITY.read(&fits).unwrap();
+    let exponents = EXPONENT.read(&fits).unwrap();
+    let row = |quantity: &str| quantities.iter().position(|q| q == quantity).unwrap();
+    let variance_rate = exponents[row("variance_rate")];
+    assert!(variance_rate.stderr < 0.05, "{variance_rate:?}");
+    assert!(
+        (variance_rate.mean - 2.0).abs() < 4.0 * variance_rate.stderr,
+        "{variance_rate:?}"
+    );
+}

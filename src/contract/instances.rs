@@ -105,6 +105,11 @@ pub fn compare() -> InstanceId {
     InstanceId::new(compare_stage::STAGE, "study")
 }
 
+/// The study's one `near_integrable` instance.
+pub fn near_integrable() -> InstanceId {
+    InstanceId::new(super::near_integrable::STAGE, "study")
+}
+
 /// The study's one `table` instance.
 pub fn table() -> InstanceId {
     InstanceId::new(table_stage::STAGE, "study")

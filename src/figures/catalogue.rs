@@ -119,6 +119,10 @@ pub enum Figure {
     /// The relaxation gaps of every inverse power law with a spectrum against
     /// `n`: over `Gamma` (a) and in rate units beside `Gamma` (b).
     Gaps,
+    /// How the rates of `r^-n` vanish as `n -> 2+`: `Gamma` and the gaps
+    /// against `n - 2` with their fitted near-integrable laws (a), the gaps
+    /// over `Gamma` (b).
+    NearIntegrable,
     /// `h(u, t)` of one ring at several final times: MD (tagged) and Boltzmann.
     MdTimes {
         /// The ring's name (the figure's).
@@ -134,7 +138,7 @@ pub enum Figure {
 pub const DILUTE: &str = "dilute";
 
 /// Names of every figure kind, for documentation and tests.
-pub const FIGURES: [&str; 15] = [
+pub const FIGURES: [&str; 16] = [
     "kernels",
     "kernels_lj",
     "kernel_fit",
@@ -150,6 +154,7 @@ pub const FIGURES: [&str; 15] = [
     "kernels_density",
     "spectrum",
     "gaps",
+    "near_integrable",
 ];
 
 impl Figure {
@@ -171,6 +176,7 @@ impl Figure {
             Figure::KernelsAtDensity { id, .. } => format!("kernels_density_{id}"),
             Figure::Spectrum { id, .. } => format!("spectrum_{id}"),
             Figure::Gaps => "gaps".into(),
+            Figure::NearIntegrable => "near_integrable".into(),
         }
     }
 
@@ -218,6 +224,9 @@ impl Figure {
             }
             Figure::Spectrum { label, .. } => {
                 format!("relaxation spectrum of {label}: the slowest rates r_k over Gamma (the tagged variance rate at u' = 0) of the linearized three-body operator and of the tagged particle's generator, +- jackknife error (a); the shapes f0 g_k(u) of the two slowest modes of each (b); the slowest rate of each from disjoint groups of randomizations against the group size, +- spread of the groups (c: noise pulls the lowest rate down until the estimate converges)")
+            }
+            Figure::NearIntegrable => {
+                "the rates of the inverse power laws near the Calogero point n = 2 (near_integrable stage) against n - 2, log axes: Gamma (the tagged variance rate at u' = 0), the gap of the gas (linearized three-body operator) and of one particle (tagged generator), +- jackknife standard error, each with its fitted law A (n - 2)^p exp(q (n - 2)) over the fitted range (a, p with its error in the legend; perturbation theory: p = 2); the gaps over Gamma (b, p = 0 expected). Only resolved rates (positive by three standard errors) are drawn and fitted".into()
             }
             Figure::Gaps => {
                 "relaxation gaps of the inverse power laws against n (the table's rows with a spectrum): the slowest relaxation rate of the gas (linearized three-body operator) and of one particle (tagged generator) over Gamma, the tagged variance rate at u' = 0 (a), and in rate units with Gamma (b, log axis: rates that vanish, n = 2, are left out), +- jackknife standard error".into()
@@ -355,6 +364,26 @@ impl Figure {
                     vec![("", Style::Markers)],
                 ),
             ],
+            Figure::NearIntegrable => vec![
+                Panel {
+                    paired: true,
+                    ..panel(
+                        "rates",
+                        log("n - 2"),
+                        log("rate [ρ² l v_th]"),
+                        vec![("fit", Style::Line)],
+                    )
+                },
+                Panel {
+                    paired: true,
+                    ..panel(
+                        "ratio",
+                        log("n - 2"),
+                        linear("gap / Γ"),
+                        vec![("fit", Style::Line)],
+                    )
+                },
+            ],
             Figure::Gaps => vec![
                 panel(
                     "ratio",
@@ -427,6 +456,7 @@ impl Figure {
             Figure::KernelsAtDensity { labels, .. } => kernels_at_density(inputs, labels),
             Figure::Spectrum { .. } => spectrum(&inputs[0]),
             Figure::Gaps => gaps(&inputs[0]),
+            Figure::NearIntegrable => near_integrable(&inputs[0]),
             Figure::KernelsAtUPrime { u_primes, .. } => {
                 let mut parts = Vec::new();
                 for (input, u_prime) in inputs.iter().zip(u_primes) {
@@ -639,6 +669,80 @@ fn gaps(input: &Input) -> Result<DataFrame, StageError> {
         panel("rates", "a_n untruncated (Γ)", A_N_UNTRUNCATED, true)?,
     ])
 }
+
+/// The near-integrable figure: per fitted quantity its resolved rates
+/// against `n - 2` and its law over the fitted range, paired by name.
+fn near_integrable(input: &Input) -> Result<DataFrame, StageError> {
+    use contract::near_integrable::{fits, rates};
+    let rates_table = rates::TABLE.of(input)?;
+    let fits_table = fits::TABLE.of(input)?;
+    let potentials = rates::POTENTIAL.read(rates_table).map_err(failed)?;
+    let excess = rates::EXCESS.read(rates_table).map_err(failed)?;
+    let quantities = fits::QUANTITY.read(fits_table).map_err(failed)?;
+    let fitted = fits::FITTED.read(fits_table).map_err(failed)?;
+    let exponents = fits::EXPONENT.read(fits_table).map_err(failed)?;
+    let amplitudes = fits::AMPLITUDE.read(fits_table).map_err(failed)?;
+    let corrections = fits::CORRECTION.read(fits_table).map_err(failed)?;
+    let mut parts = Vec::new();
+    for (panel, quantity, label, pair) in [
+        ("rates", "variance_rate", "Γ", rates::VARIANCE_RATE),
+        ("rates", "gap", GAS, rates::GAP),
+        ("rates", "particle_gap", ONE_PARTICLE, rates::PARTICLE_GAP),
+        (
+            "ratio",
+            "gap_over_variance_rate",
+            GAS,
+            rates::GAP_OVER_VARIANCE_RATE,
+        ),
+        (
+            "ratio",
+            "particle_gap_over_variance_rate",
+            ONE_PARTICLE,
+            rates::PARTICLE_GAP_OVER_VARIANCE_RATE,
+        ),
+    ] {
+        let row = quantities
+            .iter()
+            .position(|q| q == quantity)
+            .ok_or_else(|| failed(format!("near_integrable has no fit of {quantity}")))?;
+        let used: Vec<usize> = (0..potentials.len())
+            .filter(|&i| fitted[row].split(", ").any(|p| p == potentials[i]))
+            .collect();
+        let values = pair.read(rates_table).map_err(failed)?;
+        parts.push(series_of(
+            panel,
+            &format!("spectrum, {label}"),
+            used.iter().map(|&i| excess[i]).collect(),
+            used.iter().map(|&i| values[i].mean).collect(),
+            Some(used.iter().map(|&i| values[i].stderr).collect()),
+        )?);
+        let (exponent, amplitude, correction) =
+            (exponents[row], amplitudes[row].mean, corrections[row].mean);
+        if !exponent.mean.is_finite() {
+            continue;
+        }
+        let ends = used.iter().map(|&i| excess[i]);
+        let (low, high) = ends.fold((f64::INFINITY, 0.0_f64), |(lo, hi), x| {
+            (lo.min(x), hi.max(x))
+        });
+        let xs: Vec<f64> = (0..=FIT_CURVE_POINTS)
+            .map(|k| low * libm::pow(high / low, k as f64 / FIT_CURVE_POINTS as f64))
+            .collect();
+        let ys = xs
+            .iter()
+            .map(|&x| amplitude * libm::pow(x, exponent.mean) * libm::exp(correction * x))
+            .collect();
+        let name = format!(
+            "fit, p = {:.3} ± {:.3}, {label}",
+            exponent.mean, exponent.stderr
+        );
+        parts.push(series_of(panel, &name, xs, ys, None)?);
+    }
+    stack(parts)
+}
+
+/// Intervals of a fitted law's curve (log-spaced in `n - 2`).
+const FIT_CURVE_POINTS: usize = 48;
 
 /// Series title of the linearized operator's rates.
 const GAS: &str = "gas (linearized operator)";

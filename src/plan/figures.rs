@@ -32,6 +32,13 @@ pub(super) fn figure_stages(study: &Study, plan: &[Box<dyn Stage>]) -> Vec<Figur
         figures.extend(main_figures(study, p, &present));
     }
     figures.extend(gaps_figure(&study.potentials(), &present));
+    let near_integrable = instances::near_integrable();
+    if present(&near_integrable) {
+        figures.push(FiguresStage::new(
+            Figure::NearIntegrable,
+            vec![near_integrable],
+        ));
+    }
     figures.extend(evolution_figure(study, &present));
     figures.extend(kernels_at_density(study));
     figures.extend(md_figures(study, &present));

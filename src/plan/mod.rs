@@ -18,8 +18,8 @@ use crate::physics::potential::Potential;
 use crate::pipeline::{InstanceId, Stage};
 use crate::stages::compare::{CompareParams, CompareStage};
 use crate::stages::{
-    convergence, dissociation, evolve, fit, gases, kernel, md, moments, scan, spectrum, sweep,
-    table,
+    convergence, dissociation, evolve, fit, gases, kernel, md, moments, near_integrable, scan,
+    spectrum, sweep, table,
 };
 use collisions::push_collisions;
 
@@ -51,8 +51,9 @@ pub fn plan(study: &Study) -> Vec<Box<dyn Stage>> {
     stages.push(Box::new(table::TableStage::new(
         rows,
         dissociations,
-        spectra,
+        spectra.clone(),
     )));
+    push_near_integrable(&mut stages, study, &spectra);
     if let Some((name, params)) = paper::balance_collisions(study) {
         push_collisions(&mut stages, params, name);
     }
@@ -64,6 +65,22 @@ pub fn plan(study: &Study) -> Vec<Box<dyn Stage>> {
         stages.extend(figures.into_iter().map(|f| Box::new(f) as Box<dyn Stage>));
     }
     stages
+}
+
+/// The `near_integrable` table and fits, when an inverse power law with a
+/// planned spectrum lies in `2 < n <= spectrum.near_integrable_max_n` (the
+/// fits need four).
+fn push_near_integrable(stages: &mut Vec<Box<dyn Stage>>, study: &Study, spectra: &[InstanceId]) {
+    let near: Vec<Potential> = study
+        .potentials()
+        .into_iter()
+        .filter(|&p| {
+            study.config.spectrum.near_integrable(p) && spectra.contains(&instances::spectrum(&p))
+        })
+        .collect();
+    if !near.is_empty() {
+        stages.push(Box::new(near_integrable::NearIntegrableStage::new(near)));
+    }
 }
 
 /// Adds `stage` unless an instance with its id is planned already.

@@ -231,6 +231,58 @@ pub(super) fn spectrum_table(
     Ok(())
 }
 
+/// The `near_integrable` stage's fits: how the rates vanish at `n = 2`.
+pub(super) fn near_integrable_table(
+    out: &mut dyn Sink,
+    store: &Store,
+    reports: &[InstanceReport],
+) -> Result<()> {
+    use contract::near_integrable::fits::*;
+    let frames = titled_frames(
+        out,
+        store,
+        reports,
+        &TABLE,
+        "near the Calogero point n = 2: rate = A (n - 2)^p exp(q (n - 2)), weighted least squares over the resolved rates (positive by 3 standard errors; four needed) [A: rho^2 l v_th, or 1 for a ratio] (+- fit errors; expected p: first-order perturbation theory; docs/spectrum.md)",
+    )?;
+    if frames.is_empty() {
+        return Ok(());
+    }
+    let mut table = Columns::new(&[
+        (QUANTITY.name, Align::Left),
+        ("p", Align::Left),
+        ("expected", Align::Right),
+        ("z", Align::Right),
+        ("A", Align::Left),
+        ("q", Align::Left),
+        ("chi2/dof", Align::Right),
+        ("p-value", Align::Right),
+        ("fitted", Align::Left),
+    ]);
+    for (_, frame) in frames {
+        for row in 0..frame.height() {
+            let (chi2, dof) = (number(&frame, row, CHI2)?, count(&frame, row, DOF)?);
+            table.push(vec![
+                Cell::text(text(&frame, row, QUANTITY)?),
+                estimate(&frame, row, EXPONENT, "-")?,
+                Cell::text(fixed(number(&frame, row, EXPECTED_EXPONENT)?, 0)),
+                Cell::text(or_why(
+                    number(&frame, row, EXPONENT_Z)?,
+                    |z| fixed(z, 2),
+                    "-",
+                )),
+                estimate(&frame, row, AMPLITUDE, "-")?,
+                estimate(&frame, row, CORRECTION, "-")?,
+                Cell::text(or_why(chi2 / f64::from(dof), |c| fixed(c, 2), "-")),
+                Cell::text(or_why(number(&frame, row, P_VALUE)?, |p| fixed(p, 3), "-")),
+                Cell::text(text(&frame, row, FITTED)?),
+            ]);
+        }
+    }
+    out.table(&table);
+    Ok(())
+}
+
 /// The `md` stage's summaries: moments of `h(u, t_f)` by both estimators
 /// (variances below `kick_floor^2` are the engine's rounding, [`variance`]).
 pub(super) fn md_table(

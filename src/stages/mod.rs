@@ -13,6 +13,7 @@ pub mod kernel;
 pub mod launches;
 pub mod md;
 pub mod moments;
+pub mod near_integrable;
 pub mod paper;
 pub mod scan;
 pub mod spectrum;

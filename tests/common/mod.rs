@@ -208,6 +208,10 @@ balance_separations = [0.02, 0.04]
 points = 1024
 randomizations = 4
 
+# The near_integrable table over n = 6 (its fits need four potentials: null).
+[spectrum]
+near_integrable_max_n = 6.0
+
 [convergence]
 enabled = true
 inverse_power = 6

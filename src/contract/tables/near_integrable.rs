@@ -1,0 +1,141 @@
+//! The `near_integrable` stage: how the relaxation rates of `r^-n` vanish as
+//! `n -> 2+` (the Calogero point, where every collision only permutes the
+//! velocities), from the `spectrum` stage of every inverse power law with
+//! `2 < n <= spectrum.near_integrable_max_n`.
+
+pub use super::POTENTIAL;
+use super::*;
+
+/// The stage, as named in instance ids and the store.
+pub const STAGE: &str = "near_integrable";
+
+/// Jackknife error over the randomizations (the spectrum stage's).
+const JACKKNIFE: &str = "jackknife standard error over randomizations (spectrum_summary)";
+/// Error of a fitted coefficient.
+const FIT_ERROR: &str = "standard error from the fit's covariance (the rates taken as independent: every potential draws its scenes from the same seed, so their errors are correlated and the chi-square is a guide, not a test)";
+/// Why a fitted value is null.
+const TOO_FEW: &str =
+    "fewer than four resolved rates (three coefficients and one degree of freedom)";
+
+/// `near_integrable_rates.parquet`: one row per potential.
+pub mod rates {
+    pub use super::POTENTIAL;
+    use super::*;
+
+    /// The table.
+    pub const TABLE: TableSpec = TableSpec {
+        stage: STAGE,
+        name: "near_integrable_rates",
+        description: "the variance rate and the relaxation gaps of every inverse power law near the Calogero point n = 2, the points of the near_integrable fits",
+    };
+    /// `n - 2`.
+    pub const EXCESS: Col<f64> =
+        Col::f64("n_minus_2", "1", "distance n - 2 from the Calogero point");
+    /// `Gamma`.
+    pub const VARIANCE_RATE: Pair = pair!(
+        "variance_rate",
+        RATE,
+        "Gamma: the tagged variance rate at u' = 0 of the spectrum's generator (a_n without a window)",
+        JACKKNIFE
+    );
+    /// The gas's gap.
+    pub const GAP: Pair = pair!(
+        "gap",
+        RATE,
+        "relaxation gap of the gas (linearized three-body operator; spectrum_summary: gap)",
+        JACKKNIFE
+    );
+    /// One particle's gap.
+    pub const PARTICLE_GAP: Pair = pair!(
+        "particle_gap",
+        RATE,
+        "relaxation gap of one particle (tagged generator; spectrum_summary: gap)",
+        JACKKNIFE
+    );
+    /// The gas's gap over `Gamma`.
+    pub const GAP_OVER_VARIANCE_RATE: Pair = pair!(
+        "gap_over_variance_rate",
+        "1",
+        "gap / Gamma, per replicate",
+        JACKKNIFE
+    );
+    /// One particle's gap over `Gamma`.
+    pub const PARTICLE_GAP_OVER_VARIANCE_RATE: Pair = pair!(
+        "particle_gap_over_variance_rate",
+        "1",
+        "particle_gap / Gamma, per replicate",
+        JACKKNIFE
+    );
+    /// Growing modes of the gas's estimate.
+    pub const GROWING_MODES: Col<u32> = Col::u32(
+        "growing_modes",
+        "1",
+        "modes of the gas's estimate that grow (noise; spectrum_summary)",
+    );
+    /// Growing modes of one particle's estimate.
+    pub const PARTICLE_GROWING_MODES: Col<u32> = Col::u32(
+        "particle_growing_modes",
+        "1",
+        "modes of one particle's estimate that grow (noise; spectrum_summary)",
+    );
+}
+
+/// `near_integrable.parquet`: one row per fitted quantity.
+pub mod fits {
+    use super::*;
+
+    /// The table.
+    pub const TABLE: TableSpec = TableSpec {
+        stage: STAGE,
+        name: "near_integrable",
+        description: "the near-integrable law rate = A (n - 2)^p exp(q (n - 2)) of the variance rate, the gaps and their ratios to it, fitted over the resolved rates of near_integrable_rates (weighted least squares in ln rate), with the exponent perturbation theory predicts",
+    };
+    /// What is fitted.
+    pub const QUANTITY: Col<String> = Col::text(
+        "quantity",
+        "variance_rate (Gamma), gap (the gas), particle_gap (one particle), gap_over_variance_rate, particle_gap_over_variance_rate",
+    );
+    /// Potentials fitted.
+    pub const FITTED: Col<String> = Col::text(
+        "fitted",
+        "the potentials whose rate is resolved (positive, at least three standard errors) and enters the fit, comma-separated",
+    );
+    /// Number of rates fitted.
+    pub const POINTS: Col<u32> = Col::u32("points", "1", "rates in the fit");
+    /// The exponent.
+    pub const EXPONENT: Pair = pair!("exponent", "1", "p", FIT_ERROR).or_null(TOO_FEW);
+    /// The predicted exponent.
+    pub const EXPECTED_EXPONENT: Col<f64> = Col::f64(
+        "expected_exponent",
+        "1",
+        "p from first-order perturbation theory about n = 2: every kick is O(n - 2), so every rate O((n - 2)^2) and every ratio of rates O(1)",
+    );
+    /// The exponent against the prediction.
+    pub const EXPONENT_Z: Col<f64> = Col::f64(
+        "exponent_z",
+        "1",
+        "(exponent - expected_exponent) / exponent_stderr",
+    )
+    .or_null(TOO_FEW);
+    /// The amplitude.
+    pub const AMPLITUDE: Pair = pair!(
+        "amplitude",
+        "the quantity's unit (rho^2 l v_th for a rate, 1 for a ratio)",
+        "A: the quantity over (n - 2)^p exp(q (n - 2))",
+        FIT_ERROR
+    )
+    .or_null(TOO_FEW);
+    /// The next order.
+    pub const CORRECTION: Pair = pair!("correction", "1", "q", FIT_ERROR).or_null(TOO_FEW);
+    /// Chi-square.
+    pub const CHI2: Col<f64> = Col::f64("chi2", "1", "chi-square of the fit").or_null(TOO_FEW);
+    /// Degrees of freedom.
+    pub const DOF: Col<u32> = Col::u32("dof", "1", "points - 3 (0 when not fitted)");
+    /// The fit's p-value.
+    pub const P_VALUE: Col<f64> = Col::f64(
+        "p_value",
+        "1",
+        "probability of a chi-square at least chi2 if the law holds with independent errors",
+    )
+    .or_null(TOO_FEW);
+}
