@@ -3,6 +3,7 @@
 use std::ops::Range;
 
 use plotters::coord::Shift;
+use plotters::coord::combinators::WithKeyPoints;
 use plotters::coord::ranged1d::{AsRangedCoord, ValueFormatter};
 use plotters::element::{ComposedElement, DashedPathElement};
 use plotters::prelude::*;
@@ -256,16 +257,60 @@ fn draw_panel<DB: DrawingBackend>(
     );
     match (panel.x.log, panel.y.log) {
         (false, false) => chart(&plot, panel, points, size, x_range, y_range),
-        (true, false) => chart(&plot, panel, points, size, x_range.log_scale(), y_range),
-        (false, true) => chart(&plot, panel, points, size, x_range, y_range.log_scale()),
+        (true, false) => chart(&plot, panel, points, size, log_axis(x_range), y_range),
+        (false, true) => chart(&plot, panel, points, size, x_range, log_axis(y_range)),
         (true, true) => chart(
             &plot,
             panel,
             points,
             size,
-            x_range.log_scale(),
-            y_range.log_scale(),
+            log_axis(x_range),
+            log_axis(y_range),
         ),
+    }
+}
+
+/// A log axis over `range` with its ticks ([`log_ticks`]).
+fn log_axis(range: Range<f64>) -> LogAxis {
+    LogAxis(range)
+}
+
+/// The range of a log axis, drawn with the ticks of [`log_ticks`].
+#[derive(Clone)]
+struct LogAxis(Range<f64>);
+
+impl From<LogAxis> for WithKeyPoints<LogCoord<f64>> {
+    fn from(axis: LogAxis) -> Self {
+        let ticks = log_ticks(&axis.0);
+        axis.0.log_scale().with_key_points(ticks)
+    }
+}
+
+impl AsRangedCoord for LogAxis {
+    type CoordDescType = WithKeyPoints<LogCoord<f64>>;
+    type Value = f64;
+}
+
+/// Ticks of a log axis: every power of ten in `range`, and where fewer
+/// than three fall in it also their doubles and fives (an axis over less
+/// than two decades otherwise reads by one or two labels).
+fn log_ticks(range: &Range<f64>) -> Vec<f64> {
+    let first = libm::floor(libm::log10(range.start)) as i32;
+    let last = libm::ceil(libm::log10(range.end)) as i32;
+    let at = |multiples: &[f64]| -> Vec<f64> {
+        (first..=last)
+            .flat_map(|exponent| {
+                let decade = libm::pow(10.0, f64::from(exponent));
+                multiples.iter().map(move |m| m * decade)
+            })
+            .filter(|value| range.contains(value))
+            .collect()
+    };
+    let decades = at(&[1.0]);
+    if decades.len() >= 3 {
+        decades
+    } else {
+        at(&[1.0, 2.0, 5.0])
     }
 }
 
@@ -766,7 +811,26 @@ type OpenBar<DB> = ComposedElement<(f64, f64), DB, PathElement<(i32, i32)>, Poly
 
 #[cfg(test)]
 mod tests {
-    use super::tick;
+    use super::{log_ticks, tick};
+
+    /// Ticks at the decades of an axis over three or more, at 1, 2 and 5
+    /// times them over fewer.
+    #[test]
+    fn short_log_axes_tick_at_doubles_and_fives() {
+        let close = |got: Vec<f64>, want: &[f64]| {
+            got.len() == want.len()
+                && got
+                    .iter()
+                    .zip(want)
+                    .all(|(g, w)| (g / w - 1.0).abs() < 1e-12)
+        };
+        assert!(close(log_ticks(&(9e-6..2e-2)), &[1e-5, 1e-4, 1e-3, 1e-2]));
+        let short = log_ticks(&(0.015..0.6));
+        assert!(
+            close(short.clone(), &[0.02, 0.05, 0.1, 0.2, 0.5]),
+            "{short:?}"
+        );
+    }
 
     #[test]
     fn log_ticks_are_powers_of_ten_in_superscripts() {
