@@ -145,6 +145,36 @@ fn an_incomplete_store_gives_a_page_that_says_what_is_missing() {
     assert!(!dir.join("data").exists(), "report created the store");
 }
 
+/// A report never overwrites what is not its own: a directory holding a
+/// user's page, or other files and no page, is refused by name and left
+/// untouched; an empty one takes the report.
+#[test]
+fn a_report_refuses_a_directory_that_holds_other_files() {
+    let dir = workspace("report-foreign");
+    let config = write_config(&dir, &small_study("data"));
+    for (folder, file) in [("page", "index.html"), ("notes", "notes.txt")] {
+        let out = dir.join(folder);
+        fs::create_dir_all(&out).unwrap();
+        fs::write(out.join(file), "a user's file").unwrap();
+        let before = contents(&out);
+        let refused = ternary(&config, &["report", &out.to_string_lossy()]);
+        assert!(!refused.status.success(), "a report over {file}");
+        assert!(
+            stderr(&refused).contains("holds files and no earlier report"),
+            "{}",
+            stderr(&refused)
+        );
+        assert_eq!(
+            contents(&out),
+            before,
+            "the refused report wrote into {folder}"
+        );
+    }
+    let empty = dir.join("empty");
+    fs::create_dir_all(&empty).unwrap();
+    assert!(report(&config, &empty).contains("<meta name=\"generator\""));
+}
+
 /// The page as headless Chromium shows it: every image loaded (a copy of the
 /// page with a checking script, beside it) and a screenshot that is not
 /// blank. Skipped, saying so, where no `chromium` is installed.

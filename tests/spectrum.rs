@@ -16,7 +16,7 @@ use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
 use arrow::array::RecordBatch;
-use common::{stderr, ternary, workspace, write_config};
+use common::{SYMMETRIC_SCAN, stderr, ternary, workspace, write_config};
 use ternary::contract;
 use ternary::pipeline::table::read_parquet;
 use ternary::stats::Estimate;
@@ -34,16 +34,7 @@ path = "{store}"
 [potentials]
 inverse_power = [2, 6]
 
-[scan]
-offset_min = -3.0
-offset_max = 3.0
-points = 7
-
-[[scan.launch]]
-name = "symmetric"
-u2 = 1.0
-u3 = -1.0
-
+{SYMMETRIC_SCAN}
 [collisions]
 method = "quadrature"
 randomizations = 8
@@ -267,7 +258,9 @@ fn the_entropy_decays_at_the_rate_of_the_slowest_excited_mode() {
 /// Four inverse power laws near the Calogero point, each with a wide set of
 /// 32 randomizations of 32 launch pairs and nothing else; the
 /// `near_integrable` stage over all four.
-const NEAR_INTEGRABLE_STUDY: &str = r#"
+fn near_integrable_study() -> String {
+    format!(
+        r#"
 [store]
 path = "store"
 
@@ -275,16 +268,7 @@ path = "store"
 inverse_power = [2.05, 2.1, 2.25, 2.5]
 lennard_jones = []
 
-[scan]
-offset_min = -3.0
-offset_max = 3.0
-points = 7
-
-[[scan.launch]]
-name = "symmetric"
-u2 = 1.0
-u3 = -1.0
-
+{SYMMETRIC_SCAN}
 [collisions]
 method = "quadrature"
 randomizations = 8
@@ -303,7 +287,9 @@ enabled = false
 
 [md]
 enabled = false
-"#;
+"#
+    )
+}
 
 /// Near the Calogero point `n = 2` every collision is a permutation of the
 /// velocities plus kicks of `O(n - 2)` (first-order perturbation theory
@@ -316,7 +302,7 @@ enabled = false
 fn the_rates_vanish_quadratically_at_the_calogero_point() {
     use contract::near_integrable::fits::*;
     let dir = workspace("near-integrable");
-    let config = write_config(&dir, NEAR_INTEGRABLE_STUDY);
+    let config = write_config(&dir, &near_integrable_study());
     let stages = ["launches", "collisions", "spectrum", "near_integrable"];
     let mut args = vec!["run", "--quiet"];
     stages.iter().for_each(|s| args.extend(["--only", s]));

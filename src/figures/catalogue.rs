@@ -676,10 +676,8 @@ fn near_integrable(input: &Input) -> Result<DataFrame, StageError> {
     use contract::near_integrable::{fits, rates};
     let rates_table = rates::TABLE.of(input)?;
     let fits_table = fits::TABLE.of(input)?;
-    let potentials = rates::POTENTIAL.read(rates_table).map_err(failed)?;
     let excess = rates::EXCESS.read(rates_table).map_err(failed)?;
     let quantities = fits::QUANTITY.read(fits_table).map_err(failed)?;
-    let fitted = fits::FITTED.read(fits_table).map_err(failed)?;
     let exponents = fits::EXPONENT.read(fits_table).map_err(failed)?;
     let amplitudes = fits::AMPLITUDE.read(fits_table).map_err(failed)?;
     let corrections = fits::CORRECTION.read(fits_table).map_err(failed)?;
@@ -705,10 +703,10 @@ fn near_integrable(input: &Input) -> Result<DataFrame, StageError> {
             .iter()
             .position(|q| q == quantity)
             .ok_or_else(|| failed(format!("near_integrable has no fit of {quantity}")))?;
-        let used: Vec<usize> = (0..potentials.len())
-            .filter(|&i| fitted[row].split(", ").any(|p| p == potentials[i]))
-            .collect();
         let values = pair.read(rates_table).map_err(failed)?;
+        let used: Vec<usize> = (0..values.len())
+            .filter(|&i| contract::near_integrable::resolved(values[i]))
+            .collect();
         parts.push(series_of(
             panel,
             &format!("spectrum, {label}"),

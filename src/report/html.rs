@@ -66,9 +66,13 @@ struct Figure {
     height: u32,
 }
 
-/// Writes the report of `study` into `dir` (created when missing): the
-/// page and its figures; figure files of an earlier report that the study
-/// no longer has are removed. Returns a one-line summary.
+/// The page's mark: a directory whose page carries it holds an earlier
+/// report, which a new one replaces.
+const GENERATOR: &str = "<meta name=\"generator\" content=\"ternary report\">";
+
+/// Writes the report of `study` into `dir` (created when missing; else
+/// empty or holding an earlier report): the page and its figures. Returns a
+/// one-line summary.
 pub fn write(study: &Study, store: &Store, plan: &[Box<dyn Stage>], dir: &Path) -> Result<String> {
     let (target, root) = (
         std::path::absolute(dir)?,
@@ -81,6 +85,7 @@ pub fn write(study: &Study, store: &Store, plan: &[Box<dyn Stage>], dir: &Path) 
             store.root().display()
         );
     }
+    check_target(dir)?;
     let lines = executor::status(store, plan, 1)?;
     let instances: Vec<Instance> = lines
         .iter()
@@ -95,7 +100,9 @@ pub fn write(study: &Study, store: &Store, plan: &[Box<dyn Stage>], dir: &Path) 
     let figures = copy_figures(store, &instances, &figures_dir)?;
     let page = page(study, store, &instances, &figures)?;
     let path = dir.join(PAGE);
-    fs::write(&path, page).with_context(|| format!("writing {}", path.display()))?;
+    let partial = dir.join(format!(".{PAGE}.{}", std::process::id()));
+    fs::write(&partial, page).with_context(|| format!("writing {}", partial.display()))?;
+    fs::rename(&partial, &path).with_context(|| format!("writing {}", path.display()))?;
     let fresh = instances.iter().filter(|i| i.manifest.is_some()).count();
     Ok(format!(
         "report: {} figures, {fresh} of {} instances fresh, in {}\n",
@@ -103,6 +110,29 @@ pub fn write(study: &Study, store: &Store, plan: &[Box<dyn Stage>], dir: &Path) 
         instances.len(),
         path.display()
     ))
+}
+
+/// Checks that `dir` may take a report: missing, an empty directory, or one
+/// whose page carries [`GENERATOR`] (an earlier report). A report never
+/// overwrites files that are not its own.
+fn check_target(dir: &Path) -> Result<()> {
+    if !dir.exists() {
+        return Ok(());
+    }
+    let mut entries = fs::read_dir(dir).with_context(|| format!("reading {}", dir.display()))?;
+    if entries.next().is_none() {
+        return Ok(());
+    }
+    let page = dir.join(PAGE);
+    let earlier = fs::read_to_string(&page).is_ok_and(|text| text.contains(GENERATOR));
+    if !earlier {
+        bail!(
+            "{} holds files and no earlier report ({} is missing or not ternary's): a report goes into a new or empty directory, or over an earlier one",
+            dir.display(),
+            page.display()
+        );
+    }
+    Ok(())
 }
 
 /// The manifest of a fresh instance's artifact (`None` for any other).
@@ -201,6 +231,7 @@ fn page(
         out,
         "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n\
          <meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n\
+         {GENERATOR}\n\
          <title>{}</title>\n<style>{STYLE}</style>\n</head>\n<body>\n<main>",
         escape(&title)
     )?;

@@ -30,22 +30,31 @@ impl NearIntegrableStage {
     }
 }
 
-/// A rate is resolved, and fitted, when it is positive by this many
-/// standard errors: below it the spectrum's low end is noise (growing
-/// modes pull the slowest rate down and its error up).
-pub const RESOLVED_Z: f64 = 3.0;
-
 /// Rates a fit needs: three coefficients and one degree of freedom.
 const FITTED_RATES_MIN: usize = 4;
+
+/// One generator's gap (the gas's linearized operator or one particle's
+/// tagged generator).
+struct GeneratorGap {
+    /// The slowest non-conserved relaxation rate, `rho^2 l v_th`.
+    gap: Estimate,
+    /// `gap / Gamma`, per replicate.
+    ratio: Estimate,
+    /// Modes of the estimated generator that grow (noise).
+    growing_modes: u32,
+}
 
 /// One potential's rates.
 struct NearIntegrableRates {
     potential: String,
+    /// `n - 2`.
     excess: f64,
+    /// `Gamma`, `rho^2 l v_th`.
     variance_rate: Estimate,
-    /// Per generator (the gas, one particle): the gap, its ratio to
-    /// `Gamma` and the growing modes.
-    gaps: [(Estimate, Estimate, u32); 2],
+    /// The gas's gap.
+    gas: GeneratorGap,
+    /// One particle's gap.
+    particle: GeneratorGap,
 }
 
 /// A fitted quantity: its name, how it is read from a potential's rates,
@@ -55,10 +64,10 @@ type Quantity = (&'static str, fn(&NearIntegrableRates) -> Estimate, f64);
 /// The quantities fitted.
 const QUANTITIES: [Quantity; 5] = [
     ("variance_rate", |r| r.variance_rate, 2.0),
-    ("gap", |r| r.gaps[0].0, 2.0),
-    ("particle_gap", |r| r.gaps[1].0, 2.0),
-    ("gap_over_variance_rate", |r| r.gaps[0].1, 0.0),
-    ("particle_gap_over_variance_rate", |r| r.gaps[1].1, 0.0),
+    ("gap", |r| r.gas.gap, 2.0),
+    ("particle_gap", |r| r.particle.gap, 2.0),
+    ("gap_over_variance_rate", |r| r.gas.ratio, 0.0),
+    ("particle_gap_over_variance_rate", |r| r.particle.ratio, 0.0),
 ];
 
 /// One fitted quantity.
@@ -79,15 +88,20 @@ impl NearIntegrableStage {
         let table = TABLE.find(inputs, &instances::spectrum(potential))?;
         let (gaps, ratios) = (GAP.read(table)?, GAP_OVER_VARIANCE_RATE.read(table)?);
         let growing = GROWING_MODES.read(table)?;
-        let of = |generator: &str| -> Result<(Estimate, Estimate, u32), StageError> {
+        let of = |generator: &str| -> Result<GeneratorGap, StageError> {
             let row = GENERATOR.row_of(table, generator)?;
-            Ok((gaps[row], ratios[row], growing[row]))
+            Ok(GeneratorGap {
+                gap: gaps[row],
+                ratio: ratios[row],
+                growing_modes: growing[row],
+            })
         };
         Ok(NearIntegrableRates {
             potential: potential.id(),
             excess: potential.family().length_exponent().unwrap_or(f64::NAN) - 2.0,
             variance_rate: VARIANCE_RATE.read(table)?[GENERATOR.row_of(table, TAGGED)?],
-            gaps: [of(FULL)?, of(TAGGED)?],
+            gas: of(FULL)?,
+            particle: of(TAGGED)?,
         })
     }
 }
@@ -99,10 +113,7 @@ fn quantity_fit(
 ) -> QuantityFit {
     let resolved: Vec<&NearIntegrableRates> = rates
         .iter()
-        .filter(|r| {
-            let estimate = value(r);
-            estimate.mean > RESOLVED_Z * estimate.stderr && estimate.stderr > 0.0
-        })
+        .filter(|r| contract::near_integrable::resolved(value(r)))
         .collect();
     let points: Vec<(f64, Estimate)> = resolved.iter().map(|r| (r.excess, value(r))).collect();
     QuantityFit {
@@ -122,12 +133,12 @@ fn rates_table(rates: &[NearIntegrableRates]) -> Result<Table, StageError> {
         .with(POTENTIAL, |r| r.potential.clone())
         .with(EXCESS, |r| r.excess)
         .estimate(VARIANCE_RATE, |r| r.variance_rate)
-        .estimate(GAP, |r| r.gaps[0].0)
-        .estimate(PARTICLE_GAP, |r| r.gaps[1].0)
-        .estimate(GAP_OVER_VARIANCE_RATE, |r| r.gaps[0].1)
-        .estimate(PARTICLE_GAP_OVER_VARIANCE_RATE, |r| r.gaps[1].1)
-        .with(GROWING_MODES, |r| r.gaps[0].2)
-        .with(PARTICLE_GROWING_MODES, |r| r.gaps[1].2)
+        .estimate(GAP, |r| r.gas.gap)
+        .estimate(PARTICLE_GAP, |r| r.particle.gap)
+        .estimate(GAP_OVER_VARIANCE_RATE, |r| r.gas.ratio)
+        .estimate(PARTICLE_GAP_OVER_VARIANCE_RATE, |r| r.particle.ratio)
+        .with(GROWING_MODES, |r| r.gas.growing_modes)
+        .with(PARTICLE_GROWING_MODES, |r| r.particle.growing_modes)
         .table(&TABLE)?)
 }
 

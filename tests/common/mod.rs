@@ -60,6 +60,20 @@ pub fn run_counts(config: &Path, args: &[&str]) -> (usize, usize) {
     (number(" computed"), number(" fresh"))
 }
 
+/// A scan of the symmetric launch (`u2 = 1`, `u3 = -1`) at seven offsets:
+/// the least a study needs.
+pub const SYMMETRIC_SCAN: &str = r#"
+[scan]
+offset_min = -3.0
+offset_max = 3.0
+points = 7
+
+[[scan.launch]]
+name = "symmetric"
+u2 = 1.0
+u3 = -1.0
+"#;
+
 /// A study of one potential (`ipp-6`) small enough to run in a fraction of a
 /// second: scan, collisions, kernel, moments, fit, table, paper and four figures
 /// (kernels, kernel with fit, truncation, kicks).
@@ -72,16 +86,7 @@ path = "{store}"
 [potentials]
 inverse_power = [6]
 
-[scan]
-offset_min = -3.0
-offset_max = 3.0
-points = 7
-
-[[scan.launch]]
-name = "symmetric"
-u2 = 1.0
-u3 = -1.0
-
+{SYMMETRIC_SCAN}
 [collisions]
 randomizations = 2
 points = 64

@@ -14,8 +14,18 @@ const JACKKNIFE: &str = "jackknife standard error over randomizations (spectrum_
 /// Error of a fitted coefficient.
 const FIT_ERROR: &str = "standard error from the fit's covariance (the rates taken as independent: every potential draws its scenes from the same seed, so their errors are correlated and the chi-square is a guide, not a test)";
 /// Why a fitted value is null.
-const TOO_FEW: &str =
-    "fewer than four resolved rates (three coefficients and one degree of freedom)";
+const TOO_FEW: &str = "fewer than four resolved rates (three coefficients and one degree of freedom), or their abscissae too close for three coefficients (a singular fit)";
+
+/// A rate is resolved, and fitted, when it is positive by this many
+/// standard errors: below it the spectrum's low end is noise (growing
+/// modes pull the slowest rate down and its error up).
+const RESOLVED_Z: f64 = 3.0;
+
+/// Whether a rate of `near_integrable_rates` is resolved: the rule that
+/// picks the points of the fits (and of the figure).
+pub fn resolved(rate: crate::stats::Estimate) -> bool {
+    rate.stderr > 0.0 && rate.mean > RESOLVED_Z * rate.stderr
+}
 
 /// `near_integrable_rates.parquet`: one row per potential.
 pub mod rates {
