@@ -206,19 +206,6 @@ impl CollisionsConfig {
         }
         for potential in potentials {
             let id = potential.id();
-            let key = if self.method_per_potential.contains_key(&id) {
-                format!("collisions.method_per_potential.{id}")
-            } else {
-                "collisions.method".to_string()
-            };
-            check(
-                self.method_of(potential) == OffsetMethod::Sampled
-                    || !potential.family().has_well(),
-                key,
-                format!(
-                    "\"quadrature\" cannot integrate {id}: bound and orbiting pairs make the kick a non-smooth function of the arrival offset, where the offset rule does not converge (docs/benchmarks.md, \"Offset quadrature\"); use \"sampled\" for it ([collisions.method_per_potential] \"{id}\" = \"sampled\")"
-                ),
-            )?;
             if !self.points_per_potential.contains_key(&id) {
                 check_scenes(
                     sampling,

@@ -14,6 +14,14 @@
 //! at their results is not (an early stop kept `a_12` 1.4e-4 high, eight of
 //! its standard errors; docs/benchmarks.md). This is the inner integral of
 //! the kernel's `int du2 du3 dtau` (`sampling`).
+//!
+//! With a well (Lennard-Jones) the kick is not smooth in `tau` where a pair
+//! orbits or is left bound: the rule then converges like a stratified
+//! sample, not exponentially, and the last change no longer bounds its
+//! error. The moved grid keeps every sum unbiased all the same (jumps
+//! included), and the errors the study reports are the randomizations'
+//! spread, which holds either way (docs/benchmarks.md, "Lennard-Jones on the
+//! offset quadrature").
 
 use super::potential::Potential;
 use super::scan::LaunchPair;
@@ -80,7 +88,8 @@ pub struct OffsetIntegral {
     /// change, which bounds the coarser rule's error and so, the rule
     /// converging exponentially (each error about the square of the one
     /// before), the finer one's with a wide margin; plus the tails beyond the
-    /// range ([`tail_estimate`]).
+    /// range ([`tail_estimate`]). Without a well; with one, an indicator of
+    /// the kick's roughness (see the module's note).
     pub error: f64,
 }
 

@@ -36,7 +36,7 @@ pub const NODE: Col<u32> = Col::u32(
 pub const QUADRATURE_ERROR: Col<f64> = Col::f64(
     "quadrature_error",
     "v_th^2 l/v_th",
-    "bound on the error of the launch pair's offset rule on int self_kick^2 d(arrival_offset) (0 when the offset is sampled)",
+    "change of the launch pair's offset rule on int self_kick^2 d(arrival_offset) at its last halving: a bound on its error for a potential without a well, where the kick is smooth in the offset; with a well (orbiting and bound pairs) only a measure of roughness (0 when the offset is sampled)",
 );
 /// Launch velocity of the first arrival.
 pub const U2: Col<f64> = Col::f64(
