@@ -663,13 +663,18 @@ fn methods_can_differ_per_potential() {
     }
 }
 
-/// The studies the repository ships load and validate, so `ternary run` on
-/// them cannot stop at the configuration.
+/// The studies the repository ships (the default, the publication study and
+/// those docs/ runs: `docs/studies/*.toml`) load and validate, so `ternary
+/// run` on them cannot stop at the configuration.
 #[test]
 fn shipped_studies_are_valid() {
-    for file in ["pipeline.toml", "publication.toml"] {
-        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(file);
-        Study::load(&path).unwrap_or_else(|e| panic!("{file}: {e}"));
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut files = vec![root.join("pipeline.toml"), root.join("publication.toml")];
+    let studies = std::fs::read_dir(root.join("docs/studies")).expect("docs/studies");
+    files.extend(studies.map(|entry| entry.expect("entry").path()));
+    assert!(files.len() >= 4, "{files:?}");
+    for path in files {
+        Study::load(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     }
 }
 
