@@ -280,15 +280,13 @@ pub const SAME_SIDE_QUADRATURE_WIDTH: f64 = 1.25;
 /// integrand is symmetric under exchanging the two launches, as a launch
 /// pair's offset integral over a symmetric range is. The density stays that
 /// of the unordered pair (the folded points have twice it on their half, and
-/// each stands for both orderings). Launch pairs integrated over the offset
-/// (`fold_same_side`) draw the slow stratum in both strata: a slow launch's
-/// offset integral grows like `1/v`, so without it the weight of a same-side
-/// pair with a slow launch has unbounded variance (single such pairs carried
-/// the far kernel's spread at 24 x 16384 pairs: docs/benchmarks.md, "The
-/// publication study"); the fold keeps the stratum's edge straight
-/// ([`folded_coordinates`]; folding through the larger coordinate had bent
-/// it into a curve, which cost `a_n` 2-5x). With sampled offsets it doubled
-/// the error of `a` and is not used until measured further.
+/// each stands for both orderings). Only opposite-side pairs integrated over
+/// the offset (`fold_same_side`) draw the slow stratum: folding bends the
+/// stratum's dyadic edge into a curve across the square, and the weight's
+/// jump there cost `a_n` 2-5x in error (n = 6, docs/benchmarks.md, "The far
+/// kernel's heavy tail"), while on opposite-side pairs it costs nothing; with
+/// sampled offsets (Lennard-Jones) it doubled the error of `a` and is not
+/// used until measured further.
 pub fn sample_launch(
     point: [f64; 2],
     stratum: Stratum,
@@ -301,7 +299,8 @@ pub fn sample_launch(
         1.0
     };
     let fold = fold_same_side && stratum == Stratum::SameSide;
-    let launch = if fold_same_side {
+    let stratified = fold_same_side && stratum == Stratum::Opposite;
+    let launch = if stratified {
         *launch
     } else {
         launch.without_slow_stratum()
@@ -322,19 +321,15 @@ pub fn sample_launch(
 }
 
 /// Maps the unit square onto its half `c_second <= c_first` with uniform
-/// density 2, the smaller coordinate from the first: `c_second = 1 -
-/// sqrt(1 - x_first)` (the smaller of two uniform coordinates), `c_first =
-/// c_second + x_second (1 - c_second)` (uniform above it). A same-side launch
-/// pair's offset integral vanishes along the diagonal `u2 = u3` (no
-/// three-body encounter without a relative speed) with a kink that runs
-/// obliquely through the square, which randomized quasi-Monte Carlo
-/// integrates poorly; folded, the diagonal is the edge `x_second = 0`. The
-/// slow stratum of the smaller speed (`c_second < slow_share`) is the strip
-/// `x_first < 1 - (1 - slow_share)^2`, bounded by a straight line.
+/// density 2: `c_first = sqrt(x_first)` (the larger of two uniform
+/// coordinates), `c_second = x_second c_first`. A same-side launch pair's
+/// offset integral vanishes along the diagonal `u2 = u3` (no three-body
+/// encounter without a relative speed) with a kink that runs obliquely
+/// through the square, which randomized quasi-Monte Carlo integrates
+/// poorly; folded, the diagonal is the edge `x_second = 1`.
 pub fn folded_coordinates([x_first, x_second]: [f64; 2]) -> [f64; 2] {
-    // 1 - sqrt(1 - x), without the cancellation at small x.
-    let smaller = x_first / (1.0 + (1.0 - x_first).sqrt());
-    [smaller + x_second * (1.0 - smaller), smaller]
+    let larger = x_first.sqrt();
+    [larger, x_second * larger]
 }
 
 /// Scene of the literal algorithm (physics.md §3) at `u' = 0` and density
@@ -710,9 +705,8 @@ mod tests {
     }
 
     /// Folding maps the unit square uniformly onto the half below its
-    /// diagonal: the smaller coordinate is distributed as `1 - (1 - b)^2`,
-    /// the larger one uniform above it; the smaller one depends on the first
-    /// coordinate alone (the slow stratum's edge is a straight line).
+    /// diagonal: the larger coordinate is distributed as `a^2`, the smaller
+    /// one uniform below it.
     #[test]
     fn folding_covers_the_half_square_uniformly() {
         let grid = 400;
@@ -723,15 +717,6 @@ mod tests {
             })
             .collect();
         assert!(folded.iter().all(|[larger, smaller]| smaller <= larger));
-        for (x, exact) in [
-            (1e-12, 0.5e-12 + 0.125e-24),
-            (0.0625, 1.0 - libm::sqrt(0.9375)),
-            (0.75, 0.5),
-        ] {
-            let [_, smaller] = folded_coordinates([x, 0.3]);
-            assert_eq!(smaller, folded_coordinates([x, 0.9])[1]);
-            assert!((smaller / exact - 1.0).abs() < 1e-14, "{x}: {smaller}");
-        }
         for a in [0.1, 0.5, 0.9] {
             for b in [0.05, 0.3, 0.8] {
                 let fraction = folded
