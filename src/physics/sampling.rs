@@ -280,13 +280,20 @@ pub const SAME_SIDE_QUADRATURE_WIDTH: f64 = 1.25;
 /// integrand is symmetric under exchanging the two launches, as a launch
 /// pair's offset integral over a symmetric range is. The density stays that
 /// of the unordered pair (the folded points have twice it on their half, and
-/// each stands for both orderings). Only opposite-side pairs integrated over
-/// the offset (`fold_same_side`) draw the slow stratum: folding bends the
-/// stratum's dyadic edge into a curve across the square, and the weight's
-/// jump there cost `a_n` 2-5x in error (n = 6, docs/benchmarks.md, "The far
-/// kernel's heavy tail"), while on opposite-side pairs it costs nothing; with
-/// sampled offsets (Lennard-Jones) it doubled the error of `a` and is not
-/// used until measured further.
+/// each stands for both orderings). Launch pairs integrated over the offset
+/// (`fold_same_side`) draw the slow stratum: a slow launch's offset integral
+/// grows like `1/v`, so without it a pair with a slow launch has a weight of
+/// unbounded variance (single same-side such pairs carried the far kernel's
+/// spread at 24 x 16384 pairs: docs/benchmarks.md, "The same-side slow
+/// stratum"). Opposite-side pairs always; same-side pairs of a set drawn for
+/// one `u'` (`launch.spread == 0`, the kernels' sets), folded so that the
+/// stratum's edge stays straight ([`folded_coordinates`]). A launch mixture
+/// (the sweep's wide sets, which the spectrum reads) keeps the fold through
+/// the larger coordinate ([`folded_through_larger`]) and no same-side
+/// stratum: there the other fold cost the spectrum's low end (the test
+/// study's gas gap fell from 10 to 6.5 errors), for reasons not yet known.
+/// With sampled offsets the stratum doubled the error of `a` and is not
+/// used.
 pub fn sample_launch(
     point: [f64; 2],
     stratum: Stratum,
@@ -299,14 +306,21 @@ pub fn sample_launch(
         1.0
     };
     let fold = fold_same_side && stratum == Stratum::SameSide;
-    let stratified = fold_same_side && stratum == Stratum::Opposite;
-    let launch = if stratified {
+    let single_shift = launch.spread == 0.0;
+    let launch = if fold_same_side && (stratum == Stratum::Opposite || single_shift) {
         *launch
     } else {
         launch.without_slow_stratum()
     };
     let ([x_first, x_second], width) = if fold {
-        (folded_coordinates(point), SAME_SIDE_QUADRATURE_WIDTH)
+        (
+            if single_shift {
+                folded_coordinates(point)
+            } else {
+                folded_through_larger(point)
+            },
+            SAME_SIDE_QUADRATURE_WIDTH,
+        )
     } else {
         (point, 1.0)
     };
@@ -321,13 +335,26 @@ pub fn sample_launch(
 }
 
 /// Maps the unit square onto its half `c_second <= c_first` with uniform
-/// density 2: `c_first = sqrt(x_first)` (the larger of two uniform
-/// coordinates), `c_second = x_second c_first`. A same-side launch pair's
-/// offset integral vanishes along the diagonal `u2 = u3` (no three-body
-/// encounter without a relative speed) with a kink that runs obliquely
-/// through the square, which randomized quasi-Monte Carlo integrates
-/// poorly; folded, the diagonal is the edge `x_second = 1`.
+/// density 2, the smaller coordinate from the first: `c_second = 1 -
+/// sqrt(1 - x_first)` (the smaller of two uniform coordinates), `c_first =
+/// c_second + x_second (1 - c_second)` (uniform above it). A same-side launch
+/// pair's offset integral vanishes along the diagonal `u2 = u3` (no
+/// three-body encounter without a relative speed) with a kink that runs
+/// obliquely through the square, which randomized quasi-Monte Carlo
+/// integrates poorly; folded, the diagonal is the edge `x_second = 0`. The
+/// slow stratum of the smaller speed (`c_second < slow_share`) is the strip
+/// `x_first < 1 - (1 - slow_share)^2`, bounded by a straight line.
 pub fn folded_coordinates([x_first, x_second]: [f64; 2]) -> [f64; 2] {
+    // 1 - sqrt(1 - x), without the cancellation at small x.
+    let smaller = x_first / (1.0 + (1.0 - x_first).sqrt());
+    [smaller + x_second * (1.0 - smaller), smaller]
+}
+
+/// Maps the unit square onto its half `c_second <= c_first` with uniform
+/// density 2 through the larger coordinate: `c_first = sqrt(x_first)`,
+/// `c_second = x_second c_first` (the diagonal is the edge `x_second = 1`).
+/// The launch mixtures' fold ([`sample_launch`]).
+pub fn folded_through_larger([x_first, x_second]: [f64; 2]) -> [f64; 2] {
     let larger = x_first.sqrt();
     [larger, x_second * larger]
 }
@@ -704,34 +731,46 @@ mod tests {
         }
     }
 
-    /// Folding maps the unit square uniformly onto the half below its
-    /// diagonal: the larger coordinate is distributed as `a^2`, the smaller
-    /// one uniform below it.
+    /// Both folds map the unit square uniformly onto the half below its
+    /// diagonal; the kernels' fold takes the smaller coordinate from the
+    /// first one alone, distributed as `1 - (1 - b)^2` (the slow stratum's
+    /// edge is a straight line).
     #[test]
     fn folding_covers_the_half_square_uniformly() {
         let grid = 400;
-        let folded: Vec<[f64; 2]> = (0..grid * grid)
-            .map(|k| {
-                let cell = |i: u32| (f64::from(i) + 0.5) / f64::from(grid);
-                folded_coordinates([cell(k / grid), cell(k % grid)])
-            })
-            .collect();
-        assert!(folded.iter().all(|[larger, smaller]| smaller <= larger));
-        for a in [0.1, 0.5, 0.9] {
-            for b in [0.05, 0.3, 0.8] {
-                let fraction = folded
-                    .iter()
-                    .filter(|[larger, smaller]| *larger <= a && *smaller <= b)
-                    .count() as f64
-                    / folded.len() as f64;
-                // Uniform density 2 on {smaller <= larger}: measure of the region.
-                let lower = b.min(a);
-                let expected = 2.0 * (0.5 * lower * lower + (a - lower) * b);
-                assert!(
-                    (fraction - expected).abs() < 5e-3,
-                    "{a} {b}: {fraction} vs {expected}"
-                );
+        for fold in [folded_coordinates, folded_through_larger] {
+            let folded: Vec<[f64; 2]> = (0..grid * grid)
+                .map(|k| {
+                    let cell = |i: u32| (f64::from(i) + 0.5) / f64::from(grid);
+                    fold([cell(k / grid), cell(k % grid)])
+                })
+                .collect();
+            assert!(folded.iter().all(|[larger, smaller]| smaller <= larger));
+            for a in [0.1, 0.5, 0.9] {
+                for b in [0.05, 0.3, 0.8] {
+                    let fraction = folded
+                        .iter()
+                        .filter(|[larger, smaller]| *larger <= a && *smaller <= b)
+                        .count() as f64
+                        / folded.len() as f64;
+                    // Uniform density 2 on {smaller <= larger}: measure of the region.
+                    let lower = b.min(a);
+                    let expected = 2.0 * (0.5 * lower * lower + (a - lower) * b);
+                    assert!(
+                        (fraction - expected).abs() < 5e-3,
+                        "{a} {b}: {fraction} vs {expected}"
+                    );
+                }
             }
+        }
+        for (x, exact) in [
+            (1e-12, 0.5e-12 + 0.125e-24),
+            (0.0625, 1.0 - libm::sqrt(0.9375)),
+            (0.75, 0.5),
+        ] {
+            let [_, smaller] = folded_coordinates([x, 0.3]);
+            assert_eq!(smaller, folded_coordinates([x, 0.9])[1]);
+            assert!((smaller / exact - 1.0).abs() < 1e-14, "{x}: {smaller}");
         }
     }
 
