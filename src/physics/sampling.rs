@@ -275,7 +275,7 @@ pub const SAME_SIDE_QUADRATURE_WIDTH: f64 = 1.25;
 /// The launch pair in `stratum` at the unit-square point `[x_first, x_second]`,
 /// with its proposal density of `(|u2|, |u3|)` under `launch`. With
 /// `fold_same_side`, a same-side point is first folded onto the half of the
-/// square below its diagonal ([`folded_coordinates`]) and its speeds widened
+/// square below its diagonal ([`folded_through_smaller`]) and its speeds widened
 /// by [`SAME_SIDE_QUADRATURE_WIDTH`]: valid when the scene's
 /// integrand is symmetric under exchanging the two launches, as a launch
 /// pair's offset integral over a symmetric range is. The density stays that
@@ -287,7 +287,7 @@ pub const SAME_SIDE_QUADRATURE_WIDTH: f64 = 1.25;
 /// spread at 24 x 16384 pairs: docs/benchmarks.md, "The same-side slow
 /// stratum"). Opposite-side pairs always; same-side pairs of a set drawn for
 /// one `u'` (`launch.spread == 0`, the kernels' sets), folded so that the
-/// stratum's edge stays straight ([`folded_coordinates`]). A launch mixture
+/// stratum's edge stays straight ([`folded_through_smaller`]). A launch mixture
 /// (the sweep's wide sets, which the spectrum reads) keeps the fold through
 /// the larger coordinate ([`folded_through_larger`]) and no same-side
 /// stratum: there the other fold cost the spectrum's low end (the test
@@ -315,7 +315,7 @@ pub fn sample_launch(
     let ([x_first, x_second], width) = if fold {
         (
             if single_shift {
-                folded_coordinates(point)
+                folded_through_smaller(point)
             } else {
                 folded_through_larger(point)
             },
@@ -344,7 +344,7 @@ pub fn sample_launch(
 /// integrates poorly; folded, the diagonal is the edge `x_second = 0`. The
 /// slow stratum of the smaller speed (`c_second < slow_share`) is the strip
 /// `x_first < 1 - (1 - slow_share)^2`, bounded by a straight line.
-pub fn folded_coordinates([x_first, x_second]: [f64; 2]) -> [f64; 2] {
+pub fn folded_through_smaller([x_first, x_second]: [f64; 2]) -> [f64; 2] {
     // 1 - sqrt(1 - x), without the cancellation at small x.
     let smaller = x_first / (1.0 + (1.0 - x_first).sqrt());
     [smaller + x_second * (1.0 - smaller), smaller]
@@ -738,7 +738,7 @@ mod tests {
     #[test]
     fn folding_covers_the_half_square_uniformly() {
         let grid = 400;
-        for fold in [folded_coordinates, folded_through_larger] {
+        for fold in [folded_through_smaller, folded_through_larger] {
             let folded: Vec<[f64; 2]> = (0..grid * grid)
                 .map(|k| {
                     let cell = |i: u32| (f64::from(i) + 0.5) / f64::from(grid);
@@ -768,8 +768,8 @@ mod tests {
             (0.0625, 1.0 - libm::sqrt(0.9375)),
             (0.75, 0.5),
         ] {
-            let [_, smaller] = folded_coordinates([x, 0.3]);
-            assert_eq!(smaller, folded_coordinates([x, 0.9])[1]);
+            let [_, smaller] = folded_through_smaller([x, 0.3]);
+            assert_eq!(smaller, folded_through_smaller([x, 0.9])[1]);
             assert!((smaller / exact - 1.0).abs() < 1e-14, "{x}: {smaller}");
         }
     }
