@@ -7,7 +7,10 @@
 //! eigenvalues of the symmetrized generator (`spectrum`) and the decay of
 //! the linearized relative entropy along the `evolve` stage's evolutions
 //! (the tagged particle by scaling and squaring of the raw generator, no
-//! symmetrization), which the H-theorem makes monotone.
+//! symmetrization), which the H-theorem makes monotone; and two estimators
+//! of the operator from the same scenes (its columns, and the Dirichlet form
+//! detailed balance makes of them), which also carries the gaps to the
+//! Calogero point.
 
 mod common;
 
@@ -61,32 +64,50 @@ velocity_range = 4.0
     )
 }
 
-/// The store of the study, computed once for every test of this file.
+/// The store of the study, computed once for every test of this file: first
+/// its spectra with the detailed-balance estimator (their artifacts kept for
+/// [`balanced_rates`]), then the study as configured (the column estimator),
+/// whose instances the store's refs name.
 fn store() -> &'static Path {
     static STORE: OnceLock<PathBuf> = OnceLock::new();
     STORE.get_or_init(|| {
         let dir = workspace("spectrum");
-        let config = write_config(&dir, &study_text("store"));
-        let stages = ["scan", "launches", "collisions", "spectrum", "evolve"];
-        let mut args = vec!["run", "--quiet"];
-        stages.iter().for_each(|s| args.extend(["--only", s]));
-        let output = ternary(&config, &args);
-        assert!(output.status.success(), "{}", stderr(&output));
+        let run = |text: &str, stages: &[&str]| {
+            let config = write_config(&dir, text);
+            let mut args = vec!["run", "--quiet"];
+            stages.iter().for_each(|s| args.extend(["--only", s]));
+            let output = ternary(&config, &args);
+            assert!(output.status.success(), "{}", stderr(&output));
+        };
+        let scenes = ["scan", "launches", "collisions"];
+        let balanced = format!("{}estimator = \"detailed_balance\"\n", study_text("store"));
+        run(&balanced, &[&scenes[..], &["spectrum"]].concat());
+        let artifact = artifact_dir(&dir.join("store"), "spectrum", "ipp-6");
+        fs::rename(&artifact, dir.join("balanced-spectrum")).unwrap();
+        fs::remove_file(dir.join("store/refs/spectrum/ipp-6.json")).unwrap();
+        run(
+            &study_text("store"),
+            &[&scenes[..], &["spectrum", "evolve"]].concat(),
+        );
         dir.join("store")
     })
 }
 
-/// The table `name` of `<stage>[<instance>]`.
-fn table(stage: &str, instance: &str, name: &str) -> RecordBatch {
-    let store = store();
+/// The artifact directory `refs/<stage>/<instance>.json` names in `store`.
+fn artifact_dir(store: &Path, stage: &str, instance: &str) -> PathBuf {
     let reference: serde_json::Value = serde_json::from_str(
         &fs::read_to_string(store.join(format!("refs/{stage}/{instance}.json"))).unwrap(),
     )
     .unwrap();
-    let dir = store
+    store
         .join("artifacts")
         .join(stage)
-        .join(reference["key"].as_str().unwrap());
+        .join(reference["key"].as_str().unwrap())
+}
+
+/// The table `name` of `<stage>[<instance>]`.
+fn table(stage: &str, instance: &str, name: &str) -> RecordBatch {
+    let dir = artifact_dir(store(), stage, instance);
     read_parquet(&dir.join(format!("{name}.parquet")))
         .unwrap()
         .0
@@ -102,13 +123,59 @@ fn rows_of(batch: &RecordBatch, generator: &str) -> Vec<usize> {
 
 /// The rates of `generator`, slowest first, with their parities.
 fn rates(potential: &str, generator: &str) -> Vec<(Estimate, String)> {
+    rates_in(
+        &table("spectrum", potential, contract::spectrum::rates::TABLE.name),
+        generator,
+    )
+}
+
+/// The rates of `generator` in a `spectrum.parquet` batch.
+fn rates_in(batch: &RecordBatch, generator: &str) -> Vec<(Estimate, String)> {
     use contract::spectrum::rates::*;
-    let batch = table("spectrum", potential, TABLE.name);
-    let (rates, parities) = (RATE.read(&batch).unwrap(), PARITY.read(&batch).unwrap());
-    rows_of(&batch, generator)
+    let (rates, parities) = (RATE.read(batch).unwrap(), PARITY.read(batch).unwrap());
+    rows_of(batch, generator)
         .into_iter()
         .map(|i| (rates[i], parities[i].clone()))
         .collect()
+}
+
+/// `n = 6`'s rates of `generator` from the detailed-balance estimator.
+fn balanced_rates(generator: &str) -> Vec<(Estimate, String)> {
+    use contract::spectrum::rates::*;
+    let dir = store().parent().unwrap().join("balanced-spectrum");
+    let batch = read_parquet(&dir.join(format!("{}.parquet", TABLE.name)))
+        .unwrap()
+        .0;
+    rates_in(&batch, generator)
+}
+
+/// Two estimators of one operator from the same scenes: the column form
+/// (each column the kernel at its node, symmetrized with `f0`) and the
+/// Dirichlet form detailed balance makes of it (`-1/6 sum mu Delta
+/// Delta^T`). Their slowest two rates (the gap, odd, and the slowest even
+/// mode) agree within three combined errors for both generators, in the
+/// same parity; the Dirichlet form, whose per-scene terms are squares, has
+/// no growing mode by construction and resolves the gaps at least twice as
+/// precisely (measured: 4-5x). Faster modes are not compared: on this grid
+/// (step 0.05) the column form's carry a step error of up to 5% (tagged
+/// `r_4`: 2.44 -> 2.56 `Gamma` at step 0.025, where the Dirichlet form reads
+/// 2.59 at either step; docs/spectrum.md).
+#[test]
+fn the_detailed_balance_estimator_agrees_with_the_columns() {
+    for generator in ["full", "tagged"] {
+        let (columns, balanced) = (rates("ipp-6", generator), balanced_rates(generator));
+        for ((c, c_parity), (b, b_parity)) in columns.iter().zip(&balanced).take(2) {
+            let z = (b.mean - c.mean) / libm::hypot(b.stderr, c.stderr);
+            assert!(z.abs() < 3.0, "{generator}: {b:?} against {c:?}");
+            assert_eq!(b_parity, c_parity, "{generator}");
+        }
+        assert!(balanced.iter().all(|(r, _)| r.mean > 0.0), "{generator}");
+        let (c, b) = (columns[0].0, balanced[0].0);
+        assert!(
+            b.stderr < 0.5 * c.stderr,
+            "{generator}: {b:?} against {c:?}"
+        );
+    }
 }
 
 /// The conserved modes of the estimate before projection lie in the
@@ -287,17 +354,22 @@ enabled = false
 
 [md]
 enabled = false
+
+[spectrum]
+estimator = "detailed_balance"
 "#
     )
 }
 
 /// Near the Calogero point `n = 2` every collision is a permutation of the
 /// velocities plus kicks of `O(n - 2)` (first-order perturbation theory
-/// about the integrable trajectories), so `Gamma = O((n - 2)^2)`: the
-/// `near_integrable` fit of `Gamma` over `n - 2 = 0.05 .. 0.5` gives the
-/// exponent 2 within four of its errors, which are small enough (< 0.05) to
-/// tell it from the 1.72 that `n - 2 = 0.5 .. 1` alone gives (the gaps
-/// need the study's scenes: docs/spectrum.md).
+/// about the integrable trajectories), so `Gamma` and every relaxation rate
+/// are `O((n - 2)^2)`: the `near_integrable` fits over `n - 2 = 0.05 .. 0.5`
+/// give the exponent 2 within four of their errors for `Gamma` (errors below
+/// 0.05: enough to tell it from the 1.72 that `n - 2 = 0.5 .. 1` alone
+/// gives) and, from the detailed-balance estimator, for the gaps of the gas
+/// and of one particle (errors below 0.3 and 0.1; the column estimator
+/// resolves neither at these scenes: docs/spectrum.md).
 #[test]
 fn the_rates_vanish_quadratically_at_the_calogero_point() {
     use contract::near_integrable::fits::*;
@@ -308,23 +380,20 @@ fn the_rates_vanish_quadratically_at_the_calogero_point() {
     stages.iter().for_each(|s| args.extend(["--only", s]));
     let output = ternary(&config, &args);
     assert!(output.status.success(), "{}", stderr(&output));
-    let reference: serde_json::Value = serde_json::from_str(
-        &fs::read_to_string(dir.join("store/refs/near_integrable/study.json")).unwrap(),
-    )
-    .unwrap();
-    let artifact = dir
-        .join("store/artifacts/near_integrable")
-        .join(reference["key"].as_str().unwrap());
+    let artifact = artifact_dir(&dir.join("store"), "near_integrable", "study");
     let fits = read_parquet(&artifact.join(format!("{}.parquet", TABLE.name)))
         .unwrap()
         .0;
     let quantities = QUANTITY.read(&fits).unwrap();
     let exponents = EXPONENT.read(&fits).unwrap();
     let row = |quantity: &str| quantities.iter().position(|q| q == quantity).unwrap();
-    let variance_rate = exponents[row("variance_rate")];
-    assert!(variance_rate.stderr < 0.05, "{variance_rate:?}");
-    assert!(
-        (variance_rate.mean - 2.0).abs() < 4.0 * variance_rate.stderr,
-        "{variance_rate:?}"
-    );
+    for (quantity, largest_error) in [("variance_rate", 0.05), ("gap", 0.3), ("particle_gap", 0.1)]
+    {
+        let exponent = exponents[row(quantity)];
+        assert!(exponent.stderr < largest_error, "{quantity}: {exponent:?}");
+        assert!(
+            (exponent.mean - 2.0).abs() < 4.0 * exponent.stderr,
+            "{quantity}: {exponent:?}"
+        );
+    }
 }

@@ -68,7 +68,7 @@ pub use scan::{
     ScanGridOverride, ScanParams,
 };
 pub use slurm::SlurmConfig;
-pub use spectrum::{MAX_SPECTRUM_MODES, SpectrumConfig, SpectrumParams};
+pub use spectrum::{MAX_SPECTRUM_MODES, SpectrumConfig, SpectrumEstimator, SpectrumParams};
 pub use store::StoreConfig;
 pub use sweep::{MAX_SWEEP_POINTS, SweepConfig, SweepParams};
 

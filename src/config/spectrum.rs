@@ -29,6 +29,24 @@ pub struct SpectrumConfig {
     /// Its law `A (n - 2)^p exp(q (n - 2))` holds to `n = 2.5` within the
     /// rates' 0.2%; out to `n = 3` the next order shows (docs/spectrum.md).
     pub near_integrable_max_n: f64,
+    /// How the generators are estimated from the scenes.
+    pub estimator: SpectrumEstimator,
+}
+
+/// How the `spectrum` stage estimates the generators from the scenes
+/// (`evolve::operator`).
+#[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum SpectrumEstimator {
+    /// `evolve`'s: each column the kernel of the special particle at its node,
+    /// symmetrized with `f0` (detailed balance holds only on average: noise
+    /// gives growing modes).
+    Columns,
+    /// The Dirichlet form `-c sum mu Delta Delta^T` that detailed balance
+    /// makes of it: symmetric and negative semi-definite for every sample,
+    /// and noise proportional to the rates where the scattering is nearly
+    /// integrable.
+    DetailedBalance,
 }
 
 impl Default for SpectrumConfig {
@@ -39,6 +57,7 @@ impl Default for SpectrumConfig {
             grid_step: 0.05,
             modes: 4,
             near_integrable_max_n: 2.5,
+            estimator: SpectrumEstimator::Columns,
         }
     }
 }
@@ -57,6 +76,8 @@ pub struct SpectrumParams {
     pub grid_step: f64,
     /// Shapes written per generator.
     pub modes: u32,
+    /// How the generators are estimated.
+    pub estimator: SpectrumEstimator,
 }
 
 impl SpectrumConfig {
@@ -93,6 +114,7 @@ impl SpectrumConfig {
             velocity_range: self.velocity_range,
             grid_step: self.grid_step,
             modes: self.modes,
+            estimator: self.estimator,
         })
     }
 }

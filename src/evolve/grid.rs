@@ -25,6 +25,16 @@ pub struct Stencil {
     weights: [f64; 3],
 }
 
+impl Stencil {
+    /// Its entries seen from a node away from the grid's ends (see
+    /// [`VelocityGrid::interior_nodes`]): node offsets and weights.
+    pub fn relative_entries(&self) -> [(i64, f64); 3] {
+        let [w0, w1, w2] = self.weights;
+        let c = self.centre;
+        [(c - 1, w0), (c, w1), (c + 1, w2)]
+    }
+}
+
 /// Nodes `u_i = (i - half_nodes) * step`, `i = 0 ..= 2 half_nodes`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct VelocityGrid {
@@ -86,6 +96,14 @@ impl VelocityGrid {
     /// generators stable: an extrapolating stencil at the ends would give
     /// anti-diffusion there and exponentially growing modes.
     pub fn deposit(&self, column: &mut [f64], position: f64, moments: [f64; 3], scale: f64) {
+        for (node, weight) in self.deposit_entries(position, moments) {
+            column[node] += scale * weight;
+        }
+    }
+
+    /// The nodes and weights [`VelocityGrid::deposit`] adds (once each, in
+    /// this order; at an end two entries may name the same node).
+    pub fn deposit_entries(&self, position: f64, moments: [f64; 3]) -> [(usize, f64); 3] {
         let last = self.len() - 1;
         let position = position.clamp(0.0, last as f64);
         let centre = position.round();
@@ -94,17 +112,11 @@ impl VelocityGrid {
         let (c1, c2) = (m1 + d * m0, m2 + 2.0 * d * m1 + d * d * m0);
         let weights = [0.5 * (c2 - c1), m0 - c2, 0.5 * (c2 + c1)];
         let k = centre as usize;
-        column[k] += scale * weights[1];
-        if k == 0 {
-            column[0] += scale * weights[0];
-        } else {
-            column[k - 1] += scale * weights[0];
-        }
-        if k == last {
-            column[last] += scale * weights[2];
-        } else {
-            column[k + 1] += scale * weights[2];
-        }
+        [
+            (k, weights[1]),
+            (k.saturating_sub(1), weights[0]),
+            ((k + 1).min(last), weights[2]),
+        ]
     }
 
     /// The stencil of a point mass `x` (`v_th`) away from a node.
@@ -124,15 +136,27 @@ impl VelocityGrid {
     /// on the offset alone (the same three moments), and which near the ends,
     /// where it reflects, is called.
     pub fn deposit_stencil(&self, column: &mut [f64], node: usize, stencil: &Stencil, scale: f64) {
+        for (k, weight) in self.stencil_entries(node, stencil) {
+            column[k] += scale * weight;
+        }
+    }
+
+    /// The nodes from which `stencil` lies inside the grid, where
+    /// [`VelocityGrid::stencil_entries`] are its
+    /// [`Stencil::relative_entries`] shifted (possibly empty).
+    pub fn interior_nodes(&self, stencil: &Stencil) -> std::ops::RangeInclusive<i64> {
+        1 - stencil.centre..=self.len() as i64 - 2 - stencil.centre
+    }
+
+    /// The nodes and weights [`VelocityGrid::deposit_stencil`] adds.
+    pub fn stencil_entries(&self, node: usize, stencil: &Stencil) -> [(usize, f64); 3] {
+        if !self.interior_nodes(stencil).contains(&(node as i64)) {
+            return self.deposit_entries(node as f64 + stencil.shift, [1.0, 0.0, 0.0]);
+        }
         let k = node as i64 + stencil.centre;
-        if k < 1 || k + 1 >= self.len() as i64 {
-            self.deposit(column, node as f64 + stencil.shift, [1.0, 0.0, 0.0], scale);
-            return;
-        }
         let k = k as usize;
-        for (slot, weight) in column[k - 1..=k + 1].iter_mut().zip(stencil.weights) {
-            *slot += scale * weight;
-        }
+        let [w0, w1, w2] = stencil.weights;
+        [(k - 1, w0), (k, w1), (k + 1, w2)]
     }
 
     /// Adds a point mass `scale` at velocity `u`.

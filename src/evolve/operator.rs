@@ -149,6 +149,161 @@ pub fn kernel_generators(
         .collect()
 }
 
+/// The full and tagged generators of every replicate in detailed-balance
+/// (Dirichlet) form, from the same events, images and deposition as
+/// [`kernel_generators`]. With `mu` the equilibrium measure of the placed
+/// images (`f0_j` times an image's launch weight at node `j`) and `Delta` an
+/// image's deposited change (outgoing minus incoming velocities of the
+/// counted particles), detailed balance (a collision and its time-reversed
+/// mirror image are equally frequent in equilibrium) turns `phi^T M f0 g =
+/// sum mu g(u') Delta phi` into `-1/6 sum mu (Delta g)(Delta phi)` for the
+/// full operator (each collision is counted once per particle as the special
+/// one); for the tagged one, whose special particle's change `delta_s` gives
+/// `-1/2 sum mu (delta_s g)(delta_s phi)`, the same counting turns that into
+/// `-1/6 sum mu sum_k (delta_k g)(delta_k phi)` over the three particles
+/// (`delta_k` each one's own change, matched by rank): the partners' incoming
+/// velocities lie between the nodes, so that a shape alternating from node to
+/// node is not free to move (the special particle starts on a node, where the
+/// interpolant of such a shape is flat: from it alone, small kicks leave it
+/// a spurious slow mode). So `M = -A D^(-1) / 6`, `A = sum mu Delta
+/// Delta^T` (or its per-particle sum), `D = diag(f0)`: `D^(-1/2) M
+/// D^(1/2)` is symmetric and negative semi-definite for every sample, and its
+/// zero modes are the invariants on both sides (each `Delta` keeps number,
+/// momentum and energy). Where the scattering is nearly integrable (`n -> 2`),
+/// an image's `Delta` is `O(e)` and enters squared, while the column form's
+/// `O(e)` terms cancel only on average: the noise stays proportional to the
+/// rates. Each replicate adds its events in their stored order:
+/// bit-identical for any thread count. `progress` receives the events of
+/// each replicate as it finishes.
+pub fn balanced_generators(
+    events: &[Event],
+    draws: &Draws,
+    grid: &VelocityGrid,
+    kick_floor: f64,
+    progress: impl Fn(usize) + Sync,
+) -> Vec<Generators> {
+    let mut by_replicate: Vec<Vec<&Event>> = vec![Vec::new(); draws.replicates()];
+    for event in events {
+        by_replicate[event.randomization as usize].push(event);
+    }
+    by_replicate
+        .par_iter()
+        .enumerate()
+        .map(|(replicate, events)| {
+            let mut forms = DirichletForms::new(grid);
+            for event in events {
+                let scale = draws.scale(event);
+                for image in images(event, kick_floor) {
+                    if let Some(placed) = Placed::new(&image, replicate, scale, grid) {
+                        forms.add(grid, &placed);
+                    }
+                }
+            }
+            progress(events.len());
+            forms.generators()
+        })
+        .collect()
+}
+
+/// The sums `A = sum mu Delta Delta^T` of the full and tagged generators
+/// (upper triangles: `A` is symmetric).
+struct DirichletForms {
+    equilibrium: Vec<f64>,
+    full: Vec<f64>,
+    tagged: Vec<f64>,
+}
+
+impl DirichletForms {
+    fn new(grid: &VelocityGrid) -> DirichletForms {
+        let n = grid.len();
+        DirichletForms {
+            equilibrium: grid.maxwellian(),
+            full: vec![0.0; n * n],
+            tagged: vec![0.0; n * n],
+        }
+    }
+
+    /// Adds `placed` at every node: to the full form its whole change, to the
+    /// tagged form each particle's own change.
+    fn add(&mut self, grid: &VelocityGrid, placed: &Placed) {
+        let n = grid.len();
+        let (mut all, mut own) = ([(0, 0.0); 18], [(0, 0.0); 6]);
+        for node in 0..n {
+            let measure = self.equilibrium[node] * placed.weights[node];
+            if measure == 0.0 {
+                continue;
+            }
+            let mut count = 0;
+            for [from, to] in placed.moves.iter().flatten() {
+                let from = grid.stencil_entries(node, from).map(|(k, w)| (k, -w));
+                own[..3].copy_from_slice(&from);
+                own[3..].copy_from_slice(&grid.stencil_entries(node, to));
+                all[count..count + 6].copy_from_slice(&own);
+                count += 6;
+                let merged = merged_by_node(&mut own);
+                add_outer(&mut self.tagged, n, &own[..merged], measure);
+            }
+            let merged = merged_by_node(&mut all[..count]);
+            add_outer(&mut self.full, n, &all[..merged], measure);
+        }
+    }
+
+    /// `M = -c A D^(-1)` of both forms.
+    fn generators(&self) -> Generators {
+        let n = self.equilibrium.len();
+        let generator = |form: &[f64], c: f64| {
+            let columns: Vec<Vec<f64>> = (0..n)
+                .map(|j| {
+                    (0..n)
+                        .map(|i| -c * form[i.min(j) * n + i.max(j)] / self.equilibrium[j])
+                        .collect()
+                })
+                .collect();
+            Generator::from_columns(&columns)
+        };
+        Generators {
+            full: generator(&self.full, 1.0 / 6.0),
+            tagged: generator(&self.tagged, 1.0 / 6.0),
+        }
+    }
+}
+
+/// Sorts (node, weight) `entries` by node (insertion sort: they come in
+/// sorted runs) and sums the entries of each node into its first; returns
+/// how many distinct nodes lead the slice.
+fn merged_by_node(entries: &mut [(usize, f64)]) -> usize {
+    for i in 1..entries.len() {
+        let mut j = i;
+        while j > 0 && entries[j - 1].0 > entries[j].0 {
+            entries.swap(j - 1, j);
+            j -= 1;
+        }
+    }
+    let mut merged = 0;
+    for i in 0..entries.len() {
+        if merged > 0 && entries[merged - 1].0 == entries[i].0 {
+            entries[merged - 1].1 += entries[i].1;
+        } else {
+            entries[merged] = entries[i];
+            merged += 1;
+        }
+    }
+    merged
+}
+
+/// Adds `measure Delta Delta^T` to the upper triangle (row <= column) of
+/// the `n x n` matrix `form`, `Delta` given as (node, weight) entries with
+/// distinct nodes, ascending.
+fn add_outer(form: &mut [f64], n: usize, changes: &[(usize, f64)], measure: f64) {
+    for (p, &(a, x)) in changes.iter().enumerate() {
+        let row = &mut form[a * n..(a + 1) * n];
+        let scaled = measure * x;
+        for &(b, y) in &changes[p..] {
+            row[b] += scaled * y;
+        }
+    }
+}
+
 /// Drift `sum_i M_ij (u_i - u_j)` and variance rate `sum_i M_ij (u_i - u_j)^2`
 /// of every column: for the tagged generator, the special particle's drift and
 /// variance rates at `u' = u_j` (exact: deposition keeps both moments).

@@ -10,12 +10,12 @@
 
 use serde_json::Value;
 
-use crate::config::SpectrumParams;
+use crate::config::{SpectrumEstimator, SpectrumParams};
 use crate::contract::instances;
 use crate::contract::readers::collision_events;
 use crate::contract::{self, Rows};
 use crate::evolve::grid::VelocityGrid;
-use crate::evolve::operator::{Generators, column_rates, kernel_generators};
+use crate::evolve::operator::{Generators, balanced_generators, column_rates, kernel_generators};
 use crate::evolve::processes::collision_invariants;
 use crate::evolve::propagate::Generator;
 use crate::evolve::spectrum::{Spectrum, spectrum};
@@ -195,15 +195,21 @@ impl Stage for SpectrumStage {
     }
 
     /// Placing every event image on every node dominates: 5e-8 s per event
-    /// row and node (measured 2026-11-27, 2 cores: `n = 6`'s 2.0e6 wide rows
-    /// in 12 s on 161 nodes, 19 s on 201, 31 s on 321); the tables hold a
-    /// row per mode and generator, and the shapes a row per node.
+    /// row and node for the columns (measured 2026-11-27, 2 cores: `n = 6`'s
+    /// 2.0e6 wide rows in 12 s on 161 nodes, 19 s on 201, 31 s on 321), and
+    /// 1.5e-7 s more for the Dirichlet form (9.9e5 rows on 161 nodes: 7.7 s
+    /// and 32 s); the tables hold a row per mode and generator, and the
+    /// shapes a row per node.
     fn cost(&self, inputs: &[Cost]) -> Cost {
         let events: f64 = inputs.iter().map(|input| input.rows).sum();
         let nodes = self.grid().len() as f64;
         let rows = 2.0 * nodes * (1.0 + f64::from(self.params.modes));
+        let per_placement = match self.params.estimator {
+            SpectrumEstimator::Columns => 5e-8,
+            SpectrumEstimator::DetailedBalance => 2e-7,
+        };
         Cost {
-            cpu_seconds: 5e-8 * events * nodes,
+            cpu_seconds: per_placement * events * nodes,
             bytes: 40.0 * rows,
             rows,
         }
@@ -211,19 +217,26 @@ impl Stage for SpectrumStage {
 
     fn run(&self, inputs: &[Input], progress: &Progress) -> Result<Vec<Table>, StageError> {
         let (events, draws, _) = collision_events(&inputs[0])?;
-        progress.set_total(2 + events.len() as u64);
+        let passes = match self.params.estimator {
+            SpectrumEstimator::Columns => 1,
+            SpectrumEstimator::DetailedBalance => 2,
+        };
+        progress.set_total(2 + passes * events.len() as u64);
         let placed = std::sync::atomic::AtomicUsize::new(0);
-        let generators = kernel_generators(
-            &events,
-            &draws,
-            &self.grid(),
-            self.params.kernel.kick_floor,
-            |done| {
-                let before = placed.swap(done, std::sync::atomic::Ordering::Relaxed);
-                progress.advance((done - before) as u64);
-            },
-        );
+        let (grid, floor) = (self.grid(), self.params.kernel.kick_floor);
+        let generators = kernel_generators(&events, &draws, &grid, floor, |done| {
+            let before = placed.swap(done, std::sync::atomic::Ordering::Relaxed);
+            progress.advance((done - before) as u64);
+        });
         let gamma = self.gamma(&generators)?;
+        let generators = match self.params.estimator {
+            SpectrumEstimator::Columns => generators,
+            SpectrumEstimator::DetailedBalance => {
+                balanced_generators(&events, &draws, &grid, floor, |done| {
+                    progress.advance(done as u64)
+                })
+            }
+        };
         let analysed = [
             self.analyse(&generators, 0, &gamma)?,
             self.analyse(&generators, 1, &gamma)?,
