@@ -27,8 +27,8 @@ use ternary::stats::Estimate;
 /// `n = 6` (and the integrable `n = 2`) on the offset quadrature, a quarter
 /// of the default study's launch pairs (its wide set: 32 randomizations of
 /// 256), with the evolution from `u' = 0` to `4 / Gamma`; the spectrum on the
-/// evolution's grid.
-fn study_text(store: &str) -> String {
+/// evolution's grid from `estimator`.
+fn study_text(store: &str, estimator: &str) -> String {
     format!(
         r#"
 [store]
@@ -60,14 +60,16 @@ times = [0.5, 1.0, 2.0, 3.0, 4.0]
 # The evolution's grid, so that both compute the same operator.
 [spectrum]
 velocity_range = 4.0
+grid_step = 0.05
+estimator = "{estimator}"
 "#
     )
 }
 
 /// The store of the study, computed once for every test of this file: first
 /// its spectra with the detailed-balance estimator (their artifacts kept for
-/// [`balanced_rates`]), then the study as configured (the column estimator),
-/// whose instances the store's refs name.
+/// [`balanced_rates`]), then with the column estimator, whose generators are
+/// the `evolve` stage's, and the evolution; the store's refs name these.
 fn store() -> &'static Path {
     static STORE: OnceLock<PathBuf> = OnceLock::new();
     STORE.get_or_init(|| {
@@ -80,13 +82,13 @@ fn store() -> &'static Path {
             assert!(output.status.success(), "{}", stderr(&output));
         };
         let scenes = ["scan", "launches", "collisions"];
-        let balanced = format!("{}estimator = \"detailed_balance\"\n", study_text("store"));
+        let balanced = study_text("store", "detailed_balance");
         run(&balanced, &[&scenes[..], &["spectrum"]].concat());
         let artifact = artifact_dir(&dir.join("store"), "spectrum", "ipp-6");
         fs::rename(&artifact, dir.join("balanced-spectrum")).unwrap();
         fs::remove_file(dir.join("store/refs/spectrum/ipp-6.json")).unwrap();
         run(
-            &study_text("store"),
+            &study_text("store", "columns"),
             &[&scenes[..], &["spectrum", "evolve"]].concat(),
         );
         dir.join("store")

@@ -113,11 +113,51 @@ pub fn kernel_generators(
     kick_floor: f64,
     progress: impl Fn(usize),
 ) -> Vec<Generators> {
-    let (nodes, replicates) = (grid.len(), draws.replicates());
-    let mut columns: Vec<ColumnSums> = (0..nodes)
+    let nodes: Vec<usize> = (0..grid.len()).collect();
+    let columns = column_sums(events, draws, grid, kick_floor, &nodes, progress);
+    (0..draws.replicates())
+        .map(|r| {
+            let gather = |part: fn(&ColumnSums) -> &Vec<Vec<f64>>| {
+                let picked: Vec<Vec<f64>> = columns.iter().map(|c| part(c)[r].clone()).collect();
+                Generator::from_columns(&picked)
+            };
+            Generators {
+                full: gather(|c| &c.full),
+                tagged: gather(|c| &c.tagged),
+            }
+        })
+        .collect()
+}
+
+/// The tagged generator's column `node` of every replicate, as
+/// [`kernel_generators`] computes it (the kernel of the special particle at
+/// that node).
+pub fn tagged_columns(
+    events: &[Event],
+    draws: &Draws,
+    grid: &VelocityGrid,
+    kick_floor: f64,
+    node: usize,
+) -> Vec<Vec<f64>> {
+    let mut sums = column_sums(events, draws, grid, kick_floor, &[node], |_| {});
+    sums.swap_remove(0).tagged
+}
+
+/// The per-replicate sums of the columns `nodes`.
+fn column_sums(
+    events: &[Event],
+    draws: &Draws,
+    grid: &VelocityGrid,
+    kick_floor: f64,
+    nodes: &[usize],
+    progress: impl Fn(usize),
+) -> Vec<ColumnSums> {
+    let (size, replicates) = (grid.len(), draws.replicates());
+    let mut columns: Vec<ColumnSums> = nodes
+        .iter()
         .map(|_| ColumnSums {
-            full: vec![vec![0.0; nodes]; replicates],
-            tagged: vec![vec![0.0; nodes]; replicates],
+            full: vec![vec![0.0; size]; replicates],
+            tagged: vec![vec![0.0; size]; replicates],
         })
         .collect();
     for (k, block) in events.chunks(BLOCK).enumerate() {
@@ -131,22 +171,11 @@ pub fn kernel_generators(
             .collect();
         columns
             .par_iter_mut()
-            .enumerate()
-            .for_each(|(node, sums)| placed.iter().for_each(|p| sums.add(grid, node, p)));
+            .zip(nodes)
+            .for_each(|(sums, &node)| placed.iter().for_each(|p| sums.add(grid, node, p)));
         progress(k * BLOCK + block.len());
     }
-    (0..replicates)
-        .map(|r| {
-            let gather = |part: fn(&ColumnSums) -> &Vec<Vec<f64>>| {
-                let picked: Vec<Vec<f64>> = columns.iter().map(|c| part(c)[r].clone()).collect();
-                Generator::from_columns(&picked)
-            };
-            Generators {
-                full: gather(|c| &c.full),
-                tagged: gather(|c| &c.tagged),
-            }
-        })
-        .collect()
+    columns
 }
 
 /// The full and tagged generators of every replicate in detailed-balance
@@ -205,12 +234,15 @@ pub fn balanced_generators(
         .collect()
 }
 
-/// The sums `A = sum mu Delta Delta^T` of the full and tagged generators
-/// (upper triangles: `A` is symmetric).
+/// The sums `A = sum mu Delta Delta^T` of the full and tagged generators,
+/// upper triangles (`A` is symmetric) stored by diagonal: `form[d * n + a] =
+/// A[a][a + d]`, so that a change's pattern shifted along the nodes adds to
+/// contiguous runs.
 struct DirichletForms {
     equilibrium: Vec<f64>,
     full: Vec<f64>,
     tagged: Vec<f64>,
+    merger: Merger,
 }
 
 impl DirichletForms {
@@ -220,87 +252,182 @@ impl DirichletForms {
             equilibrium: grid.maxwellian(),
             full: vec![0.0; n * n],
             tagged: vec![0.0; n * n],
+            merger: Merger::new(n),
         }
     }
 
     /// Adds `placed` at every node: to the full form its whole change, to the
-    /// tagged form each particle's own change.
+    /// tagged form each particle's own change. Where every deposit of the
+    /// image lies inside the grid, its change is one pattern shifted with
+    /// the node, added per pair of entries along the nodes; near the ends,
+    /// where deposits reflect, node by node.
     fn add(&mut self, grid: &VelocityGrid, placed: &Placed) {
         let n = grid.len();
-        let (mut all, mut own) = ([(0, 0.0); 18], [(0, 0.0); 6]);
-        for node in 0..n {
-            let measure = self.equilibrium[node] * placed.weights[node];
+        let measures: Vec<f64> = (0..n)
+            .map(|j| self.equilibrium[j] * placed.weights[j])
+            .collect();
+        let moves = || placed.moves.iter().flatten();
+        let interior = moves().flatten().fold(0..=n as i64 - 1, |nodes, stencil| {
+            let inside = grid.interior_nodes(stencil);
+            *nodes.start().max(inside.start())..=*nodes.end().min(inside.end())
+        });
+        if !interior.is_empty() {
+            let (lo, hi) = (*interior.start() as usize, *interior.end() as usize);
+            let runs = Runs {
+                first: lo,
+                measures: &measures[lo..=hi],
+                n,
+            };
+            self.add_changes(
+                moves().map(|[from, to]| {
+                    let mut own = [(0, 0.0); 6];
+                    own[..3].copy_from_slice(&from.relative_entries().map(|(k, w)| (k, -w)));
+                    own[3..].copy_from_slice(&to.relative_entries());
+                    own
+                }),
+                |form, change| runs.add(form, change),
+            );
+        }
+        for node in (0..n).filter(|&j| !interior.contains(&(j as i64))) {
+            let measure = measures[node];
             if measure == 0.0 {
                 continue;
             }
-            let mut count = 0;
-            for [from, to] in placed.moves.iter().flatten() {
-                let from = grid.stencil_entries(node, from).map(|(k, w)| (k, -w));
-                own[..3].copy_from_slice(&from);
-                own[3..].copy_from_slice(&grid.stencil_entries(node, to));
-                all[count..count + 6].copy_from_slice(&own);
-                count += 6;
-                let merged = merged_by_node(&mut own);
-                add_outer(&mut self.tagged, n, &own[..merged], measure);
-            }
-            let merged = merged_by_node(&mut all[..count]);
-            add_outer(&mut self.full, n, &all[..merged], measure);
+            self.add_changes(
+                moves().map(|[from, to]| {
+                    let mut own = [(0, 0.0); 6];
+                    let from = grid
+                        .stencil_entries(node, from)
+                        .map(|(k, w)| (k as i64, -w));
+                    own[..3].copy_from_slice(&from);
+                    let to = grid.stencil_entries(node, to).map(|(k, w)| (k as i64, w));
+                    own[3..].copy_from_slice(&to);
+                    own
+                }),
+                |form, change| add_at(form, n, change, measure),
+            );
         }
     }
 
-    /// `M = -c A D^(-1)` of both forms.
+    /// Adds each particle's change (node, weight entries, unmerged) to the
+    /// tagged form and their sum to the full form, by `add`.
+    fn add_changes(
+        &mut self,
+        changes: impl Iterator<Item = [(i64, f64); 6]>,
+        add: impl Fn(&mut [f64], &[(i64, f64)]),
+    ) {
+        let (mut all, mut count) = ([(0, 0.0); 18], 0);
+        for mut own in changes {
+            all[count..count + 6].copy_from_slice(&own);
+            count += 6;
+            let merged = self.merger.merged(&mut own);
+            add(&mut self.tagged, &own[..merged]);
+        }
+        let merged = self.merger.merged(&mut all[..count]);
+        add(&mut self.full, &all[..merged]);
+    }
+
+    /// `M = -A D^(-1) / 6` of both forms.
     fn generators(&self) -> Generators {
         let n = self.equilibrium.len();
-        let generator = |form: &[f64], c: f64| {
+        let generator = |form: &[f64]| {
             let columns: Vec<Vec<f64>> = (0..n)
                 .map(|j| {
                     (0..n)
-                        .map(|i| -c * form[i.min(j) * n + i.max(j)] / self.equilibrium[j])
+                        .map(|i| {
+                            let (a, d) = (i.min(j), i.abs_diff(j));
+                            -form[d * n + a] / (6.0 * self.equilibrium[j])
+                        })
                         .collect()
                 })
                 .collect();
             Generator::from_columns(&columns)
         };
         Generators {
-            full: generator(&self.full, 1.0 / 6.0),
-            tagged: generator(&self.tagged, 1.0 / 6.0),
+            full: generator(&self.full),
+            tagged: generator(&self.tagged),
         }
     }
 }
 
-/// Sorts (node, weight) `entries` by node (insertion sort: they come in
-/// sorted runs) and sums the entries of each node into its first; returns
-/// how many distinct nodes lead the slice.
-fn merged_by_node(entries: &mut [(usize, f64)]) -> usize {
-    for i in 1..entries.len() {
-        let mut j = i;
-        while j > 0 && entries[j - 1].0 > entries[j].0 {
-            entries.swap(j - 1, j);
-            j -= 1;
-        }
-    }
-    let mut merged = 0;
-    for i in 0..entries.len() {
-        if merged > 0 && entries[merged - 1].0 == entries[i].0 {
-            entries[merged - 1].1 += entries[i].1;
-        } else {
-            entries[merged] = entries[i];
-            merged += 1;
-        }
-    }
-    merged
+/// A pattern's placements at the consecutive nodes `first ..`, with their
+/// measures.
+struct Runs<'a> {
+    first: usize,
+    measures: &'a [f64],
+    n: usize,
 }
 
-/// Adds `measure Delta Delta^T` to the upper triangle (row <= column) of
-/// the `n x n` matrix `form`, `Delta` given as (node, weight) entries with
-/// distinct nodes, ascending.
-fn add_outer(form: &mut [f64], n: usize, changes: &[(usize, f64)], measure: f64) {
-    for (p, &(a, x)) in changes.iter().enumerate() {
-        let row = &mut form[a * n..(a + 1) * n];
+impl Runs<'_> {
+    /// Adds `mu_j Delta_j Delta_j^T` for every node `j` of the run to the
+    /// diagonal-stored `form`, `Delta_j` the `change` (node offsets from `j`
+    /// and weights, distinct) shifted to `j`.
+    fn add(&self, form: &mut [f64], change: &[(i64, f64)]) {
+        for (p, &(a, x)) in change.iter().enumerate() {
+            for &(b, y) in &change[p..] {
+                let start = (self.first as i64 + a.min(b)) as usize;
+                let diagonal = a.abs_diff(b) as usize * self.n + start;
+                let run = &mut form[diagonal..diagonal + self.measures.len()];
+                let product = x * y;
+                for (slot, measure) in run.iter_mut().zip(self.measures) {
+                    *slot += measure * product;
+                }
+            }
+        }
+    }
+}
+
+/// Adds `measure Delta Delta^T` to the diagonal-stored `n x n` `form`,
+/// `Delta` given as (node, weight) entries with distinct nodes.
+fn add_at(form: &mut [f64], n: usize, change: &[(i64, f64)], measure: f64) {
+    for (p, &(a, x)) in change.iter().enumerate() {
         let scaled = measure * x;
-        for &(b, y) in &changes[p..] {
-            row[b] += scaled * y;
+        for &(b, y) in &change[p..] {
+            form[a.abs_diff(b) as usize * n + a.min(b) as usize] += scaled * y;
         }
+    }
+}
+
+/// Sums (node, weight) entries by node in place, the nodes in the order
+/// they first appear (no sorting: a change has at most 18 entries, and it is
+/// merged at every node it is placed on).
+struct Merger {
+    /// Per node (offset by `offset`), the call that last saw it.
+    seen: Vec<u64>,
+    /// Per node, where its sum stands.
+    slot: Vec<usize>,
+    call: u64,
+    /// Added to a node (or a node offset, from `-n`) to index `seen`.
+    offset: i64,
+}
+
+impl Merger {
+    fn new(n: usize) -> Merger {
+        Merger {
+            seen: vec![0; 3 * n],
+            slot: vec![0; 3 * n],
+            call: 0,
+            offset: n as i64,
+        }
+    }
+
+    /// Merges `entries` into their leading part, whose length it returns.
+    fn merged(&mut self, entries: &mut [(i64, f64)]) -> usize {
+        self.call += 1;
+        let mut merged = 0;
+        for i in 0..entries.len() {
+            let (node, weight) = entries[i];
+            let key = (node + self.offset) as usize;
+            if self.seen[key] == self.call {
+                entries[self.slot[key]].1 += weight;
+            } else {
+                self.seen[key] = self.call;
+                self.slot[key] = merged;
+                entries[merged] = (node, weight);
+                merged += 1;
+            }
+        }
+        merged
     }
 }
 

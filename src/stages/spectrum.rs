@@ -15,7 +15,7 @@ use crate::contract::instances;
 use crate::contract::readers::collision_events;
 use crate::contract::{self, Rows};
 use crate::evolve::grid::VelocityGrid;
-use crate::evolve::operator::{Generators, balanced_generators, column_rates, kernel_generators};
+use crate::evolve::operator::{Generators, balanced_generators, kernel_generators, tagged_columns};
 use crate::evolve::processes::collision_invariants;
 use crate::evolve::propagate::Generator;
 use crate::evolve::spectrum::{Spectrum, spectrum};
@@ -115,14 +115,10 @@ impl SpectrumStage {
         })
     }
 
-    /// The tagged variance rate at `u' = 0` of every replicate set.
-    fn gamma(&self, generators: &[Generators]) -> Result<Replicated<f64>, StageError> {
-        let grid = self.grid();
-        let centre = grid
-            .node_of(0.0)
-            .ok_or_else(|| StageError::Input("u = 0 is no grid node".into()))?;
-        let tagged: Vec<Generator> = generators.iter().map(|g| g.tagged.clone()).collect();
-        Ok(replicate_means(&tagged).map(|m| column_rates(m, &grid).1[centre]))
+    /// The tagged variance rate at `u' = 0` of every replicate set, from
+    /// each replicate's tagged column there.
+    fn gamma(&self, columns: &[Vec<f64>]) -> Replicated<f64> {
+        replicate_means(columns).map(|column| self.grid().moments(column, 0.0, f64::INFINITY)[2])
     }
 }
 
@@ -196,17 +192,17 @@ impl Stage for SpectrumStage {
 
     /// Placing every event image on every node dominates: 5e-8 s per event
     /// row and node for the columns (measured 2026-11-27, 2 cores: `n = 6`'s
-    /// 2.0e6 wide rows in 12 s on 161 nodes, 19 s on 201, 31 s on 321), and
-    /// 1.5e-7 s more for the Dirichlet form (9.9e5 rows on 161 nodes: 7.7 s
-    /// and 32 s); the tables hold a row per mode and generator, and the
-    /// shapes a row per node.
+    /// 2.0e6 wide rows in 12 s on 161 nodes, 19 s on 201, 31 s on 321), 8e-8
+    /// s for the Dirichlet form (9.9e5 rows: 12.8 s on 161 nodes, 7.1 s on
+    /// 81; the columns 7.8 s on 161); the tables hold a row per mode and
+    /// generator, and the shapes a row per node.
     fn cost(&self, inputs: &[Cost]) -> Cost {
         let events: f64 = inputs.iter().map(|input| input.rows).sum();
         let nodes = self.grid().len() as f64;
         let rows = 2.0 * nodes * (1.0 + f64::from(self.params.modes));
         let per_placement = match self.params.estimator {
             SpectrumEstimator::Columns => 5e-8,
-            SpectrumEstimator::DetailedBalance => 2e-7,
+            SpectrumEstimator::DetailedBalance => 8e-8,
         };
         Cost {
             cpu_seconds: per_placement * events * nodes,
@@ -217,26 +213,29 @@ impl Stage for SpectrumStage {
 
     fn run(&self, inputs: &[Input], progress: &Progress) -> Result<Vec<Table>, StageError> {
         let (events, draws, _) = collision_events(&inputs[0])?;
-        let passes = match self.params.estimator {
-            SpectrumEstimator::Columns => 1,
-            SpectrumEstimator::DetailedBalance => 2,
-        };
-        progress.set_total(2 + passes * events.len() as u64);
-        let placed = std::sync::atomic::AtomicUsize::new(0);
+        progress.set_total(2 + events.len() as u64);
         let (grid, floor) = (self.grid(), self.params.kernel.kick_floor);
-        let generators = kernel_generators(&events, &draws, &grid, floor, |done| {
-            let before = placed.swap(done, std::sync::atomic::Ordering::Relaxed);
-            progress.advance((done - before) as u64);
-        });
-        let gamma = self.gamma(&generators)?;
-        let generators = match self.params.estimator {
-            SpectrumEstimator::Columns => generators,
-            SpectrumEstimator::DetailedBalance => {
+        let centre = grid
+            .node_of(0.0)
+            .ok_or_else(|| StageError::Input("u = 0 is no grid node".into()))?;
+        let (generators, centre_columns) = match self.params.estimator {
+            SpectrumEstimator::Columns => {
+                let placed = std::sync::atomic::AtomicUsize::new(0);
+                let generators = kernel_generators(&events, &draws, &grid, floor, |done| {
+                    let before = placed.swap(done, std::sync::atomic::Ordering::Relaxed);
+                    progress.advance((done - before) as u64);
+                });
+                let columns = generators.iter().map(|g| g.tagged.column(centre)).collect();
+                (generators, columns)
+            }
+            SpectrumEstimator::DetailedBalance => (
                 balanced_generators(&events, &draws, &grid, floor, |done| {
                     progress.advance(done as u64)
-                })
-            }
+                }),
+                tagged_columns(&events, &draws, &grid, floor, centre),
+            ),
         };
+        let gamma = self.gamma(&centre_columns);
         let analysed = [
             self.analyse(&generators, 0, &gamma)?,
             self.analyse(&generators, 1, &gamma)?,
