@@ -27,7 +27,7 @@ use crate::pipeline::Stage;
 use crate::pipeline::executor::{
     self, Action, Freshness, InstanceReport, StatusLine, tool_version,
 };
-use crate::pipeline::store::{Depth, Manifest, Store};
+use crate::pipeline::store::{Depth, Manifest, Store, write_atomically};
 use crate::pipeline::table::read_parquet_footer;
 
 /// The page's file name in the report's directory.
@@ -100,9 +100,8 @@ pub fn write(study: &Study, store: &Store, plan: &[Box<dyn Stage>], dir: &Path) 
     let figures = copy_figures(store, &instances, &figures_dir)?;
     let page = page(study, store, &instances, &figures)?;
     let path = dir.join(PAGE);
-    let partial = dir.join(format!(".{PAGE}.{}", std::process::id()));
-    fs::write(&partial, page).with_context(|| format!("writing {}", partial.display()))?;
-    fs::rename(&partial, &path).with_context(|| format!("writing {}", path.display()))?;
+    write_atomically(&path, page.as_bytes(), &std::process::id().to_string())
+        .with_context(|| format!("writing {}", path.display()))?;
     let fresh = instances.iter().filter(|i| i.manifest.is_some()).count();
     Ok(format!(
         "report: {} figures, {fresh} of {} instances fresh, in {}\n",

@@ -17,7 +17,7 @@ pub(super) fn write_synced(path: &Path, bytes: &[u8]) -> Result<(), StoreError> 
 
 /// Writes `path` by a synced temporary file `.<name>.<tag>` renamed over it,
 /// then syncs the directory: readers see the old or the new file, never a part.
-pub(super) fn write_atomically(path: &Path, bytes: &[u8], tag: &str) -> Result<(), StoreError> {
+pub fn write_atomically(path: &Path, bytes: &[u8], tag: &str) -> Result<(), StoreError> {
     let dir = path.parent().unwrap_or(Path::new(".")).to_path_buf();
     let name = path
         .file_name()

@@ -46,6 +46,7 @@ mod open;
 mod staging;
 
 pub use check::listing_problem;
+pub use files::write_atomically;
 pub use names::{is_key, is_live_staging};
 pub use staging::Staging;
 
