@@ -367,6 +367,7 @@ impl Figure {
             Figure::NearIntegrable => vec![
                 Panel {
                     paired: true,
+                    pair_order: NEAR_INTEGRABLE_PAIRS,
                     ..panel(
                         "rates",
                         log("n - 2"),
@@ -376,6 +377,7 @@ impl Figure {
                 },
                 Panel {
                     paired: true,
+                    pair_order: NEAR_INTEGRABLE_PAIRS,
                     ..panel(
                         "ratio",
                         log("n - 2"),
@@ -744,6 +746,8 @@ const FIT_CURVE_POINTS: usize = 48;
 
 /// Series title of the linearized operator's rates.
 const GAS: &str = "gas (linearized operator)";
+/// The `near_integrable` figure's pairs, coloured alike in both panels.
+const NEAR_INTEGRABLE_PAIRS: &[&str] = &["Γ", GAS, ONE_PARTICLE];
 /// Series title of the tagged generator's rates.
 const ONE_PARTICLE: &str = "one particle";
 

@@ -409,7 +409,7 @@ where
 
 /// The colour of each series of `panel`: the `k`-th series gets the `k`-th
 /// colour, or with [`Panel::paired`] the `k`-th pair (series named alike up
-/// to their last `", "`) does.
+/// to their last `", "`) does, after those of [`Panel::pair_order`].
 pub fn series_colours(panel: &Panel, names: &[&str]) -> Vec<RGBColor> {
     let mut pairs: Vec<&str> = Vec::new();
     names
@@ -418,10 +418,14 @@ pub fn series_colours(panel: &Panel, names: &[&str]) -> Vec<RGBColor> {
         .map(|(k, name)| {
             let index = if panel.paired {
                 let pair = name.rsplit_once(", ").map_or(*name, |(_, pair)| pair);
-                if !pairs.contains(&pair) {
-                    pairs.push(pair);
-                }
-                pairs.iter().position(|p| *p == pair).unwrap_or(k)
+                let fixed = panel.pair_order.iter().position(|p| *p == pair);
+                fixed.unwrap_or_else(|| {
+                    if !pairs.contains(&pair) {
+                        pairs.push(pair);
+                    }
+                    let later = pairs.iter().position(|p| *p == pair).unwrap_or(k);
+                    panel.pair_order.len() + later
+                })
             } else {
                 k
             };

@@ -97,6 +97,11 @@ pub struct Panel {
     /// 960 ns`) share a colour, told apart by their styles.
     #[serde(skip_serializing_if = "std::ops::Not::not")]
     pub paired: bool,
+    /// With `paired`, the pairs whose colours are fixed, in palette order
+    /// (the same in every panel of a figure, whichever pairs it holds);
+    /// other pairs follow in the order they appear.
+    #[serde(skip_serializing_if = "<[_]>::is_empty")]
+    pub pair_order: &'static [&'static str],
     /// Marker series drawn side by side: the `k`-th of `n` moved along the
     /// horizontal axis by `(k - (n - 1) / 2)` times [`DODGE`] of its span
     /// (in decades on a log axis), so points of several series at one `x`
@@ -142,6 +147,7 @@ impl Panel {
             marks: Vec::new(),
             styles,
             paired: false,
+            pair_order: &[],
             dodge: false,
             dashed: false,
             title: "",
