@@ -72,6 +72,16 @@ impl Placed {
             self_rank: image.self_rank,
         })
     }
+
+    /// Adds rank `rank`'s move (nothing if its velocity is unchanged) to
+    /// column `node`, weighted by the image's launch weight there.
+    fn deposit_move(&self, grid: &VelocityGrid, node: usize, rank: usize, column: &mut [f64]) {
+        if let Some([from, to]) = &self.moves[rank] {
+            let weight = self.weights[node];
+            grid.deposit_stencil(column, node, from, -weight);
+            grid.deposit_stencil(column, node, to, weight);
+        }
+    }
 }
 
 /// Per-replicate sums of one column.
@@ -82,21 +92,13 @@ struct ColumnSums {
 
 impl ColumnSums {
     fn add(&mut self, grid: &VelocityGrid, node: usize, placed: &Placed) {
-        let weight = placed.weights[node];
-        if weight == 0.0 {
+        if placed.weights[node] == 0.0 {
             return;
         }
-        for (rank, moves) in placed.moves.iter().enumerate() {
-            let Some([from, to]) = moves else {
-                continue;
-            };
-            let deposit = |column: &mut Vec<f64>| {
-                grid.deposit_stencil(column, node, from, -weight);
-                grid.deposit_stencil(column, node, to, weight);
-            };
-            deposit(&mut self.full[placed.replicate]);
+        for rank in 0..3 {
+            placed.deposit_move(grid, node, rank, &mut self.full[placed.replicate]);
             if rank == placed.self_rank {
-                deposit(&mut self.tagged[placed.replicate]);
+                placed.deposit_move(grid, node, rank, &mut self.tagged[placed.replicate]);
             }
         }
     }
@@ -127,20 +129,6 @@ pub fn kernel_generators(
             }
         })
         .collect()
-}
-
-/// The tagged generator's column `node` of every replicate, as
-/// [`kernel_generators`] computes it (the kernel of the special particle at
-/// that node).
-pub fn tagged_columns(
-    events: &[Event],
-    draws: &Draws,
-    grid: &VelocityGrid,
-    kick_floor: f64,
-    node: usize,
-) -> Vec<Vec<f64>> {
-    let mut sums = column_sums(events, draws, grid, kick_floor, &[node], |_| {});
-    sums.swap_remove(0).tagged
 }
 
 /// The per-replicate sums of the columns `nodes`.
@@ -201,16 +189,20 @@ fn column_sums(
 /// momentum and energy). Where the scattering is nearly integrable (`n -> 2`),
 /// an image's `Delta` is `O(e)` and enters squared, while the column form's
 /// `O(e)` terms cancel only on average: the noise stays proportional to the
-/// rates. Each replicate adds its events in their stored order:
-/// bit-identical for any thread count. `progress` receives the events of
-/// each replicate as it finishes.
+/// rates. Beside them, each replicate's tagged column at node `centre` as
+/// [`kernel_generators`] computes it (the special particle's kernel there,
+/// whose variance rate is exact), from the same placed images. Each
+/// replicate adds its events in their stored order: bit-identical for any
+/// thread count. `progress` receives the events of each replicate as it
+/// finishes.
 pub fn balanced_generators(
     events: &[Event],
     draws: &Draws,
     grid: &VelocityGrid,
     kick_floor: f64,
+    centre: usize,
     progress: impl Fn(usize) + Sync,
-) -> Vec<Generators> {
+) -> (Vec<Generators>, Vec<Vec<f64>>) {
     let mut by_replicate: Vec<Vec<&Event>> = vec![Vec::new(); draws.replicates()];
     for event in events {
         by_replicate[event.randomization as usize].push(event);
@@ -220,18 +212,22 @@ pub fn balanced_generators(
         .enumerate()
         .map(|(replicate, events)| {
             let mut forms = DirichletForms::new(grid);
+            let mut centre_column = vec![0.0; grid.len()];
             for event in events {
                 let scale = draws.scale(event);
                 for image in images(event, kick_floor) {
                     if let Some(placed) = Placed::new(&image, replicate, scale, grid) {
                         forms.add(grid, &placed);
+                        if placed.weights[centre] != 0.0 {
+                            placed.deposit_move(grid, centre, placed.self_rank, &mut centre_column);
+                        }
                     }
                 }
             }
             progress(events.len());
-            forms.generators()
+            (forms.generators(), centre_column)
         })
-        .collect()
+        .unzip()
 }
 
 /// The sums `A = sum mu Delta Delta^T` of the full and tagged generators,
@@ -243,6 +239,8 @@ struct DirichletForms {
     full: Vec<f64>,
     tagged: Vec<f64>,
     merger: Merger,
+    /// The equilibrium measure of the image being added, per node.
+    measures: Vec<f64>,
 }
 
 impl DirichletForms {
@@ -253,6 +251,7 @@ impl DirichletForms {
             full: vec![0.0; n * n],
             tagged: vec![0.0; n * n],
             merger: Merger::new(n),
+            measures: Vec::with_capacity(n),
         }
     }
 
@@ -263,9 +262,14 @@ impl DirichletForms {
     /// where deposits reflect, node by node.
     fn add(&mut self, grid: &VelocityGrid, placed: &Placed) {
         let n = grid.len();
-        let measures: Vec<f64> = (0..n)
-            .map(|j| self.equilibrium[j] * placed.weights[j])
-            .collect();
+        let mut measures = std::mem::take(&mut self.measures);
+        measures.clear();
+        measures.extend(
+            self.equilibrium
+                .iter()
+                .zip(&placed.weights)
+                .map(|(f, w)| f * w),
+        );
         let moves = || placed.moves.iter().flatten();
         let interior = moves().flatten().fold(0..=n as i64 - 1, |nodes, stencil| {
             let inside = grid.interior_nodes(stencil);
@@ -304,9 +308,17 @@ impl DirichletForms {
                     own[3..].copy_from_slice(&to);
                     own
                 }),
-                |form, change| add_at(form, n, change, measure),
+                |form, change| {
+                    let at_node = Runs {
+                        first: 0,
+                        measures: std::slice::from_ref(&measure),
+                        n,
+                    };
+                    at_node.add(form, change)
+                },
             );
         }
+        self.measures = measures;
     }
 
     /// Adds each particle's change (node, weight entries, unmerged) to the
@@ -351,7 +363,7 @@ impl DirichletForms {
 }
 
 /// A pattern's placements at the consecutive nodes `first ..`, with their
-/// measures.
+/// measures (a pattern of absolute nodes at one node: `first = 0`).
 struct Runs<'a> {
     first: usize,
     measures: &'a [f64],
@@ -373,17 +385,6 @@ impl Runs<'_> {
                     *slot += measure * product;
                 }
             }
-        }
-    }
-}
-
-/// Adds `measure Delta Delta^T` to the diagonal-stored `n x n` `form`,
-/// `Delta` given as (node, weight) entries with distinct nodes.
-fn add_at(form: &mut [f64], n: usize, change: &[(i64, f64)], measure: f64) {
-    for (p, &(a, x)) in change.iter().enumerate() {
-        let scaled = measure * x;
-        for &(b, y) in &change[p..] {
-            form[a.abs_diff(b) as usize * n + a.min(b) as usize] += scaled * y;
         }
     }
 }

@@ -15,7 +15,7 @@ use crate::contract::instances;
 use crate::contract::readers::collision_events;
 use crate::contract::{self, Rows};
 use crate::evolve::grid::VelocityGrid;
-use crate::evolve::operator::{Generators, balanced_generators, kernel_generators, tagged_columns};
+use crate::evolve::operator::{Generators, balanced_generators, kernel_generators};
 use crate::evolve::processes::collision_invariants;
 use crate::evolve::propagate::Generator;
 use crate::evolve::spectrum::{Spectrum, spectrum};
@@ -39,12 +39,13 @@ const GENERATORS: [(&str, &[&str]); 2] = [
     ("tagged", &["number"]),
 ];
 
-/// One generator's spectrum on every replicate set, and the variance rate.
-struct Analysed {
+/// One generator's spectrum on every replicate set, and the variance rate
+/// (shared by both generators).
+struct Analysed<'a> {
     name: &'static str,
     invariants: &'static [&'static str],
     spectra: Replicated<Spectrum>,
-    gamma: Replicated<f64>,
+    gamma: &'a Replicated<f64>,
     /// Per group size: the slowest rates of each group.
     groups: Vec<GroupRates>,
 }
@@ -70,12 +71,12 @@ impl SpectrumStage {
     }
 
     /// The spectra of generator `which` of every replicate set and group.
-    fn analyse(
+    fn analyse<'a>(
         &self,
         generators: &[Generators],
         which: usize,
-        gamma: &Replicated<f64>,
-    ) -> Result<Analysed, StageError> {
+        gamma: &'a Replicated<f64>,
+    ) -> Result<Analysed<'a>, StageError> {
         let grid = self.grid();
         let (name, invariant_names) = GENERATORS[which];
         let invariants: Vec<Vec<f64>> = collision_invariants(&grid)
@@ -107,10 +108,7 @@ impl SpectrumStage {
             name,
             invariants: invariant_names,
             spectra,
-            gamma: Replicated {
-                full: gamma.full,
-                leave_one_out: gamma.leave_one_out.clone(),
-            },
+            gamma,
             groups: group_rates(&replicates, |m| solve(m).map(|s| s.rates))?,
         })
     }
@@ -228,12 +226,11 @@ impl Stage for SpectrumStage {
                 let columns = generators.iter().map(|g| g.tagged.column(centre)).collect();
                 (generators, columns)
             }
-            SpectrumEstimator::DetailedBalance => (
-                balanced_generators(&events, &draws, &grid, floor, |done| {
+            SpectrumEstimator::DetailedBalance => {
+                balanced_generators(&events, &draws, &grid, floor, centre, |done| {
                     progress.advance(done as u64)
-                }),
-                tagged_columns(&events, &draws, &grid, floor, centre),
-            ),
+                })
+            }
         };
         let gamma = self.gamma(&centre_columns);
         let analysed = [
@@ -258,7 +255,7 @@ fn of(spectra: &Replicated<Spectrum>, f: impl Fn(&Spectrum) -> f64) -> Estimate 
 
 /// Jackknife estimate of `f` of the spectrum over `Gamma`, per replicate.
 fn over_gamma(a: &Analysed, f: impl Fn(&Spectrum) -> f64 + Sync) -> Estimate {
-    a.spectra.zip(&a.gamma, |s, g| f(s) / g).scalar(|x| *x)
+    a.spectra.zip(a.gamma, |s, g| f(s) / g).scalar(|x| *x)
 }
 
 /// Modes of the estimate on all randomizations with a negative rate: noise
