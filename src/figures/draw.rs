@@ -255,12 +255,17 @@ fn draw_panel<DB: DrawingBackend>(
         panel.y.log,
         panel.y.decades,
     );
+    let labels = [
+        Labels::of(&x_range, panel.x.log),
+        Labels::of(&y_range, panel.y.log),
+    ];
+    let plot = (&plot, labels);
     match (panel.x.log, panel.y.log) {
-        (false, false) => chart(&plot, panel, points, size, x_range, y_range),
-        (true, false) => chart(&plot, panel, points, size, log_axis(x_range), y_range),
-        (false, true) => chart(&plot, panel, points, size, x_range, log_axis(y_range)),
+        (false, false) => chart(plot, panel, points, size, x_range, y_range),
+        (true, false) => chart(plot, panel, points, size, log_axis(x_range), y_range),
+        (false, true) => chart(plot, panel, points, size, x_range, log_axis(y_range)),
         (true, true) => chart(
-            &plot,
+            plot,
             panel,
             points,
             size,
@@ -268,6 +273,42 @@ fn draw_panel<DB: DrawingBackend>(
             log_axis(y_range),
         ),
     }
+}
+
+/// How an axis writes its tick labels.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Labels {
+    /// The number's shortest form (`0.05`, `20`; powers of ten below 1e-3
+    /// and from 1e4 on).
+    Plain,
+    /// Powers of ten (`10⁻³`, `2×10⁻³`).
+    Powers,
+}
+
+impl Labels {
+    /// A linear axis, or a log axis over fewer than three decades (ticked at
+    /// 1, 2 and 5 times the powers of ten, [`log_ticks`]) whose ticks all have
+    /// a plain form, reads plainly (`1, 2, 5, 10, 20`, not `10⁰, 2×10⁰, ...`);
+    /// a log axis over more decades by its powers of ten.
+    fn of(range: &Range<f64>, log: bool) -> Labels {
+        if !log {
+            return Labels::Plain;
+        }
+        let ticks = log_ticks(range);
+        let decades_only = ticks.iter().all(|&t| is_power_of_ten(t));
+        let plain = |t: &f64| (1e-3..1e4).contains(t);
+        if !decades_only && ticks.iter().all(plain) {
+            Labels::Plain
+        } else {
+            Labels::Powers
+        }
+    }
+}
+
+/// `true` when `value` is a power of ten (to rounding).
+fn is_power_of_ten(value: f64) -> bool {
+    let exponent = libm::log10(value);
+    (exponent - exponent.round()).abs() < 1e-9
 }
 
 /// A log axis over `range` with its ticks ([`log_ticks`]).
@@ -315,7 +356,7 @@ fn log_ticks(range: &Range<f64>) -> Vec<f64> {
 }
 
 fn chart<DB, X, Y>(
-    area: &DrawingArea<DB, Shift>,
+    (area, labels): (&DrawingArea<DB, Shift>, [Labels; 2]),
     panel: &Panel,
     points: &[&Point],
     size: &Size,
@@ -331,7 +372,7 @@ where
 {
     let text = size.text;
     let font = |scale: f64| (FAMILY, text * scale).into_font();
-    let y_labels = y_label_width(area, &y, panel.y.log, &font(1.0).into())?;
+    let y_labels = y_label_width(area, &y, labels[1], &font(1.0).into())?;
     let mut chart = ChartBuilder::on(area)
         .margin((text * 0.6) as i32)
         // Room for half the widest tick label at the x axis's right end.
@@ -349,8 +390,8 @@ where
         .label_style(font(1.0))
         .x_labels(5)
         .y_labels(5)
-        .x_label_formatter(&|v| tick(*v, panel.x.log))
-        .y_label_formatter(&|v| tick(*v, panel.y.log))
+        .x_label_formatter(&|v| tick(*v, labels[0]))
+        .y_label_formatter(&|v| tick(*v, labels[1]))
         .set_all_tick_mark_size((text * 0.35) as i32)
         .axis_style(BLACK.stroke_width(size.stroke))
         .draw()?;
@@ -652,14 +693,14 @@ fn marker_radius(size: &Size) -> i32 {
     (size.text * 0.13).max(2.0) as i32
 }
 
-/// A tick label: `10⁻³` on a log axis at a decade, `2×10⁻³` between
-/// decades; on a linear axis the number's shortest form, `5×10⁻⁴` below
-/// 1e-3 or from 1e4 on. Negative numbers take a minus sign (U+2212).
-fn tick(value: f64, log: bool) -> String {
-    let label = if log {
-        let exponent = libm::log10(value).round();
-        if (libm::log10(value) - exponent).abs() < 1e-9 {
-            power_of_ten(exponent as i32)
+/// A tick label: in [`Labels::Powers`] `10⁻³` at a decade, `2×10⁻³`
+/// between decades; in [`Labels::Plain`] the number's shortest form,
+/// `5×10⁻⁴` below 1e-3 or from 1e4 on. Negative numbers take a minus sign
+/// (U+2212).
+fn tick(value: f64, labels: Labels) -> String {
+    let label = if labels == Labels::Powers {
+        if is_power_of_ten(value) {
+            power_of_ten(libm::log10(value).round() as i32)
         } else {
             scientific(&format!("{value:.0e}"))
         }
@@ -681,7 +722,7 @@ fn tick(value: f64, log: bool) -> String {
 fn y_label_width<DB, Y>(
     area: &DrawingArea<DB, Shift>,
     y: &Y,
-    log: bool,
+    labels: Labels,
     font: &TextStyle,
 ) -> Result<u32, DrawError<DB>>
 where
@@ -691,7 +732,7 @@ where
     let spec: Y::CoordDescType = y.clone().into();
     let mut widest = 0;
     for value in spec.key_points(5) {
-        widest = widest.max(area.estimate_text_size(&tick(value, log), font)?.0);
+        widest = widest.max(area.estimate_text_size(&tick(value, labels), font)?.0);
     }
     Ok(widest)
 }
@@ -815,7 +856,7 @@ type OpenBar<DB> = ComposedElement<(f64, f64), DB, PathElement<(i32, i32)>, Poly
 
 #[cfg(test)]
 mod tests {
-    use super::{log_ticks, tick};
+    use super::{Labels, log_ticks, tick};
 
     /// Ticks at the decades of an axis over three or more, at 1, 2 and 5
     /// times them over fewer.
@@ -838,18 +879,29 @@ mod tests {
 
     #[test]
     fn log_ticks_are_powers_of_ten_in_superscripts() {
-        assert_eq!(tick(1e-4, true), "10⁻⁴");
-        assert_eq!(tick(1.0, true), "10⁰");
-        assert_eq!(tick(1e12, true), "10¹²");
-        assert_eq!(tick(2e-3, true), "2×10⁻³");
+        assert_eq!(tick(1e-4, Labels::Powers), "10⁻⁴");
+        assert_eq!(tick(1.0, Labels::Powers), "10⁰");
+        assert_eq!(tick(1e12, Labels::Powers), "10¹²");
+        assert_eq!(tick(2e-3, Labels::Powers), "2×10⁻³");
+    }
+
+    #[test]
+    fn log_axes_over_few_plain_decades_read_plainly() {
+        assert_eq!(Labels::of(&(0.8..40.0), true), Labels::Plain);
+        assert_eq!(tick(2.0, Labels::Plain), "2");
+        assert_eq!(tick(0.05, Labels::Plain), "0.05");
+        // Many decades, or ticks beyond the plain forms: powers of ten.
+        assert_eq!(Labels::of(&(1e-6..1.0), true), Labels::Powers);
+        assert_eq!(Labels::of(&(1e-5..4e-4), true), Labels::Powers);
+        assert_eq!(Labels::of(&(1e-6..1.0), false), Labels::Plain);
     }
 
     #[test]
     fn linear_ticks_take_minus_signs_and_powers_of_ten() {
-        assert_eq!(tick(-0.05, false), "−0.05");
-        assert_eq!(tick(0.0, false), "0");
-        assert_eq!(tick(15.0, false), "15");
-        assert_eq!(tick(-5e-4, false), "−5×10⁻⁴");
-        assert_eq!(tick(2e4, false), "2×10⁴");
+        assert_eq!(tick(-0.05, Labels::Plain), "−0.05");
+        assert_eq!(tick(0.0, Labels::Plain), "0");
+        assert_eq!(tick(15.0, Labels::Plain), "15");
+        assert_eq!(tick(-5e-4, Labels::Plain), "−5×10⁻⁴");
+        assert_eq!(tick(2e4, Labels::Plain), "2×10⁴");
     }
 }
