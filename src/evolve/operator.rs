@@ -73,11 +73,12 @@ impl Placed {
         })
     }
 
-    /// Adds rank `rank`'s move (nothing if its velocity is unchanged) to
-    /// column `node`, weighted by the image's launch weight there.
+    /// Adds rank `rank`'s move (nothing if its velocity is unchanged or the
+    /// image has no weight there) to column `node`, weighted by the image's
+    /// launch weight there.
     fn deposit_move(&self, grid: &VelocityGrid, node: usize, rank: usize, column: &mut [f64]) {
-        if let Some([from, to]) = &self.moves[rank] {
-            let weight = self.weights[node];
+        let weight = self.weights[node];
+        if let (Some([from, to]), true) = (&self.moves[rank], weight != 0.0) {
             grid.deposit_stencil(column, node, from, -weight);
             grid.deposit_stencil(column, node, to, weight);
         }
@@ -92,9 +93,6 @@ struct ColumnSums {
 
 impl ColumnSums {
     fn add(&mut self, grid: &VelocityGrid, node: usize, placed: &Placed) {
-        if placed.weights[node] == 0.0 {
-            return;
-        }
         for rank in 0..3 {
             placed.deposit_move(grid, node, rank, &mut self.full[placed.replicate]);
             if rank == placed.self_rank {
@@ -218,9 +216,7 @@ pub fn balanced_generators(
                 for image in images(event, kick_floor) {
                     if let Some(placed) = Placed::new(&image, replicate, scale, grid) {
                         forms.add(grid, &placed);
-                        if placed.weights[centre] != 0.0 {
-                            placed.deposit_move(grid, centre, placed.self_rank, &mut centre_column);
-                        }
+                        placed.deposit_move(grid, centre, placed.self_rank, &mut centre_column);
                     }
                 }
             }
@@ -239,8 +235,6 @@ struct DirichletForms {
     full: Vec<f64>,
     tagged: Vec<f64>,
     merger: Merger,
-    /// The equilibrium measure of the image being added, per node.
-    measures: Vec<f64>,
 }
 
 impl DirichletForms {
@@ -251,7 +245,6 @@ impl DirichletForms {
             full: vec![0.0; n * n],
             tagged: vec![0.0; n * n],
             merger: Merger::new(n),
-            measures: Vec::with_capacity(n),
         }
     }
 
@@ -262,14 +255,9 @@ impl DirichletForms {
     /// where deposits reflect, node by node.
     fn add(&mut self, grid: &VelocityGrid, placed: &Placed) {
         let n = grid.len();
-        let mut measures = std::mem::take(&mut self.measures);
-        measures.clear();
-        measures.extend(
-            self.equilibrium
-                .iter()
-                .zip(&placed.weights)
-                .map(|(f, w)| f * w),
-        );
+        let measures: Vec<f64> = (0..n)
+            .map(|j| self.equilibrium[j] * placed.weights[j])
+            .collect();
         let moves = || placed.moves.iter().flatten();
         let interior = moves().flatten().fold(0..=n as i64 - 1, |nodes, stencil| {
             let inside = grid.interior_nodes(stencil);
@@ -311,7 +299,6 @@ impl DirichletForms {
                 |form, change| add_at(form, n, change, measure),
             );
         }
-        self.measures = measures;
     }
 
     /// Adds each particle's change (node, weight entries, unmerged) to the
