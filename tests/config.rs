@@ -790,8 +790,10 @@ fn kernel_section_rejects_bad_values() {
         (
             "window = 0.2\nbin_width = 5e-5",
             "window = 1e-4\nbin_width = 5e-5",
-            "kernel.window",
+            "kernel.bin_width",
         ),
+        // Blamed on kernel.window, without a line (issue 54).
+        ("bin_width = 5e-5", "bin_width = 1e300", "kernel.bin_width"),
         (
             "launch_length = 90.0\nkick",
             "launch_length = 0.0\nkick",
@@ -1188,4 +1190,322 @@ fn every_table_with_defaults_accepts_any_one_of_its_keys() {
     ] {
         assert!(tables.contains(table), "{table} not covered: {tables:?}");
     }
+}
+
+/// A name from the configuration became a path: `[[md.system]] name =
+/// "../../../notes"` made `run --only md` replace the user's `notes.json`,
+/// an absolute name wrote anywhere, `a/b` created folders, and a 300-character
+/// name failed after the compute (issue 54, item 1). Every name that becomes
+/// part of a path is refused at load by one rule, with its key and line.
+#[test]
+fn names_that_could_be_paths_are_refused_at_load() {
+    let long = "a".repeat(300);
+    let bad = [
+        "../../../notes",
+        "/dir/precious",
+        "a/b",
+        ".hidden",
+        "..",
+        "tab\\there",
+        "new\\nline",
+        "sp ace",
+        long.as_str(),
+    ];
+    for name in bad {
+        rejects(&[
+            (
+                "name = \"symmetric\"",
+                &format!("name = \"{name}\""),
+                "scan.launch[0].name",
+            ),
+            (
+                "[[md.system]]\nname = \"ring\"",
+                &format!("[[md.system]]\nname = \"{name}\""),
+                "md.system[0].name",
+            ),
+            (
+                "[[gas]]\nname = \"lj\"",
+                &format!("[[gas]]\nname = \"{name}\""),
+                "gas[1].name",
+            ),
+        ]);
+    }
+    let path = std::path::Path::new("pipeline.toml");
+    let error = Study::parse(
+        path,
+        &STUDY.replace(
+            "[[md.system]]\nname = \"ring\"",
+            "[[md.system]]\nname = \"a/../x\"",
+        ),
+    )
+    .unwrap_err();
+    assert!(error.message.contains("`/`"), "{error}");
+    for good in ["N41_R1600", "ring-2.5+x", "He.4"] {
+        let text = STUDY.replace(
+            "[[md.system]]\nname = \"ring\"",
+            &format!("[[md.system]]\nname = \"{good}\""),
+        );
+        Study::parse(path, &text).unwrap_or_else(|e| panic!("{good}: {e}"));
+    }
+}
+
+/// Planning grew faster than linearly with the number of potentials
+/// (`status` took 100 s with 4,000): a study lists at most 128.
+#[test]
+fn the_number_of_potentials_is_bounded() {
+    let many: Vec<String> = (0..200)
+        .map(|k| format!("{}", 3.0 + 0.01 * k as f64))
+        .collect();
+    let text = STUDY.replacen(
+        "inverse_power = [",
+        &format!("inverse_power = [{}, ", many.join(", ")),
+        1,
+    );
+    let error = Study::parse(std::path::Path::new("pipeline.toml"), &text).unwrap_err();
+    assert_eq!(error.key, "potentials", "{error}");
+    assert!(error.message.contains("more than 128"), "{error}");
+}
+
+/// Values that loaded and then panicked, hung or failed late with an
+/// internal message (issue 54, items 5-8): each is refused at load, naming
+/// its key and line.
+#[test]
+fn values_that_panicked_or_hung_are_refused_at_load() {
+    rejects(&[
+        // "capacity overflow" (exit 101), and a 1.6 GB allocation at 1e-9.
+        ("bin_width = 0.01", "bin_width = 1e-300", "md.bin_width"),
+        ("bin_width = 0.01", "bin_width = 1e-9", "md.bin_width"),
+        // Blamed on md.bin_width.
+        (
+            "window = 0.2\nbin_width = 0.01",
+            "window = -0.2\nbin_width = 0.01",
+            "md.window",
+        ),
+        // Ran past 90 s: the estimate ignored u'.
+        (
+            "u_prime = 0.0\nfinal",
+            "u_prime = 1e300\nfinal",
+            "md.system[0].u_prime",
+        ),
+        (
+            "u_prime = 0.0\nfinal",
+            "u_prime = 1e6\nfinal",
+            "md.system[0].u_prime",
+        ),
+        // "Column 'h_tagged' is declared as non-nullable".
+        (
+            "times = [0.1, 1.0]",
+            "times = [0.1, 1e300]",
+            "evolve.times[1]",
+        ),
+        (
+            "early_times = [1e-3]",
+            "early_times = [1e300]",
+            "evolve.early_times[0]",
+        ),
+        (
+            "times_ns = [100.0]",
+            "times_ns = [1e300]",
+            "evolve.times_ns",
+        ),
+        // Every scan scene failed with exit 0; "launch_delay holds an infinite value".
+        ("u3 = -1.0", "u3 = -1e-300", "scan.launch[0].u3"),
+        ("u3 = -1.0", "u3 = -5e-324", "scan.launch[0].u3"),
+        // "figure table: empty fit table".
+        (
+            "tolerance = 1e-12",
+            "tolerance = 5e-324",
+            "engine.tolerance",
+        ),
+    ]);
+}
+
+/// The values the fuzz test puts in place of each key's value: wrong types,
+/// zero, negatives, tiny and huge numbers, non-numbers, huge strings and
+/// names that are paths.
+fn mutations() -> Vec<toml::Value> {
+    use toml::Value as V;
+    vec![
+        V::String("x".into()),
+        V::Boolean(true),
+        V::Integer(0),
+        V::Integer(-1),
+        V::Integer(i64::MAX),
+        V::Float(-0.5),
+        V::Float(1e-300),
+        V::Float(1e300),
+        V::Float(f64::NAN),
+        V::Float(f64::INFINITY),
+        V::String("a".repeat(100_000)),
+        V::String("../../../notes".into()),
+        V::String("/dir/precious".into()),
+        V::String("a\u{1}b".into()),
+        V::Array(vec![]),
+        V::Array(vec![V::Float(1e300)]),
+        V::Array(vec![V::String("../x".into())]),
+    ]
+}
+
+/// Every leaf of `value` as a path of keys and indices, with a setter.
+fn leaf_paths(value: &toml::Value, path: &mut Vec<String>, out: &mut Vec<Vec<String>>) {
+    match value {
+        toml::Value::Table(table) if !table.is_empty() => {
+            for (name, item) in table {
+                path.push(name.clone());
+                leaf_paths(item, path, out);
+                path.pop();
+            }
+        }
+        toml::Value::Array(items) if items.iter().any(toml::Value::is_table) => {
+            for (k, item) in items.iter().enumerate() {
+                path.push(format!("[{k}]"));
+                leaf_paths(item, path, out);
+                path.pop();
+            }
+        }
+        _ => out.push(path.clone()),
+    }
+}
+
+/// The value at `path` inside `root`.
+fn value_at<'a>(root: &'a mut toml::Value, path: &[String]) -> &'a mut toml::Value {
+    path.iter()
+        .fold(root, |value, part| match part.strip_prefix('[') {
+            Some(index) => &mut value[index.trim_end_matches(']').parse::<usize>().unwrap()],
+            None => &mut value[part.as_str()],
+        })
+}
+
+/// The dotted key path the configuration names (`scan.launch[0].u2`).
+fn dotted(path: &[String]) -> String {
+    let mut out = String::new();
+    for part in path {
+        if !part.starts_with('[') && !out.is_empty() {
+            out.push('.');
+        }
+        out.push_str(part);
+    }
+    out
+}
+
+/// A configuration fuzz test (issue 54): every key of [`STUDY`] (every
+/// section enabled) takes every value of [`mutations`] in turn. Loading
+/// never panics and never takes long; a refusal names a key on the mutated
+/// key's path (or the key it is checked against) and its line; a study that
+/// loads is planned by `ternary status` within a time bound, without a
+/// panic and without writing anything. Fixed seed, bounded time.
+#[test]
+fn mutated_configurations_are_refused_by_key_or_planned() {
+    let base: toml::Value = toml::from_str(STUDY).unwrap();
+    let mut paths = Vec::new();
+    leaf_paths(&base, &mut Vec::new(), &mut paths);
+    assert!(paths.len() >= 80, "only {} keys", paths.len());
+    let file = std::path::Path::new("pipeline.toml");
+    let mut loaded = Vec::new();
+    let mut refused = 0;
+    let mut wrong = Vec::new();
+    let started = std::time::Instant::now();
+    for path in &paths {
+        let key = dotted(path);
+        for mutation in mutations() {
+            let mut study = base.clone();
+            *value_at(&mut study, path) = mutation.clone();
+            let Ok(text) = toml::to_string(&study) else {
+                continue; // NaN and inf have TOML forms; nothing else fails here
+            };
+            let what = format!(
+                "{key} = {}",
+                mutation.to_string().chars().take(40).collect::<String>()
+            );
+            let parsed = std::panic::catch_unwind(|| Study::parse(file, &text))
+                .unwrap_or_else(|_| panic!("{what}: loading panicked"));
+            match parsed {
+                Ok(_) => loaded.push((what, text)),
+                Err(error) => {
+                    refused += 1;
+                    // The error's key lies on the mutated key's path, or its
+                    // message names the mutated key (a check across keys).
+                    let section = key.split(['.', '[']).next().unwrap();
+                    let unindexed: String = dotted(
+                        &path
+                            .iter()
+                            .filter(|p| !p.starts_with('['))
+                            .cloned()
+                            .collect::<Vec<_>>(),
+                    );
+                    let names_it = error.message.contains(&key)
+                        || error.message.contains(&unindexed)
+                        || error.message.contains(&format!("[{section}]"));
+                    let on_path = !error.key.is_empty()
+                        && (error.key.starts_with(section) || key.starts_with(&error.key));
+                    let shown: String = error.to_string().chars().take(400).collect();
+                    if !(on_path || names_it) {
+                        wrong.push(format!("{what}: blamed on `{}`: {shown}", error.key));
+                    } else if error.line.is_none() && !names_it {
+                        wrong.push(format!("{what}: no line: {shown}"));
+                    } else if error.message.len() > 2000 {
+                        wrong.push(format!("{what}: a long message: {shown}"));
+                    }
+                }
+            }
+        }
+    }
+    assert!(
+        started.elapsed() < std::time::Duration::from_secs(60),
+        "loading {} mutations took {:?}",
+        refused + loaded.len(),
+        started.elapsed()
+    );
+    assert!(
+        wrong.is_empty(),
+        "{} refusals:\n{}",
+        wrong.len(),
+        wrong.join("\n")
+    );
+    assert!(refused >= 500, "only {refused} refusals");
+    // Plan a fixed-seed sample of the studies that load, each in a fresh
+    // folder that must stay empty but for the configuration.
+    let mut state = 0x9e37_79b9_7f4a_7c15_u64;
+    let mut next = || {
+        state = state
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1);
+        (state >> 33) as usize
+    };
+    let dir = std::env::temp_dir().join(format!("ternary-fuzz-{}", std::process::id()));
+    for _ in 0..loaded.len().min(24) {
+        let (what, text) = &loaded[next() % loaded.len()];
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let config = dir.join("pipeline.toml");
+        std::fs::write(&config, text).unwrap();
+        let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_ternary"))
+            .arg("--config")
+            .arg(&config)
+            .arg("status")
+            .stdout(std::process::Stdio::null())
+            .stderr(std::process::Stdio::null())
+            .spawn()
+            .unwrap();
+        let begun = std::time::Instant::now();
+        let status = loop {
+            if let Some(status) = child.try_wait().unwrap() {
+                break status;
+            }
+            if begun.elapsed() > std::time::Duration::from_secs(20) {
+                let _ = child.kill();
+                panic!("{what}: `status` ran past 20 s");
+            }
+            std::thread::sleep(std::time::Duration::from_millis(20));
+        };
+        assert_ne!(status.code(), Some(101), "{what}: `status` panicked");
+        let entries: Vec<_> = std::fs::read_dir(&dir).unwrap().collect();
+        assert_eq!(
+            entries.len(),
+            1,
+            "{what}: `status` wrote into {}",
+            dir.display()
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
 }

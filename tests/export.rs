@@ -9,8 +9,8 @@ use std::process::Command;
 mod common;
 
 use common::{
-    files_under, flip_byte, run_counts, small_study, stderr, stdout, ternary, workspace,
-    write_config,
+    files_under, flip_byte, run_counts, small_study, stderr, stdout, strace_works, ternary,
+    workspace, write_config,
 };
 
 const PUBLICATION: &str = r#"
@@ -445,43 +445,90 @@ fn verify_bundle_names_each_problem() {
 /// An export into an empty directory that is a mount point failed with
 /// "Device or resource busy" and left a full hidden copy beside it; a killed
 /// export left its staging copy forever; a file as target gave an error
-/// without its path. Now the bundle is staged inside an existing target,
-/// debris of exports that no longer run is removed, and errors name paths.
+/// without its path; a user's folder named like staging debris
+/// (`.export-2023/`, `.results.export-2024/`) was deleted. Now the bundle is
+/// staged inside an existing target, staging carries the store's id, this
+/// process and a marker, what a killed export left is removed by its marker
+/// (beside the same target, or by `run`/`gc` wherever it lies), nothing that
+/// merely looks like staging is touched, and errors name paths.
 #[test]
 fn exports_land_in_empty_mount_points_and_leave_no_debris() {
     let (config, dir) = computed("export-places");
-    // A staging copy of a killed export (its process is gone) beside the
-    // target, and one inside another target.
-    let dead = (100_000..u32::MAX)
-        .find(|pid| !Path::new("/proc").join(pid.to_string()).exists())
-        .unwrap();
-    let beside = dir.join(format!(".bundle.export-{dead}"));
-    fs::create_dir_all(beside.join("kernel")).unwrap();
-    fs::write(beside.join("kernel/x.parquet"), "half").unwrap();
-    let bundle = dir.join("bundle");
+    // A user's folders named like staging of a long-gone process: kept.
+    let user_beside = dir.join(".bundle.export-2024");
+    let user_inside = dir.join("u/.export-2023");
+    for folder in [&user_beside, &user_inside] {
+        fs::create_dir_all(folder).unwrap();
+        fs::write(folder.join("thesis.tex"), "t").unwrap();
+    }
+    let refused = export(&config, &dir.join("u"), &["--stage", "kernel"]);
+    assert!(!refused.status.success());
     assert!(
-        export(&config, &bundle, &["--stage", "kernel"])
-            .status
-            .success()
+        stderr(&refused).contains("not empty"),
+        "{}",
+        stderr(&refused)
     );
-    assert!(!beside.exists(), "the killed export's copy was removed");
+    let bundle = dir.join("bundle");
+    let exported = export(&config, &bundle, &["--stage", "kernel"]);
+    assert!(exported.status.success(), "{}", stderr(&exported));
     assert!(verify_bundle(&config, &bundle).status.success());
-    let siblings: Vec<String> = fs::read_dir(&dir)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .filter(|name| name.contains(".export-"))
-        .collect();
-    assert!(siblings.is_empty(), "{siblings:?}");
-    // An existing empty directory, with a dead export's staging inside.
+    for folder in [&user_beside, &user_inside] {
+        assert_eq!(fs::read_to_string(folder.join("thesis.tex")).unwrap(), "t");
+    }
+    // Exports killed as they move their bundle into place leave marked
+    // staging: the next export to the same target removes it, and `gc`
+    // removes what lies beside any other target.
+    if strace_works() {
+        let killed = |target: &Path| {
+            let output = Command::new("strace")
+                .args([
+                    "-qq",
+                    "-o",
+                    "/dev/null",
+                    "-e",
+                    "trace=rename,renameat,renameat2",
+                ])
+                .args(["-e", "inject=rename,renameat,renameat2:signal=KILL:when=1"])
+                .args([common::BINARY, "--config"])
+                .arg(&config)
+                .arg("export")
+                .arg(target)
+                .args(["--stage", "kernel"])
+                .output()
+                .unwrap();
+            assert!(!output.status.success(), "the export was not killed");
+        };
+        let staged = || -> Vec<String> {
+            fs::read_dir(&dir)
+                .unwrap()
+                .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+                .filter(|name| name.contains(".export-") && !name.ends_with("2024"))
+                .collect()
+        };
+        killed(&dir.join("again"));
+        killed(&dir.join("elsewhere"));
+        assert_eq!(staged().len(), 2, "{:?}", staged());
+        let again = export(&config, &dir.join("again"), &["--stage", "kernel"]);
+        assert!(again.status.success(), "{}", stderr(&again));
+        assert_eq!(staged().len(), 1, "{:?}", staged());
+        let collected = ternary(&config, &["gc"]);
+        assert!(collected.status.success(), "{}", stderr(&collected));
+        assert!(staged().is_empty(), "{:?}", staged());
+        let verified = ternary(&config, &["verify"]);
+        assert!(verified.status.success(), "{}", stdout(&verified));
+    } else {
+        eprintln!("skipped the killed exports: strace cannot trace here");
+    }
+    assert!(user_beside.join("thesis.tex").exists());
+    // An existing empty directory takes the bundle (staged inside it).
     let empty = dir.join("empty");
-    fs::create_dir_all(empty.join(format!(".export-{dead}"))).unwrap();
+    fs::create_dir_all(&empty).unwrap();
     assert!(
         export(&config, &empty, &["--stage", "kernel"])
             .status
             .success()
     );
     assert!(verify_bundle(&config, &empty).status.success());
-    assert!(!empty.join(format!(".export-{dead}")).exists());
     // A file as target: the error names it.
     let file = dir.join("a-file");
     fs::write(&file, "mine").unwrap();

@@ -175,6 +175,76 @@ fn a_report_refuses_a_directory_that_holds_other_files() {
     assert!(report(&config, &empty).contains("<meta name=\"generator\""));
 }
 
+/// `report x/../data/artifacts/report` and a link into the store wrote
+/// inside the store; a link in the place of a figure was written through
+/// (a file outside the report overwritten); a figure the user edited was
+/// replaced silently (issue 54, item 4). Now the folder is resolved before
+/// the store check, links are replaced and never followed, and an edited
+/// file is kept with an error that names it.
+#[test]
+fn a_report_never_escapes_its_folder_nor_overwrites_edits() {
+    let dir = workspace("report-escapes");
+    let config = write_config(&dir, &small_study("data"));
+    run_counts(&config, &[]);
+    let store = dir.join("data");
+    let before = contents(&store);
+    std::os::unix::fs::symlink(&store, dir.join("storelink")).unwrap();
+    for target in [
+        "x/../data/artifacts/report",
+        "storelink/rep",
+        "data/../data/refs/r",
+    ] {
+        let refused = ternary(&config, &["report", &dir.join(target).to_string_lossy()]);
+        assert!(!refused.status.success(), "a report at {target}");
+        assert!(
+            stderr(&refused).contains("is inside the store"),
+            "{target}: {}",
+            stderr(&refused)
+        );
+    }
+    assert_eq!(contents(&store), before, "a report wrote into the store");
+    assert!(!dir.join("x").exists());
+
+    let out = dir.join("out");
+    let page = report(&config, &out);
+    let figure = attributes(&page, "src")[0].to_string();
+    // A link in the place of a figure: not followed; the report refuses,
+    // naming it, and the file it names is intact.
+    let outside = dir.join("precious.png");
+    fs::write(&outside, "precious").unwrap();
+    fs::remove_file(out.join(&figure)).unwrap();
+    std::os::unix::fs::symlink(&outside, out.join(&figure)).unwrap();
+    let refused = ternary(&config, &["report", &out.to_string_lossy()]);
+    assert!(!refused.status.success(), "a report through a link");
+    assert!(stderr(&refused).contains(&figure), "{}", stderr(&refused));
+    assert_eq!(fs::read_to_string(&outside).unwrap(), "precious");
+    assert!(
+        fs::symlink_metadata(out.join(&figure))
+            .unwrap()
+            .file_type()
+            .is_symlink()
+    );
+    fs::remove_file(out.join(&figure)).unwrap();
+    report(&config, &out);
+    // A figure the user edited: kept, and the report refuses, naming it.
+    fs::write(out.join(&figure), "my edit").unwrap();
+    let refused = ternary(&config, &["report", &out.to_string_lossy()]);
+    assert!(!refused.status.success(), "a report over an edited figure");
+    assert!(stderr(&refused).contains(&figure), "{}", stderr(&refused));
+    assert_eq!(fs::read_to_string(out.join(&figure)).unwrap(), "my edit");
+    // An edited page likewise.
+    fs::remove_file(out.join(&figure)).unwrap();
+    report(&config, &out);
+    let edited = fs::read_to_string(out.join("index.html")).unwrap() + "<!-- my note -->";
+    fs::write(out.join("index.html"), &edited).unwrap();
+    assert!(
+        !ternary(&config, &["report", &out.to_string_lossy()])
+            .status
+            .success()
+    );
+    assert_eq!(fs::read_to_string(out.join("index.html")).unwrap(), edited);
+}
+
 /// The page as headless Chromium shows it: every image loaded (a copy of the
 /// page with a checking script, beside it) and a screenshot that is not
 /// blank. Skipped, saying so, where no `chromium` is installed.

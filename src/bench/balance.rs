@@ -113,7 +113,11 @@ fn run(variant: &Variant, options: &BalanceBenchOptions) -> BalanceRun {
 
 /// The comparison table: today's sweep set (sampled offsets, launch mixture
 /// at `0, +-2`) against the quadrature with mixtures reaching `a`.
-pub fn balance(options: &BalanceBenchOptions) -> String {
+///
+/// Fails, naming the scene set, where a ratio or its error is not a finite
+/// number (no scene carried the particle between the pair's bins: a wide
+/// separation with few randomizations).
+pub fn balance(options: &BalanceBenchOptions) -> Result<String, String> {
     let sampled = OffsetIntegration::Sampled;
     let quadrature = OffsetIntegration::Quadrature(options.study.quadrature);
     let mixture = |spread: f64| LaunchProposal {
@@ -168,6 +172,17 @@ pub fn balance(options: &BalanceBenchOptions) -> String {
     for variant in &variants {
         let result = run(variant, options);
         let merit = 1.0 / (result.paired.stderr.powi(2) * result.seconds);
+        if !(merit.is_finite() && result.independent.stderr.is_finite()) {
+            return Err(format!(
+                "{}: the ratio G(a -> b) / G(b -> a) is {} +- {} (G(a -> b) = {}, G(b -> a) = {}): too few scenes join the bins {} apart; use a smaller --separation or more --randomizations",
+                variant.name,
+                result.paired.mean,
+                result.paired.stderr,
+                result.forward.mean,
+                result.backward.mean,
+                options.separation
+            ));
+        }
         let base = *baseline.get_or_insert(merit);
         let _ = writeln!(
             out,
@@ -187,5 +202,5 @@ pub fn balance(options: &BalanceBenchOptions) -> String {
             merit / base,
         );
     }
-    out
+    Ok(out)
 }

@@ -207,13 +207,13 @@ pub(super) struct RateArgs {
     pub(super) mass: MassArg,
     /// Well depth eps/k_B of 4 eps ((sigma/d)^12 - (sigma/d)^6), K (with
     /// --sigma-angstrom and --mass-amu, instead of --species).
-    #[arg(long, value_parser = positive, requires_all = ["sigma_angstrom", "mass_amu"])]
+    #[arg(long, allow_negative_numbers = true, value_parser = positive, requires_all = ["sigma_angstrom", "mass_amu"])]
     pub(super) eps_k: Option<f64>,
     /// sigma, Angstrom.
-    #[arg(long, value_parser = positive, requires = "eps_k")]
+    #[arg(long, allow_negative_numbers = true, value_parser = positive, requires = "eps_k")]
     pub(super) sigma_angstrom: Option<f64>,
     /// Particle mass, amu.
-    #[arg(long, value_parser = positive, requires = "eps_k")]
+    #[arg(long, allow_negative_numbers = true, value_parser = positive, requires = "eps_k")]
     pub(super) mass_amu: Option<f64>,
     /// How the well depth eps becomes the eps of U = eps ((l0/d)^12 -
     /// (l0/d)^6): as it is (the paper's N2 example, theta = kT/eps) or 4 eps
@@ -221,13 +221,13 @@ pub(super) struct RateArgs {
     #[arg(long, value_enum, default_value_t = ReadingArg::Paper)]
     pub(super) reading: ReadingArg,
     /// Temperature, K.
-    #[arg(long, value_parser = positive)]
+    #[arg(long, allow_negative_numbers = true, value_parser = positive)]
     pub(super) temperature: f64,
     /// Mean spacing of the particles, um (density 1/spacing).
-    #[arg(long, value_parser = positive, required_unless_present = "density_per_um", conflicts_with = "density_per_um")]
+    #[arg(long, allow_negative_numbers = true, value_parser = positive, required_unless_present = "density_per_um", conflicts_with = "density_per_um")]
     pub(super) spacing_um: Option<f64>,
     /// Linear density, particles per um.
-    #[arg(long, value_parser = positive)]
+    #[arg(long, allow_negative_numbers = true, value_parser = positive)]
     pub(super) density_per_um: Option<f64>,
 }
 
@@ -241,21 +241,21 @@ pub(super) struct PairsArgs {
     #[arg(long, default_value_t = 128, value_parser = clap::value_parser!(u32).range(16..=100_000))]
     pub(super) particles: u32,
     /// Linear density, particles per l (l = l0 (eps/kT)^(1/6)).
-    #[arg(long, default_value_t = 0.02, value_parser = positive)]
+    #[arg(long, default_value_t = 0.02, allow_negative_numbers = true, value_parser = positive)]
     pub(super) density: f64,
     /// Time each ring is watched, l/v_th (many relaxation times 1/(k_d rho)).
-    #[arg(long, default_value_t = 20000.0, value_parser = positive)]
+    #[arg(long, default_value_t = 20000.0, allow_negative_numbers = true, value_parser = positive)]
     pub(super) duration: f64,
     /// Time between two counts of the bound pairs, l/v_th.
-    #[arg(long, default_value_t = 1.0, value_parser = positive)]
+    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true, value_parser = positive)]
     pub(super) interval: f64,
     /// The fit of the count's autocorrelation starts at this lag, l/v_th
     /// (past the collisions in progress: a few l/v_th).
-    #[arg(long, default_value_t = 20.0, value_parser = positive)]
+    #[arg(long, default_value_t = 20.0, allow_negative_numbers = true, value_parser = positive)]
     pub(super) fit_from: f64,
     /// Integrator tolerance of the rings (1e-6 and 1e-8 gave the same rates
     /// at theta = 1; [md]'s 1e-10 costs 2x more than 1e-8).
-    #[arg(long, default_value_t = 1e-8, value_parser = positive)]
+    #[arg(long, default_value_t = 1e-8, allow_negative_numbers = true, value_parser = positive)]
     pub(super) tolerance: f64,
     /// Independent rings (at least 2, for the errors).
     #[arg(long, default_value_t = 32, value_parser = clap::value_parser!(u32).range(2..=100_000))]
@@ -402,7 +402,7 @@ pub(super) struct BenchBalanceArgs {
     pub(super) separation: f64,
     /// Bin width of the two kernels (v_th), from separation / 5e5 (1e6
     /// bins) to the separation (the pair at least one bin apart).
-    #[arg(long, default_value_t = 0.005, value_parser = positive)]
+    #[arg(long, default_value_t = 0.005, allow_negative_numbers = true, value_parser = positive)]
     pub(super) bin_width: f64,
     /// Seed.
     #[arg(long, default_value_t = 1)]
@@ -416,13 +416,13 @@ pub(super) struct BenchMdArgs {
     #[arg(long, default_value_t = 161, value_parser = clap::value_parser!(u32).range(3..=100_000))]
     pub(super) particles: u32,
     /// Ring radius, um (> 0).
-    #[arg(long, default_value_t = 51200.0, value_parser = positive)]
+    #[arg(long, default_value_t = 51200.0, allow_negative_numbers = true, value_parser = positive)]
     pub(super) radius_um: f64,
     /// Temperature, eV (> 0).
-    #[arg(long, default_value_t = 0.1, value_parser = positive)]
+    #[arg(long, default_value_t = 0.1, allow_negative_numbers = true, value_parser = positive)]
     pub(super) kt_ev: f64,
     /// Final time, ns (> 0).
-    #[arg(long, default_value_t = 12800.0, value_parser = positive)]
+    #[arg(long, default_value_t = 12800.0, allow_negative_numbers = true, value_parser = positive)]
     pub(super) final_time_ns: f64,
     /// Interacting neighbours on each side, 1 to 64.
     #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..=64))]

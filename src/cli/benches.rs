@@ -83,7 +83,7 @@ pub(super) fn balance(config: &Path, args: BenchBalanceArgs) -> Result<ExitCode>
         seed: args.seed,
         study: bench_study(config)?,
     };
-    emit(&bench::balance(&options));
+    emit(&bench::balance(&options).map_err(anyhow::Error::msg)?);
     Ok(ExitCode::SUCCESS)
 }
 

@@ -14,13 +14,14 @@ use super::args::{
     SlurmSubmitArgs, StatusArgs, VerifyArgs,
 };
 use super::{Opening, emit, exit_code, load, open, print_event, within_limits};
-use ternary::config::{SlurmConfig, Study};
+use ternary::config::{SlurmConfig, Study, compact};
 use ternary::export::{self, ExportOptions};
 use ternary::physics::dissociation::{dissociation_rate, sobol_dissociation_scenes};
 use ternary::physics::md::CLUSTER_STEP_BUDGET;
 use ternary::physics::pair_kinetics::{
     KineticsSettings, RelaxationSettings, dense_bound_length, equilibrium_runs, pair_relaxation,
 };
+use ternary::physics::potential::LennardJones;
 use ternary::physics::species::{self, MassChoice, Particle, Reading};
 use ternary::physics::units::{Mass, PhysicalGas};
 use ternary::pipeline::executor::{self, Action, Freshness, RunOptions, Verbosity};
@@ -348,7 +349,34 @@ fn rate_gas(args: &RateArgs) -> Result<(PhysicalGas, String)> {
         },
         args.temperature
     );
+    check_rate_gas(&gas, eps, args.temperature)?;
     Ok((gas, description))
+}
+
+/// Refuses a gas whose `theta = kT/eps` the Lennard-Jones family does not
+/// take, or whose units (`rho^2 l v_th`) are not a finite positive rate:
+/// `rate` prints no `inf`, `undefined` or 310-digit number.
+fn check_rate_gas(gas: &PhysicalGas, eps_over_k: f64, temperature: f64) -> Result<()> {
+    let theta = temperature / eps_over_k;
+    if LennardJones::new(theta).is_err() {
+        let [low, high] = LennardJones::THETA_RANGE;
+        bail!(
+            "--temperature {} K over eps/k_B = {} K gives theta = kT/eps = {}, outside the Lennard-Jones family's [{}, {}]",
+            compact(temperature),
+            compact(eps_over_k),
+            compact(theta),
+            compact(low),
+            compact(high)
+        );
+    }
+    let unit = gas.rate_per_ns(1.0, None);
+    if !(unit.is_finite() && unit > 0.0) {
+        bail!(
+            "the gas's rate unit rho^2 l v_th is {} /ns: check --mass-amu, the density and the temperature (their product over- or underflows)",
+            compact(unit)
+        );
+    }
+    Ok(())
 }
 
 /// `ternary slurm submit`: the shardable stages as an array job and a

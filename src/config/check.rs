@@ -3,6 +3,7 @@
 use std::fmt;
 
 use crate::physics::potential::Potential;
+use crate::pipeline::path_names::{LONGEST_USER_NAME, name_problem};
 
 /// A validation failure: key path and message.
 pub(super) type Invalid = (String, String);
@@ -44,6 +45,15 @@ pub(super) fn check_length<T>(values: &[T], key: &str) -> Result<(), Invalid> {
     )
 }
 
+/// `name` may become part of a file path (a ring's, a gas's, a launch's
+/// name, a potential's id): the one rule of [`name_problem`].
+pub(super) fn check_name(name: &str, key: impl Into<String>) -> Result<(), Invalid> {
+    match name_problem(name, LONGEST_USER_NAME) {
+        None => Ok(()),
+        Some(problem) => Err((key.into(), problem)),
+    }
+}
+
 /// `value` is a finite number > 0.
 pub(super) fn positive(value: f64) -> bool {
     value.is_finite() && value > 0.0
@@ -82,8 +92,34 @@ pub(super) fn compact_numbers(message: &str) -> String {
     out
 }
 
+/// `message` with every word (a run without spaces) of more than
+/// [`LONGEST_WORD`] characters cut to its start and its length: a 1 MB string
+/// given for a number is named, not printed.
+pub(super) fn shortened(message: &str) -> String {
+    message
+        .split(' ')
+        .map(|word| {
+            let length = word.chars().count();
+            if length > LONGEST_WORD {
+                let start: String = word.chars().take(LONGEST_WORD / 2).collect();
+                format!("{start}... ({length} characters)")
+            } else {
+                word.to_string()
+            }
+        })
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+/// Longest word a message shows whole.
+const LONGEST_WORD: usize = 120;
+
 /// Longest number a message shows as written (`0.000123456789012345`).
 const LONGEST_PLAIN_NUMBER: usize = 24;
+
+/// Most potentials of one study: every stage runs per potential, and the
+/// plan grows with their number (a finer grid is a second study).
+pub const MAX_POTENTIALS: usize = 128;
 
 /// Longest list of values (velocities, densities, times, settings).
 pub const MAX_LIST: usize = 256;
@@ -104,7 +140,7 @@ pub(super) fn potential_named(
             (
                 key.into(),
                 format!(
-                    "`{id}` names no configured potential; known ids: {}",
+                    "`{id}` names no potential of [potentials]; known ids: {}",
                     known.join(", ")
                 ),
             )
@@ -123,5 +159,18 @@ mod tests {
         assert_eq!(compact_numbers(&tiny), "X = -1e-300 is outside (0, 0.1]");
         let plain = "scan.launch[3]: 0.000123456789 and 2e-4 at line 12";
         assert_eq!(compact_numbers(plain), plain);
+    }
+
+    #[test]
+    fn long_words_in_messages_are_cut() {
+        let huge = format!(
+            "invalid type: string \"{}\", expected f64",
+            "a".repeat(100_000)
+        );
+        let short = shortened(&huge);
+        assert!(short.len() < 200, "{short}");
+        assert!(short.contains("(100003 characters)"), "{short}");
+        let plain = "`gas[0].name`: is empty";
+        assert_eq!(shortened(plain), plain);
     }
 }

@@ -34,10 +34,10 @@ impl EngineConfig {
     /// Checks the tolerance and the step budget.
     pub(super) fn validate(&self) -> Result<(), Invalid> {
         check(
-            self.tolerance > 0.0 && self.tolerance <= 1e-3,
+            (1e-16..=1e-3).contains(&self.tolerance),
             "engine.tolerance",
             format!(
-                "{} is outside (0, 1e-3]; 1e-12 is a good default",
+                "{} is outside [1e-16, 1e-3] (below 1e-16 no step meets it in double precision); 1e-12 is a good default",
                 self.tolerance
             ),
         )?;

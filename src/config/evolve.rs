@@ -89,6 +89,10 @@ pub struct PhysicalTimes {
 /// Largest `evolve.velocity_range / evolve.grid_step` (801 nodes).
 pub const MAX_EVOLVE_HALF_NODES: f64 = 400.0;
 
+/// Latest time `evolve` propagates to, in `1/Gamma` (or, for `times_ns`, in
+/// `1/(rho^2 l v_th)`): the slowest mode has decayed by `e^-400` long before.
+pub const MAX_EVOLVE_TIME: f64 = 1e3;
+
 /// What the evolve stage needs of the other sections.
 pub(super) struct Context<'a> {
     /// The configured potentials.
@@ -131,6 +135,18 @@ impl EvolveConfig {
                 times_ns,
             }
         });
+        if let Some(times) = &physical {
+            let longest = times.times_scaled.iter().copied().fold(0.0, f64::max);
+            check(
+                longest <= MAX_EVOLVE_TIME,
+                "evolve.times_ns",
+                format!(
+                    "{} ns is {longest:e} / (rho^2 l v_th) of `{}`, beyond {MAX_EVOLVE_TIME} (relaxed long before)",
+                    times.times_ns.last().copied().unwrap_or_default(),
+                    times.gas
+                ),
+            )?;
+        }
         Ok(Some(EvolveParams {
             kernel,
             times: sorted(&self.times),
@@ -160,8 +176,14 @@ impl EvolveConfig {
             gas.is_some(),
             "evolve.gas",
             format!(
-                "`{name}` names no [[gas]] with potential {}",
-                self.potential
+                "`{name}` is no gas.name of a [[gas]] with potential {} (those with it: {})",
+                self.potential,
+                gases
+                    .iter()
+                    .filter(|g| g.potential.id() == self.potential)
+                    .map(|g| format!("`{}`", g.name))
+                    .collect::<Vec<_>>()
+                    .join(", ")
             ),
         )?;
         Ok(gas)
@@ -214,11 +236,14 @@ impl EvolveConfig {
             ("times_ns", &evolve.times_ns),
         ] {
             check_length(times, &format!("evolve.{name}"))?;
+            let in_gamma = name != "times_ns";
             for (k, &t) in times.iter().enumerate() {
                 check(
-                    positive(t),
+                    positive(t) && (t <= MAX_EVOLVE_TIME || !in_gamma),
                     format!("evolve.{name}[{k}]"),
-                    format!("{t} must be > 0"),
+                    format!(
+                        "{t} must lie in (0, {MAX_EVOLVE_TIME}] (1/Gamma: relaxed long before)"
+                    ),
                 )?;
             }
         }
@@ -264,8 +289,8 @@ pub(super) fn check_grid(
         within_reach(wide, range) && within_reach(wide, -range),
         format!("{section}.velocity_range"),
         format!(
-            "{range} is beyond the reach of the wide launch proposal (+- (sweep.launch_spread {} + {REWEIGHTING_REACH})): widen sweep.launch_spread",
-            wide.spread
+            "+-{range} is beyond the reach of the wide launch proposal (collisions.launch_shift {} +- (sweep.launch_spread {} + {REWEIGHTING_REACH})): widen sweep.launch_spread",
+            wide.shift, wide.spread
         ),
     )
 }

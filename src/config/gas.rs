@@ -2,7 +2,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::check::{Invalid, check, check_unique, positive, potential_named};
+use super::check::{Invalid, check, check_name, check_unique, positive, potential_named};
 use crate::physics::potential::Potential;
 use crate::physics::units::{Mass, PhysicalGas, ring_density_per_um};
 
@@ -51,6 +51,11 @@ impl GasParams {
     }
 }
 
+/// The range of a gas's physical values (`l0_um`, `eps_ev`, `kt_ev` and the
+/// mass) in their own units: wide enough for any gas, narrow enough that
+/// rates in 1/ns stay finite numbers.
+const PHYSICAL_RANGE: std::ops::RangeInclusive<f64> = 1e-9..=1e9;
+
 /// Largest particles of a ring.
 pub const MAX_RING_PARTICLES: u32 = 100_000;
 
@@ -78,14 +83,18 @@ impl GasConfig {
     fn resolve(&self, k: usize, potentials: &[Potential]) -> Result<GasParams, Invalid> {
         let gas = self;
         let key = |name: &str| format!("gas[{k}].{name}");
-        check(!gas.name.is_empty(), key("name"), "is empty")?;
+        check_name(&gas.name, key("name"))?;
         let potential = potential_named(&gas.potential, potentials, key("potential"))?;
         for (name, value) in [
             ("l0_um", gas.l0_um),
             ("eps_ev", gas.eps_ev),
             ("kt_ev", gas.kt_ev),
         ] {
-            check(positive(value), key(name), format!("{value} must be > 0"))?;
+            check(
+                PHYSICAL_RANGE.contains(&value),
+                key(name),
+                format!("{value} is outside [1e-9, 1e9] of its unit"),
+            )?;
         }
         if let Some(theta) = potential.family().theta() {
             let ratio = gas.kt_ev / gas.eps_ev;
@@ -99,15 +108,30 @@ impl GasConfig {
             )?;
         }
         let mass = match (gas.mass_electron, gas.mass_amu) {
-            (Some(m), None) if positive(m) => Mass::ElectronMasses(m),
-            (None, Some(m)) if positive(m) => Mass::AtomicMassUnits(m),
-            _ => {
+            (Some(m), None) => Mass::ElectronMasses(m),
+            (None, Some(m)) => Mass::AtomicMassUnits(m),
+            (Some(_), Some(_)) => {
                 return Err((
                     key("mass_electron"),
-                    "give exactly one positive mass: mass_electron or mass_amu".into(),
+                    "give exactly one mass: mass_electron or mass_amu, not both".into(),
+                ));
+            }
+            (None, None) => {
+                return Err((
+                    format!("gas[{k}]"),
+                    "gives no mass: give mass_electron or mass_amu".into(),
                 ));
             }
         };
+        let (mass_key, mass_value) = match mass {
+            Mass::ElectronMasses(m) => ("mass_electron", m),
+            Mass::AtomicMassUnits(m) => ("mass_amu", m),
+        };
+        check(
+            PHYSICAL_RANGE.contains(&mass_value),
+            key(mass_key),
+            format!("{mass_value} is outside [1e-9, 1e9] of its unit"),
+        )?;
         let (density_per_um, density_key) = gas.density(k)?;
         let physical = PhysicalGas {
             l0_um: gas.l0_um,

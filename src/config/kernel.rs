@@ -169,13 +169,19 @@ impl KernelConfig {
             format!("{} must be > 0", kernel.bin_width),
         )?;
         check(
-            kernel.window.is_finite()
-                && kernel.window >= 3.0 * kernel.bin_width
-                && kernel.window <= MAX_WINDOW,
+            kernel.window.is_finite() && kernel.window > 0.0 && kernel.window <= MAX_WINDOW,
             "kernel.window",
             format!(
-                "{} must hold at least 3 bins of kernel.bin_width and be at most {MAX_WINDOW} (every velocity the launches reach)",
+                "{} is outside (0, {MAX_WINDOW}] (every velocity the launches reach)",
                 kernel.window
+            ),
+        )?;
+        check(
+            kernel.window >= 3.0 * kernel.bin_width,
+            "kernel.bin_width",
+            format!(
+                "{} is wider than a third of kernel.window = {}: the window holds at least 3 bins",
+                kernel.bin_width, kernel.window
             ),
         )?;
         check(

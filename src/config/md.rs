@@ -2,7 +2,8 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::check::{Invalid, check, positive};
+use super::check::{Invalid, check, check_name, positive};
+use super::scan::MAX_LAUNCH_SPEED;
 use super::{GasConfig, GasParams};
 use crate::physics::potential::Potential;
 use crate::physics::units::PhysicalGas;
@@ -131,6 +132,9 @@ impl MdParams {
     }
 }
 
+/// Most velocity bins of a ring's estimator window (`md.window / md.bin_width`).
+pub const MAX_MD_BINS: f64 = 1e5;
+
 /// Largest sample times per ring.
 pub const MAX_MD_SAMPLES: u32 = 1000;
 
@@ -179,10 +183,21 @@ impl MdConfig {
             format!("{} is outside (0, 1e-6]", self.tolerance),
         )?;
         check(
-            self.window > 0.0 && self.bin_width > 0.0 && self.bin_width <= self.window,
+            self.window > 0.0 && self.window <= 2.0 * MAX_LAUNCH_SPEED,
+            "md.window",
+            format!(
+                "{} is outside (0, {}] v_th",
+                self.window,
+                2.0 * MAX_LAUNCH_SPEED
+            ),
+        )?;
+        check(
+            self.bin_width > 0.0
+                && self.bin_width <= self.window
+                && self.window / self.bin_width <= MAX_MD_BINS,
             "md.bin_width",
             format!(
-                "{} must be in (0, md.window = {}]",
+                "{} must be in [md.window / {MAX_MD_BINS}, md.window] (md.window = {})",
                 self.bin_width, self.window
             ),
         )?;
@@ -209,6 +224,7 @@ impl MdConfig {
         gases: &[GasParams],
     ) -> Result<MdParams, Invalid> {
         let key = |name: &str| format!("md.system[{k}].{name}");
+        check_name(&system.name, key("name"))?;
         check(
             self.system.iter().filter(|s| s.name == system.name).count() == 1,
             key("name"),
@@ -223,7 +239,7 @@ impl MdConfig {
             return Err((
                 key("gas"),
                 format!(
-                    "`{}` names no [[gas]] given as a ring (ring_particles, ring_radius_um)",
+                    "`{}` is no gas.name of a [[gas]] given as a ring (ring_particles, ring_radius_um)",
                     system.gas
                 ),
             ));
@@ -240,8 +256,17 @@ impl MdConfig {
             key("final_time_ns"),
             format!("{} must be > 0", system.final_time_ns),
         )?;
+        check(
+            system.u_prime.is_finite() && system.u_prime.abs() <= MAX_LAUNCH_SPEED,
+            key("u_prime"),
+            format!(
+                "{} is outside +-{MAX_LAUNCH_SPEED} v_th (the scans' fastest launch)",
+                system.u_prime
+            ),
+        )?;
         let gas = resolved.gas;
-        let encounters = f64::from(particles)
+        // The special particle at `u'` meets `|u'|` thermal particles' worth.
+        let encounters = (f64::from(particles) + system.u_prime.abs())
             * gas.density_per_um
             * gas.thermal_speed_um_per_ns()
             * system.final_time_ns;
@@ -249,11 +274,10 @@ impl MdConfig {
             encounters <= MAX_RING_ENCOUNTERS,
             key("final_time_ns"),
             format!(
-                "{} ns gives ~{encounters:.1e} neighbour encounters per run (N rho v_th t_f), more than {MAX_RING_ENCOUNTERS:.0e}",
+                "{} ns gives ~{encounters:.1e} neighbour encounters per run ((N + |u'|) rho v_th t_f), more than {MAX_RING_ENCOUNTERS:.0e}",
                 system.final_time_ns
             ),
         )?;
-        check(system.u_prime.is_finite(), key("u_prime"), "must be finite")?;
         check(
             system
                 .runs

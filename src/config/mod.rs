@@ -178,6 +178,11 @@ pub struct Study {
     convergence: Option<(ConvergenceParams, Vec<CollisionsParams>)>,
 }
 
+/// Most kernels of one study (potentials times `(u', density)` targets):
+/// each is an instance of `kernel`, `moments`, `fit` and a figure, so the
+/// plan's size is bounded at load, before anything is planned.
+pub const MAX_KERNELS: usize = 4096;
+
 /// Largest configuration file read: a study of every key with hundreds of
 /// rings and gases is ~100 kB (a `/dev/zero` or a data file given by mistake
 /// must not be read without end).
@@ -243,23 +248,46 @@ impl Study {
         let config: Config = serde_path_to_error::deserialize(deserializer).map_err(|e| {
             let key = e.path().to_string();
             let line = line_of_span(text, e.inner().span()).or_else(|| line_of_key(text, &key));
-            error(key, line, e.inner().message().to_string())
+            let mut message = e.inner().message().to_string();
+            // A date-time deserializes as a map inside the TOML reader.
+            if let Some(date) = date_at_key(text, &key) {
+                message = message.replace(
+                    "invalid type: map",
+                    &format!("invalid type: date-time `{date}`"),
+                );
+            }
+            error(key, line, check::shortened(&message))
         })?;
         Study::resolve(file, config).map_err(|(key, message)| {
             let line = line_of_key(text, &key);
-            error(key, line, check::compact_numbers(&message))
+            error(
+                key,
+                line,
+                check::shortened(&check::compact_numbers(&message)),
+            )
         })
     }
 
     /// Checks every section in dependency order and resolves what needs
     /// lookups across sections, in one pass.
     fn resolve(file: &Path, config: Config) -> Result<Study, Invalid> {
+        config.store.validate()?;
         let potentials = config.potentials.resolve()?;
         config.engine.validate()?;
         config.scan.validate(&potentials)?;
         config.collisions.validate(&potentials)?;
         let launch = config.collisions.launch();
         config.kernel.validate(&launch)?;
+        let kernels = potentials.len() * config.kernel.targets().len();
+        check::check(
+            kernels <= MAX_KERNELS,
+            "kernel",
+            format!(
+                "{} potentials x {} (u', density) targets are {kernels} kernels, more than {MAX_KERNELS}: every kernel is an instance of four stages; split the study",
+                potentials.len(),
+                config.kernel.targets().len()
+            ),
+        )?;
         let wide = config.sweep.wide_launch(&launch);
         config.sweep.validate(&wide)?;
         config.dissociation.validate()?;
@@ -380,11 +408,24 @@ fn line_of_span(text: &str, span: Option<std::ops::Range<usize>>) -> Option<usiz
     Some(text[..start].matches('\n').count() + 1)
 }
 
-/// Line of the value at a dotted key path such as `scan.launch[1].u2`, found in
-/// the spanned document tree. A segment may itself hold dots (a quoted key
-/// such as `points_per_potential."lj-0.1"`): at each level the longest key of
-/// the table that the path continues with is taken.
+/// Line of the value at a dotted key path such as `scan.launch[1].u2`.
 fn line_of_key(text: &str, key: &str) -> Option<usize> {
+    line_of_span(text, Some(value_at_key(text, key)?.span()))
+}
+
+/// The date-time written at `key`, if the value there is one.
+fn date_at_key(text: &str, key: &str) -> Option<String> {
+    match value_at_key(text, key)?.into_inner() {
+        toml::de::DeValue::Datetime(date) => Some(date.to_string()),
+        _ => None,
+    }
+}
+
+/// The spanned value at a dotted key path such as `scan.launch[1].u2`, found
+/// in the spanned document tree. A segment may itself hold dots (a quoted
+/// key such as `points_per_potential."lj-0.1"`): at each level the longest
+/// key of the table that the path continues with is taken.
+fn value_at_key<'t>(text: &'t str, key: &str) -> Option<toml::Spanned<toml::de::DeValue<'t>>> {
     use toml::de::{DeTable, DeValue};
     let root = DeTable::parse(text).ok()?;
     let mut current: toml::Spanned<DeValue> =
@@ -414,7 +455,7 @@ fn line_of_key(text: &str, key: &str) -> Option<usize> {
         }
         rest = rest.strip_prefix('.').unwrap_or(rest);
     }
-    line_of_span(text, Some(current.span()))
+    Some(current)
 }
 
 #[cfg(test)]

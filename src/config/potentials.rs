@@ -6,13 +6,26 @@ use std::collections::BTreeMap;
 
 use serde::{Deserialize, Serialize};
 
-use super::check::{Invalid, check, check_unique};
+use super::check::{Invalid, MAX_POTENTIALS, check, check_name, check_unique};
 use crate::physics::potential::{FAMILIES, Potential};
 
 /// `[potentials]`: per family key, one potential per listed value.
 #[derive(Clone, Debug, Default, Deserialize, Serialize)]
 #[serde(transparent)]
-pub struct PotentialsConfig(BTreeMap<String, Vec<serde_json::Value>>);
+pub struct PotentialsConfig(BTreeMap<String, Vec<toml::Value>>);
+
+/// A listed TOML value as the family reads it (JSON), or why it cannot be
+/// one: JSON has no NaN, infinity or date (serde_json would make the first
+/// two `null`, and the message would say "null").
+fn as_json(value: &toml::Value) -> Result<serde_json::Value, String> {
+    match value {
+        toml::Value::Float(x) if !x.is_finite() => Err(format!("{x} is not a finite number")),
+        toml::Value::Datetime(date) => {
+            Err(format!("{date} is a date, not a potential's parameter"))
+        }
+        other => serde_json::to_value(other).map_err(|e| e.to_string()),
+    }
+}
 
 impl PotentialsConfig {
     /// Checks every value and returns the potentials, family by family in
@@ -46,12 +59,27 @@ impl PotentialsConfig {
             let listed = values
                 .iter()
                 .enumerate()
-                .map(|(k, value)| (family.potential)(value.clone()).map_err(|e| (key(k), e)))
+                .map(|(k, value)| {
+                    as_json(value)
+                        .and_then(family.potential)
+                        .map_err(|e| (key(k), e))
+                })
                 .collect::<Result<Vec<Potential>, Invalid>>()?;
             let ids: Vec<String> = listed.iter().map(Potential::id).collect();
+            for (k, id) in ids.iter().enumerate() {
+                check_name(id, key(k))?;
+            }
             check_unique(&ids, key)?;
             potentials.extend(listed);
         }
+        check(
+            potentials.len() <= MAX_POTENTIALS,
+            "potentials",
+            format!(
+                "lists {} potentials, more than {MAX_POTENTIALS}: split the study",
+                potentials.len()
+            ),
+        )?;
         Ok(potentials)
     }
 }

@@ -4,7 +4,7 @@ use std::collections::BTreeMap;
 
 use serde::{Deserialize, Serialize};
 
-use super::check::{Invalid, check, check_unique, potential_named};
+use super::check::{Invalid, check, check_name, check_unique, potential_named};
 use crate::physics::potential::Potential;
 use crate::physics::scene::EngineSettings;
 
@@ -114,6 +114,10 @@ pub const MAX_SCAN_OFFSET: f64 = 1e3;
 /// (the kernel's point sets reach 6.8).
 pub const MAX_LAUNCH_SPEED: f64 = 20.0;
 
+/// Smallest launch speed `|u|` of a scan, `v_th`: a slower particle takes
+/// longer than the step budget to cross the offsets.
+pub const MIN_LAUNCH_SPEED: f64 = 1e-3;
+
 /// Largest number of scan launch pairs.
 pub const MAX_SCAN_LAUNCHES: usize = 64;
 
@@ -177,10 +181,10 @@ impl ScanConfig {
         for (k, launch) in scan.launch.iter().enumerate() {
             for (name, u) in [("u2", launch.u2), ("u3", launch.u3)] {
                 check(
-                    u != 0.0 && u.abs() <= MAX_LAUNCH_SPEED,
+                    (MIN_LAUNCH_SPEED..=MAX_LAUNCH_SPEED).contains(&u.abs()),
                     format!("scan.launch[{k}].{name}"),
                     format!(
-                        "{u} must be non-zero (a particle at rest never arrives) and within +-{MAX_LAUNCH_SPEED} v_th"
+                        "{u} must have a size in [{MIN_LAUNCH_SPEED}, {MAX_LAUNCH_SPEED}] v_th (a particle at rest never arrives)"
                     ),
                 )?;
             }
@@ -189,11 +193,7 @@ impl ScanConfig {
                 format!("scan.launch[{k}].u3"),
                 "equal velocities never collide",
             )?;
-            check(
-                !launch.name.is_empty(),
-                format!("scan.launch[{k}].name"),
-                "is empty",
-            )?;
+            check_name(&launch.name, format!("scan.launch[{k}].name"))?;
         }
         let names: Vec<&str> = scan.launch.iter().map(|l| l.name.as_str()).collect();
         check_unique(&names, |k| format!("scan.launch[{k}].name"))?;

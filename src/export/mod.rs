@@ -41,6 +41,7 @@ use crate::pipeline::Stage;
 use crate::pipeline::code::CodeRecord;
 use crate::pipeline::executor::{self, Freshness};
 use crate::pipeline::key::sha256_hex;
+use crate::pipeline::path_names::joined_inside;
 use crate::pipeline::store::{Depth, Store};
 use crate::pipeline::table::is_table_file;
 
@@ -123,13 +124,12 @@ pub fn export(
         );
     }
     let entries = selected_entries(study, store, plan, options)?;
-    let staging = prepare_target(dir)?;
-    let placed =
-        write_bundle(study, store, plan, &entries, &staging.dir).and_then(|()| staging.place(dir));
-    if let Err(error) = placed {
-        let _ = fs::remove_dir_all(&staging.dir);
+    let staging = prepare_target(store, dir)?;
+    if let Err(error) = write_bundle(study, store, plan, &entries, &staging.dir()) {
+        let _ = staging.abandon();
         return Err(error);
     }
+    staging.place(dir)?;
     let bytes: u64 = files_of(dir)?
         .iter()
         .map(|path| fs::metadata(dir.join(path)).map(|m| m.len()).unwrap_or(0))
@@ -241,7 +241,7 @@ fn write_bundle(
 ) -> Result<()> {
     let mut resources = Vec::new();
     for entry in entries {
-        let target = dir.join(&entry.path);
+        let target = joined_inside(dir, &entry.path).map_err(anyhow::Error::msg)?;
         let folder = target.parent().unwrap_or(dir);
         fs::create_dir_all(folder).with_context(|| format!("creating {}", folder.display()))?;
         let bytes = fs::read(&entry.source)

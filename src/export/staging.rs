@@ -1,38 +1,58 @@
-//! Where a bundle is written: a staging directory next to the target,
-//! renamed into place once complete, so a bundle appears whole or not at all
-//! (and staging left by a killed export is removed).
+//! Where a bundle is written: a staging directory of the store's
+//! ([`Store::begin_outside`]: named with the store's id and this process,
+//! marked, recorded in the store) next to the target, moved into place once
+//! complete, so a bundle appears whole or not at all. Staging left by a
+//! killed export is removed by its marker; a directory that merely looks
+//! like staging (a user's `.export-2023/`) is never touched.
 
 use std::fs;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use anyhow::{Context, Result, bail};
 
+use crate::pipeline::store::{OutsideStaging, Store};
+
 /// Where a bundle is written before it appears at its target.
 pub(super) struct BundleStaging {
-    /// The staging directory.
-    pub(super) dir: PathBuf,
+    /// The marked staging directory; the bundle is its `content()`.
+    staging: OutsideStaging,
     /// `true` when it lies inside the (empty) target, which may be a mount
-    /// point: its entries are then moved up one by one; otherwise the whole
-    /// directory is renamed onto the target.
+    /// point: the bundle's entries are then moved up one by one; otherwise
+    /// the whole bundle directory is renamed onto the target.
     inside: bool,
 }
 
 impl BundleStaging {
-    /// Moves the written bundle to `target`.
-    pub(super) fn place(&self, target: &Path) -> Result<()> {
+    /// The directory the bundle is written into.
+    pub(super) fn dir(&self) -> std::path::PathBuf {
+        self.staging.content()
+    }
+
+    /// Moves the written bundle to `target` and removes the staging.
+    pub(super) fn place(self, target: &Path) -> Result<()> {
         let moved = |from: &Path, to: &Path| {
             fs::rename(from, to).with_context(|| format!("moving the bundle into {}", to.display()))
         };
-        if !self.inside {
-            return moved(&self.dir, target);
+        let bundle = self.dir();
+        if self.inside {
+            for entry in
+                fs::read_dir(&bundle).with_context(|| format!("reading {}", bundle.display()))?
+            {
+                let name = entry?.file_name();
+                moved(&bundle.join(&name), &target.join(&name))?;
+            }
+        } else {
+            moved(&bundle, target)?;
         }
-        for entry in
-            fs::read_dir(&self.dir).with_context(|| format!("reading {}", self.dir.display()))?
-        {
-            let name = entry?.file_name();
-            moved(&self.dir.join(&name), &target.join(&name))?;
-        }
-        fs::remove_dir(&self.dir).with_context(|| format!("removing {}", self.dir.display()))
+        self.abandon()
+    }
+
+    /// Removes the staging and what it holds.
+    pub(super) fn abandon(self) -> Result<()> {
+        let dir = self.staging.dir.clone();
+        self.staging
+            .finish()
+            .with_context(|| format!("removing {}", dir.display()))
     }
 }
 
@@ -40,11 +60,11 @@ impl BundleStaging {
 const INSIDE_STAGING: &str = ".export-";
 
 /// Checks the target `dir` (missing, or an empty directory, which may be a
-/// mount point), removes staging debris of exports that were killed (named
-/// for a process that no longer runs), and creates the staging directory:
-/// inside an existing target (a mount point cannot be renamed over), beside
-/// a missing one. Every error names its path.
-pub(super) fn prepare_target(dir: &Path) -> Result<BundleStaging> {
+/// mount point), removes staging of this store's exports that were killed
+/// (by their marker), and creates the staging directory: inside an existing
+/// target (a mount point cannot be renamed over), beside a missing one.
+/// Every error names its path.
+pub(super) fn prepare_target(store: &Store, dir: &Path) -> Result<BundleStaging> {
     let name = dir
         .file_name()
         .with_context(|| format!("{}: the bundle directory has no name", dir.display()))?
@@ -55,8 +75,7 @@ pub(super) fn prepare_target(dir: &Path) -> Result<BundleStaging> {
         .filter(|p| !p.as_os_str().is_empty())
         .unwrap_or(Path::new("."));
     let beside = format!(".{name}.export-");
-    remove_dead_staging(parent, &beside)?;
-    let pid = std::process::id();
+    store.clean_outside(parent, &beside)?;
     if dir.exists() {
         if !dir.is_dir() {
             bail!(
@@ -64,7 +83,7 @@ pub(super) fn prepare_target(dir: &Path) -> Result<BundleStaging> {
                 dir.display()
             );
         }
-        remove_dead_staging(dir, INSIDE_STAGING)?;
+        store.clean_outside(dir, INSIDE_STAGING)?;
         let listing = fs::read_dir(dir).with_context(|| format!("reading {}", dir.display()))?;
         if listing.count() > 0 {
             bail!(
@@ -72,44 +91,14 @@ pub(super) fn prepare_target(dir: &Path) -> Result<BundleStaging> {
                 dir.display()
             );
         }
-        let staging = dir.join(format!("{INSIDE_STAGING}{pid}"));
-        fs::create_dir(&staging).with_context(|| format!("creating {}", staging.display()))?;
         return Ok(BundleStaging {
-            dir: staging,
+            staging: store.begin_outside(dir, INSIDE_STAGING)?,
             inside: true,
         });
     }
     fs::create_dir_all(parent).with_context(|| format!("creating {}", parent.display()))?;
-    let staging = parent.join(format!("{beside}{pid}"));
-    if staging.exists() {
-        fs::remove_dir_all(&staging).with_context(|| format!("removing {}", staging.display()))?;
-    }
-    fs::create_dir(&staging).with_context(|| format!("creating {}", staging.display()))?;
     Ok(BundleStaging {
-        dir: staging,
+        staging: store.begin_outside(parent, &beside)?,
         inside: false,
     })
-}
-
-/// Removes the directories `<prefix><pid>` in `dir` whose process no longer
-/// runs: what an export killed midway left.
-fn remove_dead_staging(dir: &Path, prefix: &str) -> Result<()> {
-    let Ok(listing) = fs::read_dir(dir) else {
-        return Ok(());
-    };
-    for entry in listing.flatten() {
-        let name = entry.file_name().to_string_lossy().into_owned();
-        let Some(pid) = name
-            .strip_prefix(prefix)
-            .and_then(|p| p.parse::<u32>().ok())
-        else {
-            continue;
-        };
-        let running = Path::new("/proc").join(pid.to_string()).exists();
-        if !running && entry.path().is_dir() {
-            fs::remove_dir_all(entry.path())
-                .with_context(|| format!("removing {}", entry.path().display()))?;
-        }
-    }
-    Ok(())
 }

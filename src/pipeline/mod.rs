@@ -7,6 +7,7 @@
 pub mod code;
 pub mod executor;
 pub mod key;
+pub mod path_names;
 pub mod shards;
 pub mod store;
 pub mod table;

@@ -17,7 +17,8 @@ use crate::stages::figures::FiguresStage;
 /// against `u'`, the kernels at each `u'`, the spectrum and the kicks; the evolution; MD
 /// against Boltzmann for the compared rings.
 pub(super) fn figure_stages(study: &Study, plan: &[Box<dyn Stage>]) -> Vec<FiguresStage> {
-    let present = |id: &InstanceId| plan.iter().any(|stage| stage.id() == *id);
+    let planned: std::collections::HashSet<InstanceId> = plan.iter().map(|s| s.id()).collect();
+    let present = |id: &InstanceId| planned.contains(id);
     let kicked: Vec<Potential> = study
         .potentials()
         .into_iter()

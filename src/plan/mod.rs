@@ -38,11 +38,11 @@ pub fn plan(study: &Study) -> Vec<Box<dyn Stage>> {
         .map(|&p| study.kernel_params(p, 0.0, 0.0))
         .collect();
     // Each potential's instance of a stage, where the plan holds one.
+    let ids: std::collections::HashSet<InstanceId> = stages.iter().map(|s| s.id()).collect();
     let planned = |instance: fn(&Potential) -> InstanceId| -> Vec<InstanceId> {
         let potentials = study.potentials();
-        let ids = potentials.iter().map(instance);
-        ids.filter(|id| stages.iter().any(|stage| stage.id() == *id))
-            .collect()
+        let ids_of = potentials.iter().map(instance);
+        ids_of.filter(|id| ids.contains(id)).collect()
     };
     let (dissociations, spectra) = (
         planned(instances::dissociation),

@@ -16,9 +16,10 @@ use std::fs;
 use std::path::Path;
 use std::time::UNIX_EPOCH;
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result};
 
 use super::describe;
+use super::folder::ReportFolder;
 use super::layout::{Align, Cell, Columns, Sink};
 use super::summary::{paper_table, stage_tables, study_table};
 use crate::config::Study;
@@ -27,7 +28,7 @@ use crate::pipeline::Stage;
 use crate::pipeline::executor::{
     self, Action, Freshness, InstanceReport, StatusLine, tool_version,
 };
-use crate::pipeline::store::{Depth, Manifest, Store, write_atomically};
+use crate::pipeline::store::{Depth, Manifest, Store};
 use crate::pipeline::table::read_parquet_footer;
 
 /// The page's file name in the report's directory.
@@ -74,18 +75,9 @@ const GENERATOR: &str = "<meta name=\"generator\" content=\"ternary report\">";
 /// empty or holding an earlier report): the page and its figures. Returns a
 /// one-line summary.
 pub fn write(study: &Study, store: &Store, plan: &[Box<dyn Stage>], dir: &Path) -> Result<String> {
-    let (target, root) = (
-        std::path::absolute(dir)?,
-        std::path::absolute(store.root())?,
-    );
-    if target.starts_with(&root) {
-        bail!(
-            "{} is inside the store {}: a report goes elsewhere (the store holds only what `run` writes)",
-            dir.display(),
-            store.root().display()
-        );
-    }
-    check_target(dir)?;
+    let is_earlier_page =
+        |page: &Path| fs::read_to_string(page).is_ok_and(|text| text.contains(GENERATOR));
+    let mut folder = ReportFolder::open(dir, store.root(), is_earlier_page, PAGE)?;
     let lines = executor::status(store, plan, 1)?;
     let instances: Vec<Instance> = lines
         .iter()
@@ -94,14 +86,12 @@ pub fn write(study: &Study, store: &Store, plan: &[Box<dyn Stage>], dir: &Path) 
             manifest: fresh_manifest(store, line),
         })
         .collect();
-    let figures_dir = dir.join(FIGURES);
-    fs::create_dir_all(&figures_dir)
-        .with_context(|| format!("creating {}", figures_dir.display()))?;
-    let figures = copy_figures(store, &instances, &figures_dir)?;
+    folder.subfolder(FIGURES)?;
+    let figures = copy_figures(store, &instances, &mut folder)?;
     let page = page(study, store, &instances, &figures)?;
+    folder.write(PAGE, page.as_bytes())?;
+    folder.finish()?;
     let path = dir.join(PAGE);
-    write_atomically(&path, page.as_bytes(), &std::process::id().to_string())
-        .with_context(|| format!("writing {}", path.display()))?;
     let fresh = instances.iter().filter(|i| i.manifest.is_some()).count();
     Ok(format!(
         "report: {} figures, {fresh} of {} instances fresh, in {}\n",
@@ -109,29 +99,6 @@ pub fn write(study: &Study, store: &Store, plan: &[Box<dyn Stage>], dir: &Path) 
         instances.len(),
         path.display()
     ))
-}
-
-/// Checks that `dir` may take a report: missing, an empty directory, or one
-/// whose page carries [`GENERATOR`] (an earlier report). A report never
-/// overwrites files that are not its own.
-fn check_target(dir: &Path) -> Result<()> {
-    if !dir.exists() {
-        return Ok(());
-    }
-    let mut entries = fs::read_dir(dir).with_context(|| format!("reading {}", dir.display()))?;
-    if entries.next().is_none() {
-        return Ok(());
-    }
-    let page = dir.join(PAGE);
-    let earlier = fs::read_to_string(&page).is_ok_and(|text| text.contains(GENERATOR));
-    if !earlier {
-        bail!(
-            "{} holds files and no earlier report ({} is missing or not ternary's): a report goes into a new or empty directory, or over an earlier one",
-            dir.display(),
-            page.display()
-        );
-    }
-    Ok(())
 }
 
 /// The manifest of a fresh instance's artifact (`None` for any other).
@@ -142,10 +109,14 @@ fn fresh_manifest(store: &Store, line: &StatusLine) -> Option<Manifest> {
         .flatten()
 }
 
-/// Copies the screen PNG of every fresh figure into `dir` and reads its
-/// caption and size. Removes nothing: `dir` may hold files that are not
-/// ternary's.
-fn copy_figures(store: &Store, instances: &[Instance], dir: &Path) -> Result<Vec<Figure>> {
+/// Copies the screen PNG of every fresh figure into the report's figures
+/// folder and reads its caption and size. Removes nothing: the folder may
+/// hold files that are not ternary's.
+fn copy_figures(
+    store: &Store,
+    instances: &[Instance],
+    folder: &mut ReportFolder,
+) -> Result<Vec<Figure>> {
     let mut figures = Vec::new();
     for instance in instances {
         let Some(manifest) = &instance.manifest else {
@@ -159,10 +130,11 @@ fn copy_figures(store: &Store, instances: &[Instance], dir: &Path) -> Result<Vec
             continue;
         };
         let (_, metadata, _) = read_parquet_footer(&artifact.join("points.parquet"))?;
-        let target = dir.join(&file.name);
-        fs::copy(artifact.join(&file.name), &target)
-            .with_context(|| format!("copying {} into {}", file.name, dir.display()))?;
-        let (width, height) = png_size(&target)?;
+        let source = artifact.join(&file.name);
+        let bytes = fs::read(&source).with_context(|| format!("reading {}", source.display()))?;
+        let (width, height) =
+            png_size(&bytes).with_context(|| format!("decoding {}", source.display()))?;
+        folder.write(&format!("{FIGURES}/{}", file.name), &bytes)?;
         figures.push(Figure {
             name: instance.line.id.instance.clone(),
             href: format!("{FIGURES}/{}", file.name),
@@ -175,11 +147,8 @@ fn copy_figures(store: &Store, instances: &[Instance], dir: &Path) -> Result<Vec
 }
 
 /// Width and height of a PNG, from its header (which also shows it decodes).
-fn png_size(path: &Path) -> Result<(u32, u32)> {
-    let file = fs::File::open(path).with_context(|| format!("opening {}", path.display()))?;
-    let reader = png::Decoder::new(std::io::BufReader::new(file))
-        .read_info()
-        .with_context(|| format!("decoding {}", path.display()))?;
+fn png_size(bytes: &[u8]) -> Result<(u32, u32)> {
+    let reader = png::Decoder::new(std::io::Cursor::new(bytes)).read_info()?;
     let info = reader.info();
     Ok((info.width, info.height))
 }

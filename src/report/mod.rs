@@ -5,6 +5,7 @@
 //! ([`with_error`]); a number that does not exist says why.
 
 mod dag;
+mod folder;
 pub mod html;
 mod layout;
 mod numbers;

@@ -181,13 +181,13 @@ fn artifact_by_prefix(store: &Store, prefix: &str) -> Result<(String, String)> {
 }
 
 /// The artifact in `dir`: its manifest, under a warning naming `problems`
-/// when it has any, then each table ([`show_file`]) and other file.
+/// when it has any, then each table ([`show_file`]) and other file. Of a
+/// damaged artifact, what cannot be read is listed as unreadable under the
+/// warning instead of failing the command.
 fn show_artifact(dir: &Path, problems: &[String], rows: usize) -> Result<String> {
-    let manifest_path = dir.join("manifest.json");
-    let manifest = std::fs::read_to_string(&manifest_path)
-        .with_context(|| format!("reading {}", manifest_path.display()))?;
+    let damaged = !problems.is_empty();
     let mut out = String::new();
-    if !problems.is_empty() {
+    if damaged {
         writeln!(
             out,
             "DAMAGED {}: {} (not to be trusted; the next run recomputes it)",
@@ -195,12 +195,41 @@ fn show_artifact(dir: &Path, problems: &[String], rows: usize) -> Result<String>
             problems.join("; ")
         )?;
     }
-    writeln!(out, "{manifest}")?;
-    let value: serde_json::Value = serde_json::from_str(&manifest)?;
+    let manifest_path = dir.join("manifest.json");
+    let value = std::fs::read_to_string(&manifest_path)
+        .with_context(|| format!("reading {}", manifest_path.display()))
+        .and_then(|manifest| {
+            let value: serde_json::Value = serde_json::from_str(&manifest)
+                .with_context(|| format!("decoding {}", manifest_path.display()))?;
+            Ok((manifest, value))
+        });
+    let value = match value {
+        Ok((manifest, value)) => {
+            writeln!(out, "{manifest}")?;
+            value
+        }
+        Err(error) if damaged => {
+            writeln!(
+                out,
+                "== {}: unreadable ({error:#})",
+                manifest_path.display()
+            )?;
+            return Ok(out);
+        }
+        Err(error) => return Err(error),
+    };
     for file in value["files"].as_array().into_iter().flatten() {
         let name = file["name"].as_str().unwrap_or_default();
         if is_table_file(name) {
-            out.push_str(&show_file(&dir.join(name), rows)?);
+            match show_file(&dir.join(name), rows) {
+                Ok(text) => out.push_str(&text),
+                Err(error) if damaged => writeln!(
+                    out,
+                    "== {}: unreadable ({error:#})",
+                    dir.join(name).display()
+                )?,
+                Err(error) => return Err(error),
+            }
         } else {
             writeln!(
                 out,

@@ -9,6 +9,7 @@ use super::check::*;
 use super::files::*;
 use super::names::*;
 use super::*;
+use crate::pipeline::path_names::joined_inside;
 
 impl Store {
     /// Directory of the artifact `key` of `stage`.
@@ -16,11 +17,15 @@ impl Store {
         self.root.join("artifacts").join(stage).join(key)
     }
 
-    fn ref_path(&self, stage: &str, instance: &str) -> PathBuf {
-        self.root
-            .join("refs")
-            .join(stage)
-            .join(format!("{instance}.json"))
+    /// The ref of a stage instance, `refs/<stage>/<instance>.json`, checked
+    /// to lie inside the store whatever the names hold.
+    fn ref_path(&self, stage: &str, instance: &str) -> Result<PathBuf, StoreError> {
+        joined_inside(&self.root, &format!("refs/{stage}/{instance}.json")).map_err(|message| {
+            StoreError::Name {
+                root: self.root.clone(),
+                message,
+            }
+        })
     }
 
     /// Checks the artifact `key` of `stage` to `depth` and returns its
@@ -81,6 +86,12 @@ impl Store {
         writer: &str,
     ) -> Result<Staging, StoreError> {
         let id = self.id.as_deref().unwrap_or("unknown");
+        joined_inside(&self.root, &format!("artifacts/{stage}/{key}")).map_err(|message| {
+            StoreError::Name {
+                root: self.root.clone(),
+                message,
+            }
+        })?;
         let dir = self.root.join("tmp").join(format!("{key}.{id}.{writer}"));
         if dir.exists() {
             fs::remove_dir_all(&dir).map_err(io_error(&dir))?;
@@ -105,7 +116,7 @@ impl Store {
         instance: &str,
         entry: &InstanceRef,
     ) -> Result<(), StoreError> {
-        let path = self.ref_path(stage, instance);
+        let path = self.ref_path(stage, instance)?;
         let text = serde_json::to_vec_pretty(entry).map_err(|source| StoreError::Json {
             path: path.clone(),
             source,
@@ -117,7 +128,7 @@ impl Store {
 
     /// The last computed key of a stage instance, if any.
     pub fn read_ref(&self, stage: &str, instance: &str) -> Option<InstanceRef> {
-        read_json(&self.ref_path(stage, instance)).ok()
+        read_json(&self.ref_path(stage, instance).ok()?).ok()
     }
 
     /// The most recently written manifest of `stage` that names `instance`:

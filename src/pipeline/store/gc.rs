@@ -28,7 +28,11 @@ impl Store {
         }
         let id = self.id.as_deref().unwrap_or_default();
         let tmp = self.root.join("tmp");
+        let records = self.outside_records()?;
         for name in sorted_entries(&tmp)? {
+            if records.contains(&name) {
+                continue;
+            }
             if !(is_staging_name(&name, id) && tmp.join(&name).is_dir()) {
                 foreign.push(tmp.join(name));
             }
@@ -76,8 +80,10 @@ impl Store {
         Ok(debris)
     }
 
-    /// Removes staging debris. Call only while holding the lock.
+    /// Removes staging debris, in the store and (by their records) outside
+    /// it. Call only while holding the lock.
     pub fn clean_staging(&self, _lock: &StoreLock) -> Result<usize, StoreError> {
+        let outside = self.clean_outside_records()?;
         let debris = self.staging_debris()?;
         for path in &debris {
             let removed = if path.is_dir() {
@@ -87,10 +93,13 @@ impl Store {
             };
             removed.map_err(io_error(path))?;
         }
-        Ok(debris.len())
+        Ok(debris.len() + outside)
     }
 
     /// Removes an artifact directory. Call only while holding the lock.
+    /// The directory is first renamed into `gc`'s own debris
+    /// (`tmp/<key>.<id>.<writer>.old`), so that a `gc` killed while deleting
+    /// leaves debris the next locked command removes, never a half artifact.
     pub fn remove_artifact(
         &self,
         _lock: &StoreLock,
@@ -99,7 +108,18 @@ impl Store {
     ) -> Result<u64, StoreError> {
         let dir = self.artifact_dir(stage, key);
         let bytes = directory_bytes(&dir);
-        fs::remove_dir_all(&dir).map_err(io_error(&dir))?;
+        let id = self.id.as_deref().unwrap_or("unknown");
+        let trash = self
+            .root
+            .join("tmp")
+            .join(format!("{key}.{id}.{}.old", writer_name()));
+        if trash.exists() {
+            fs::remove_dir_all(&trash).map_err(io_error(&trash))?;
+        }
+        fs::create_dir_all(self.root.join("tmp")).map_err(io_error(&self.root))?;
+        fs::rename(&dir, &trash).map_err(io_error(&dir))?;
+        sync_dir(&self.root.join("artifacts").join(stage))?;
+        fs::remove_dir_all(&trash).map_err(io_error(&trash))?;
         Ok(bytes)
     }
 }

@@ -43,11 +43,13 @@ mod files;
 mod gc;
 mod names;
 mod open;
+mod outside;
 mod staging;
 
 pub use check::listing_problem;
 pub use files::write_atomically;
 pub use names::{is_key, is_live_staging};
+pub use outside::OutsideStaging;
 pub use staging::Staging;
 
 use std::fmt;
@@ -121,6 +123,15 @@ pub enum StoreError {
     /// The store directory does not exist (commands that only read).
     #[error("no store at {0}: `ternary run` creates it")]
     Missing(PathBuf),
+    /// A stage's or an instance's name cannot name a file inside the store
+    /// (the configuration refuses such names; this is the store's own check).
+    #[error("{root}: {message}")]
+    Name {
+        /// The store root.
+        root: PathBuf,
+        /// Which name and why.
+        message: String,
+    },
 }
 
 fn io_error(path: &Path) -> impl FnOnce(io::Error) -> StoreError + '_ {
