@@ -288,6 +288,36 @@ impl ChiSquare {
         self.chi2 / self.dof as f64
     }
 
+    /// The p-value as a table or a note prints it: `no test` with fewer than
+    /// [`MIN_TEST_DOF`] degrees of freedom (a test without power), the bound
+    /// `< 1e-300` where the tail underflows to 0 (not `0.0e0`), three digits
+    /// above 1e-3, and two significant digits below.
+    pub fn p_text(self) -> String {
+        let p = self.p_value();
+        if self.dof < MIN_TEST_DOF {
+            format!("no test ({} degrees of freedom)", self.dof)
+        } else if p.is_nan() {
+            "-".into()
+        } else if p == 0.0 {
+            "< 1e-300".into()
+        } else if p < 1e-3 {
+            format!("{p:.1e}")
+        } else {
+            format!("{p:.3}")
+        }
+    }
+
+    /// [`ChiSquare::p_text`] as a phrase of a note: `p = 0.440`,
+    /// `p < 1e-300`, `no test (2 degrees of freedom)`.
+    pub fn p_phrase(self) -> String {
+        let text = self.p_text();
+        match text.chars().next() {
+            Some('<') => format!("p {text}"),
+            Some(c) if c.is_ascii_digit() => format!("p = {text}"),
+            _ => text,
+        }
+    }
+
     /// Probability that a chi-square variable with `dof` degrees of freedom
     /// is at least `chi2`: `Q(dof/2, chi2/2)`, the regularized upper
     /// incomplete gamma function. NaN without degrees of freedom.
@@ -305,6 +335,10 @@ impl ChiSquare {
 /// lineages visibly non-uniform (Kolmogorov-Smirnov D = 0.013 over 20000
 /// simulated sets), 10 does not (`physics::md`'s calibration test).
 pub const MINIMUM_EXPECTED_COUNT: f64 = 10.0;
+
+/// Fewest degrees of freedom of a chi-square test worth printing: with one
+/// or two, a test has almost no power against a misfit (README: "no test").
+pub const MIN_TEST_DOF: usize = 3;
 
 /// One multinomial source of a binned estimator's counts: in each replicate,
 /// objects fall into bin `k` with probability `p_k`, or beyond the bins with
@@ -643,6 +677,40 @@ mod tests {
 
     /// One degree of freedom: `P(chi2 >= 1) = P(|z| >= 1) = 0.3173105078629141`
     /// (erfc(1/sqrt 2)).
+    #[test]
+    fn p_text_says_no_test_and_bounds_an_underflow() {
+        assert_eq!(
+            ChiSquare { chi2: 1.0, dof: 2 }.p_text(),
+            "no test (2 degrees of freedom)"
+        );
+        assert_eq!(ChiSquare { chi2: 1e5, dof: 10 }.p_text(), "< 1e-300");
+        assert_eq!(
+            ChiSquare {
+                chi2: 10.0,
+                dof: 10
+            }
+            .p_text(),
+            "0.440"
+        );
+        assert_eq!(
+            ChiSquare {
+                chi2: 40.0,
+                dof: 10
+            }
+            .p_text(),
+            "1.7e-5"
+        );
+        assert_eq!(ChiSquare { chi2: 1e5, dof: 10 }.p_phrase(), "p < 1e-300");
+        assert_eq!(
+            ChiSquare {
+                chi2: 10.0,
+                dof: 10
+            }
+            .p_phrase(),
+            "p = 0.440"
+        );
+    }
+
     #[test]
     fn p_value_of_one_degree_of_freedom_is_the_normal_tail() {
         let p = ChiSquare { chi2: 1.0, dof: 1 }.p_value();

@@ -284,9 +284,9 @@ fn shape_row(
             dof,
         };
         format!(
-            "chi2/dof = {:.1} with {dof} degrees of freedom, p = {:.1e}",
+            "chi2/dof = {:.1} with {dof} degrees of freedom, {}",
             chi2[row],
-            test.p_value()
+            test.p_phrase()
         )
     };
     let varied = PROTOCOL
@@ -352,10 +352,10 @@ fn exponent_row(
         "three rates fix the three parameters (no chi-square)".to_string()
     } else {
         format!(
-            "chi2/dof = {:.2} with {} degrees of freedom, p = {:.2}",
+            "chi2/dof = {:.2} with {} degrees of freedom, {}",
             law.goodness.per_dof(),
             law.goodness.dof,
-            law.goodness.p_value()
+            law.goodness.p_phrase()
         )
     };
     let note = format!(

@@ -9,6 +9,7 @@ use super::numbers::{fixed, or_why, significant};
 use crate::contract;
 use crate::pipeline::executor::InstanceReport;
 use crate::pipeline::store::Store;
+use crate::stats::ChiSquare;
 
 use super::{count, estimate, number, row_of, table_frames, text, titled_frames, variance};
 
@@ -274,7 +275,13 @@ pub(super) fn near_integrable_table(
                 estimate(&frame, row, AMPLITUDE, "-")?,
                 estimate(&frame, row, CORRECTION, "-")?,
                 Cell::text(or_why(chi2 / f64::from(dof), |c| fixed(c, 2), "-")),
-                Cell::text(or_why(number(&frame, row, P_VALUE)?, |p| fixed(p, 3), "-")),
+                Cell::text(
+                    ChiSquare {
+                        chi2,
+                        dof: dof as usize,
+                    }
+                    .p_text(),
+                ),
                 Cell::text(text(&frame, row, FITTED)?),
             ]);
         }
@@ -360,11 +367,15 @@ pub(super) fn compare_table(
                 Cell::text(text(&frame, row, goodness::ESTIMATOR)?),
                 Cell::text(reduced(goodness::CHI2_PER_DOF)?),
                 Cell::text(count(&frame, row, goodness::DOF)?.to_string()),
-                Cell::text(or_why(
-                    number(&frame, row, goodness::P_VALUE)?,
-                    |p| format!("{p:.2e}"),
-                    "-",
-                )),
+                Cell::text({
+                    let dof = count(&frame, row, goodness::DOF)?;
+                    let per_dof = number(&frame, row, goodness::CHI2_PER_DOF)?;
+                    ChiSquare {
+                        chi2: per_dof * f64::from(dof),
+                        dof: dof as usize,
+                    }
+                    .p_text()
+                }),
                 Cell::text(format!(
                     "{} ({})",
                     reduced(goodness::SAMPLE_CHI2_PER_DOF)?,
