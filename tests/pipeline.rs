@@ -504,7 +504,7 @@ fn evolve_stage_is_deterministic_and_conserves() {
             .collect()
     };
     let (a, b) = (files(&one), files(&two));
-    assert_eq!(a.len(), 5, "four h tables and the projection table");
+    assert_eq!(a.len(), 4, "four h tables");
     assert!(a == b, "evolve artifacts differ between 1 and 2 threads");
     let artifact = &stage_dirs(&one.join("data"), "evolve")[0];
     let script = r#"

@@ -27,11 +27,6 @@ pub struct Dissipative {
     eigen: SymmetricEigen,
     /// Largest eigenvalue set to zero (noise), `rho^2 l v_th`; 0 if none.
     pub largest_clipped: f64,
-    /// Eigenvalues up to this are zero within the rounding of the
-    /// diagonalization: `1e-12 max_k |lambda_k|` (the QR eigenvalues carry
-    /// errors ~ `n eps` of the largest, ~4e-14 at 161 nodes). The invariant
-    /// modes, exactly 0 in exact arithmetic, stay below it.
-    rounding: f64,
     /// `||S - S^T||_F / ||S + S^T||_F` of the estimate: its detailed-balance violation.
     pub asymmetry: f64,
 }
@@ -55,12 +50,10 @@ impl Dissipative {
         project_out(&mut sym, &invariant_basis(invariants, &root));
         let eigen = symmetric_eigen(&sym, n)?;
         let largest_clipped = eigen.values.iter().copied().fold(0.0, f64::max);
-        let radius = eigen.values.iter().fold(0.0, |r: f64, l| r.max(l.abs()));
         Ok(Dissipative {
             root,
             eigen,
             largest_clipped,
-            rounding: 1e-12 * radius,
             asymmetry,
         })
     }
@@ -74,36 +67,6 @@ impl Dissipative {
             .iter()
             .map(|&t| self.superpose(h0, |lambda| libm::exp(lambda.min(0.0) * t)))
             .collect()
-    }
-
-    /// `h(t) - h_unclipped(t)` at every time of `times`, where `h_unclipped`
-    /// propagates the same symmetrized, invariant-projected operator without
-    /// clipping: `D^(1/2) sum_{lambda_k > r} c_k (1 - exp(lambda_k t)) v_k`,
-    /// `r` the rounding of the eigenvalues (the invariant modes' eigenvalues,
-    /// 0 to rounding, count as 0). Exactly zero when no eigenvalue exceeds
-    /// `r`; a clipped mode, orthogonal to the invariant directions
-    /// `D^(1/2) p(u)`, changes none of the moments `sum_i p(u_i) h_i`.
-    pub fn clipping_change(&self, h0: &[f64], times: &[f64]) -> Vec<Vec<f64>> {
-        times
-            .iter()
-            .map(|&t| {
-                self.superpose(h0, |lambda| {
-                    if lambda > self.rounding {
-                        -libm::expm1(lambda * t)
-                    } else {
-                        0.0
-                    }
-                })
-            })
-            .collect()
-    }
-
-    /// The part of `h0` in the clipped modes, `D^(1/2) sum_{lambda_k > r} c_k v_k`:
-    /// [`Dissipative::propagate`] keeps it unchanged at every time, where the
-    /// operator without noise would let it decay (its rates are <= 0), so
-    /// its L1 norm bounds what clipping adds to `h(t)` when one mode is clipped.
-    pub fn clipped_part(&self, h0: &[f64]) -> Vec<f64> {
-        self.superpose(h0, |lambda| if lambda > self.rounding { 1.0 } else { 0.0 })
     }
 
     /// `D^(1/2) sum_k c_k gain(lambda_k) v_k` with `c_k = v_k . D^(-1/2) h0`.

@@ -7,13 +7,14 @@
 //! * up to several `1/Gamma`: the full `u'`-dependent master equation on a
 //!   velocity grid spanning the Maxwellian (`evolution`, `evolution_summary`),
 //!   for the linearized operator (`full`: conserves number, momentum and
-//!   energy, relaxes to `f0 (1 + u u' + (u'^2 - 1)(u^2 - 1)/2)`; its estimate
-//!   is projected onto detailed balance and dissipation, which removes the
-//!   growing noise modes of the raw estimate, see `evolve::spectral`), for the
-//!   special particle alone (`tagged`: a Markov generator, relaxes to `f0`),
-//!   and for the Fokker-Planck equation of the tagged drift and variance rates;
-//! * what the projection of the full operator does to `h_full`, against its
-//!   statistical error (`projection`).
+//!   energy, relaxes to `f0 (1 + u u' + (u'^2 - 1)(u^2 - 1)/2)`), for the
+//!   special particle alone (`tagged`: relaxes to `f0`), and for the
+//!   Fokker-Planck equation of the tagged variance rate in detailed-balance
+//!   form. The generators are the Dirichlet forms of the scenes
+//!   (`evolve::operator::balanced_generators`, as the `spectrum` stage's
+//!   default): symmetric under `f0`, negative semi-definite and with exact
+//!   invariants for every sample, so `f0` is stationary and the relative
+//!   entropy cannot rise, by construction.
 //!
 //! Times are given in `1/Gamma` (`Gamma` = the special particle's variance
 //! rate at `u'`, from the same events: `a_n` at `u' = 0`) or in ns for a gas;
@@ -32,15 +33,13 @@ use crate::contract::{self, Rows};
 use crate::evolve::convolution;
 use crate::evolve::early::EarlyEvolution;
 use crate::evolve::grid::VelocityGrid;
-use crate::evolve::operator::kernel_generators;
-use crate::evolve::processes::{
-    GridEvolution, Process, ProcessMoments, ProjectionEffect, ProjectionSizes,
-};
+use crate::evolve::operator::balanced_generators;
+use crate::evolve::processes::{GridEvolution, Process, ProcessMoments};
 use crate::kernel::equilibrium::self_rates;
 use crate::kernel::{Draws, Event};
 use crate::pipeline::code::{self, Code};
 use crate::pipeline::{Input, InstanceId, Progress, Stage, StageError, Table};
-use crate::stats::{Estimate, Replicated};
+use crate::stats::Estimate;
 
 /// The `evolve` stage.
 pub struct EvolveStage {
@@ -158,7 +157,7 @@ impl EvolveStage {
         Ok(vec![h_table, summary_table])
     }
 
-    /// The `evolution`, `evolution_summary` and `projection` tables.
+    /// The `evolution` and `evolution_summary` tables.
     fn grid_evolution(
         &self,
         events: &[Event],
@@ -171,20 +170,18 @@ impl EvolveStage {
         let start = grid.node_of(p.kernel.u_prime).ok_or_else(|| {
             StageError::Input(format!("u' = {} is no grid node", p.kernel.u_prime))
         })?;
-        let placed = std::sync::atomic::AtomicUsize::new(0);
-        let generators = kernel_generators(events, draws, &grid, p.kernel.kick_floor, |done| {
-            let before = placed.swap(done, std::sync::atomic::Ordering::Relaxed);
-            progress.advance((done - before) as u64);
-        });
+        let (generators, _) =
+            balanced_generators(events, draws, &grid, p.kernel.kick_floor, start, |done| {
+                progress.advance(done as u64);
+            });
         let times: Vec<f64> = schedule.iter().map(|m| m.scaled).collect();
         let evolution = GridEvolution::new(&generators, &grid, start, p.kernel.u_prime, &times)
-            .map_err(|error| StageError::Input(format!("projecting the generator: {error}")))?;
+            .map_err(|error| StageError::Input(format!("diagonalizing the generator: {error}")))?;
         progress.advance(1);
         let processes = &evolution.processes;
         Ok(vec![
             self.state_table(&grid, schedule, processes)?,
             self.summary_table(&grid, schedule, processes)?,
-            projection_table(&grid, schedule, &processes[0].states, &evolution.effect)?,
         ])
     }
 
@@ -236,7 +233,7 @@ impl EvolveStage {
         let names = [FULL, TAGGED, FOKKER_PLANCK];
         let mut rows = Vec::new();
         for (&name, process) in names.iter().zip(processes) {
-            let [clipped, asymmetry] = process.diagnostics.unwrap_or([none, none]);
+            let [clipped, asymmetry] = process.diagnostics;
             for (k, &at) in schedule.iter().enumerate() {
                 let decay = match k {
                     0 => none,
@@ -298,34 +295,6 @@ struct ProcessRow {
     asymmetry: Estimate,
 }
 
-/// The `projection` table: per time the sizes of the projection's effect on
-/// `h_full` against its statistical error (`ProjectionEffect::sizes`).
-fn projection_table(
-    grid: &VelocityGrid,
-    schedule: &[Moment],
-    states: &Replicated<Vec<Vec<f64>>>,
-    effect: &ProjectionEffect,
-) -> Result<Table, StageError> {
-    use contract::evolve::projection::*;
-    let rows: Vec<(Moment, ProjectionSizes)> = schedule
-        .iter()
-        .enumerate()
-        .map(|(k, &at)| (at, effect.sizes(grid, states, k)))
-        .collect();
-    Ok(with_times(Rows::new(&rows), |r| r.0)
-        .estimate(CLIPPING_CHANGE, |r| r.1.clipping)
-        .estimate(CLIPPED_WEIGHT, |r| r.1.clipped)
-        .estimate(CLIPPING_NUMBER, |r| r.1.moments[0])
-        .estimate(CLIPPING_MOMENTUM, |r| r.1.moments[1])
-        .estimate(CLIPPING_SECOND_MOMENT, |r| r.1.moments[2])
-        .estimate(PROJECTION_CHANGE, |r| r.1.projection)
-        .with(H_ERROR_L1, |r| r.1.error)
-        .optional(CLIPPING_CHANGE_OVER_ERROR, |r| r.1.over_error[0])
-        .optional(CLIPPED_WEIGHT_OVER_ERROR, |r| r.1.over_error[1])
-        .optional(PROJECTION_CHANGE_OVER_ERROR, |r| r.1.over_error[2])
-        .table(&TABLE)?)
-}
-
 /// Adds the three time columns of every evolve table.
 fn with_times<'r, R>(rows: Rows<'r, R>, at: impl Fn(&R) -> Moment) -> Rows<'r, R> {
     use contract::evolve::*;
@@ -360,7 +329,6 @@ impl Stage for EvolveStage {
             early_summary::TABLE.name,
             evolution::TABLE.name,
             evolution_summary::TABLE.name,
-            projection::TABLE.name,
         ]
     }
 

@@ -127,7 +127,7 @@ pub mod evolution {
     pub const H_FOKKER_PLANCK: Pair = pair!(
         "h_fokker_planck",
         DENSITY,
-        "Fokker-Planck evolution with the tagged drift and variance rates",
+        "Fokker-Planck evolution with the tagged variance rate D2 in detailed-balance form (drift (D2' - u D2) / 2: f0 stationary)",
         JACKKNIFE
     );
     /// Limit of `h_full`.
@@ -140,7 +140,7 @@ pub mod evolution {
     pub const EQUILIBRIUM_TAGGED: Col<f64> = Col::f64(
         "equilibrium_tagged",
         DENSITY,
-        "f0: the limit of h_tagged and h_fokker_planck",
+        "f0 normalized on the grid: the limit of h_tagged and h_fokker_planck",
     );
 }
 
@@ -164,7 +164,7 @@ pub mod evolution_summary {
     pub const FULL: &str = "full";
     /// The special particle alone.
     pub const TAGGED: &str = "tagged";
-    /// The Fokker-Planck equation of the tagged rates.
+    /// The Fokker-Planck equation of the tagged variance rate.
     pub const FOKKER_PLANCK: &str = "fokker_planck";
     /// Node spacing.
     pub const GRID_STEP: Col<f64> = Col::f64("grid_step", "v_th", "node spacing");
@@ -232,103 +232,14 @@ pub mod evolution_summary {
     pub const LARGEST_CLIPPED_RATE: Pair = pair!(
         "largest_clipped_rate",
         RATE,
-        "largest positive eigenvalue of the estimated generator (symmetrized, invariants projected out), set to zero: Monte Carlo noise",
+        "largest positive eigenvalue of the process's generator (symmetrized, invariants projected out), set to zero: rounding, since the Dirichlet form is negative semi-definite for every sample",
         JACKKNIFE
-    )
-    .or_null("not projected: the process has no estimated generator");
+    );
     /// Detailed-balance violation.
     pub const ASYMMETRY: Pair = pair!(
         "asymmetry",
         "1",
-        "||S - S^T|| / ||S + S^T|| of S = f0^(-1/2) M f0^(1/2): detailed-balance violation of the raw estimate, removed",
-        JACKKNIFE
-    )
-    .or_null("not projected: the process has no estimated generator");
-}
-
-/// `projection.parquet`: one row per time, the `full` process.
-pub mod projection {
-    use super::*;
-    pub use super::{TIME_GAMMA, TIME_NS, TIME_SCALED};
-
-    /// The table.
-    pub const TABLE: TableSpec = TableSpec {
-        stage: STAGE,
-        name: "projection",
-        description: "what projecting the full operator's estimate (symmetrization, clipping of positive eigenvalues) does to h_full, against h_full's statistical error",
-    };
-    /// L1 size of the clipping's change.
-    pub const CLIPPING_CHANGE: Pair = pair!(
-        "clipping_change",
-        "1",
-        "sum_i |h_i - h_unclipped_i|: h_unclipped propagates the same symmetrized, invariant-projected operator without clipping its positive eigenvalues (0 when none is positive)",
-        JACKKNIFE
-    )
-    .or_null("overflow: the unprojected evolution diverges beyond the floating-point range");
-    /// Weight of `h` in the clipped modes.
-    pub const CLIPPED_WEIGHT: Pair = pair!(
-        "clipped_weight",
-        "1",
-        "sum_i |f0^(1/2) sum_(lambda_k > 0) c_k v_k|_i: the part of h kept frozen in the clipped modes at every time (the noiseless rates are <= 0), bounding the clipping's bias",
+        "||S - S^T|| / ||S + S^T|| of S = f0^(-1/2) M f0^(1/2): the generator's detailed-balance violation, rounding for the Dirichlet form (removed)",
         JACKKNIFE
     );
-    /// Number of the change.
-    pub const CLIPPING_NUMBER: Pair = pair!(
-        "clipping_number",
-        "1",
-        "sum_i (h - h_unclipped)_i: 0 to rounding (clipped modes are orthogonal to the invariants)",
-        JACKKNIFE
-    )
-    .or_null("overflow: the unprojected evolution diverges beyond the floating-point range");
-    /// Momentum of the change.
-    pub const CLIPPING_MOMENTUM: Pair = pair!(
-        "clipping_momentum",
-        "v_th",
-        "sum_i u_i (h - h_unclipped)_i: 0 to rounding",
-        JACKKNIFE
-    )
-    .or_null("overflow: the unprojected evolution diverges beyond the floating-point range");
-    /// Second moment of the change.
-    pub const CLIPPING_SECOND_MOMENT: Pair = pair!(
-        "clipping_second_moment",
-        "v_th^2",
-        "sum_i u_i^2 (h - h_unclipped)_i: 0 to rounding",
-        JACKKNIFE
-    )
-    .or_null("overflow: the unprojected evolution diverges beyond the floating-point range");
-    /// L1 size of the whole projection's change.
-    pub const PROJECTION_CHANGE: Pair = pair!(
-        "projection_change",
-        "1",
-        "sum_i |h_i - h_raw_i|: h_raw = exp(t M) h(0) of the raw estimate M (neither symmetrized nor clipped)",
-        JACKKNIFE
-    )
-    .or_null("overflow: the unprojected evolution diverges beyond the floating-point range");
-    /// The statistical error of `h_full` in L1.
-    pub const H_ERROR_L1: Col<f64> = Col::f64(
-        "h_error_l1",
-        "1",
-        "sum_i of the jackknife standard errors of h_full's node masses: the L1 size of h's statistical error",
-    );
-    /// Clipping change against the error.
-    pub const CLIPPING_CHANGE_OVER_ERROR: Col<f64> = Col::f64(
-        "clipping_change_over_error",
-        "1",
-        "largest clipping_change of the full and every leave-one-out estimate over h_error_l1 (< 1: within the errors)",
-    )
-    .or_null("h_error_l1 is zero to rounding (h is exact at t = 0): no finite ratio");
-    /// Clipped weight against the error.
-    pub const CLIPPED_WEIGHT_OVER_ERROR: Col<f64> = Col::f64(
-        "clipped_weight_over_error",
-        "1",
-        "largest clipped_weight of the full and every leave-one-out estimate over h_error_l1",
-    )
-    .or_null("h_error_l1 is zero to rounding (h is exact at t = 0): no finite ratio");
-    /// Projection change against the error.
-    pub const PROJECTION_CHANGE_OVER_ERROR: Col<f64> = Col::f64(
-        "projection_change_over_error",
-        "1",
-        "largest projection_change of the full and every leave-one-out estimate over h_error_l1",
-    )
-    .or_null("h_error_l1 is zero to rounding (h is exact at t = 0): no finite ratio");
 }
