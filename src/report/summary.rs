@@ -13,7 +13,7 @@ use crate::pipeline::store::Store;
 
 use super::tables::{
     balance_table, compare_table, convergence_table, evolve_table, gases_table, md_table,
-    near_integrable_table, scan_table, spectrum_table,
+    near_integrable_table, scan_table, spectrum_table, stationarity_table,
 };
 use super::{count, estimate, number, table_frames, text};
 
@@ -60,6 +60,7 @@ pub(super) fn stage_tables(
     md_table(out, store, reports, kick_floor)?;
     compare_table(out, store, reports)?;
     scan_table(out, store, reports)?;
+    stationarity_table(out, store, reports)?;
     balance_table(out, store, reports)
 }
 

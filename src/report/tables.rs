@@ -13,6 +13,43 @@ use crate::stats::ChiSquare;
 
 use super::{count, estimate, number, row_of, table_frames, text, titled_frames, variance};
 
+/// The sweeps' joint tests of the drift against stationarity.
+pub(super) fn stationarity_table(
+    out: &mut dyn Sink,
+    store: &Store,
+    reports: &[InstanceReport],
+) -> Result<()> {
+    use contract::sweep::stationarity::*;
+    let frames = titled_frames(
+        out,
+        store,
+        reports,
+        &TABLE,
+        "Fokker-Planck stationarity, joint over u' < 0: the drift's relative excess along P = (D2' - u D2)/2, sum s (D1 - P) / sum |P| (s the sign of P; correlations from the randomizations; below 0 the drift is weaker than stationarity requires)",
+    )?;
+    if frames.is_empty() {
+        return Ok(());
+    }
+    let mut table = Columns::new(&[
+        ("potential", Align::Left),
+        ("points", Align::Right),
+        ("relative residual", Align::Left),
+        ("z", Align::Right),
+    ]);
+    for (instance, frame) in frames {
+        for row in 0..frame.height() {
+            table.push(vec![
+                Cell::text(instance.as_str()),
+                Cell::text(count(&frame, row, POINTS)?.to_string()),
+                estimate(&frame, row, RELATIVE_RESIDUAL, "-")?,
+                Cell::text(or_why(number(&frame, row, JOINT_Z)?, |z| fixed(z, 2), "-")),
+            ]);
+        }
+    }
+    out.table(&table);
+    Ok(())
+}
+
 /// The sweeps' joint detailed-balance tests.
 pub(super) fn balance_table(
     out: &mut dyn Sink,

@@ -25,7 +25,7 @@ use crate::contract::{self, Rows};
 use crate::kernel::binding::{BindingBins, BindingSums, binding_sums};
 use crate::kernel::equilibrium::{
     Balance, FokkerPlanckPoint, JointBalance, SelfRates, balance_between, fokker_planck_check,
-    joint_balance, self_rates,
+    joint_balance, joint_stationarity, self_rates,
 };
 use crate::kernel::{Draws, Event, Target, self_bin_feeders};
 use crate::pipeline::code::{self, Code};
@@ -136,6 +136,18 @@ impl SweepStage {
             .estimate(SELF_VARIANCE, |(_, p)| p.variance)
             .estimate(FOKKER_PLANCK_DRIFT, |(_, p)| p.predicted_drift)
             .with(FOKKER_PLANCK_Z, |(_, p)| p.z)
+            .table(&TABLE)?)
+    }
+
+    /// The joint test of stationarity over the independent half of the grid.
+    fn stationarity_table(grid: &[f64], rates: &[SelfRates]) -> Result<Table, StageError> {
+        use contract::sweep::stationarity::*;
+        let joint = [joint_stationarity(grid, rates)];
+        Ok(Rows::new(&joint)
+            .with(POINTS, |j| j.points as u32)
+            .estimate(RELATIVE_RESIDUAL, |j| j.relative_residual)
+            .with(JOINT_Z, |j| j.relative_residual.z())
+            .with(LARGEST_SHARE, |j| j.largest_share)
             .table(&TABLE)?)
     }
 
@@ -253,6 +265,7 @@ impl Stage for SweepStage {
     fn tables(&self) -> &'static [&'static str] {
         &[
             contract::sweep::rates::TABLE.name,
+            contract::sweep::stationarity::TABLE.name,
             contract::sweep::detailed_balance::TABLE.name,
             contract::sweep::balance_tests::TABLE.name,
             contract::sweep::recombination::TABLE.name,
@@ -279,6 +292,7 @@ impl Stage for SweepStage {
         let (per_point, thermal) = self.recombination_sums(&events, &draws, &grid, &bins);
         Ok(vec![
             self.rates_table(&grid, &rates)?,
+            Self::stationarity_table(&grid, &rates)?,
             balance,
             tests,
             Self::recombination_table(&grid, &per_point, &thermal)?,

@@ -170,6 +170,44 @@ pub mod detailed_balance {
     .or_null("not estimable: the imbalance has no spread over randomizations");
 }
 
+/// `stationarity.parquet`: one row, the joint test of the measured drift
+/// against Fokker-Planck stationarity.
+pub mod stationarity {
+    use super::*;
+
+    /// The table.
+    pub const TABLE: TableSpec = TableSpec {
+        stage: STAGE,
+        name: "stationarity",
+        description: "joint test of the drift D1 against the stationarity drift (D2' - u D2) / 2 over the independent half of the u' grid, with the points' correlations",
+    };
+    /// Points joined.
+    pub const POINTS: Col<u32> = Col::u32(
+        "points",
+        "1",
+        "grid points at u' < 0 (every scene enters with its mirror image, so those at u' > 0 repeat their evidence; at u' = 0 both drifts vanish)",
+    );
+    /// The relative residual.
+    pub const RELATIVE_RESIDUAL: Pair = pair!(
+        "relative_residual",
+        "1",
+        "sum of s (D1 - P) over the points / sum of |P|, P = (D2' - u D2) / 2 the stationarity drift and s its sign: the drift's relative excess along it (below 0: weaker); 0 for a Fokker-Planck process, a few percent from the higher Kramers-Moyal terms a jump process has",
+        "standard error from its spread over randomizations (the points share scenes: their correlations are in it)"
+    )
+    .or_null("not estimable: fewer than two randomizations");
+    /// Its z-score.
+    pub const JOINT_Z: Col<f64> =
+        Col::f64("joint_z", "1", "relative_residual / its standard error")
+            .or_null("not estimable: fewer than two randomizations");
+    /// Share of the spread in one randomization.
+    pub const LARGEST_SHARE: Col<f64> = Col::f64(
+        "largest_share",
+        "1",
+        "share of relative_residual's spread carried by one randomization; above 0.5 one scene makes the error and the z-score is no evidence",
+    )
+    .or_null("not estimable: fewer than two randomizations");
+}
+
 /// `balance_tests.parquet`: one joint detailed-balance test per separation.
 pub mod balance_tests {
     use super::*;
