@@ -35,19 +35,38 @@ pub(super) fn stationarity_table(
         ("points", Align::Right),
         ("relative residual", Align::Left),
         ("z", Align::Right),
+        ("", Align::Left),
     ]);
     for (instance, frame) in frames {
         for row in 0..frame.height() {
+            let share = number(&frame, row, LARGEST_SHARE)?;
             table.push(vec![
                 Cell::text(instance.as_str()),
                 Cell::text(count(&frame, row, POINTS)?.to_string()),
                 estimate(&frame, row, RELATIVE_RESIDUAL, "-")?,
                 Cell::text(or_why(number(&frame, row, JOINT_Z)?, |z| fixed(z, 2), "-")),
+                Cell::text(evidence_verdict(share)),
             ]);
         }
     }
     out.table(&table);
     Ok(())
+}
+
+/// Whether a joint test whose spread one randomization carries `share` of
+/// is evidence: empty when it is, else why not.
+fn evidence_verdict(share: f64) -> String {
+    use crate::thresholds::DOMINATED_SHARE;
+    if share <= DOMINATED_SHARE {
+        String::new()
+    } else if share.is_nan() {
+        "no evidence: no kicks or no pairs".to_string()
+    } else {
+        format!(
+            "no evidence: one randomization carries {:.0}% of the spread",
+            100.0 * share
+        )
+    }
 }
 
 /// The sweeps' joint detailed-balance tests.
@@ -56,7 +75,6 @@ pub(super) fn balance_table(
     store: &Store,
     reports: &[InstanceReport],
 ) -> Result<()> {
-    use crate::thresholds::DOMINATED_SHARE;
     use contract::sweep::balance_tests::*;
     let frames = titled_frames(
         out,
@@ -80,16 +98,7 @@ pub(super) fn balance_table(
         for row in 0..frame.height() {
             let share = number(&frame, row, JOINT_LARGEST_SHARE)?;
             let z = or_why(number(&frame, row, JOINT_Z)?, |z| fixed(z, 2), "-");
-            let verdict = if share <= DOMINATED_SHARE {
-                String::new()
-            } else if share.is_nan() {
-                "no evidence: no kicks or no pairs".to_string()
-            } else {
-                format!(
-                    "no evidence: one randomization carries {:.0}% of the spread",
-                    100.0 * share
-                )
-            };
+            let verdict = evidence_verdict(share);
             table.push(vec![
                 Cell::text(instance.as_str()),
                 Cell::text(fixed(number(&frame, row, SEPARATION)?, 3)),
