@@ -78,6 +78,16 @@ impl Store {
         self.begin_as(stage, key, &writer_name())
     }
 
+    /// The staging directory `tmp/<key>.<id>.<writer><suffix>` of this
+    /// store (`suffix` empty, or `.old` for an artifact set aside): the one
+    /// naming of [`is_staging_name`], which the next locked command removes.
+    pub(super) fn staging_dir(&self, key: &str, writer: &str, suffix: &str) -> PathBuf {
+        let id = self.id.as_deref().unwrap_or("unknown");
+        self.root
+            .join("tmp")
+            .join(format!("{key}.{id}.{writer}{suffix}"))
+    }
+
     /// [`Store::begin`] for the writer named `writer` (`<pid>@<host>`).
     pub(super) fn begin_as(
         &self,
@@ -85,14 +95,13 @@ impl Store {
         key: &str,
         writer: &str,
     ) -> Result<Staging, StoreError> {
-        let id = self.id.as_deref().unwrap_or("unknown");
         joined_inside(&self.root, &format!("artifacts/{stage}/{key}")).map_err(|message| {
             StoreError::Name {
                 root: self.root.clone(),
                 message,
             }
         })?;
-        let dir = self.root.join("tmp").join(format!("{key}.{id}.{writer}"));
+        let dir = self.staging_dir(key, writer, "");
         if dir.exists() {
             fs::remove_dir_all(&dir).map_err(io_error(&dir))?;
         }
@@ -100,10 +109,7 @@ impl Store {
         Ok(Staging {
             dir,
             target: self.artifact_dir(stage, key),
-            trash: self
-                .root
-                .join("tmp")
-                .join(format!("{key}.{id}.{writer}.old")),
+            trash: self.staging_dir(key, writer, ".old"),
             files: Vec::new(),
             committed: false,
         })

@@ -108,11 +108,7 @@ impl Store {
     ) -> Result<u64, StoreError> {
         let dir = self.artifact_dir(stage, key);
         let bytes = directory_bytes(&dir);
-        let id = self.id.as_deref().unwrap_or("unknown");
-        let trash = self
-            .root
-            .join("tmp")
-            .join(format!("{key}.{id}.{}.old", writer_name()));
+        let trash = self.staging_dir(key, &writer_name(), ".old");
         if trash.exists() {
             fs::remove_dir_all(&trash).map_err(io_error(&trash))?;
         }

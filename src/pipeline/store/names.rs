@@ -47,16 +47,26 @@ pub(super) fn is_writer_name(text: &str) -> bool {
 /// progress, not debris of an interrupted one.
 pub fn is_live_staging(name: &str) -> bool {
     let name = name.strip_suffix(".old").unwrap_or(name);
-    let ours = writer_name();
-    let this_host = ours.split_once('@').map_or("", |(_, host)| host);
+    let this_host = this_host();
     let (pid, host) = match name.rsplit_once('@') {
         Some((rest, host)) => (rest.rsplit('.').next().unwrap_or_default(), host),
-        None => (name.rsplit('.').next().unwrap_or_default(), this_host),
+        None => (
+            name.rsplit('.').next().unwrap_or_default(),
+            this_host.as_str(),
+        ),
     };
     host == this_host
         && !pid.is_empty()
         && pid.bytes().all(|b| b.is_ascii_digit())
         && Path::new("/proc").join(pid).exists()
+}
+
+/// This host's name as [`writer_name`] writes it.
+pub(super) fn this_host() -> String {
+    let ours = writer_name();
+    ours.split_once('@')
+        .map_or("", |(_, host)| host)
+        .to_string()
 }
 
 /// `true` for a temporary marker of any store: `.ternary-store.json.<id>.<pid>`.

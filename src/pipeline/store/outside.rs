@@ -151,12 +151,10 @@ fn is_tag_of(tag: &str, id: &str) -> bool {
 /// `true` for a tag of the store `id` whose writer ran on this host and no
 /// longer runs (another host's writer may still be at work: kept).
 fn is_dead_tag(tag: &str, id: &str) -> bool {
-    let ours = writer_name();
-    let this_host = ours.split_once('@').map_or("", |(_, host)| host);
     is_tag_of(tag, id)
         && tag
             .rsplit_once('@')
-            .is_some_and(|(_, host)| host == this_host)
+            .is_some_and(|(_, host)| host == this_host())
         && !is_live_staging(tag)
 }
 
