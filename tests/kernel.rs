@@ -446,7 +446,7 @@ fn pilot_allocation_favours_the_opposite_side_and_declines_without_kicks() {
     let target = dilute(0.0);
     let calogero = Potential::inverse_power(2.0);
     assert_eq!(
-        pilot_same_side_fraction(&pilot_plan, &calogero, &engine(), &target, 256),
+        pilot_same_side_fraction(&pilot_plan, &calogero, &engine(), &[target], 256),
         None
     );
     // numerics.md: the opposite-side pattern carries ~90% of a_n; Neyman gives ~15% same-side.
@@ -454,7 +454,7 @@ fn pilot_allocation_favours_the_opposite_side_and_declines_without_kicks() {
         &pilot_plan,
         &Potential::inverse_power(6.0),
         &engine(),
-        &target,
+        &[target],
         1024,
     )
     .unwrap();

@@ -75,7 +75,7 @@ fn run(variant: &Variant, options: &BalanceBenchOptions) -> BalanceRun {
         &plan,
         &options.potential,
         &options.study.engine,
-        &Target::dilute(variant.pilot_at),
+        &[Target::dilute(variant.pilot_at)],
         pilot_points,
     )
     .unwrap_or(0.15);

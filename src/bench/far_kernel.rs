@@ -116,7 +116,7 @@ pub fn far_kernel(options: &KernelBenchOptions) -> String {
         &probe,
         &potential,
         &study.engine,
-        &Target::dilute(0.0),
+        &[Target::dilute(0.0)],
         1024,
     )
     .unwrap_or(base.same_side_fraction);

@@ -344,7 +344,7 @@ pub fn kernel(options: &KernelBenchOptions) -> (String, BenchFigure) {
     );
     let started = Instant::now();
     let fraction =
-        ternary::kernel::pilot_same_side_fraction(&probe, &potential, &engine, &target, 1024)
+        ternary::kernel::pilot_same_side_fraction(&probe, &potential, &engine, &[target], 1024)
             .unwrap_or(0.15);
     let pilot_seconds = started.elapsed().as_secs_f64();
     let piloted = Variant {

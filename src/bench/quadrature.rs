@@ -35,7 +35,7 @@ pub(super) fn run_quadrature(
         &probe,
         potential,
         &options.study.engine,
-        &Target::dilute(0.0),
+        &[Target::dilute(0.0)],
         1024,
     )
     .unwrap_or(variant.same_side_fraction);

@@ -669,9 +669,11 @@ const PILOT_SEED_MASK: u64 = 0x5049_4c4f_545f_5345;
 /// Same-side fraction of the Neyman allocation for `a_n` (numerics.md):
 /// `N_s ~ sigma_s / sqrt(c_s)` for sampled offsets, `(sigma_s^2 / c_s)^(1/3)`
 /// for launch pairs integrated by quadrature (whose randomized quasi-Monte
-/// Carlo errors fall about as `N^-1`, not `N^-1/2`), with `sigma_s` the standard deviation of one
-/// point's contribution `sum w k^2` to the self variance rate at `target` (a
-/// sampled scene, or a launch pair's offset integral) and `c_s` its mean cost
+/// Carlo errors fall about as `N^-1`, not `N^-1/2`), with `sigma_s^2` the variance of one
+/// point's contribution `sum w k^2` to the self variance rate (a sampled
+/// scene, or a launch pair's offset integral) relative to the rate, summed
+/// over `targets` (a launch mixture serves every `u'` its components reach:
+/// the sweep's wide sets pass one target per component), and `c_s` its mean cost
 /// in force evaluations, both from plain Monte Carlo points of a separate seed
 /// (the main points are not reused): `pilot_points` per stratum when offsets
 /// are sampled, `pilot_points / nodes` launch pairs (at least 16; `nodes` per pair) when
@@ -682,7 +684,7 @@ pub fn pilot_same_side_fraction(
     plan: &SamplingPlan,
     potential: &Potential,
     engine: &EngineSettings,
-    target: &Target,
+    targets: &[Target],
     pilot_points: u32,
 ) -> Option<f64> {
     let points = match plan.offsets {
@@ -698,23 +700,45 @@ pub fn pilot_same_side_fraction(
         ..*plan
     };
     let records = pilot.integrate_all(potential, engine, |_| ());
-    let merit = |stratum: Stratum| {
-        let mut values = vec![0.0; points as usize];
+    let count = f64::from(points);
+    let mean = |values: &[f64]| values.iter().sum::<f64>() / count;
+    let variance = |values: &[f64]| {
+        let mean = mean(values);
+        values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (count - 1.0)
+    };
+    // Per stratum: each point's contribution at every target, and the mean cost.
+    let sample = |stratum: Stratum| {
+        let mut values = vec![vec![0.0; points as usize]; targets.len()];
         let mut costs = vec![0.0; points as usize];
         for record in records.iter().filter(|r| r.scene.stratum == stratum) {
             let point = record.point as usize;
-            values[point] += contributions(&Event::from_record(record), target)
-                .map(|c| c.weight * c.self_kick().powi(2))
-                .sum::<f64>();
+            let event = Event::from_record(record);
+            for (values, target) in values.iter_mut().zip(targets) {
+                values[point] += contributions(&event, target)
+                    .map(|c| c.weight * c.self_kick().powi(2))
+                    .sum::<f64>();
+            }
             costs[point] += f64::from(record.collision.evaluations);
         }
-        let count = f64::from(points);
-        let mean = values.iter().sum::<f64>() / count;
-        let deviation =
-            (values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (count - 1.0)).sqrt();
-        deviation / (costs.iter().sum::<f64>() / count).sqrt()
+        (values, mean(&costs))
     };
-    let (opposite, same) = (merit(Stratum::Opposite), merit(Stratum::SameSide));
+    let strata = [sample(Stratum::Opposite), sample(Stratum::SameSide)];
+    // Each target's rate (both strata), so that every target weighs by its
+    // relative variance: the rates at the mixture's outer components are
+    // several times the centre's.
+    let rates: Vec<f64> = (0..targets.len())
+        .map(|t| strata.iter().map(|(values, _)| mean(&values[t])).sum())
+        .collect();
+    let merit = |(values, cost): &(Vec<Vec<f64>>, f64)| {
+        let relative: f64 = values
+            .iter()
+            .zip(&rates)
+            .filter(|(_, rate)| **rate != 0.0)
+            .map(|(values, rate)| variance(values) / (rate * rate))
+            .sum();
+        relative.sqrt() / cost.sqrt()
+    };
+    let [opposite, same] = strata.each_ref().map(merit);
     // Errors falling as N^-p split a fixed cost as N_s ~ (sigma_s^2 / c_s)^(1 / (2p + 1)):
     // Neyman's sigma_s / sqrt(c_s) for Monte Carlo (p = 1/2); launch pairs under the
     // offset quadrature converge as N^-1.1 .. N^-1.75 (docs/benchmarks.md), p = 1 taken.

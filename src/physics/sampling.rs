@@ -213,6 +213,14 @@ impl LaunchProposal {
         }
     }
 
+    /// The `u'` of each component, `v_th`: the shift, and with a spread the
+    /// shift minus and plus it.
+    pub fn component_shifts(&self) -> impl Iterator<Item = f64> + '_ {
+        self.components()
+            .iter()
+            .map(|c| self.shift + c * self.spread)
+    }
+
     fn components(&self) -> &'static [f64] {
         if self.spread == 0.0 {
             &[0.0]
@@ -285,13 +293,11 @@ pub const SAME_SIDE_QUADRATURE_WIDTH: f64 = 1.25;
 /// grows like `1/v`, so without it a pair with a slow launch has a weight of
 /// unbounded variance (single same-side such pairs carried the far kernel's
 /// spread at 24 x 16384 pairs: docs/benchmarks.md, "The same-side slow
-/// stratum"). Opposite-side pairs always; same-side pairs of a set drawn for
-/// one `u'` (`launch.spread == 0`, the kernels' sets), folded so that the
-/// stratum's edge stays straight ([`folded_through_smaller`]). A launch mixture
-/// (the sweep's wide sets, which the spectrum reads) keeps the fold through
-/// the larger coordinate ([`folded_through_larger`]) and no same-side
-/// stratum: there the other fold cost the spectrum's low end (the test
-/// study's gas gap fell from 10 to 6.5 errors), for reasons not yet known.
+/// stratum"); a launch mixture without it undercounted the sweep's
+/// recombination rates, which slow same-side pairs carry: at `theta = 100`
+/// the thermal rate fell 60% short of `3 K_b k_d`, and 4-9% at `theta <=
+/// 20`, docs/lennard-jones.md). Every pair is folded so that the stratum's
+/// edge stays straight ([`folded_through_smaller`]).
 /// With sampled offsets the stratum doubled the error of `a` and is not
 /// used.
 pub fn sample_launch(
@@ -306,21 +312,13 @@ pub fn sample_launch(
         1.0
     };
     let fold = fold_same_side && stratum == Stratum::SameSide;
-    let single_shift = launch.spread == 0.0;
-    let launch = if fold_same_side && (stratum == Stratum::Opposite || single_shift) {
+    let launch = if fold_same_side {
         *launch
     } else {
         launch.without_slow_stratum()
     };
     let ([x_first, x_second], width) = if fold {
-        (
-            if single_shift {
-                folded_through_smaller(point)
-            } else {
-                folded_through_larger(point)
-            },
-            SAME_SIDE_QUADRATURE_WIDTH,
-        )
+        (folded_through_smaller(point), SAME_SIDE_QUADRATURE_WIDTH)
     } else {
         (point, 1.0)
     };
@@ -348,15 +346,6 @@ pub fn folded_through_smaller([x_first, x_second]: [f64; 2]) -> [f64; 2] {
     // 1 - sqrt(1 - x), without the cancellation at small x.
     let smaller = x_first / (1.0 + (1.0 - x_first).sqrt());
     [smaller + x_second * (1.0 - smaller), smaller]
-}
-
-/// Maps the unit square onto its half `c_second <= c_first` with uniform
-/// density 2 through the larger coordinate: `c_first = sqrt(x_first)`,
-/// `c_second = x_second c_first` (the diagonal is the edge `x_second = 1`).
-/// The launch mixtures' fold ([`sample_launch`]).
-pub fn folded_through_larger([x_first, x_second]: [f64; 2]) -> [f64; 2] {
-    let larger = x_first.sqrt();
-    [larger, x_second * larger]
 }
 
 /// Scene of the literal algorithm (physics.md §3) at `u' = 0` and density
@@ -731,36 +720,34 @@ mod tests {
         }
     }
 
-    /// Both folds map the unit square uniformly onto the half below its
-    /// diagonal; the kernels' fold takes the smaller coordinate from the
-    /// first one alone, distributed as `1 - (1 - b)^2` (the slow stratum's
-    /// edge is a straight line).
+    /// The fold maps the unit square uniformly onto the half below its
+    /// diagonal, the smaller coordinate from the first one alone,
+    /// distributed as `1 - (1 - b)^2` (the slow stratum's edge is a
+    /// straight line).
     #[test]
     fn folding_covers_the_half_square_uniformly() {
         let grid = 400;
-        for fold in [folded_through_smaller, folded_through_larger] {
-            let folded: Vec<[f64; 2]> = (0..grid * grid)
-                .map(|k| {
-                    let cell = |i: u32| (f64::from(i) + 0.5) / f64::from(grid);
-                    fold([cell(k / grid), cell(k % grid)])
-                })
-                .collect();
-            assert!(folded.iter().all(|[larger, smaller]| smaller <= larger));
-            for a in [0.1, 0.5, 0.9] {
-                for b in [0.05, 0.3, 0.8] {
-                    let fraction = folded
-                        .iter()
-                        .filter(|[larger, smaller]| *larger <= a && *smaller <= b)
-                        .count() as f64
-                        / folded.len() as f64;
-                    // Uniform density 2 on {smaller <= larger}: measure of the region.
-                    let lower = b.min(a);
-                    let expected = 2.0 * (0.5 * lower * lower + (a - lower) * b);
-                    assert!(
-                        (fraction - expected).abs() < 5e-3,
-                        "{a} {b}: {fraction} vs {expected}"
-                    );
-                }
+        let folded: Vec<[f64; 2]> = (0..grid * grid)
+            .map(|k| {
+                let cell = |i: u32| (f64::from(i) + 0.5) / f64::from(grid);
+                folded_through_smaller([cell(k / grid), cell(k % grid)])
+            })
+            .collect();
+        assert!(folded.iter().all(|[larger, smaller]| smaller <= larger));
+        for a in [0.1, 0.5, 0.9] {
+            for b in [0.05, 0.3, 0.8] {
+                let fraction = folded
+                    .iter()
+                    .filter(|[larger, smaller]| *larger <= a && *smaller <= b)
+                    .count() as f64
+                    / folded.len() as f64;
+                // Uniform density 2 on {smaller <= larger}: measure of the region.
+                let lower = b.min(a);
+                let expected = 2.0 * (0.5 * lower * lower + (a - lower) * b);
+                assert!(
+                    (fraction - expected).abs() < 5e-3,
+                    "{a} {b}: {fraction} vs {expected}"
+                );
             }
         }
         for (x, exact) in [

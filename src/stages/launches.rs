@@ -29,7 +29,8 @@ impl LaunchesStage {
     }
 
     /// The plan with the strata split the pilot chooses for the self
-    /// variance rate at the launch proposal's own `u'` (its shift); without
+    /// variance rate at the `u'` of each component of the launch proposal
+    /// (its shift alone, for the kernels' sets); without
     /// any contribution, as for n = 2, the configured split stays.
     fn allocated_plan(&self) -> SamplingPlan {
         let mut plan = self.params.sampling;
@@ -38,7 +39,11 @@ impl LaunchesStage {
                 &plan,
                 &self.params.potential,
                 &PILOT_ENGINE,
-                &Target::dilute(plan.launch.shift),
+                &plan
+                    .launch
+                    .component_shifts()
+                    .map(Target::dilute)
+                    .collect::<Vec<_>>(),
                 self.params.pilot_points,
             )
         {
