@@ -28,6 +28,7 @@
 
 pub mod analysis;
 pub mod binning;
+pub mod calibration;
 pub mod config;
 pub mod contract;
 pub mod evolve;

@@ -449,6 +449,126 @@ fn paper_rows_recompute_from_their_sources() {
         rate_reproduces_the_nitrogen_row(&config, &store, (ours[k], converged[k]));
     }
     recombination_agrees_between_scene_sets(&store);
+    pulls_recompute_from_their_sources(&store, &summary);
+}
+
+/// The `pulls` table holds every cross-check of the study, each pull
+/// recomputed here from the tables it compares: the recombination rate of
+/// each potential with a well three ways (`moments`, the sweep's and the
+/// dissociation's `recombination` tables) and every sweep's joint
+/// detailed-balance test that is evidence, against exactly 0. The summary
+/// is their count, mean, spread and largest, and its verdict the rule of
+/// `calibration` (the reduced study has too few pulls for one); the run
+/// prints it.
+fn pulls_recompute_from_their_sources(store: &Path, printed: &str) {
+    use contract::pulls::{checks, summary};
+    let pulls = table(store, "pulls", "study", "pulls");
+    let subjects = checks::SUBJECT.read(&pulls).unwrap();
+    let firsts = checks::FIRST.read(&pulls).unwrap();
+    let seconds = checks::SECOND.read(&pulls).unwrap();
+    let values = checks::PULL.read(&pulls).unwrap();
+    let checks = checks::CHECK.read(&pulls).unwrap();
+    let mut expected: Vec<(String, Estimate, Estimate)> = Vec::new();
+    let rates = |stage: &str, instance: &str, at: Option<f64>| {
+        use contract::sweep::recombination::{RATE_COLUMN, U_PRIME};
+        let table = table(store, stage, instance, "recombination");
+        let row = U_PRIME
+            .optional(&table)
+            .unwrap()
+            .iter()
+            .position(|u| *u == at)
+            .unwrap();
+        RATE_COLUMN.read(&table).unwrap()[row]
+    };
+    for lj in ["lj-0.1", "lj-0.1052"] {
+        let moments = table(store, "moments", &format!("{lj}_u0_rho0"), "moments");
+        let kernel = contract::moments::RECOMBINATION_RATE
+            .read(&moments)
+            .unwrap()[0];
+        let balanced = |at| rates("dissociation", lj, at);
+        expected.push((lj.to_string(), kernel, balanced(Some(0.0))));
+        expected.push((
+            lj.to_string(),
+            rates("sweep", lj, Some(0.0)),
+            balanced(Some(0.0)),
+        ));
+        expected.push((lj.to_string(), rates("sweep", lj, None), balanced(None)));
+    }
+    let mut sweeps: Vec<String> = fs::read_dir(store.join("refs/sweep"))
+        .unwrap()
+        .map(|entry| {
+            entry
+                .unwrap()
+                .file_name()
+                .to_string_lossy()
+                .replace(".json", "")
+        })
+        .collect();
+    sweeps.sort();
+    let order = |id: &str| {
+        let potentials = ["ipp-2", "ipp-6", "lj-0.1", "lj-0.1052"];
+        potentials
+            .iter()
+            .position(|p| *p == id)
+            .unwrap_or_else(|| panic!("{id}"))
+    };
+    sweeps.sort_by_key(|id| order(id));
+    for sweep in &sweeps {
+        use contract::sweep::balance_tests::*;
+        let tests = table(store, "sweep", sweep, "balance_tests");
+        let separations = SEPARATION.read(&tests).unwrap();
+        let shares = JOINT_LARGEST_SHARE.read(&tests).unwrap();
+        for (k, imbalance) in JOINT_IMBALANCE
+            .read(&tests)
+            .unwrap()
+            .into_iter()
+            .enumerate()
+        {
+            if shares[k] <= 0.5 {
+                let subject = format!("{sweep}, separation {}", separations[k]);
+                expected.push((
+                    subject,
+                    imbalance,
+                    Estimate {
+                        mean: 0.0,
+                        stderr: 0.0,
+                    },
+                ));
+            }
+        }
+    }
+    assert_eq!(subjects.len(), expected.len(), "{subjects:?}");
+    assert!(
+        checks[..6].iter().all(|c| c.contains("recombination")),
+        "{checks:?}"
+    );
+    for (k, (subject, first, second)) in expected.iter().enumerate() {
+        assert_eq!(
+            (&subjects[k], firsts[k], seconds[k]),
+            (subject, *first, *second)
+        );
+        let pull = (first.mean - second.mean) / libm::hypot(first.stderr, second.stderr);
+        assert!(pull.to_bits() == values[k].to_bits() || pull.is_nan() && values[k].is_nan());
+    }
+    let finite: Vec<f64> = values.iter().copied().filter(|v| v.is_finite()).collect();
+    let count = finite.len() as f64;
+    let mean = finite.iter().sum::<f64>() / count;
+    let spread = (finite.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (count - 1.0)).sqrt();
+    let worst = finite
+        .iter()
+        .copied()
+        .fold(0.0, |w: f64, v| if v.abs() > w.abs() { v } else { w });
+    let row = table(store, "pulls", "study", "pulls_summary");
+    assert_eq!(summary::PULLS.read(&row).unwrap()[0] as usize, finite.len());
+    let recorded = summary::MEAN.read(&row).unwrap()[0];
+    assert!(close(recorded.mean, mean) && close(recorded.stderr, spread / count.sqrt()));
+    assert!(close(summary::SPREAD.read(&row).unwrap()[0], spread));
+    assert_eq!(summary::WORST_PULL.read(&row).unwrap()[0], worst);
+    assert_eq!(
+        summary::VERDICT.read(&row).unwrap()[0],
+        format!("too few pulls to tell ({} < 50)", finite.len())
+    );
+    assert!(printed.contains("cross-checks: pulls"), "{printed}");
 }
 
 /// `ternary rate` on the study's store: N2 at the `N2_10K` gas's theta =

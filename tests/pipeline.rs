@@ -59,12 +59,13 @@ fn python_check(script: &str, artifact: &Path) {
 
 /// Every instance of the default DAG: per potential scan, launches and
 /// collisions, the sweep's own launches and collisions, sweep, spectrum, and
-/// kernel, moments and fit at (u' = 0, dilute), plus the table, the launches
+/// kernel, moments and fit at (u' = 0, dilute), plus the pulls of the
+/// study's cross-checks (the sweeps' detailed balance), the table, the launches
 /// and collisions drawn for the paper's balance pair (u' = -3), the paper
 /// table, the figures of the kicked potential (kernels, kernel with fit,
 /// rates, truncation, kicks, spectrum) and the gaps across `n` (both potentials
 /// have a spectrum).
-const INSTANCES: usize = 31;
+const INSTANCES: usize = 32;
 
 fn stage_dirs(store: &Path, stage: &str) -> Vec<PathBuf> {
     let mut dirs: Vec<PathBuf> = fs::read_dir(store.join("artifacts").join(stage))
@@ -88,6 +89,7 @@ fn all_artifact_dirs(store: &Path) -> Vec<PathBuf> {
         "fit",
         "sweep",
         "spectrum",
+        "pulls",
         "table",
         "paper",
         "figures",

@@ -110,6 +110,16 @@ pub fn near_integrable() -> InstanceId {
     InstanceId::new(super::near_integrable::STAGE, "study")
 }
 
+/// The `sweep` instance of a potential.
+pub fn sweep(potential: &Potential) -> InstanceId {
+    InstanceId::new(super::sweep::STAGE, &potential.id())
+}
+
+/// The study's one `pulls` instance.
+pub fn pulls() -> InstanceId {
+    InstanceId::new(super::pulls::STAGE, "study")
+}
+
 /// The study's one `table` instance.
 pub fn table() -> InstanceId {
     InstanceId::new(table_stage::STAGE, "study")

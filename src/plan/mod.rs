@@ -18,8 +18,8 @@ use crate::physics::potential::Potential;
 use crate::pipeline::{InstanceId, Stage};
 use crate::stages::compare::{CompareParams, CompareStage};
 use crate::stages::{
-    convergence, dissociation, evolve, fit, gases, kernel, md, moments, near_integrable, scan,
-    spectrum, sweep, table,
+    convergence, dissociation, evolve, fit, gases, kernel, md, moments, near_integrable, pulls,
+    scan, spectrum, sweep, table,
 };
 use collisions::push_collisions;
 
@@ -48,6 +48,12 @@ pub fn plan(study: &Study) -> Vec<Box<dyn Stage>> {
         planned(instances::dissociation),
         planned(instances::spectrum),
     );
+    push_pulls(
+        &mut stages,
+        study,
+        &planned(instances::sweep),
+        &dissociations,
+    );
     stages.push(Box::new(table::TableStage::new(
         rows,
         dissociations,
@@ -65,6 +71,33 @@ pub fn plan(study: &Study) -> Vec<Box<dyn Stage>> {
         stages.extend(figures.into_iter().map(|f| Box::new(f) as Box<dyn Stage>));
     }
     stages
+}
+
+/// The `pulls` of the study's cross-checks, when it runs a sweep: the
+/// joint detailed-balance tests of every sweep and the recombination rates
+/// of every potential whose sweep and dissociation run.
+fn push_pulls(
+    stages: &mut Vec<Box<dyn Stage>>,
+    study: &Study,
+    sweeps: &[InstanceId],
+    dissociations: &[InstanceId],
+) {
+    if sweeps.is_empty() {
+        return;
+    }
+    let recombinations = study
+        .potentials()
+        .into_iter()
+        .filter(|p| {
+            sweeps.contains(&instances::sweep(p))
+                && dissociations.contains(&instances::dissociation(p))
+        })
+        .map(|p| study.kernel_params(p, 0.0, 0.0))
+        .collect();
+    stages.push(Box::new(pulls::PullsStage::new(
+        sweeps.to_vec(),
+        recombinations,
+    )));
 }
 
 /// The `near_integrable` table and fits, when an inverse power law with a

@@ -13,7 +13,7 @@ use crate::pipeline::store::Store;
 
 use super::tables::{
     balance_table, compare_table, convergence_table, evolve_table, gases_table, md_table,
-    near_integrable_table, scan_table, spectrum_table, stationarity_table,
+    near_integrable_table, pulls_table, scan_table, spectrum_table, stationarity_table,
 };
 use super::{count, estimate, number, table_frames, text};
 
@@ -33,6 +33,7 @@ pub fn summary(
     study_table(&mut out, store, reports)?;
     near_integrable_table(&mut out, store, reports)?;
     paper_table(&mut out, store, reports)?;
+    pulls_table(&mut out, store, reports)?;
     figures_line(&mut out, store, reports);
     if details {
         stage_tables(&mut out, store, reports, kick_floor)?;

@@ -529,3 +529,54 @@ fn bound_pairs_table(out: &mut dyn Sink, store: &Store, reports: &[InstanceRepor
     }
     Ok(())
 }
+
+/// The `pulls` stage's summary: whether the study's errors are calibrated
+/// by its own cross-checks.
+pub(super) fn pulls_table(
+    out: &mut dyn Sink,
+    store: &Store,
+    reports: &[InstanceReport],
+) -> Result<()> {
+    use contract::pulls::summary::*;
+    let frames = titled_frames(
+        out,
+        store,
+        reports,
+        &TABLE,
+        "cross-checks: pulls (a - b) / combined error of every quantity computed two independent ways or held against an exact value (recombination three ways, detailed balance); N(0, 1) when the errors are right (pulls.parquet lists each)",
+    )?;
+    if frames.is_empty() {
+        return Ok(());
+    }
+    let mut table = Columns::new(&[
+        ("pulls", Align::Right),
+        ("mean", Align::Left),
+        ("spread", Align::Right),
+        ("largest", Align::Right),
+        ("where", Align::Left),
+        ("verdict", Align::Left),
+    ]);
+    for (_, frame) in frames {
+        for row in 0..frame.height() {
+            let worst = format!(
+                "{}: {}",
+                text(&frame, row, WORST_SUBJECT)?,
+                text(&frame, row, WORST_CHECK)?
+            );
+            table.push(vec![
+                Cell::text(count(&frame, row, PULLS)?.to_string()),
+                estimate(&frame, row, MEAN, "-")?,
+                Cell::text(or_why(number(&frame, row, SPREAD)?, |s| fixed(s, 2), "-")),
+                Cell::text(or_why(
+                    number(&frame, row, WORST_PULL)?,
+                    |z| fixed(z, 2),
+                    "-",
+                )),
+                Cell::text(worst),
+                Cell::text(text(&frame, row, VERDICT)?),
+            ]);
+        }
+    }
+    out.table(&table);
+    Ok(())
+}

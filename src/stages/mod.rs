@@ -15,6 +15,7 @@ pub mod md;
 pub mod moments;
 pub mod near_integrable;
 pub mod paper;
+pub mod pulls;
 pub mod scan;
 pub mod spectrum;
 pub mod sweep;

@@ -251,7 +251,7 @@ const CODE: &Code = code::of(file!());
 
 impl Stage for SweepStage {
     fn id(&self) -> InstanceId {
-        InstanceId::new(contract::sweep::STAGE, &self.params.kernel.potential.id())
+        instances::sweep(&self.params.kernel.potential)
     }
 
     fn code(&self) -> &'static Code {
