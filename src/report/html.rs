@@ -22,6 +22,7 @@ use super::describe;
 use super::folder::ReportFolder;
 use super::layout::{Align, Cell, Columns, Sink};
 use super::summary::{paper_table, stage_tables, study_table};
+use super::tables::{largest_pulls_table, pulls_table};
 use crate::config::Study;
 use crate::contract;
 use crate::pipeline::Stage;
@@ -172,7 +173,7 @@ fn page(
             },
         })
         .collect();
-    let sections: [(&str, &str, String); 7] = [
+    let sections: [(&str, &str, String); 8] = [
         ("missing", "Not fresh", not_fresh(instances)),
         ("summary", "Thermalization constants", {
             let mut tables = Tables::default();
@@ -182,6 +183,12 @@ fn page(
         ("paper", "The paper's numbers", {
             let mut tables = Tables::default();
             paper_table(&mut tables, store, &reports)?;
+            tables.html
+        }),
+        ("crosschecks", "Cross-checks: are the errors calibrated?", {
+            let mut tables = Tables::default();
+            pulls_table(&mut tables, store, &reports)?;
+            largest_pulls_table(&mut tables, store, &reports)?;
             tables.html
         }),
         ("figures", "Figures", figure_list(figures)),

@@ -12,8 +12,9 @@ use crate::pipeline::executor::InstanceReport;
 use crate::pipeline::store::Store;
 
 use super::tables::{
-    balance_table, compare_table, convergence_table, evolve_table, gases_table, md_table,
-    near_integrable_table, pulls_table, scan_table, spectrum_table, stationarity_table,
+    balance_table, compare_table, convergence_table, evolve_table, gases_table,
+    largest_pulls_table, md_table, near_integrable_table, pulls_table, scan_table, spectrum_table,
+    stationarity_table,
 };
 use super::{count, estimate, number, table_frames, text};
 
@@ -36,6 +37,7 @@ pub fn summary(
     pulls_table(&mut out, store, reports)?;
     figures_line(&mut out, store, reports);
     if details {
+        largest_pulls_table(&mut out, store, reports)?;
         stage_tables(&mut out, store, reports, kick_floor)?;
     } else {
         out.title(

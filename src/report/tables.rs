@@ -580,3 +580,52 @@ pub(super) fn pulls_table(
     out.table(&table);
     Ok(())
 }
+
+/// Pulls listed by [`largest_pulls_table`].
+const LARGEST_PULLS: usize = 10;
+
+/// The `pulls` stage's largest pulls, largest |pull| first.
+pub(super) fn largest_pulls_table(
+    out: &mut dyn Sink,
+    store: &Store,
+    reports: &[InstanceReport],
+) -> Result<()> {
+    use contract::pulls::checks::*;
+    let frames = titled_frames(
+        out,
+        store,
+        reports,
+        &TABLE,
+        &format!(
+            "the {LARGEST_PULLS} largest pulls (a: first estimate, b: second or exact; units per check)"
+        ),
+    )?;
+    if frames.is_empty() {
+        return Ok(());
+    }
+    let mut table = Columns::new(&[
+        ("pull", Align::Right),
+        ("subject", Align::Left),
+        ("a", Align::Left),
+        ("b", Align::Left),
+        ("check", Align::Left),
+    ]);
+    for (_, frame) in frames {
+        let mut rows: Vec<(usize, f64)> = (0..frame.height())
+            .map(|row| Ok((row, number(&frame, row, PULL)?)))
+            .collect::<Result<_>>()?;
+        rows.retain(|(_, pull)| pull.is_finite());
+        rows.sort_by(|a, b| b.1.abs().total_cmp(&a.1.abs()));
+        for &(row, pull) in rows.iter().take(LARGEST_PULLS) {
+            table.push(vec![
+                Cell::text(fixed(pull, 2)),
+                Cell::text(text(&frame, row, SUBJECT)?),
+                estimate(&frame, row, FIRST, "-")?,
+                estimate(&frame, row, SECOND, "-")?,
+                Cell::text(text(&frame, row, CHECK)?),
+            ]);
+        }
+    }
+    out.table(&table);
+    Ok(())
+}
