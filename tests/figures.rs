@@ -591,8 +591,47 @@ fn expected(store: &Path, figure: &Artifact) -> Vec<Row> {
             rows
         }
         "near_integrable" => near_integrable_rows(&figure.input(store, 0)),
+        "pulls" => pulls_rows(&figure.input(store, 0)),
         other => panic!("figure kind `{other}` has no check here"),
     }
+}
+
+/// The pulls figure's points, counted here from the pulls table: bins of
+/// 0.5 on [-4, 4] (the outer ones open), each a density +- its Poisson
+/// error, then the standard normal density on a grid of 0.05.
+fn pulls_rows(input: &Artifact) -> Vec<Row> {
+    use contract::pulls::checks::PULL;
+    let pulls: Vec<f64> = PULL
+        .read(&input.table("pulls"))
+        .unwrap()
+        .into_iter()
+        .filter(|p| p.is_finite())
+        .collect();
+    let per_pull = 1.0 / (pulls.len() as f64 * 0.5);
+    let series = format!("{} pulls", pulls.len());
+    let mut rows: Vec<Row> = (0..16)
+        .map(|k| {
+            let low = -4.0 + 0.5 * f64::from(k);
+            let inside = pulls
+                .iter()
+                .filter(|&&p| (k == 0 || p >= low) && (k == 15 || p < low + 0.5))
+                .count() as f64;
+            let density = inside * per_pull;
+            (
+                "pulls".into(),
+                series.clone(),
+                low + 0.25,
+                density,
+                inside.sqrt() * per_pull,
+            )
+        })
+        .collect();
+    rows.extend((0..=160).map(|k| {
+        let x = -4.0 + 0.05 * f64::from(k);
+        let density = libm::exp(-0.5 * x * x) / libm::sqrt(2.0 * std::f64::consts::PI);
+        ("pulls".into(), "N(0, 1)".into(), x, density, 0.0)
+    }));
+    rows
 }
 
 /// A JSON array of strings.

@@ -63,9 +63,9 @@ fn python_check(script: &str, artifact: &Path) {
 /// study's cross-checks (the sweeps' detailed balance), the table, the launches
 /// and collisions drawn for the paper's balance pair (u' = -3), the paper
 /// table, the figures of the kicked potential (kernels, kernel with fit,
-/// rates, truncation, kicks, spectrum) and the gaps across `n` (both potentials
-/// have a spectrum).
-const INSTANCES: usize = 32;
+/// rates, truncation, kicks, spectrum), the gaps across `n` (both potentials
+/// have a spectrum) and the pulls.
+const INSTANCES: usize = 33;
 
 fn stage_dirs(store: &Path, stage: &str) -> Vec<PathBuf> {
     let mut dirs: Vec<PathBuf> = fs::read_dir(store.join("artifacts").join(stage))

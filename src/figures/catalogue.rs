@@ -123,6 +123,9 @@ pub enum Figure {
     /// against `n - 2` with their fitted near-integrable laws (a), the gaps
     /// over `Gamma` (b).
     NearIntegrable,
+    /// The pulls of the study's cross-checks (the `pulls` stage) against
+    /// the standard normal they follow when the errors are right.
+    Pulls,
     /// `h(u, t)` of one ring at several final times: MD (tagged) and Boltzmann.
     MdTimes {
         /// The ring's name (the figure's).
@@ -138,7 +141,7 @@ pub enum Figure {
 pub const DILUTE: &str = "dilute";
 
 /// Names of every figure kind, for documentation and tests.
-pub const FIGURES: [&str; 16] = [
+pub const FIGURES: [&str; 17] = [
     "kernels",
     "kernels_lj",
     "kernel_fit",
@@ -155,6 +158,7 @@ pub const FIGURES: [&str; 16] = [
     "spectrum",
     "gaps",
     "near_integrable",
+    "pulls",
 ];
 
 impl Figure {
@@ -177,6 +181,7 @@ impl Figure {
             Figure::Spectrum { id, .. } => format!("spectrum_{id}"),
             Figure::Gaps => "gaps".into(),
             Figure::NearIntegrable => "near_integrable".into(),
+            Figure::Pulls => "pulls".into(),
         }
     }
 
@@ -227,6 +232,9 @@ impl Figure {
             }
             Figure::NearIntegrable => {
                 "the rates of the inverse power laws near the Calogero point n = 2 (near_integrable stage) against n - 2, log axes: Gamma (the tagged variance rate at u' = 0), the gap of the gas (linearized three-body operator) and of one particle (tagged generator), +- jackknife standard error, each with its fitted law A (n - 2)^p exp(q (n - 2)) over the fitted range (a, p with its error in the legend; perturbation theory: p = 2); the gaps over Gamma (b, p = 0 expected). Only resolved rates (positive by three standard errors) are drawn and fitted".into()
+            }
+            Figure::Pulls => {
+                "the pulls (a - b) / combined error of every cross-check of the study (pulls stage): their histogram as a density in bins of 0.5 on [-4, 4] (pulls beyond counted in the outer bins), +- Poisson error, against the standard normal density they follow when the errors are right".into()
             }
             Figure::Gaps => {
                 "relaxation gaps of the inverse power laws against n (the table's rows with a spectrum): the slowest relaxation rate of the gas (linearized three-body operator) and of one particle (tagged generator) over Gamma, the tagged variance rate at u' = 0 (a), and in rate units with Gamma (b, log axis: rates that vanish, n = 2, are left out), +- jackknife standard error".into()
@@ -386,6 +394,12 @@ impl Figure {
                     )
                 },
             ],
+            Figure::Pulls => vec![panel(
+                "pulls",
+                linear("pull = (a - b) / combined error"),
+                linear("density"),
+                vec![(NORMAL, Style::Line)],
+            )],
             Figure::Gaps => vec![
                 panel(
                     "ratio",
@@ -459,6 +473,7 @@ impl Figure {
             Figure::Spectrum { .. } => spectrum(&inputs[0]),
             Figure::Gaps => gaps(&inputs[0]),
             Figure::NearIntegrable => near_integrable(&inputs[0]),
+            Figure::Pulls => pulls(&inputs[0]),
             Figure::KernelsAtUPrime { u_primes, .. } => {
                 let mut parts = Vec::new();
                 for (input, u_prime) in inputs.iter().zip(u_primes) {
@@ -669,6 +684,54 @@ fn gaps(input: &Input) -> Result<DataFrame, StageError> {
         panel("rates", GAS, GAP, true)?,
         panel("rates", ONE_PARTICLE, PARTICLE_GAP, true)?,
         panel("rates", "a_n untruncated (Γ)", A_N_UNTRUNCATED, true)?,
+    ])
+}
+
+/// Legend label of the standard normal density in [`Figure::Pulls`].
+const NORMAL: &str = "N(0, 1)";
+/// Width of [`Figure::Pulls`]' bins.
+const PULL_BIN: f64 = 0.5;
+/// Its bins cover `[-PULL_RANGE, PULL_RANGE]`.
+const PULL_RANGE: f64 = 4.0;
+
+/// The pulls figure: the histogram of the pulls with a value as a density
+/// (count / (pulls x bin width), +- its Poisson error), those beyond the
+/// range in the outer bins, and the standard normal density.
+fn pulls(input: &Input) -> Result<DataFrame, StageError> {
+    use contract::pulls::checks::{PULL, TABLE};
+    let table = frame(TABLE.of(input)?)?;
+    let values: Vec<f64> = numbers(&table, PULL.name)?
+        .into_iter()
+        .filter(|v| v.is_finite())
+        .collect();
+    let bins = (2.0 * PULL_RANGE / PULL_BIN) as usize;
+    let mut counts = vec![0.0; bins];
+    for value in &values {
+        let k = ((value + PULL_RANGE) / PULL_BIN)
+            .floor()
+            .clamp(0.0, (bins - 1) as f64);
+        counts[k as usize] += 1.0;
+    }
+    let per_pull = 1.0 / (values.len() as f64 * PULL_BIN);
+    let centres = (0..bins)
+        .map(|k| -PULL_RANGE + (k as f64 + 0.5) * PULL_BIN)
+        .collect();
+    let normal_x: Vec<f64> = (0..=160)
+        .map(|k| -PULL_RANGE + 0.05 * f64::from(k))
+        .collect();
+    let normal_y = normal_x
+        .iter()
+        .map(|x| libm::exp(-0.5 * x * x) / (2.0 * std::f64::consts::PI).sqrt())
+        .collect();
+    stack(vec![
+        series_of(
+            "pulls",
+            &format!("{} pulls", values.len()),
+            centres,
+            counts.iter().map(|c| c * per_pull).collect(),
+            Some(counts.iter().map(|c| c.sqrt() * per_pull).collect()),
+        )?,
+        series_of("pulls", NORMAL, normal_x, normal_y, None)?,
     ])
 }
 

@@ -40,6 +40,10 @@ pub(super) fn figure_stages(study: &Study, plan: &[Box<dyn Stage>]) -> Vec<Figur
             vec![near_integrable],
         ));
     }
+    let pulls = instances::pulls();
+    if present(&pulls) {
+        figures.push(FiguresStage::new(Figure::Pulls, vec![pulls]));
+    }
     figures.extend(evolution_figure(study, &present));
     figures.extend(kernels_at_density(study));
     figures.extend(md_figures(study, &present));
