@@ -29,6 +29,8 @@ pub struct Pull {
     pub check: &'static str,
     /// Which instance it is compared for (a potential id, with a detail).
     pub subject: String,
+    /// Unit of the two estimates.
+    pub unit: &'static str,
     /// The first estimate.
     pub first: Estimate,
     /// The second estimate, or the exact value.
@@ -139,6 +141,7 @@ mod tests {
                 Pull {
                     check: "test",
                     subject: k.to_string(),
+                    unit: "1",
                     first: estimate(draw() + bias, quoted),
                     second: estimate(draw(), quoted),
                 }
@@ -154,6 +157,7 @@ mod tests {
             Pull {
                 check: "test",
                 subject: String::new(),
+                unit: "1",
                 first: a,
                 second: b,
             }

@@ -719,10 +719,6 @@ fn pulls(input: &Input) -> Result<DataFrame, StageError> {
     let normal_x: Vec<f64> = (0..=160)
         .map(|k| -PULL_RANGE + 0.05 * f64::from(k))
         .collect();
-    let normal_y = normal_x
-        .iter()
-        .map(|x| libm::exp(-0.5 * x * x) / (2.0 * std::f64::consts::PI).sqrt())
-        .collect();
     stack(vec![
         series_of(
             "pulls",
@@ -731,7 +727,7 @@ fn pulls(input: &Input) -> Result<DataFrame, StageError> {
             counts.iter().map(|c| c * per_pull).collect(),
             Some(counts.iter().map(|c| c.sqrt() * per_pull).collect()),
         )?,
-        series_of("pulls", NORMAL, normal_x, normal_y, None)?,
+        standard_normal("pulls", NORMAL, normal_x)?,
     ])
 }
 
@@ -1082,12 +1078,17 @@ fn early_shapes(input: &Input) -> Result<Vec<DataFrame>, StageError> {
     let xs: Vec<f64> = (-100..=100)
         .map(|k| EARLY_REACH * f64::from(k) / 100.0)
         .collect();
-    let normal: Vec<f64> = xs
+    parts.push(standard_normal("early", STANDARD_NORMAL, xs)?);
+    Ok(parts)
+}
+
+/// The standard normal density at `xs`, a series `name` of `panel` without errors.
+fn standard_normal(panel: &str, name: &str, xs: Vec<f64>) -> Result<DataFrame, StageError> {
+    let density = xs
         .iter()
         .map(|x| libm::exp(-0.5 * x * x) / libm::sqrt(2.0 * std::f64::consts::PI))
         .collect();
-    parts.push(series_of("early", STANDARD_NORMAL, xs, normal, None)?);
-    Ok(parts)
+    series_of(panel, name, xs, density, None)
 }
 
 /// The reference series of the early panel.

@@ -70,6 +70,7 @@ impl PullsStage {
         let pull = |check, first, second| Pull {
             check,
             subject: potential.id(),
+            unit: RATE_UNIT,
             first,
             second,
         };
@@ -95,6 +96,7 @@ impl PullsStage {
             .map(|((separation, imbalance), _)| Pull {
                 check: BALANCE,
                 subject: format!("{}, separation {separation}", sweep.instance),
+                unit: "1",
                 first: imbalance,
                 second: EXACT_ZERO,
             })
@@ -148,10 +150,7 @@ fn pulls_table(pulls: &[Pull]) -> Result<Table, StageError> {
     Ok(Rows::new(pulls)
         .with(CHECK, |p| p.check.to_string())
         .with(SUBJECT, |p| p.subject.clone())
-        .with(UNIT, |p| {
-            let unit = if p.check == BALANCE { "1" } else { RATE_UNIT };
-            unit.to_string()
-        })
+        .with(UNIT, |p| p.unit.to_string())
         .estimate(FIRST, |p| p.first)
         .estimate(SECOND, |p| p.second)
         .with(PULL, Pull::value)
