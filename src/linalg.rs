@@ -4,7 +4,7 @@
 //! the composite Simpson weights of the quadratures (bound-pair length,
 //! averages over thermal starts); and the node slopes of the not-a-knot cubic
 //! spline (a tridiagonal solve), the derivative of measured rates on a grid;
-//! the quadratic form of an inverse covariance (Cholesky), for chi-squares
+//! the Cholesky factor of a covariance, for chi-squares and least squares
 //! with correlated entries. Pure math: no IO.
 
 /// Eigenvalues and orthonormal eigenvectors of a symmetric matrix.
@@ -63,35 +63,70 @@ fn qr_eigen(a: &[f64], n: usize, iterations: usize) -> Result<SymmetricEigen, Ei
     })
 }
 
-/// `d^T A^(-1) d` for a symmetric positive-definite `A` (row-major, `n x n`
-/// with `n = d.len()`): with the Cholesky factor `A = L L^T` (Golub & Van
-/// Loan, Matrix Computations, §4.2), `|y|^2` where `L y = d`. `None` when a
-/// pivot is not positive (`A` not positive definite to rounding). Units: those
-/// of `d^2 / A`.
-pub fn inverse_quadratic_form(a: &[f64], d: &[f64]) -> Option<f64> {
-    let n = d.len();
-    assert_eq!(a.len(), n * n, "a matrix of {n} x {n} entries");
-    let mut factor = vec![0.0; n * n];
-    for i in 0..n {
-        for j in 0..=i {
-            let dot: f64 = (0..j).map(|k| factor[i * n + k] * factor[j * n + k]).sum();
-            let entry = a[i * n + j] - dot;
-            if i == j {
-                if entry.is_nan() || entry <= 0.0 {
-                    return None;
+/// The Cholesky factor of a symmetric positive-definite matrix, `A = L L^T`
+/// with `L` lower triangular (Golub & Van Loan, Matrix Computations, §4.2).
+/// For a covariance `A`, `L^(-1)` whitens: `L^(-1) d` has unit covariance,
+/// so least squares on whitened rows is generalized least squares.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Cholesky {
+    /// `L`, row-major `n x n` (zero above the diagonal).
+    factor: Vec<f64>,
+    n: usize,
+}
+
+impl Cholesky {
+    /// The factor of `a` (row-major, `n x n`); `None` when a pivot is not
+    /// positive (`a` not positive definite to rounding) or not finite.
+    pub fn of(a: &[f64], n: usize) -> Option<Cholesky> {
+        assert_eq!(a.len(), n * n, "a matrix of {n} x {n} entries");
+        let mut factor = vec![0.0; n * n];
+        for i in 0..n {
+            for j in 0..=i {
+                let dot: f64 = (0..j).map(|k| factor[i * n + k] * factor[j * n + k]).sum();
+                let entry = a[i * n + j] - dot;
+                if i == j {
+                    if !entry.is_finite() || entry <= 0.0 {
+                        return None;
+                    }
+                    factor[i * n + i] = entry.sqrt();
+                } else {
+                    factor[i * n + j] = entry / factor[j * n + j];
                 }
-                factor[i * n + i] = entry.sqrt();
-            } else {
-                factor[i * n + j] = entry / factor[j * n + j];
             }
         }
+        Some(Cholesky { factor, n })
     }
-    let mut y = vec![0.0; n];
-    for i in 0..n {
-        let dot: f64 = (0..i).map(|k| factor[i * n + k] * y[k]).sum();
-        y[i] = (d[i] - dot) / factor[i * n + i];
+
+    /// `L^(-1) d` (forward substitution); `d.len()` must be `n`.
+    pub fn whiten(&self, d: &[f64]) -> Vec<f64> {
+        let n = self.n;
+        assert_eq!(d.len(), n, "a vector of {n} entries");
+        let mut y = vec![0.0; n];
+        for i in 0..n {
+            let dot: f64 = (0..i).map(|k| self.factor[i * n + k] * y[k]).sum();
+            y[i] = (d[i] - dot) / self.factor[i * n + i];
+        }
+        y
     }
-    Some(y.iter().map(|v| v * v).sum())
+
+    /// `A^(-1) b`: forward substitution, then back substitution with `L^T`.
+    pub fn solve(&self, b: &[f64]) -> Vec<f64> {
+        let n = self.n;
+        let mut x = self.whiten(b);
+        for i in (0..n).rev() {
+            let dot: f64 = (i + 1..n).map(|k| self.factor[k * n + i] * x[k]).sum();
+            x[i] = (x[i] - dot) / self.factor[i * n + i];
+        }
+        x
+    }
+}
+
+/// `d^T A^(-1) d` for a symmetric positive-definite `A` (row-major, `n x n`
+/// with `n = d.len()`): `|L^(-1) d|^2` with the [`Cholesky`] factor. `None`
+/// when `A` is not positive definite to rounding. Units: those of `d^2 / A`.
+pub fn inverse_quadratic_form(a: &[f64], d: &[f64]) -> Option<f64> {
+    let whitened = Cholesky::of(a, d.len())?.whiten(d);
+    Some(whitened.iter().map(|v| v * v).sum())
 }
 
 /// Weight of node `k` of the composite Simpson rule over `intervals` (even)
@@ -256,7 +291,8 @@ mod tests {
 
     /// `A = [[4, 2], [2, 3]]` has inverse `[[3, -2], [-2, 4]] / 8`: for `d =
     /// (1, 2)`, `d^T A^-1 d = (3 - 8 + 16) / 8 = 11/8`; a diagonal matrix
-    /// gives the sum of squared pulls; a singular one (rank 1) has none.
+    /// gives the sum of squared pulls; a singular one (rank 1) has none; `A x
+    /// = d` has `x = A^-1 d = (-1, 6) / 8`.
     #[test]
     fn inverse_quadratic_form_matches_the_closed_forms() {
         let form = inverse_quadratic_form(&[4.0, 2.0, 2.0, 3.0], &[1.0, 2.0]).unwrap();
@@ -267,6 +303,16 @@ mod tests {
         assert_eq!(
             inverse_quadratic_form(&[1.0, 1.0, 1.0, 1.0], &[1.0, 0.0]),
             None
+        );
+        let solved = Cholesky::of(&[4.0, 2.0, 2.0, 3.0], 2)
+            .unwrap()
+            .solve(&[1.0, 2.0]);
+        let by_hand = [(3.0 - 4.0) / 8.0, (-2.0 + 8.0) / 8.0];
+        assert!(
+            solved
+                .iter()
+                .zip(by_hand)
+                .all(|(x, y)| (x - y).abs() < 1e-15)
         );
     }
 

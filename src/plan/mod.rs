@@ -48,6 +48,7 @@ pub fn plan(study: &Study) -> Vec<Box<dyn Stage>> {
         planned(instances::dissociation),
         planned(instances::spectrum),
     );
+    push_near_integrable(&mut stages, study, &spectra);
     push_pulls(
         &mut stages,
         study,
@@ -57,9 +58,8 @@ pub fn plan(study: &Study) -> Vec<Box<dyn Stage>> {
     stages.push(Box::new(table::TableStage::new(
         rows,
         dissociations,
-        spectra.clone(),
+        spectra,
     )));
-    push_near_integrable(&mut stages, study, &spectra);
     if let Some((name, params)) = paper::balance_collisions(study) {
         push_collisions(&mut stages, params, name);
     }
@@ -74,8 +74,9 @@ pub fn plan(study: &Study) -> Vec<Box<dyn Stage>> {
 }
 
 /// The `pulls` of the study's cross-checks, when it runs a sweep: the
-/// joint detailed-balance tests of every sweep and the recombination rates
-/// of every potential whose sweep and dissociation run.
+/// joint detailed-balance tests of every sweep, the recombination rates
+/// of every potential whose sweep and dissociation run, and the
+/// near-integrable exponents when `near_integrable` is planned already.
 fn push_pulls(
     stages: &mut Vec<Box<dyn Stage>>,
     study: &Study,
@@ -94,9 +95,13 @@ fn push_pulls(
         })
         .map(|p| study.kernel_params(p, 0.0, 0.0))
         .collect();
+    let near_integrable = stages
+        .iter()
+        .any(|s| s.id() == instances::near_integrable());
     stages.push(Box::new(pulls::PullsStage::new(
         sweeps.to_vec(),
         recombinations,
+        near_integrable,
     )));
 }
 

@@ -5,11 +5,11 @@
 //! detailed balance gives from the dissociating scenes, and the sweep's
 //! thermal rate against `3 K_b k_d` (independent scene sets); for every
 //! sweep, the joint detailed-balance test of each separation against 0
-//! (exact), where no single randomization carries its spread. Left out:
-//! the stationarity residual (a jump process differs from a Fokker-Planck
-//! one by a few percent, so 0 is not exact) and the near-integrable
-//! exponents (fitted as independent, though every `n` shares its launch
-//! points: their errors are upper bounds).
+//! (exact), where no single randomization carries its spread; where the
+//! study runs `near_integrable`, every fitted exponent against perturbation
+//! theory's (exact; the error the statistical one and the law's
+//! truncation's). Left out: the stationarity residual (a jump process
+//! differs from a Fokker-Planck one by a few percent, so 0 is not exact).
 
 use serde_json::Value;
 
@@ -29,6 +29,8 @@ pub struct PullsStage {
     /// The dilute `u' = 0` moments of every potential whose sweep and
     /// dissociation the study runs (a potential with a well).
     recombinations: Vec<KernelParams>,
+    /// Whether the study runs `near_integrable`.
+    near_integrable: bool,
 }
 
 /// Unit of a rate's pulls.
@@ -40,14 +42,23 @@ const SWEEP_AT_REST: &str = "recombination at u' = 0: sweep's scenes against det
 const THERMAL: &str = "thermal recombination: sweep's scenes against 3 K_b k_d";
 /// The check of detailed balance.
 const BALANCE: &str = "detailed balance of the self kernel: joint imbalance against 0";
+/// The check of the near-integrable law.
+const NEAR_INTEGRABLE: &str =
+    "near-integrable exponent p of rate ~ (n - 2)^p against perturbation theory";
 
 impl PullsStage {
-    /// The pulls of these sweeps and of the recombination rates of these
-    /// potentials (their moments; each with a planned sweep and dissociation).
-    pub fn new(sweeps: Vec<InstanceId>, recombinations: Vec<KernelParams>) -> PullsStage {
+    /// The pulls of these sweeps, of the recombination rates of these
+    /// potentials (their moments; each with a planned sweep and
+    /// dissociation) and, if `near_integrable`, of its fits.
+    pub fn new(
+        sweeps: Vec<InstanceId>,
+        recombinations: Vec<KernelParams>,
+        near_integrable: bool,
+    ) -> PullsStage {
         PullsStage {
             sweeps,
             recombinations,
+            near_integrable,
         }
     }
 
@@ -103,6 +114,39 @@ impl PullsStage {
             .collect())
     }
 
+    /// The fitted exponents of `near_integrable` against their prediction.
+    fn near_integrable(inputs: &[Input]) -> Result<Vec<Pull>, StageError> {
+        use contract::near_integrable::fits::*;
+        let table = TABLE.find(inputs, &instances::near_integrable())?;
+        let (quantities, exponents) = (QUANTITY.read(table)?, EXPONENT.read(table)?);
+        let (errors, expected) = (
+            EXPONENT_ERROR.optional(table)?,
+            EXPECTED_EXPONENT.read(table)?,
+        );
+        let rows = quantities
+            .into_iter()
+            .zip(exponents)
+            .zip(errors)
+            .zip(expected);
+        Ok(rows
+            .filter_map(|(((quantity, exponent), error), expected)| {
+                Some(Pull {
+                    check: NEAR_INTEGRABLE,
+                    subject: quantity,
+                    unit: "1",
+                    first: Estimate {
+                        mean: exponent.mean,
+                        stderr: error?,
+                    },
+                    second: Estimate {
+                        mean: expected,
+                        stderr: 0.0,
+                    },
+                })
+            })
+            .collect())
+    }
+
     /// Every pull, in the order of the study's potentials.
     fn pulls(&self, inputs: &[Input], progress: &Progress) -> Result<Vec<Pull>, StageError> {
         let mut pulls = Vec::new();
@@ -113,6 +157,9 @@ impl PullsStage {
         for sweep in &self.sweeps {
             pulls.extend(Self::balance(inputs, sweep)?);
             progress.advance(1);
+        }
+        if self.near_integrable {
+            pulls.extend(Self::near_integrable(inputs)?);
         }
         Ok(pulls)
     }
@@ -193,6 +240,7 @@ impl Stage for PullsStage {
         serde_json::json!({
             "sweeps": self.sweeps.iter().map(ToString::to_string).collect::<Vec<_>>(),
             "recombinations": self.recombinations,
+            "near_integrable": self.near_integrable,
         })
     }
 
@@ -212,6 +260,7 @@ impl Stage for PullsStage {
                 ]
             })
             .chain(self.sweeps.iter().cloned())
+            .chain(self.near_integrable.then(instances::near_integrable))
             .fold(Vec::new(), |mut unique, id| {
                 if !unique.contains(&id) {
                     unique.push(id);

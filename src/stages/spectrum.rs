@@ -177,6 +177,7 @@ impl Stage for SpectrumStage {
             conserved::TABLE.name,
             modes::TABLE.name,
             scenes::TABLE.name,
+            jackknife::TABLE.name,
         ]
     }
 
@@ -244,6 +245,7 @@ impl Stage for SpectrumStage {
             conserved_table(&analysed)?,
             self.modes_table(&analysed)?,
             scenes_table(&analysed)?,
+            jackknife_table(&analysed)?,
         ])
     }
 }
@@ -370,6 +372,25 @@ fn conserved_table(analysed: &[Analysed]) -> Result<Table, StageError> {
         .estimate(RESIDUAL, |r| r.2)
         .estimate(EIGENVALUE, |r| r.3)
         .estimate(OVERLAP, |r| r.4)
+        .table(&TABLE)?)
+}
+
+/// `spectrum_jackknife.parquet`.
+fn jackknife_table(analysed: &[Analysed]) -> Result<Table, StageError> {
+    use contract::spectrum::jackknife::*;
+    let mut rows = Vec::new();
+    for a in analysed {
+        let gap = growing(a);
+        let left_out = a.spectra.leave_one_out.iter().zip(&a.gamma.leave_one_out);
+        for (r, (spectrum, gamma)) in left_out.enumerate() {
+            rows.push((a.name, r as u32, *gamma, spectrum.rates[gap]));
+        }
+    }
+    Ok(Rows::new(&rows)
+        .with(GENERATOR, |r| r.0.to_string())
+        .with(RANDOMIZATION, |r| r.1)
+        .with(VARIANCE_RATE, |r| r.2)
+        .with(GAP, |r| r.3)
         .table(&TABLE)?)
 }
 

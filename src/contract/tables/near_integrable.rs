@@ -12,9 +12,9 @@ pub const STAGE: &str = "near_integrable";
 /// Jackknife error over the randomizations (the spectrum stage's).
 const JACKKNIFE: &str = "jackknife standard error over randomizations (spectrum_summary)";
 /// Error of a fitted coefficient.
-const FIT_ERROR: &str = "standard error from the fit's covariance (the rates taken as independent: every potential draws its scenes from the same seed, so their errors are correlated and the chi-square is a guide, not a test)";
+const FIT_ERROR: &str = "standard error from the fit's covariance: generalized least squares with the covariance of ln rate across the potentials (every potential draws its scenes from the same random stream), the jackknife's over the randomizations (spectrum_jackknife) times (R - 1)/(R - points - 2) so that its inverse is unbiased";
 /// Why a fitted value is null.
-const TOO_FEW: &str = "fewer than four resolved rates (three coefficients and one degree of freedom), or their abscissae too close for three coefficients (a singular fit)";
+const TOO_FEW: &str = "fewer than four resolved rates (three coefficients and one degree of freedom), too few randomizations to estimate their covariance (at most points + 2), or their abscissae too close for three coefficients (a singular fit)";
 
 /// A rate is resolved, and fitted, when it is positive by this many
 /// standard errors: below it the spectrum's low end is noise (growing
@@ -98,7 +98,7 @@ pub mod fits {
     pub const TABLE: TableSpec = TableSpec {
         stage: STAGE,
         name: "near_integrable",
-        description: "the near-integrable law rate = A (n - 2)^p exp(q (n - 2)) of the variance rate, the gaps and their ratios to it, fitted over the resolved rates of near_integrable_rates (weighted least squares in ln rate), with the exponent perturbation theory predicts",
+        description: "the near-integrable law rate = A (n - 2)^p exp(q (n - 2)) of the variance rate, the gaps and their ratios to it, fitted over the resolved rates of near_integrable_rates (generalized least squares in ln rate with the rates' covariance), with the exponent perturbation theory predicts",
     };
     /// What is fitted.
     pub const QUANTITY: Col<String> = Col::text(
@@ -120,11 +120,26 @@ pub mod fits {
         "1",
         "p from first-order perturbation theory about n = 2: every kick is O(n - 2), so every rate O((n - 2)^2) and every ratio of rates O(1)",
     );
+    /// The exponent of the law with one more order.
+    pub const NEXT_ORDER_EXPONENT: Pair = pair!(
+        "next_order_exponent",
+        "1",
+        "p of the law with the next order, A (n - 2)^p exp(q (n - 2) + s (n - 2)^2), fitted to the same rates the same way: how far the law's truncation moves p",
+        FIT_ERROR
+    )
+    .or_null(TOO_FEW);
+    /// The exponent's whole error.
+    pub const EXPONENT_ERROR: Col<f64> = Col::f64(
+        "exponent_error",
+        "1",
+        "the error of p that exponent_z divides by: exponent_stderr and the truncation's, |next_order_exponent - exponent| (0 when the next order cannot be fitted), in quadrature (the rates share their launch draws, so their statistical error is far below what the three-coefficient law describes)",
+    )
+    .or_null(TOO_FEW);
     /// The exponent against the prediction.
     pub const EXPONENT_Z: Col<f64> = Col::f64(
         "exponent_z",
         "1",
-        "(exponent - expected_exponent) / exponent_stderr",
+        "(exponent - expected_exponent) / exponent_error",
     )
     .or_null(TOO_FEW);
     /// The amplitude.
@@ -145,7 +160,7 @@ pub mod fits {
     pub const P_VALUE: Col<f64> = Col::f64(
         "p_value",
         "1",
-        "probability of a chi-square at least chi2 if the law holds with independent errors",
+        "probability of a chi-square at least chi2 if the law holds (chi-square with dof degrees of freedom; the covariance is estimated, so this is approximate for few randomizations)",
     )
     .or_null(TOO_FEW);
 }

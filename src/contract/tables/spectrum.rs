@@ -236,3 +236,35 @@ pub mod scenes {
     )
     .or_null("one group: no spread to measure");
 }
+
+/// `spectrum_jackknife.parquet`: the leave-one-out values behind the
+/// summary's errors, one row per generator and randomization.
+pub mod jackknife {
+    pub use super::GENERATOR;
+    use super::*;
+
+    /// The table.
+    pub const TABLE: TableSpec = TableSpec {
+        stage: STAGE,
+        name: "spectrum_jackknife",
+        description: "the variance rate and the gap of spectrum_summary with each randomization left out: the jackknife's leave-one-out values, from which the covariance of the spectra of several potentials follows (randomization r of every potential draws from the same random stream, so their errors are correlated)",
+    };
+    /// The randomization left out.
+    pub const RANDOMIZATION: Col<u32> = Col::u32(
+        "randomization",
+        "1",
+        "the randomization left out, 0-based; the jackknife error of a summary column is sqrt((R - 1)/R sum_r (x_r - mean x)^2) over these rows",
+    );
+    /// `Gamma` without this randomization.
+    pub const VARIANCE_RATE: Col<f64> = Col::f64(
+        "variance_rate",
+        RATE_UNIT,
+        "spectrum_summary's variance_rate on the other randomizations",
+    );
+    /// The gap without this randomization.
+    pub const GAP: Col<f64> = Col::f64(
+        "gap",
+        RATE_UNIT,
+        "spectrum_summary's gap on the other randomizations (the same rank, growing_modes + 1)",
+    );
+}
