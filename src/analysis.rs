@@ -20,8 +20,9 @@ use crate::linalg::simpson_weight;
 use crate::physics::launch::thermal_density;
 use crate::physics::md::{THERMAL_BAND, published_model, tagged_model};
 use crate::stats::{
-    ChiSquare, CountModel, Estimate, MINIMUM_EXPECTED_COUNT, Replicated, chi_square,
+    ChiSquare, CountModel, Estimate, MIN_TEST_DOF, MINIMUM_EXPECTED_COUNT, Replicated, chi_square,
 };
+use crate::thresholds::{REJECTED_P, REJECTED_Z};
 
 /// Simpson intervals of the average over thermal starts in
 /// `[-THERMAL_BAND, THERMAL_BAND]` (step 0.25).
@@ -134,9 +135,25 @@ impl VarianceRatio {
     }
 }
 
+/// A ring's window variances `sum (u - u')^2 h du` by each MD estimator,
+/// `v_th^2`, with standard errors over runs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct WindowVariances {
+    /// The published estimator (background subtracted).
+    pub published: Estimate,
+    /// The tagged estimator (lineages starting near `u'`).
+    pub tagged: Estimate,
+    /// The thermal estimator (every lineage).
+    pub thermal: Estimate,
+}
+
 /// The finite-size and density comparison of one ring at scaled time `time`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FiniteSize {
+    /// The published estimator against the window variance of the Boltzmann
+    /// `h` on the ring's bins (jackknife): the same `h` as the tagged one's,
+    /// with the background's noise.
+    pub published: VarianceRatio,
     /// The tagged estimator (starts near `u'`) against the window variance
     /// of the Boltzmann `h` on the ring's bins (jackknife).
     pub tagged: VarianceRatio,
@@ -145,12 +162,11 @@ pub struct FiniteSize {
     pub thermal: VarianceRatio,
 }
 
-/// [`FiniteSize`] from the ring's window variances (`tagged`, `thermal`),
-/// its Boltzmann `h` ([`boltzmann_on_bins`]) and its thermal rate per kernel
-/// replicate ([`thermal_window_variance_rates`]).
+/// [`FiniteSize`] from the ring's window variances (`md`), its Boltzmann
+/// `h` ([`boltzmann_on_bins`]) and its thermal rate per kernel replicate
+/// ([`thermal_window_variance_rates`]).
 pub fn finite_size(
-    tagged: Estimate,
-    thermal: Estimate,
+    md: WindowVariances,
     boltzmann: &Replicated<Vec<f64>>,
     bins: RingBins,
     thermal_rates: &[f64],
@@ -160,8 +176,9 @@ pub fn finite_size(
     let thermal_boltzmann =
         Estimate::from_replicates(&thermal_rates.iter().map(|r| r * time).collect::<Vec<f64>>());
     FiniteSize {
-        tagged: VarianceRatio::new(tagged, tagged_boltzmann),
-        thermal: VarianceRatio::new(thermal, thermal_boltzmann),
+        published: VarianceRatio::new(md.published, tagged_boltzmann),
+        tagged: VarianceRatio::new(md.tagged, tagged_boltzmann),
+        thermal: VarianceRatio::new(md.thermal, thermal_boltzmann),
     }
 }
 
@@ -208,6 +225,52 @@ pub struct Goodness {
     /// above chi-square (under the reference its chi2/dof has median 1.0 to
     /// 1.2 and a long upper tail, simulated for the default study's rings).
     pub sample: ChiSquare,
+}
+
+/// What the comparison of an MD estimator with its reference concludes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Agreement {
+    /// No test rejects at [`REJECTED_P`].
+    Agrees,
+    /// The shape's chi-square or the window variance's ratio rejects.
+    Differs,
+    /// Neither test can be made: fewer than [`MIN_TEST_DOF`] groups and no
+    /// window variance.
+    NoTest,
+}
+
+impl Agreement {
+    /// The verdict as tables and the report print it.
+    pub fn label(self) -> &'static str {
+        match self {
+            Agreement::Agrees => "agrees",
+            Agreement::Differs => "differs",
+            Agreement::NoTest => "no test",
+        }
+    }
+}
+
+/// The verdict of the shape's chi-square (`shape`; a test only with at least
+/// [`MIN_TEST_DOF`] degrees of freedom) and of the ratio of the window
+/// variances, MD over the reference, against 1 (`variance_ratio`): MD
+/// differs when either rejects at [`REJECTED_P`] (the ratio at `|z| >`
+/// [`REJECTED_Z`]). The variance is the test with power against a
+/// broadening: a 20% excess spreads over every group of the shape's
+/// chi-square, but is all of the ratio's.
+pub fn agreement(shape: Option<ChiSquare>, variance_ratio: Option<Estimate>) -> Agreement {
+    let shape = shape.filter(|s| s.dof >= MIN_TEST_DOF);
+    let ratio_z = variance_ratio
+        .map(|r| (r.mean - 1.0) / r.stderr)
+        .filter(|z| z.is_finite());
+    if shape.is_none() && ratio_z.is_none() {
+        Agreement::NoTest
+    } else if shape.is_some_and(|s| s.p_value() < REJECTED_P)
+        || ratio_z.is_some_and(|z| z.abs() > REJECTED_Z)
+    {
+        Agreement::Differs
+    } else {
+        Agreement::Agrees
+    }
 }
 
 /// Both MD estimators of `ring` against the reference `predicted` (its
@@ -342,10 +405,43 @@ mod tests {
             mean: 1.0,
             stderr: 0.1,
         };
-        let FiniteSize { tagged, thermal } = finite_size(md, md, &h, bins, &[1.0, 2.0, 3.0], 0.5);
+        let md = WindowVariances {
+            published: md,
+            tagged: md,
+            thermal: md,
+        };
+        let FiniteSize {
+            published,
+            tagged,
+            thermal,
+        } = finite_size(md, &h, bins, &[1.0, 2.0, 3.0], 0.5);
+        assert_eq!(published.boltzmann, tagged.boltzmann);
         assert!(tagged.boltzmann.mean.abs() < 1e-14);
         assert_eq!(thermal.boltzmann.mean, 1.0);
         assert_eq!(thermal.ratio.mean, 1.0);
+    }
+
+    /// The verdict: a ratio 4 errors from 1 rejects, one 3 errors away does
+    /// not; a shape with p < 1e-3 rejects unless it has fewer than three
+    /// degrees of freedom (no test), and neither test at all is no test.
+    #[test]
+    fn agreement_rejects_at_the_thresholds_and_only_with_a_test() {
+        let ratio = |z: f64| {
+            Some(Estimate {
+                mean: 1.0 + 0.05 * z,
+                stderr: 0.05,
+            })
+        };
+        let shape = |chi2: f64, dof: usize| Some(ChiSquare { chi2, dof });
+        assert_eq!(agreement(None, ratio(4.0)), Agreement::Differs);
+        assert_eq!(agreement(None, ratio(-4.0)), Agreement::Differs);
+        assert_eq!(agreement(None, ratio(3.0)), Agreement::Agrees);
+        // chi2 = 30 for 6 dof: p = 3.9e-5; 10 for 6: p = 0.12.
+        assert_eq!(agreement(shape(30.0, 6), None), Agreement::Differs);
+        assert_eq!(agreement(shape(10.0, 6), ratio(0.0)), Agreement::Agrees);
+        assert_eq!(agreement(shape(30.0, 2), None), Agreement::NoTest);
+        assert_eq!(agreement(shape(30.0, 2), ratio(0.5)), Agreement::Agrees);
+        assert_eq!(agreement(None, None), Agreement::NoTest);
     }
 
     /// A ring of 9 bins of width 0.1 whose published and tagged `h` (per

@@ -14,3 +14,13 @@ pub const DEFAULT_KICK_FLOOR: f64 = 1e-10;
 /// the pair or joint test is then no evidence for or against detailed
 /// balance (its z-score means nothing).
 pub const DOMINATED_SHARE: f64 = 0.5;
+
+/// Significance at which a comparison of molecular dynamics with its
+/// reference rejects agreement, per test (the shape's chi-square, the window
+/// variance's ratio): one in a thousand, so that the default study's ~30
+/// comparisons of two tests each reject a ring that agrees in ~6% of studies.
+pub const REJECTED_P: f64 = 1e-3;
+
+/// `|z|` beyond which a ratio that should be 1 rejects agreement: the
+/// two-sided normal quantile of [`REJECTED_P`].
+pub const REJECTED_Z: f64 = 3.29;

@@ -6,35 +6,19 @@
 //! gases table and from MD, the N2 gas).
 
 use std::fs;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use arrow::array::RecordBatch;
 use ternary::binning::Bins;
 use ternary::contract;
 use ternary::contract::readers::collision_events;
 use ternary::kernel::{Target, histograms};
-use ternary::pipeline::table::read_parquet;
 use ternary::pipeline::{Input, InstanceId};
 use ternary::stats::Estimate;
 
 mod common;
 
-use common::{REDUCED_STUDY, stderr, stdout, ternary, workspace, write_config};
-
-/// The table `name` of the artifact a ref names (`<stage>/<instance>`).
-fn table(store: &Path, stage: &str, instance: &str, name: &str) -> RecordBatch {
-    let reference: serde_json::Value = serde_json::from_str(
-        &fs::read_to_string(store.join(format!("refs/{stage}/{instance}.json"))).unwrap(),
-    )
-    .unwrap();
-    let dir: PathBuf = store
-        .join("artifacts")
-        .join(stage)
-        .join(reference["key"].as_str().unwrap());
-    read_parquet(&dir.join(format!("{name}.parquet")))
-        .unwrap()
-        .0
-}
+use common::{REDUCED_STUDY, stderr, stdout, table, ternary, workspace, write_config};
 
 /// The `[[md.system]]` parameters of a ring, from its md artifact.
 fn md_params(store: &Path, ring: &str) -> serde_json::Value {

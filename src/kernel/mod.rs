@@ -625,6 +625,12 @@ pub struct MomentSums {
     pub window_drift: f64,
     /// Variance rate of all particles in the window.
     pub window_variance: f64,
+    /// `sum w |sum_particles (out^2 - in^2)|` over every particle whatever
+    /// the truncation: twice the kinetic energy each scene's velocities
+    /// gained or lost (the engine's error and the kick floor's snapping),
+    /// summed without its sign. Energy conservation makes the untruncated
+    /// `window_variance` exactly 0; this bounds its size.
+    pub energy_change: f64,
 }
 
 /// Moment sums per replicate for each truncation half-width.
@@ -639,7 +645,11 @@ pub fn moments(
         for contribution in contributions(event, target) {
             let weight = contribution.weight * scale;
             let kick = contribution.self_kick();
+            let squares = |v: &[f64; 3]| v.iter().map(|x| x * x).sum::<f64>();
+            let energy_change =
+                weight * (squares(&contribution.outgoing) - squares(&contribution.incoming)).abs();
             for (slot, &limit) in sums.iter_mut().zip(truncations) {
+                slot.energy_change += energy_change;
                 let inside = |x: f64| if x.abs() <= limit { 1.0 } else { 0.0 };
                 slot.self_drift += weight * kick * inside(kick);
                 slot.self_variance += weight * kick * kick * inside(kick);

@@ -387,7 +387,7 @@ pub(super) fn compare_table(
     use contract::estimator;
     for (_, frame) in table_frames(store, reports, &goodness::TABLE)? {
         out.title(
-            "MD against Boltzmann and the scaling collapse: chi2 per degree of freedom with the variance MD would have if it followed the reference, its p-value, and (sample) with the runs' own errors",
+            "MD against Boltzmann and the scaling collapse: the shape's chi2 per degree of freedom with the variance MD would have if it followed the reference, its p-value, and (sample) with the runs' own errors; the window variance over the reference's and its z; the verdict of both (differs: p < 1e-3 or |z| > 3.29)",
         );
         let mut table = Columns::new(&[
             (goodness::RING.name, Align::Left),
@@ -397,15 +397,14 @@ pub(super) fn compare_table(
             (goodness::DOF.name, Align::Right),
             ("p", Align::Right),
             ("sample chi2/dof", Align::Right),
+            ("variance / reference", Align::Right),
+            ("z", Align::Right),
+            (goodness::VERDICT.name, Align::Left),
         ]);
         for row in 0..frame.height() {
-            // No bin with a variance: nothing to compare.
+            // Null: no shape test, or too few degrees of freedom for one.
             let reduced = |col| -> Result<String> {
-                Ok(or_why(
-                    number(&frame, row, col)?,
-                    |c| fixed(c, 2),
-                    "no bins",
-                ))
+                Ok(or_why(number(&frame, row, col)?, |c| fixed(c, 2), "-"))
             };
             table.push(vec![
                 Cell::text(text(&frame, row, goodness::RING)?),
@@ -413,20 +412,21 @@ pub(super) fn compare_table(
                 Cell::text(text(&frame, row, goodness::ESTIMATOR)?),
                 Cell::text(reduced(goodness::CHI2_PER_DOF)?),
                 Cell::text(count(&frame, row, goodness::DOF)?.to_string()),
-                Cell::text({
-                    let dof = count(&frame, row, goodness::DOF)?;
-                    let per_dof = number(&frame, row, goodness::CHI2_PER_DOF)?;
+                Cell::text(
                     ChiSquare {
-                        chi2: per_dof * f64::from(dof),
-                        dof: dof as usize,
+                        chi2: number(&frame, row, goodness::CHI2)?,
+                        dof: count(&frame, row, goodness::DOF)? as usize,
                     }
-                    .p_text()
-                }),
+                    .p_text(),
+                ),
                 Cell::text(format!(
                     "{} ({})",
                     reduced(goodness::SAMPLE_CHI2_PER_DOF)?,
                     count(&frame, row, goodness::SAMPLE_DOF)?
                 )),
+                estimate(&frame, row, goodness::VARIANCE_RATIO, "-")?,
+                Cell::text(reduced(goodness::VARIANCE_Z)?),
+                Cell::text(text(&frame, row, goodness::VERDICT)?),
             ]);
         }
         out.table(&table);

@@ -3,9 +3,11 @@
 //! translation-invariant kernel (exact in Fourier space at the ring's `t_f`
 //! in units of its own `rho^2 l v_th`; at `Gamma t_f ~ 2e-4` the kernel's `u'`
 //! dependence is negligible) on the ring's bins, with jackknife errors, and the
-//! chi-square of both MD estimators against it. The scaling collapse: the
-//! tagged `h` of every ring against the first one's. The finite-size and
-//! density study: the tagged window variance of every ring against
+//! chi-square of both MD estimators against it, beside the ratio of each
+//! estimator's window variance to Boltzmann's (the test with power against a
+//! broadening) and the verdict of both (`analysis::agreement`). The scaling
+//! collapse: the tagged `h` of every ring against the first one's. The
+//! finite-size and density study: the window variances of every ring against
 //! Boltzmann's, with the ring's `N` and `rho l`. Rings of other potentials
 //! that kick (Lennard-Jones) are set against their own potential's kernel:
 //! `h` and the goodness of fit only. A Lennard-Jones kernel holds three-body
@@ -18,8 +20,8 @@ use serde::Serialize;
 use serde_json::Value;
 
 use crate::analysis::{
-    CollapseRing, FiniteSize, Goodness, RingBins, RingH, boltzmann_on_bins, finite_size, goodness,
-    scaling_collapse, thermal_window_variance_rates,
+    CollapseRing, FiniteSize, Goodness, RingBins, RingH, VarianceRatio, WindowVariances, agreement,
+    boltzmann_on_bins, finite_size, goodness, scaling_collapse, thermal_window_variance_rates,
 };
 use crate::binning::Bins;
 use crate::config::{KernelParams, MdParams};
@@ -29,7 +31,7 @@ use crate::contract::{self, Rows};
 use crate::evolve::convolution;
 use crate::pipeline::code::{self, Code};
 use crate::pipeline::{Input, InstanceId, Progress, Stage, StageError, Table};
-use crate::stats::{Estimate, Replicated};
+use crate::stats::{ChiSquare, Estimate, MIN_TEST_DOF, Replicated};
 
 /// Resolved parameters of the `compare` stage.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -58,16 +60,14 @@ struct MdEstimates {
     du: Vec<f64>,
     published: Vec<Estimate>,
     tagged: Vec<Estimate>,
-    /// Window variance `sum (u - u')^2 h du` of the tagged estimator.
-    tagged_variance: Estimate,
-    /// Window variance of the thermal estimator (every lineage).
-    thermal_variance: Estimate,
+    /// Window variances `sum (u - u')^2 h du` of the three estimators.
+    variances: WindowVariances,
     /// Tagged lineages of each run.
     lineages: Vec<f64>,
 }
 
 fn read_md(input: &Input) -> Result<MdEstimates, StageError> {
-    use contract::estimator::{TAGGED, THERMAL};
+    use contract::estimator::{PUBLISHED, TAGGED, THERMAL};
     use contract::md::{h, runs, summary};
     let batch = h::TABLE.of(input)?;
     let moments = summary::TABLE.of(input)?;
@@ -79,8 +79,11 @@ fn read_md(input: &Input) -> Result<MdEstimates, StageError> {
         du: h::DU.read(batch)?,
         published: h::H_PUBLISHED.read(batch)?,
         tagged: h::H_TAGGED.read(batch)?,
-        tagged_variance: variance(TAGGED)?,
-        thermal_variance: variance(THERMAL)?,
+        variances: WindowVariances {
+            published: variance(PUBLISHED)?,
+            tagged: variance(TAGGED)?,
+            thermal: variance(THERMAL)?,
+        },
         lineages: runs::LINEAGES.read(runs::TABLE.of(input)?)?,
     })
 }
@@ -134,8 +137,16 @@ struct Fit {
     ring: String,
     reference: String,
     estimator: String,
-    goodness: Goodness,
+    /// The shape's chi-squares (none for the thermal estimator, whose
+    /// reference is a rate, not an `h`).
+    shape: Option<Goodness>,
+    /// The window variance against the reference's (rings in the
+    /// finite-size study, against Boltzmann).
+    variance: Option<VarianceRatio>,
 }
+
+/// A ring's finite-size comparison at its scaled time.
+type Sized<'a> = (&'a MdParams, f64, FiniteSize);
 
 impl CompareStage {
     /// The kernel's collisions, then the thermal reference's when they
@@ -214,20 +225,18 @@ impl CompareStage {
         ))
     }
 
-    /// The finite-size and density study: per ring, its size, density and
-    /// scaled time, and the window variances of MD against Boltzmann's: of
-    /// the tagged estimator (starts near `u'`, against the Boltzmann `h`) and
-    /// of the thermal one (every start, against `t` times the thermal rate;
+    /// The finite-size and density study: per ring, its scaled time and the
+    /// window variances of MD against Boltzmann's: of the published and
+    /// tagged estimators (starts near `u'`, against the Boltzmann `h`) and of
+    /// the thermal one (every start, against `t` times the thermal rate;
     /// first order in `Gamma t`).
-    fn finite_size(
-        &self,
+    fn finite_sizes<'a>(
+        &'a self,
         rings: &[MdEstimates],
         boltzmann: &[Replicated<Vec<f64>>],
         thermal_rates: &[Vec<f64>],
-    ) -> Result<Table, StageError> {
-        use contract::compare::finite_size::*;
-        let rows: Vec<(&MdParams, f64, FiniteSize)> = self
-            .params
+    ) -> Vec<Sized<'a>> {
+        self.params
             .systems
             .iter()
             .zip(rings)
@@ -235,18 +244,18 @@ impl CompareStage {
             .zip(thermal_rates)
             .map(|(((system, ring), predicted), rates)| {
                 let time = system.scaled_final_time();
-                let compared = finite_size(
-                    ring.tagged_variance,
-                    ring.thermal_variance,
-                    predicted,
-                    ring_bins(system, ring),
-                    rates,
-                    time,
-                );
+                let bins = ring_bins(system, ring);
+                let compared = finite_size(ring.variances, predicted, bins, rates, time);
                 (system, time, compared)
             })
-            .collect();
-        Ok(Rows::new(&rows)
+            .collect()
+    }
+
+    /// The finite-size table: per ring its size and density beside the
+    /// tagged and thermal comparisons.
+    fn finite_size_table(sizes: &[Sized]) -> Result<Table, StageError> {
+        use contract::compare::finite_size::*;
+        Ok(Rows::new(sizes)
             .with(RING, |(system, ..)| system.name.clone())
             .with(PARTICLES, |(system, ..)| system.particles)
             .with(DENSITY, |(system, ..)| {
@@ -285,26 +294,46 @@ impl CompareStage {
 
     /// Chi-square of both MD estimators against Boltzmann per ring, and of
     /// every later ring's tagged `h` against the first one's on the same
-    /// bins at the same scaled time (the scaling collapse).
-    fn goodness(compared: &[Compared]) -> Result<Table, StageError> {
-        use contract::compare::goodness::*;
-        use contract::estimator::{PUBLISHED, TAGGED};
+    /// bins at the same scaled time (the scaling collapse); beside each, the
+    /// ratio of the estimator's window variance to the reference's where the
+    /// finite-size study has it (`sizes`, the first rings of `compared`), a
+    /// row of the thermal estimator with its ratio alone.
+    fn fits(compared: &[Compared], sizes: &[Sized]) -> Vec<Fit> {
+        use contract::compare::goodness::BOLTZMANN;
+        use contract::estimator::{PUBLISHED, TAGGED, THERMAL};
         let mut fits: Vec<Fit> = Vec::new();
-        let mut record = |ring: &str, reference: &str, estimator: &str, goodness| {
+        let mut record = |ring: &str, reference: &str, estimator: &str, shape, variance| {
             fits.push(Fit {
                 ring: ring.to_string(),
                 reference: reference.to_string(),
                 estimator: estimator.to_string(),
-                goodness,
+                shape,
+                variance,
             });
         };
         let first = compared.first();
-        for (system, ring, predicted) in compared {
+        for (k, (system, ring, predicted)) in compared.iter().enumerate() {
             let name = system.name.as_str();
             let h = ring_h(system, ring);
             let [published, tagged] = goodness(&h, predicted);
-            record(name, BOLTZMANN, PUBLISHED, published);
-            record(name, BOLTZMANN, TAGGED, tagged);
+            let size = sizes.get(k).map(|(.., size)| size);
+            record(
+                name,
+                BOLTZMANN,
+                PUBLISHED,
+                Some(published),
+                size.map(|s| s.published),
+            );
+            record(
+                name,
+                BOLTZMANN,
+                TAGGED,
+                Some(tagged),
+                size.map(|s| s.tagged),
+            );
+            if let Some(size) = size {
+                record(name, BOLTZMANN, THERMAL, None, Some(size.thermal));
+            }
             if let Some((reference, first, first_predicted)) = first
                 && reference.name != system.name
                 && reference.potential == system.potential
@@ -313,19 +342,37 @@ impl CompareStage {
                     &collapse_ring(reference, first, first_predicted),
                 )
             {
-                record(name, &reference.name, TAGGED, collapsed);
+                record(name, &reference.name, TAGGED, Some(collapsed), None);
             }
         }
-        Ok(Rows::new(&fits)
+        fits
+    }
+
+    /// The goodness table of `fits`, with each row's verdict.
+    fn goodness_table(fits: &[Fit]) -> Result<Table, StageError> {
+        use contract::compare::goodness::*;
+        let model = |f: &Fit| f.shape.map(|g| g.model);
+        let tested = |f: &Fit| model(f).filter(|m| m.dof >= MIN_TEST_DOF);
+        let not_compared = Estimate {
+            mean: f64::NAN,
+            stderr: f64::NAN,
+        };
+        let ratio = |f: &Fit| f.variance.map(|v| v.ratio);
+        Ok(Rows::new(fits)
             .with(RING, |f| f.ring.clone())
             .with(REFERENCE, |f| f.reference.clone())
             .with(ESTIMATOR, |f| f.estimator.clone())
-            .with(CHI2, |f| f.goodness.model.chi2)
-            .with(DOF, |f| f.goodness.model.dof as u32)
-            .with(CHI2_PER_DOF, |f| f.goodness.model.per_dof())
-            .with(P_VALUE, |f| f.goodness.model.p_value())
-            .with(SAMPLE_CHI2_PER_DOF, |f| f.goodness.sample.per_dof())
-            .with(SAMPLE_DOF, |f| f.goodness.sample.dof as u32)
+            .optional(CHI2, |f| model(f).map(|m| m.chi2))
+            .with(DOF, |f| model(f).map_or(0, |m| m.dof as u32))
+            .optional(CHI2_PER_DOF, |f| tested(f).map(ChiSquare::per_dof))
+            .optional(P_VALUE, |f| tested(f).map(ChiSquare::p_value))
+            .optional(SAMPLE_CHI2_PER_DOF, |f| f.shape.map(|g| g.sample.per_dof()))
+            .with(SAMPLE_DOF, |f| f.shape.map_or(0, |g| g.sample.dof as u32))
+            .estimate(VARIANCE_RATIO, |f| ratio(f).unwrap_or(not_compared))
+            .optional(VARIANCE_Z, |f| ratio(f).map(|r| (r.mean - 1.0) / r.stderr))
+            .with(VERDICT, |f| {
+                agreement(model(f), ratio(f)).label().to_string()
+            })
             .table(&TABLE)?)
     }
 }
@@ -399,10 +446,10 @@ impl Stage for CompareStage {
             )
             .collect();
         let comparison = Self::comparison(&compared)?;
-        let goodness = Self::goodness(&compared)?;
         progress.advance(1);
         let thermal_rates = self.thermal_rates(&inputs[main - 1])?;
-        let finite_size = self.finite_size(&rings, &replicated, &thermal_rates)?;
-        Ok(vec![comparison, goodness, finite_size])
+        let sizes = self.finite_sizes(&rings, &replicated, &thermal_rates);
+        let goodness = Self::goodness_table(&Self::fits(&compared, &sizes))?;
+        Ok(vec![comparison, goodness, Self::finite_size_table(&sizes)?])
     }
 }

@@ -136,6 +136,11 @@ impl Stage for MomentsStage {
             .estimate(SELF_VARIANCE, estimate(|m| m.self_variance))
             .estimate(WINDOW_DRIFT, estimate(|m| m.window_drift))
             .estimate(WINDOW_VARIANCE, estimate(|m| m.window_variance))
+            .optional(ENERGY_ERROR_BOUND, |&k| {
+                truncations[k]
+                    .is_infinite()
+                    .then(|| estimate(|m| m.energy_change)(&k).mean)
+            })
             .estimate(RECOMBINATION_RATE, |_| recombination)
             .with(RECOMBINED_EVENTS, |_| recombined)
             .with(EVENTS, |_| events.len() as u32)

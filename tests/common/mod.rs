@@ -7,6 +7,22 @@ use std::process::{Command, Output};
 
 pub const BINARY: &str = env!("CARGO_BIN_EXE_ternary");
 
+/// The table `name` of the artifact a ref of `store` names
+/// (`<stage>/<instance>`).
+pub fn table(store: &Path, stage: &str, instance: &str, name: &str) -> arrow::array::RecordBatch {
+    let reference: serde_json::Value = serde_json::from_str(
+        &fs::read_to_string(store.join(format!("refs/{stage}/{instance}.json"))).unwrap(),
+    )
+    .unwrap();
+    let dir: PathBuf = store
+        .join("artifacts")
+        .join(stage)
+        .join(reference["key"].as_str().unwrap());
+    ternary::pipeline::table::read_parquet(&dir.join(format!("{name}.parquet")))
+        .unwrap()
+        .0
+}
+
 /// A fresh directory for one test.
 pub fn workspace(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("ternary-test-{name}-{}", std::process::id()));

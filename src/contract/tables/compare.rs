@@ -48,8 +48,14 @@ pub mod goodness {
     pub const TABLE: TableSpec = TableSpec {
         stage: STAGE,
         name: "goodness",
-        description: "goodness of fit of MD against Boltzmann, and of the scaling collapse",
+        description: "goodness of fit of MD against Boltzmann (the shape's chi-square and the window variance's ratio, with their verdict), and of the scaling collapse",
     };
+    /// Why a shape column is null.
+    const NO_SHAPE: &str =
+        "no shape test: the thermal estimator (its reference is a rate, not an h)";
+    /// Why a p-value is null.
+    const NO_TEST: &str =
+        "fewer than 3 degrees of freedom (a test without power), or no shape test (thermal)";
     /// Reference.
     pub const REFERENCE: Col<String> = Col::text(
         "reference",
@@ -64,35 +70,56 @@ pub mod goodness {
         "chi2",
         "1",
         "d^T (C + S)^-1 d over groups of bins of at least 10 expected counts, the largest cell left out: d the group masses of MD minus the reference's, C their covariance if MD followed the reference (multinomial counts), S the reference's squared standard errors",
-    );
+    )
+    .or_null(NO_SHAPE);
     /// Degrees of freedom.
-    pub const DOF: Col<u32> = Col::u32("dof", "1", "groups of bins kept");
+    pub const DOF: Col<u32> = Col::u32("dof", "1", "groups of bins kept (0: no shape test)");
     /// Reduced chi-square.
     pub const CHI2_PER_DOF: Col<f64> = Col::f64(
         "chi2_per_dof",
         "1",
         "chi2 / dof: ~1 when MD follows the reference",
     )
-    .or_null("no degrees of freedom: no test");
+    .or_null(NO_TEST);
     /// p-value of `chi2` with `dof` degrees of freedom.
     pub const P_VALUE: Col<f64> = Col::f64(
         "p_value",
         "1",
         "probability of a chi2 at least this large if MD followed the reference",
     )
-    .or_null("no degrees of freedom: no test");
+    .or_null(NO_TEST);
     /// Reduced chi-square with the MD runs' own spread (the published definition).
     pub const SAMPLE_CHI2_PER_DOF: Col<f64> = Col::f64(
         "sample_chi2_per_dof",
         "1",
         "chi2 / dof with the MD runs' own standard errors, over the bins where they are nonzero (the published estimator's definition)",
     )
-    .or_null("no degrees of freedom: no test");
+    .or_null(NO_SHAPE);
     /// Its degrees of freedom.
     pub const SAMPLE_DOF: Col<u32> = Col::u32(
         "sample_dof",
         "1",
         "bins where the MD runs' standard error is nonzero",
+    );
+    /// The window variance against the reference's.
+    pub const VARIANCE_RATIO: Pair = pair!(
+        "variance_ratio",
+        "1",
+        "MD's window variance sum (u - u')^2 h du by this estimator over the reference's (finite_size: the published and tagged estimators against the Boltzmann h, the thermal one against t times the thermal rate): 1 when MD follows the reference; the test with power against a broadening",
+        "propagated from MD's standard error over runs and the reference's over the kernel's randomizations"
+    )
+    .or_null("not in the finite-size study: the scaling collapse, and rings of other potentials");
+    /// The ratio against 1.
+    pub const VARIANCE_Z: Col<f64> = Col::f64(
+        "variance_z",
+        "1",
+        "(variance_ratio - 1) / variance_ratio_stderr",
+    )
+    .or_null("no variance ratio");
+    /// The verdict.
+    pub const VERDICT: Col<String> = Col::text(
+        "verdict",
+        "differs: the shape's p_value below 1e-3 or |variance_z| above 3.29 (thresholds::REJECTED_P, REJECTED_Z); agrees: neither; no test: no p_value and no variance ratio",
     );
 }
 

@@ -46,9 +46,17 @@ pub const WINDOW_DRIFT: Pair = pair!(
 pub const WINDOW_VARIANCE: Pair = pair!(
     "window_variance",
     RATE,
-    "variance rate of all particles within the truncation",
+    "variance rate of all particles within the truncation (untruncated: 0 by energy conservation up to the engine's error, energy_error_bound)",
     SPREAD
 );
+/// What the integrator's energy error contributes to the untruncated
+/// window variance.
+pub const ENERGY_ERROR_BOUND: Col<f64> = Col::f64(
+    "energy_error_bound",
+    RATE,
+    "sum over scenes of weight |sum_particles (u_out^2 - u_in^2)|, mean over randomizations: the energy the scenes' velocities gained or lost, summed without its sign (the scattering engine's error, and the kick floor's, which sets velocity changes below it to zero). Energy conservation makes the untruncated window_variance exactly 0, so its value is theirs and |window_variance| <= this bound (its standard error measures the scatter, not this)",
+)
+.or_null("a truncated row: particles crossing the edge move variance in or out, so it is not 0");
 /// Recombination rate (the same in every row).
 pub const RECOMBINATION_RATE: Pair = pair!(
     "recombination_rate",
