@@ -197,7 +197,10 @@ fn the_untruncated_window_variance_is_the_engines_energy_error() {
             let sums = moments(&events, &target, &[f64::INFINITY], &replicates(&events));
             for replicate in &sums {
                 let m = replicate[0];
-                assert!(m.window_variance.abs() <= m.energy_change + rounding, "{m:?}");
+                assert!(
+                    m.window_variance.abs() <= m.energy_change + rounding,
+                    "{m:?}"
+                );
                 assert!(m.energy_change < 1e-5 * m.self_variance, "{m:?}");
                 if kick_floor == 0.0 {
                     assert!(m.window_variance < -0.9 * m.energy_change, "{m:?}");

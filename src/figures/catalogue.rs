@@ -404,7 +404,7 @@ impl Figure {
                 panel(
                     "ratio",
                     linear("n"),
-                    linear("gap / Γ"),
+                    Axis::from_zero("gap / Γ"),
                     vec![("", Style::Markers)],
                 ),
                 panel(

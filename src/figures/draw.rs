@@ -10,7 +10,7 @@ use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 use super::text::{FAMILY, Typeset};
-use super::{DODGE, Layout, Panel, Point, Style};
+use super::{Axis, DODGE, Layout, Panel, Point, Style};
 
 /// Colour-blind safe colours (Okabe and Ito), one per series in order.
 pub const PALETTE: [RGBColor; 7] = [
@@ -208,11 +208,16 @@ fn draw<DB: DrawingBackend>(
     root.present()
 }
 
-/// The range of `values` (value, error) with their errors, padded by 4%
-/// of its span, or by a factor on a log axis (positive values only there,
-/// at most `decades` below the largest).
-fn span(values: impl Iterator<Item = (f64, f64)>, log: bool, decades: u32) -> Range<f64> {
+/// The range of `values` (value, error) with their errors on `axis`,
+/// padded by 4% of its span (from 0 on an axis that starts there), or by a
+/// factor on a log axis (positive values only there, at most its decades
+/// below the largest).
+fn span(values: impl Iterator<Item = (f64, f64)>, axis: &Axis) -> Range<f64> {
+    let (log, decades) = (axis.log, axis.decades);
     let (mut low, mut high) = (f64::INFINITY, f64::NEG_INFINITY);
+    if axis.from_zero {
+        (low, high) = (0.0, 0.0);
+    }
     for (value, error) in values {
         for v in [value - error, value, value + error] {
             if v.is_finite() && (!log || v > 0.0) {
@@ -245,16 +250,8 @@ fn draw_panel<DB: DrawingBackend>(
     let strip = legend_height(area, &entries, size, tag)?;
     let (top, plot) = area.split_vertically(strip);
     draw_legend(&top, &entries, size, tag)?;
-    let x_range = span(
-        points.iter().map(|p| (p.x, 0.0)),
-        panel.x.log,
-        panel.x.decades,
-    );
-    let y_range = span(
-        points.iter().map(|p| (p.y, p.y_error)),
-        panel.y.log,
-        panel.y.decades,
-    );
+    let x_range = span(points.iter().map(|p| (p.x, 0.0)), &panel.x);
+    let y_range = span(points.iter().map(|p| (p.y, p.y_error)), &panel.y);
     let labels = [
         Labels::of(&x_range, panel.x.log),
         Labels::of(&y_range, panel.y.log),

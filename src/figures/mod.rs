@@ -45,6 +45,10 @@ pub struct Axis {
     /// Decades shown at most on a log axis (work-precision plots need more).
     #[serde(skip_serializing_if = "is_default_decades")]
     pub decades: u32,
+    /// A linear axis that starts at 0 (a positive ratio, whose distance from
+    /// 0 is part of what it says).
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub from_zero: bool,
 }
 
 impl Axis {
@@ -54,15 +58,23 @@ impl Axis {
             label,
             log: false,
             decades: LOG_DECADES,
+            from_zero: false,
+        }
+    }
+
+    /// A linear axis from 0.
+    pub fn from_zero(label: &'static str) -> Axis {
+        Axis {
+            from_zero: true,
+            ..Axis::linear(label)
         }
     }
 
     /// A log axis showing [`LOG_DECADES`] decades.
     pub fn log(label: &'static str) -> Axis {
         Axis {
-            label,
             log: true,
-            decades: LOG_DECADES,
+            ..Axis::linear(label)
         }
     }
 }

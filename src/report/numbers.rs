@@ -149,9 +149,48 @@ fn unresolved(value: f64, error: f64) -> String {
         format!("{shown} (error < {RESOLVED_ERROR:e} of it)")
     } else if value == 0.0 {
         shown
+    } else if let Some((numerator, denominator)) = repeating_fraction(value) {
+        format!("{numerator}/{denominator} (exact)")
     } else {
         format!("{shown} (exact)")
     }
+}
+
+/// The greatest common divisor of `a` and `b` (Euclid).
+fn gcd(a: u64, b: u32) -> u64 {
+    let (mut a, mut b) = (a, u64::from(b));
+    while b != 0 {
+        (a, b) = (b, a % b);
+    }
+    a
+}
+
+/// Denominators up to which an exact value is recognised as a fraction.
+const LARGEST_DENOMINATOR: u32 = 12;
+
+/// `value` as `numerator / denominator` when it is such a fraction in
+/// lowest terms to rounding (a few units in the last place) with a
+/// denominator up to [`LARGEST_DENOMINATOR`] whose decimals repeat (a prime
+/// factor other than 2 and 5: `1/3`, not `1/4`, which `0.25` writes exactly;
+/// never an integer).
+fn repeating_fraction(value: f64) -> Option<(i64, u32)> {
+    let terminates = |mut q: u32| {
+        for p in [2, 5] {
+            while q.is_multiple_of(p) {
+                q /= p;
+            }
+        }
+        q == 1
+    };
+    (2..=LARGEST_DENOMINATOR)
+        .filter(|&q| !terminates(q))
+        .find_map(|q| {
+            let numerator = (value * f64::from(q)).round();
+            let close =
+                (numerator / f64::from(q) - value).abs() <= 4.0 * f64::EPSILON * value.abs();
+            let lowest = close && numerator.abs() < 1e15 && gcd(numerator.abs() as u64, q) == 1;
+            lowest.then_some((numerator as i64, q))
+        })
 }
 
 /// `x` with `decimals` decimals; a value that rounds to zero has no sign.
@@ -285,6 +324,11 @@ mod tests {
             with_error(1.1637580872059066, 0.0, "-"),
             "1.16375808720591 (exact)"
         );
+        assert_eq!(with_error(1.0 / 3.0, 0.0, "-"), "1/3 (exact)");
+        assert_eq!(with_error(0.5 - 1.0 / 6.0, 0.0, "-"), "1/3 (exact)");
+        assert_eq!(with_error(-5.0 / 12.0, 0.0, "-"), "-5/12 (exact)");
+        assert_eq!(with_error(0.25, 0.0, "-"), "0.25 (exact)");
+        assert_eq!(with_error(2.0, 0.0, "-"), "2 (exact)");
         assert_eq!(with_error(2.0, f64::NAN, "-"), "2 (no error estimate)");
         assert_eq!(with_error(f64::NAN, f64::NAN, "no fit"), "no fit");
         assert_eq!(with_error(f64::INFINITY, f64::NAN, "never"), "never");
