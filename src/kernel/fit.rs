@@ -69,6 +69,9 @@ pub struct ShapeFit {
     pub chi2_per_dof: f64,
     /// Bins used.
     pub bins: usize,
+    /// Whether the iterations reached a minimum ([`refine`]); otherwise the
+    /// parameters are the last iterate.
+    pub converged: bool,
 }
 
 /// Parameters in the fit's coordinates `(ln alpha, beta, 1/sigma^2)`.
@@ -142,12 +145,19 @@ fn chi2(data: &FitData, bins: &[usize], p: &Coordinates) -> f64 {
         .sum()
 }
 
-/// Damped Gauss-Newton iterations from `start` until chi-square stops improving.
-fn refine(data: &FitData, bins: &[usize], start: Coordinates) -> Coordinates {
+/// Iterations [`refine`] allows.
+const ITERATIONS: usize = 200;
+
+/// Damped Gauss-Newton (Levenberg-Marquardt) iterations from `start` until
+/// chi-square stops improving, and whether they converged: a step improved
+/// chi-square by at most 1e-12 of it, or no step improves it at any damping
+/// up to 1e12 (a minimum to rounding). Not converged: [`ITERATIONS`] spent,
+/// or singular normal equations.
+fn refine(data: &FitData, bins: &[usize], start: Coordinates) -> (Coordinates, bool) {
     let mut p = start;
     let mut current = chi2(data, bins, &p);
     let mut damping = 1e-3;
-    for _ in 0..200 {
+    for _ in 0..ITERATIONS {
         let mut normal = [[0.0; 3]; 3];
         let mut right = [0.0; 3];
         for &k in bins {
@@ -165,7 +175,7 @@ fn refine(data: &FitData, bins: &[usize], start: Coordinates) -> Coordinates {
             row[i] *= 1.0 + damping;
         }
         let Some(step) = solve3(&normal, &right) else {
-            break;
+            return (p, false);
         };
         let trial = [p[0] + step[0], p[1] + step[1], p[2] + step[2]];
         let value = chi2(data, bins, &trial);
@@ -173,16 +183,16 @@ fn refine(data: &FitData, bins: &[usize], start: Coordinates) -> Coordinates {
             let converged = current - value <= 1e-12 * current;
             (p, current, damping) = (trial, value, damping * 0.3);
             if converged {
-                break;
+                return (p, true);
             }
         } else {
             damping *= 10.0;
             if damping > 1e12 {
-                break;
+                return (p, true);
             }
         }
     }
-    p
+    (p, false)
 }
 
 /// Fits the shape to the points.
@@ -191,7 +201,7 @@ pub fn fit_shape(data: &FitData) -> Option<ShapeFit> {
     if bins.len() < 4 {
         return None;
     }
-    let p = refine(data, &bins, log_linear_start(data, &bins)?);
+    let (p, converged) = refine(data, &bins, log_linear_start(data, &bins)?);
     if p.iter().any(|v| !v.is_finite()) || p[2] <= 0.0 {
         return None;
     }
@@ -209,6 +219,7 @@ pub fn fit_shape(data: &FitData) -> Option<ShapeFit> {
         shape,
         chi2_per_dof: chi2(data, &bins, &p) / (bins.len() - 3) as f64,
         bins: bins.len(),
+        converged,
     })
 }
 
@@ -321,10 +332,13 @@ pub fn systematic<'a>(
 pub struct KernelFit {
     /// Fit to the replicate mean (`None` when nothing could be fitted).
     pub mean: Option<ShapeFit>,
-    /// Fits of the replicates that converged.
+    /// Fits of the replicates that gave a shape.
     pub replicates: Vec<Shape>,
     /// Groups of bins with a nonzero standard error.
     pub measured: usize,
+    /// Fits (the mean's and the replicates') that gave a shape without
+    /// converging (`ShapeFit::converged`).
+    pub unconverged: usize,
 }
 
 impl KernelFit {
@@ -402,11 +416,12 @@ pub fn fit_kernel(fine: &[Vec<f64>], offsets: &[f64], protocol: Protocol) -> Ker
             mean: None,
             replicates: Vec::new(),
             measured,
+            unconverged: 0,
         };
     };
     let scale = (replicates.len() as f64).sqrt();
     let replicate_errors: Vec<f64> = errors.iter().map(|e| e * scale).collect();
-    let shapes = replicates
+    let fits: Vec<ShapeFit> = replicates
         .iter()
         .filter_map(|values| {
             fit_shape(&FitData {
@@ -414,13 +429,14 @@ pub fn fit_kernel(fine: &[Vec<f64>], offsets: &[f64], protocol: Protocol) -> Ker
                 values,
                 errors: &replicate_errors,
             })
-            .map(|f| f.shape)
         })
         .collect();
+    let unconverged = std::iter::once(&mean).chain(&fits);
     KernelFit {
         mean: Some(mean),
-        replicates: shapes,
+        replicates: fits.iter().map(|f| f.shape).collect(),
         measured,
+        unconverged: unconverged.filter(|f| !f.converged).count(),
     }
 }
 
@@ -451,6 +467,19 @@ mod tests {
         assert!((fit.shape.beta - 1.17).abs() < 1e-8, "{fit:?}");
         assert!((fit.shape.sigma / 0.02 - 1.0).abs() < 1e-8, "{fit:?}");
         assert!(fit.chi2_per_dof < 1e-10);
+        assert!(fit.converged);
+        // Points that all sit at |x| = 1, where the model does not depend on
+        // beta (ln |x| = 0): the normal equations are singular at any
+        // damping, and the iterations say they did not converge (the start
+        // comes back).
+        let one_place = vec![vec![1.0]; 5];
+        let data = FitData {
+            members: &one_place,
+            values: &values[..5],
+            errors: &errors[..5],
+        };
+        let start = [0.0, 1.0, 100.0];
+        assert_eq!(refine(&data, &[0, 1, 2, 3, 4], start), (start, false));
     }
 
     /// Replicates of a shape on bins of 5e-5 out to 0.1, each a multiple of

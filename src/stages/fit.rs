@@ -122,6 +122,7 @@ impl ProtocolFit {
             (None, _) if self.fit.measured == 0 => "kernel vanishes in the fit range",
             (None, _) => "too few measured groups",
             (Some(_), fitted) if fitted < 2 => "replicates could not be fitted: no standard errors",
+            (Some(mean), _) if !mean.converged => "fitted, but the mean fit did not converge",
             (Some(_), _) => "fitted",
         }
     }
@@ -163,6 +164,7 @@ fn fit_table(fits: &[ProtocolFit]) -> Result<Table, StageError> {
             row.fit.mean.map_or(row.fit.measured, |m| m.bins) as u32
         })
         .with(REPLICATES_FITTED, |row| row.fit.replicates.len() as u32)
+        .with(UNCONVERGED_FITS, |row| row.fit.unconverged as u32)
         .with(STATUS, |row| row.status().to_string())
         .table(&TABLE)?)
 }

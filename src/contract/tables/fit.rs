@@ -112,7 +112,13 @@ pub const BINS: Col<u32> = Col::u32(
 pub const REPLICATES_FITTED: Col<u32> = Col::u32(
     "replicates_fitted",
     "1",
-    "randomizations whose own fit converged",
+    "randomizations whose own fit gave a shape",
+);
+/// Fits that stopped before converging.
+pub const UNCONVERGED_FITS: Col<u32> = Col::u32(
+    "unconverged_fits",
+    "1",
+    "fits (the mean's and the randomizations') whose Levenberg-Marquardt iterations stopped at their limit of 200 or on singular normal equations, not at a minimum (where chi-square improves by at most 1e-12 of itself, or no step improves it): their parameters are the last iterate",
 );
 /// Fit range, lower end.
 pub const RANGE_MIN: Col<f64> = Col::f64("range_min", "v_th", "smallest |u - u'| fitted");
