@@ -328,10 +328,19 @@ impl ChiSquare {
     /// `< 1e-300` where the tail underflows to 0 (not `0.0e0`), three digits
     /// above 1e-3, and two significant digits below.
     pub fn p_text(self) -> String {
-        let p = self.p_value();
         if self.dof < MIN_TEST_DOF {
             format!("no test ({} degrees of freedom)", self.dof)
-        } else if p.is_nan() {
+        } else {
+            self.p_digits()
+        }
+    }
+
+    /// The p-value's digits as [`ChiSquare::p_text`] writes them, whatever
+    /// the degrees of freedom (a fit's chi-square with 1 or 2 rejects a law
+    /// as well as any: `-` when there are none).
+    pub fn p_digits(self) -> String {
+        let p = self.p_value();
+        if p.is_nan() {
             "-".into()
         } else if p == 0.0 {
             "< 1e-300".into()

@@ -290,7 +290,7 @@ pub(super) fn near_integrable_table(
         store,
         reports,
         &TABLE,
-        "near the Calogero point n = 2: rate = A (n - 2)^p exp(q (n - 2)), weighted least squares over the resolved rates (positive by 3 standard errors; four needed) [A: rho^2 l v_th, or 1 for a ratio] (+- fit errors; expected p: first-order perturbation theory; docs/spectrum.md)",
+        "near the Calogero point n = 2: rate = A (n - 2)^p exp(q (n - 2)), generalized least squares with the rates' covariance across n over the resolved rates (positive by 3 standard errors; four needed) [A: rho^2 l v_th, or 1 for a ratio] (+- fit errors; z: p against first-order perturbation theory with the law's truncation error, |p - p with s (n - 2)^2|, added; docs/spectrum.md)",
     )?;
     if frames.is_empty() {
         return Ok(());
@@ -326,7 +326,7 @@ pub(super) fn near_integrable_table(
                         chi2,
                         dof: dof as usize,
                     }
-                    .p_text(),
+                    .p_digits(),
                 ),
                 Cell::text(text(&frame, row, FITTED)?),
             ]);
