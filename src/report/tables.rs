@@ -412,13 +412,12 @@ pub(super) fn compare_table(
                 Cell::text(text(&frame, row, goodness::ESTIMATOR)?),
                 Cell::text(reduced(goodness::CHI2_PER_DOF)?),
                 Cell::text(count(&frame, row, goodness::DOF)?.to_string()),
-                Cell::text(
-                    ChiSquare {
-                        chi2: number(&frame, row, goodness::CHI2)?,
-                        dof: count(&frame, row, goodness::DOF)? as usize,
-                    }
-                    .p_text(),
-                ),
+                Cell::text({
+                    // Null chi2: no shape test at all (the thermal estimator).
+                    let chi2 = number(&frame, row, goodness::CHI2)?;
+                    let dof = count(&frame, row, goodness::DOF)? as usize;
+                    or_why(chi2, |chi2| ChiSquare { chi2, dof }.p_text(), "-")
+                }),
                 Cell::text(format!(
                     "{} ({})",
                     reduced(goodness::SAMPLE_CHI2_PER_DOF)?,
