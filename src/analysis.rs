@@ -259,9 +259,7 @@ impl Agreement {
 /// chi-square, but is all of the ratio's.
 pub fn agreement(shape: Option<ChiSquare>, variance_ratio: Option<Estimate>) -> Agreement {
     let shape = shape.filter(|s| s.dof >= MIN_TEST_DOF);
-    let ratio_z = variance_ratio
-        .map(|r| (r.mean - 1.0) / r.stderr)
-        .filter(|z| z.is_finite());
+    let ratio_z = variance_ratio.map(ratio_z).filter(|z| z.is_finite());
     if shape.is_none() && ratio_z.is_none() {
         Agreement::NoTest
     } else if shape.is_some_and(|s| s.p_value() < REJECTED_P)
@@ -271,6 +269,11 @@ pub fn agreement(shape: Option<ChiSquare>, variance_ratio: Option<Estimate>) -> 
     } else {
         Agreement::Agrees
     }
+}
+
+/// How many standard errors a ratio that should be 1 lies from it.
+pub fn ratio_z(ratio: Estimate) -> f64 {
+    (ratio.mean - 1.0) / ratio.stderr
 }
 
 /// Both MD estimators of `ring` against the reference `predicted` (its

@@ -625,8 +625,8 @@ pub struct MomentSums {
     pub window_drift: f64,
     /// Variance rate of all particles in the window.
     pub window_variance: f64,
-    /// `sum w |sum_particles (out^2 - in^2)|` over every particle whatever
-    /// the truncation: twice the kinetic energy each scene's velocities
+    /// `sum w |sum_particles (out^2 - in^2)|` over every particle, in the
+    /// untruncated slot only (0 in the others): twice the kinetic energy each scene's velocities
     /// gained or lost (the engine's error and the kick floor's snapping),
     /// summed without its sign. Energy conservation makes the untruncated
     /// `window_variance` exactly 0; this bounds its size.
@@ -649,7 +649,9 @@ pub fn moments(
             let energy_change =
                 weight * (squares(&contribution.outgoing) - squares(&contribution.incoming)).abs();
             for (slot, &limit) in sums.iter_mut().zip(truncations) {
-                slot.energy_change += energy_change;
+                if limit.is_infinite() {
+                    slot.energy_change += energy_change;
+                }
                 let inside = |x: f64| if x.abs() <= limit { 1.0 } else { 0.0 };
                 slot.self_drift += weight * kick * inside(kick);
                 slot.self_variance += weight * kick * kick * inside(kick);

@@ -21,7 +21,8 @@ use serde_json::Value;
 
 use crate::analysis::{
     CollapseRing, FiniteSize, Goodness, RingBins, RingH, VarianceRatio, WindowVariances, agreement,
-    boltzmann_on_bins, finite_size, goodness, scaling_collapse, thermal_window_variance_rates,
+    boltzmann_on_bins, finite_size, goodness, ratio_z, scaling_collapse,
+    thermal_window_variance_rates,
 };
 use crate::binning::Bins;
 use crate::config::{KernelParams, MdParams};
@@ -369,7 +370,7 @@ impl CompareStage {
             .optional(SAMPLE_CHI2_PER_DOF, |f| f.shape.map(|g| g.sample.per_dof()))
             .with(SAMPLE_DOF, |f| f.shape.map_or(0, |g| g.sample.dof as u32))
             .estimate(VARIANCE_RATIO, |f| ratio(f).unwrap_or(not_compared))
-            .optional(VARIANCE_Z, |f| ratio(f).map(|r| (r.mean - 1.0) / r.stderr))
+            .optional(VARIANCE_Z, |f| ratio(f).map(ratio_z))
             .with(VERDICT, |f| {
                 agreement(model(f), ratio(f)).label().to_string()
             })
