@@ -40,7 +40,7 @@ pub enum EigenError {
 /// tridiagonalization and implicit QR with Wilkinson shifts (Golub & Van
 /// Loan, Matrix Computations, §8.3), to `eps` of the matrix. An error, never
 /// a silent unconverged result, when an entry is not finite or the iterations
-/// exceed [`QR_ITERATIONS_PER_ROW`] per row.
+/// exceed `QR_ITERATIONS_PER_ROW` per row.
 pub fn symmetric_eigen(a: &[f64], n: usize) -> Result<SymmetricEigen, EigenError> {
     qr_eigen(a, n, QR_ITERATIONS_PER_ROW * n)
 }

@@ -126,7 +126,7 @@ impl LogRates {
 
 /// Fits `ln rate = ln A + p ln(n - 2) + q (n - 2)` to the rates at `excess`
 /// (`n - 2`, one per rate) by generalized least squares with their
-/// covariance; `None` under the conditions of [`fit_log_linear`] or when an
+/// covariance; `None` under the conditions of `fit_log_linear` or when an
 /// `n - 2` is not positive.
 pub fn fit_near_integrable(excess: &[f64], rates: &LogRates) -> Option<NearIntegrableLaw> {
     if excess.iter().any(|x| *x <= 0.0) {

@@ -1,6 +1,6 @@
-//! The README's `pipeline.toml` key tables against the schema: every key of
-//! the schema has a row, every row names a key of the schema, and every
-//! default the README shows equals the schema's.
+//! The `pipeline.toml` reference (docs/configuration.md) against the schema:
+//! every key of the schema has a row, every row names a key of the schema,
+//! and every default the reference shows equals the schema's.
 
 use std::collections::{BTreeMap, BTreeSet};
 
@@ -119,7 +119,7 @@ fn walk(value: &Value, path: String, found: &mut BTreeMap<String, Value>) {
     }
 }
 
-/// One row of a README key table: its keys and the defaults it shows.
+/// One row of a reference key table: its keys and the defaults it shows.
 struct Row {
     keys: Vec<String>,
     defaults: Vec<Value>,
@@ -146,18 +146,16 @@ fn toml_value(token: &str) -> Option<Vec<Value>> {
     parse(token).map(|value| vec![value])
 }
 
-/// The key tables of README.md's `pipeline.toml` section.
-fn readme_rows() -> Vec<Row> {
-    let readme = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/README.md"))
-        .expect("README.md");
-    let section = readme
-        .split("\n## `pipeline.toml`")
-        .nth(1)
-        .and_then(|rest| rest.split("\n## ").next())
-        .expect("a `pipeline.toml` section");
+/// The key tables of docs/configuration.md.
+fn reference_rows() -> Vec<Row> {
+    let reference = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/docs/configuration.md"
+    ))
+    .expect("docs/configuration.md");
     let mut rows = Vec::new();
     let mut table_prefix = String::new();
-    for line in section.lines() {
+    for line in reference.lines() {
         let cells: Vec<&str> = line.split(" | ").collect();
         if !line.starts_with("| ") || cells.len() < 3 || line.starts_with("|---") {
             continue;
@@ -206,8 +204,8 @@ fn row(key_cell: &str, type_cell: &str, table_prefix: &str) -> Row {
 }
 
 /// Equal as documented values: numbers to 1e-12 relative, lists elementwise.
-fn same(readme: &Value, schema: &Value) -> bool {
-    match (readme, schema) {
+fn same(documented: &Value, schema: &Value) -> bool {
+    match (documented, schema) {
         (Value::Number(a), Value::Number(b)) => {
             let (a, b) = (a.as_f64().unwrap(), b.as_f64().unwrap());
             (a - b).abs() <= 1e-12 * a.abs().max(b.abs())
@@ -220,24 +218,24 @@ fn same(readme: &Value, schema: &Value) -> bool {
 }
 
 #[test]
-fn every_key_has_a_readme_row_and_every_row_a_key() {
+fn every_key_has_a_reference_row_and_every_row_a_key() {
     let mut schema: BTreeSet<String> = leaves(EVERY_KEY).into_keys().collect();
     // `[potentials]` holds one list per family, whichever the sample lists.
     schema.extend(FAMILIES.iter().map(|f| format!("potentials.{}", f.key)));
-    let documented: BTreeSet<String> = readme_rows().into_iter().flat_map(|r| r.keys).collect();
+    let documented: BTreeSet<String> = reference_rows().into_iter().flat_map(|r| r.keys).collect();
     let undocumented: Vec<&String> = schema.difference(&documented).collect();
     let unknown: Vec<&String> = documented.difference(&schema).collect();
     assert!(
         undocumented.is_empty() && unknown.is_empty(),
-        "keys without a README row: {undocumented:?}; README rows naming no key: {unknown:?}"
+        "keys without a row in docs/configuration.md: {undocumented:?}; rows naming no key: {unknown:?}"
     );
 }
 
 #[test]
-fn readme_defaults_are_the_schema_defaults() {
+fn reference_defaults_are_the_schema_defaults() {
     let defaults = leaves(DEFAULTS);
     let mut compared = 0;
-    for row in readme_rows() {
+    for row in reference_rows() {
         let pairs: Vec<(&String, &Value)> = if row.defaults.len() == row.keys.len() {
             row.keys.iter().zip(&row.defaults).collect()
         } else if row.keys.len() == 1 && !row.defaults.is_empty() {
@@ -251,7 +249,7 @@ fn readme_defaults_are_the_schema_defaults() {
             };
             assert!(
                 same(shown, default),
-                "README shows `{key}` = {shown} but the default is {default}"
+                "docs/configuration.md shows `{key}` = {shown} but the default is {default}"
             );
             compared += 1;
         }

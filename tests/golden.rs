@@ -12,7 +12,11 @@
 //!   golden`; the commit says why. A refactoring leaves the content unchanged.
 //! * A key that changes with the same content passes (a note says so).
 //!
-//! The recompute audit (`verify --recompute`) then runs on the same store.
+//! The recompute audit (`verify --recompute`) then runs on the same store,
+//! and the store's bundle gives docs/tables.md, the manual's reference of
+//! every table (each kind as the bundle's README describes it, from the
+//! columns' own metadata), which must match the page (rewritten by the same
+//! `TERNARY_BLESS=1`).
 //!
 //! Results do not depend on the CPU (no code path is picked at run time by
 //! its features: transcendental functions from `libm`, our own FFT), so the
@@ -26,9 +30,84 @@ use std::path::Path;
 
 mod common;
 
-use common::{BINARY, REDUCED_STUDY, files_under, stdout, ternary, workspace, write_config};
+use common::{
+    BINARY, REDUCED_STUDY, files_under, stderr, stdout, ternary, workspace, write_config,
+};
 
 const GOLDEN: &str = "tests/golden/reduced-study.txt";
+
+/// The manual's reference of every table.
+const TABLES: &str = "docs/tables.md";
+
+/// What an export needs beyond the study: a title and an author.
+const PUBLICATION: &str = r#"
+[publication]
+title = "The reduced study of ternary's tests"
+
+[[publication.authors]]
+name = "The ternary developers"
+"#;
+
+/// docs/tables.md from a bundle's README: every table kind's section (its
+/// heading, description and columns), without the files that hold it in this
+/// study.
+fn table_reference(bundle_readme: &str) -> String {
+    let mut page = String::from(
+        "# Every table\n\n\
+         What each stage writes: one section per kind of table (a stage's table of one name), \
+         with its columns, types, units and what a null means, as an exported bundle's \
+         README.md describes them. Generated from the reduced study of `tests/golden.rs`, which \
+         runs every stage, by `TERNARY_BLESS=1 cargo test --release --test golden`; the test \
+         fails when a table's columns change and this page does not. What each stage computes: \
+         [stages](stages.md).\n",
+    );
+    let mut keep = false;
+    for line in bundle_readme.lines() {
+        if line.starts_with("## ") {
+            keep = false;
+        } else if line.starts_with("### ") {
+            keep = true;
+            page.push_str("\n## ");
+            page.push_str(line.trim_start_matches("### "));
+            page.push('\n');
+            continue;
+        }
+        if keep && !line.starts_with("Files `") {
+            page.push_str(line);
+            page.push('\n');
+        }
+    }
+    let mut tidy = page.replace("\n\n\n", "\n\n");
+    while tidy.ends_with("\n\n") {
+        tidy.pop();
+    }
+    tidy
+}
+
+/// Exports the computed reduced study in `dir` and holds its table reference
+/// against docs/tables.md (or rewrites the page when blessing).
+fn check_table_reference(dir: &Path) {
+    let config = dir.join("export.toml");
+    fs::write(&config, format!("{REDUCED_STUDY}{PUBLICATION}")).unwrap();
+    let bundle = dir.join("bundle");
+    let export = ternary(
+        &config,
+        &["export", bundle.to_str().unwrap(), "--include-events"],
+    );
+    assert!(export.status.success(), "{}", stderr(&export));
+    let readme = fs::read_to_string(bundle.join("README.md")).unwrap();
+    let reference = table_reference(&readme);
+    let page = Path::new(env!("CARGO_MANIFEST_DIR")).join(TABLES);
+    if std::env::var_os("TERNARY_BLESS").is_some() {
+        fs::write(&page, reference).unwrap();
+        return;
+    }
+    assert!(
+        fs::read_to_string(&page).is_ok_and(|text| text == reference),
+        "{TABLES} differs from the tables the study writes: rewrite it with \
+         `TERNARY_BLESS=1 cargo test --release --test golden` and say why in the commit"
+    );
+}
 
 /// `<stage> <instance> <file>` -> `(key, content sha256)` of every output file.
 fn output_records(store: &Path) -> BTreeMap<String, (String, String)> {
@@ -109,6 +188,7 @@ fn every_stage_keeps_its_bytes() {
         "recompute audit:\n{}",
         stdout(&audit)
     );
+    check_table_reference(&dir);
     let golden = Path::new(env!("CARGO_MANIFEST_DIR")).join(GOLDEN);
     if std::env::var_os("TERNARY_BLESS").is_some() {
         fs::create_dir_all(golden.parent().unwrap()).unwrap();

@@ -7,7 +7,7 @@
 //! every documented range, and the parameters of the stages it configures.
 //! Unknown keys, wrong types and out-of-range values are rejected with a
 //! [`ConfigError`] naming the key path and, where the document shows it, the
-//! line. Every key is documented in README.md (a test checks the table
+//! line. Every key is documented in docs/configuration.md (a test checks the table
 //! against the defaults here).
 //!
 //! **Adding a key.** A stage's parameters are hashed into its artifact keys.

@@ -10,9 +10,9 @@
 //! positive eigenvalues (noise) to zero. Then `exp(t M)` is exact for any `t`
 //! through the eigenvectors, and conserves the invariants exactly.
 //!
-//! What the clipping does to `h` is measured by [`Dissipative::clipping_change`]
-//! (against the same projection without clipping) and
-//! [`Dissipative::clipped_part`] (the weight `h` keeps in the clipped modes).
+//! How much the clipping removed is [`Dissipative::largest_clipped`], the
+//! largest eigenvalue set to zero, beside the estimate's detailed-balance
+//! violation [`Dissipative::asymmetry`].
 
 use super::propagate::Generator;
 use crate::linalg::{EigenError, SymmetricEigen, symmetric_eigen};

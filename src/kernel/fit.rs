@@ -69,7 +69,7 @@ pub struct ShapeFit {
     pub chi2_per_dof: f64,
     /// Bins used.
     pub bins: usize,
-    /// Whether the iterations reached a minimum ([`refine`]); otherwise the
+    /// Whether the iterations reached a minimum (`refine`); otherwise the
     /// parameters are the last iterate.
     pub converged: bool,
 }
@@ -145,7 +145,7 @@ fn chi2(data: &FitData, bins: &[usize], p: &Coordinates) -> f64 {
         .sum()
 }
 
-/// Iterations [`refine`] allows.
+/// Iterations `refine` allows.
 const ITERATIONS: usize = 200;
 
 /// Damped Gauss-Newton (Levenberg-Marquardt) iterations from `start` until

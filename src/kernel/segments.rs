@@ -32,7 +32,7 @@
 //! few: at n = 12 those point masses were half the variance of the bins at
 //! `|du| ~ 1e-3`. The window's nodes keep their weight (the trapezoid's
 //! estimate of the window's measure) but spread it over the whole window's
-//! kicks ([`lay_window`]). Interpolating the window itself instead (its
+//! kicks (`lay_window`). Interpolating the window itself instead (its
 //! edges on the quintic through six nodes) put ~25% too much measure there
 //! at n = 12, where a step spans a third of the swing from the kick's peak
 //! to zero (docs/benchmarks.md).
@@ -52,9 +52,9 @@ pub const CORE_KICK: f64 = 2e-3;
 /// it, and the outer tails on either side. The nodes of the core and of the
 /// windows keep their whole weight (the trapezoid rule of those parts,
 /// unbiased on average over the grid's move): the core's as point masses,
-/// a window's spread over the whole window's kicks ([`lay_window`]). In the
+/// a window's spread over the whole window's kicks (`lay_window`). In the
 /// outer tails each node gives the segment on either side its share of the
-/// mass ([`segment_masses`]), and the segments, the innermost cut where the
+/// mass (`segment_masses`), and the segments, the innermost cut where the
 /// interpolated kick reaches `CORE_KICK`, are spread ([`Segment::spread`]);
 /// where the track turns, along the cubic through the turn
 /// ([`Segment::turning`]). Returns the measure laid, also where it falls

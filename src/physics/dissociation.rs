@@ -41,7 +41,7 @@ pub fn meeting_speed() -> f64 {
 
 /// The equilibrium density of bound pairs of a potential with a well, and a
 /// proposal for drawing their gaps: piecewise constant in `t` on
-/// [`PROPOSAL_CELLS`] cells, each cell's mass the density at its midpoint.
+/// `PROPOSAL_CELLS` cells, each cell's mass the density at its midpoint.
 /// Draws carry the weight `density / proposal`, so averages are exact
 /// whatever the proposal's shape.
 pub struct BoundPairs<P> {

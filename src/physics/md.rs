@@ -306,7 +306,7 @@ fn sample(
 /// on the estimator's bins of width `w`): in run `r` each of its `L_r`
 /// lineages ends in bin `k` with probability `p_k = h_k w` (beyond the window
 /// with `1 - sum p`), independently, so a run's counts are multinomial and the
-/// masses `w h_k` of the run mean ([`tagged_estimate`] averaged over `R` runs)
+/// masses `w h_k` of the run mean (`tagged_estimate` averaged over `R` runs)
 /// have the covariance `c (p_k delta_kj - p_k p_j)`, `c = sum_r 1 / L_r /
 /// R^2`; `sum_r L_r` lineages in all. A run's sample times lie within a few
 /// percent of `t_f` and count once: a lineage seldom changes bin between them
@@ -326,7 +326,7 @@ pub fn tagged_model(reference: &[f64], width: f64, lineages: &[f64]) -> CountMod
 /// The published estimator of `h` if MD followed `reference` (`h` per
 /// `v_th`): a run's count in bin `k` is that of its `N - 1` thermal
 /// particles, multinomial with `q_k = int_bin f0` (the background that
-/// [`published_estimate`] subtracts), plus the special particle's, one draw
+/// `published_estimate` subtracts), plus the special particle's, one draw
 /// with `p_k = h_k w`. Over `R` runs the masses `w h_k` of the mean have the
 /// covariance `(N - 1) / R (q_k delta_kj - q_k q_j) + 1 / R (p_k delta_kj -
 /// p_k p_j)`; `R (N - 1)` thermal draws and `R` special ones. A run's sample
@@ -513,7 +513,7 @@ mod tests {
         /// as [`sample`] forms it: per run, each lineage's bin and the thermal
         /// particles' velocities (from `f0`) plus the special particle's, the
         /// same at each of `samples` sample times (the model's assumption),
-        /// through [`tagged_estimate`] and [`published_estimate`]; per bin the
+        /// through `tagged_estimate` and `published_estimate`; per bin the
         /// mean and standard error over runs. `[published, tagged]`.
         fn draw(
             &self,

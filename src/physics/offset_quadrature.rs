@@ -88,7 +88,7 @@ pub struct OffsetIntegral {
     /// change, which bounds the coarser rule's error and so, the rule
     /// converging exponentially (each error about the square of the one
     /// before), the finer one's with a wide margin; plus the tails beyond the
-    /// range ([`tail_estimate`]). Without a well; with one, an indicator of
+    /// range (`tail_estimate`). Without a well; with one, an indicator of
     /// the kick's roughness (see the module's note).
     pub error: f64,
 }

@@ -95,7 +95,7 @@ pub fn embedded_inputs(inputs: &[InputRecord]) -> String {
 }
 
 /// The key of a stage instance: stage, the fingerprint of its code
-/// ([`super::code`]), parameters and [`keyed_inputs`]. Encoding 3: keys
+/// ([`super::code`]), parameters and `keyed_inputs`. Encoding 3: keys
 /// follow the code (encodings 1 and 2 hashed a hand-kept stage version).
 pub fn stage_key(stage: &str, code: &str, params: &Value, inputs: &[InputRecord]) -> String {
     let document = serde_json::json!({

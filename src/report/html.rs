@@ -604,7 +604,10 @@ pub fn escape(text: &str) -> String {
 }
 
 /// The page's style: readable type, numbers in aligned figures, tables that
-/// scroll sideways on narrow screens rather than overflow.
+/// scroll sideways on narrow screens rather than overflow. A cell keeps its
+/// value on one line (`(1.122363 ± 0.000056)e-4` broken at a space reads as
+/// two numbers); only a row's last text column wraps, at least 40 characters
+/// wide so that its rows stay a few lines tall.
 const STYLE: &str = "
 :root { color-scheme: light; }
 body { margin: 0; background: #fff; color: #1a1a1a;
@@ -624,11 +627,11 @@ pre { background: #f6f6f6; padding: 0.8rem; overflow-x: auto; border: 1px solid 
 .scroll { overflow-x: auto; }
 table { border-collapse: collapse; font-variant-numeric: tabular-nums; font-size: 0.9em; margin: 0.3rem 0 0.8rem; }
 th, td { padding: 0.2rem 0.45rem; text-align: left; vertical-align: top; }
-th, .num { white-space: nowrap; }
+th, td { white-space: nowrap; }
 th { border-bottom: 2px solid #888; font-weight: 600; }
 tbody tr:nth-child(even) { background: #f7f7f7; }
 .num { text-align: right; }
-td:last-child:not(.num) { min-width: 18ch; }
+td:last-child:not(.num) { white-space: normal; min-width: 40ch; }
 figure { margin: 2rem 0; }
 figure img { display: block; width: 860px; max-width: 100%; height: auto; border: 1px solid #ddd; }
 figcaption { margin-top: 0.5rem; max-width: 90ch; font-size: 0.95em; }

@@ -10,7 +10,7 @@ const BARE_DIGITS: i32 = 6;
 const CONCISE_DIGITS: i32 = 8;
 
 /// Significant digits an `f64` reproduces whatever its value (`DBL_DIG`):
-/// how a value is printed whose error is zero or below [`RESOLVED_ERROR`].
+/// how a value is printed whose error is zero or below `RESOLVED_ERROR`.
 const F64_DIGITS: i32 = 15;
 
 /// Smallest error, relative to its value, that a two-digit error can state:
@@ -51,7 +51,7 @@ struct Rounded {
 }
 
 impl Rounded {
-    /// `None` when the error is not a finite number above [`RESOLVED_ERROR`]
+    /// `None` when the error is not a finite number above `RESOLVED_ERROR`
     /// of the value: those are written without digits of the error.
     fn of(value: f64, error: f64) -> Option<Rounded> {
         let error = error.abs();
@@ -90,12 +90,12 @@ pub fn natural_notation(value: f64, error: f64) -> Notation {
 /// `value ± error` to the digits the error justifies: the error with two
 /// significant digits, the value to the same decimal place; in fixed
 /// notation for magnitudes from `1e-4` to `1e6`, otherwise as
-/// `(m ± e)e<exponent>`. A value known to more than [`CONCISE_DIGITS`]
+/// `(m ± e)e<exponent>`. A value known to more than `CONCISE_DIGITS`
 /// digits is written `m(ee)`, the error in units of the last digit. A value
 /// that is not a number (NaN, infinite) prints `undefined`, which says why;
 /// an exact zero (zero error) prints `0`, another value with a zero error
-/// [`F64_DIGITS`] digits and `(exact)`, one with an error below
-/// [`RESOLVED_ERROR`] of it the same digits and that bound, one with a
+/// `F64_DIGITS` digits and `(exact)`, one with an error below
+/// `RESOLVED_ERROR` of it the same digits and that bound, one with a
 /// missing error `(no error estimate)`.
 pub fn with_error(value: f64, error: f64, undefined: &str) -> String {
     written(value, error, undefined, natural_notation(value, error))
@@ -140,7 +140,7 @@ pub fn written(value: f64, error: f64, undefined: &str, notation: Notation) -> S
 }
 
 /// A finite `value` whose `error` has no digits to write: missing, zero, or
-/// below [`RESOLVED_ERROR`] of the value.
+/// below `RESOLVED_ERROR` of the value.
 fn unresolved(value: f64, error: f64) -> String {
     let shown = significant_to(value, F64_DIGITS);
     if !error.is_finite() {

@@ -102,6 +102,9 @@ pub(super) fn paper_table(
     let rest: Vec<usize> = (0..frame.height())
         .filter(|row| !table_i.contains(row))
         .collect();
+    if rest.is_empty() {
+        return Ok(());
+    }
     let mut table = Columns::new(&[
         ("", Align::Right),
         ("published", Align::Left),

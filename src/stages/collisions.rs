@@ -79,7 +79,7 @@ impl Stage for CollisionsStage {
     }
 
     /// Scenes (launch points, times the rule's nodes under the quadrature)
-    /// at [`CPU_PER_SCENE`], one events row of [`BYTES_PER_SCENE`] each.
+    /// at `CPU_PER_SCENE`, one events row of `BYTES_PER_SCENE` each.
     fn cost(&self, _inputs: &[Cost]) -> Cost {
         let nodes = match self.params.sampling.offsets {
             OffsetIntegration::Quadrature(rule) => f64::from(rule.nodes()),

@@ -63,7 +63,7 @@ pub mod goodness {
     );
     /// The reference of MD against the Boltzmann evolution.
     pub const BOLTZMANN: &str = "boltzmann";
-    /// MD estimator ([`estimator`](super::super::estimator)).
+    /// MD estimator ([`estimator`]).
     pub const ESTIMATOR: Col<String> = Col::text("estimator", "MD estimator");
     /// Chi-square with the covariance MD would have if it followed the reference.
     pub const CHI2: Col<f64> = Col::f64(

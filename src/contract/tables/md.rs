@@ -32,7 +32,7 @@ pub mod h {
     );
 }
 
-/// `summary.parquet`: one row per estimator ([`estimator`](super::estimator)).
+/// `summary.parquet`: one row per estimator ([`estimator`]).
 pub mod summary {
     use super::*;
 

@@ -61,7 +61,7 @@ impl Store {
     /// Opens the store at `root` for writing: a missing or empty directory
     /// becomes a new store (with its marker); a directory with files must
     /// carry our marker (a version-1 marker gets an id), or be provably a
-    /// store whose marker was damaged ([`Store::is_damaged_store`]), or is
+    /// store whose marker was damaged (`Store::is_damaged_store`), or is
     /// refused, so nothing of a user's is ever treated as debris.
     pub fn open(root: &Path) -> Result<Store, StoreError> {
         Store::view(root)?.writable()
