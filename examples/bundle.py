@@ -114,6 +114,8 @@ def main():
     parser.add_argument("--out", type=pathlib.Path, default=pathlib.Path("kernels.png"))
     args = parser.parse_args()
 
+    if args.out.exists():
+        sys.exit(f"{args.out}: exists; give --out a new file (this script writes no file it did not make)")
     kernels = dilute_kernels_at_rest(args.bundle)
     if len(kernels) < 2:
         sys.exit(f"{args.bundle}: needs the dilute kernels at u' = 0 of two potentials, "
