@@ -43,7 +43,7 @@ fn tiny() -> BTreeMap<String, String> {
         ),
         (
             "src/pipeline.rs",
-            "pub trait Stage { fn run(&self) -> f64; }\n\
+            "pub trait Stage { fn run(&self) -> f64; fn cost(&self) -> f64 { 1.0 } }\n\
              pub fn encode(x: f64) -> Vec<u8> { x.to_le_bytes().to_vec() }\n",
         ),
         (
@@ -67,7 +67,11 @@ fn tiny() -> BTreeMap<String, String> {
             "src/stages/a.rs",
             "use crate::pipeline::Stage;\nuse crate::shared::{double, Grid};\n\
              pub struct A;\n\
-             impl Stage for A { fn run(&self) -> f64 { double(Grid::default().width()) } }\n",
+             const CPU_PER_NODE: f64 = 1e-3;\n\
+             impl Stage for A {\n\
+                 fn run(&self) -> f64 { double(Grid::default().width()) }\n\
+                 fn cost(&self) -> f64 { CPU_PER_NODE * 40.0 }\n\
+             }\n",
         ),
         (
             "src/stages/b.rs",
@@ -209,6 +213,28 @@ fn a_function_body_edit_changes_exactly_the_stages_that_reach_it() {
     // Each stage's own file.
     let own = edited(&files, "src/stages/c.rs", "1).len()", "2).len()");
     assert_eq!(changed(&base, &tiny_fingerprints(&own)), [c]);
+}
+
+#[test]
+fn the_cost_estimate_is_no_stage_code() {
+    let files = tiny();
+    let base = tiny_fingerprints(&files);
+    let a = "src/stages/a.rs";
+    // An impl's estimate, the constant only it reads, the trait's default.
+    let body = edited(&files, a, "CPU_PER_NODE * 40.0", "CPU_PER_NODE * 80.0");
+    let constant = edited(&files, a, "1e-3", "2e-3");
+    let default = edited(&files, "src/pipeline.rs", "{ 1.0 }", "{ 2.0 }");
+    for calibrated in [body, constant, default] {
+        assert!(changed(&base, &tiny_fingerprints(&calibrated)).is_empty());
+    }
+    // The stage's computation beside it still counts.
+    let run = edited(
+        &files,
+        a,
+        "Grid::default().width()",
+        "Grid::default().width() + 1.0",
+    );
+    assert_eq!(changed(&base, &tiny_fingerprints(&run)), [a]);
 }
 
 #[test]

@@ -24,7 +24,7 @@
 //!   their locked versions and dependencies (from `Cargo.lock`).
 //!
 //! Test items (`#[cfg(test)]`, `#[test]`) are left out: they compute nothing
-//! a stage writes.
+//! a stage writes; so are the root trait's [`ESTIMATES`] methods.
 
 // By path: this file is itself included by path, from the build script and
 // from tests/code.rs, and its parts live in `code/`.
@@ -46,6 +46,12 @@ use syntax::hex;
 
 /// The trait whose impls are this crate's roots: one per stage.
 pub const STAGE_TRAIT: &str = "Stage";
+
+/// Methods of the root trait that only estimate (the expected cost `status`
+/// and the limits read): left out of the trait and of every impl of it, so
+/// of every fingerprint, since nothing they compute enters an artifact;
+/// calibrating an estimate re-keys nothing.
+pub const ESTIMATES: [&str; 1] = ["cost"];
 
 /// What the executor runs on every stage's tables before they become bytes
 /// (Parquet encoding, provenance metadata): part of every stage's code.
@@ -85,7 +91,7 @@ pub fn fingerprints(
     root_trait: &str,
     shared: &[&str],
 ) -> Result<Vec<Fingerprint>, String> {
-    let graph = Graph::build(sources)?;
+    let graph = Graph::build(sources, root_trait)?;
     let mut shared_nodes = Vec::new();
     for path in shared {
         let nodes = graph.named_path(path);
@@ -187,6 +193,8 @@ struct Scan {
 
 /// The item graph of a crate, with every node's references resolved.
 struct Graph {
+    /// The trait whose impls are roots, which lose their [`ESTIMATES`].
+    root_trait: String,
     modules: Vec<Module>,
     nodes: Vec<Node>,
     externs: BTreeSet<String>,

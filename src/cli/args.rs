@@ -126,6 +126,10 @@ pub(super) struct StatusArgs {
     /// as `dvc status` does in scripts.
     #[arg(long)]
     pub(super) check: bool,
+    /// Instead of the instances, a line per stage: the estimated CPU time,
+    /// and the measured one of its fresh instances against their estimate.
+    #[arg(long)]
+    pub(super) costs: bool,
 }
 
 /// Arguments of `ternary dag`.

@@ -109,8 +109,13 @@ pub(super) fn status(config: &Path, args: StatusArgs) -> Result<ExitCode> {
     let (study, store) = load(config, Opening::View)?;
     let plan = plan(&study);
     let lines = executor::status(&store, &plan, args.shards)?;
-    emit(&report::status(&lines, args.shards, args.changed));
-    emit(&report::cost_estimate(&executor::estimate(&plan), &lines));
+    let costs = executor::estimate(&plan);
+    if args.costs {
+        emit(&report::costs_by_stage(&costs, &lines));
+    } else {
+        emit(&report::status(&lines, args.shards, args.changed));
+    }
+    emit(&report::cost_estimate(&costs, &lines));
     let all_fresh = lines.iter().all(|line| line.freshness == Freshness::Fresh);
     Ok(exit_code(usize::from(args.check && !all_fresh)))
 }

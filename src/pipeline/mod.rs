@@ -4,6 +4,7 @@
 //! tables, and the executor owns caching, keys, progress, atomic writes and
 //! logging (stages never touch the store).
 
+pub mod clock;
 pub mod code;
 pub mod executor;
 pub mod key;
@@ -123,10 +124,11 @@ impl Cost {
     }
 }
 
-/// CPU seconds per input row of a stage that reads tables (measured on the
-/// default study: kernel 2.6 us, sweep 6, evolve 16, moments 0.8; the
-/// default [`Stage::cost`]).
-pub const CPU_PER_INPUT_ROW: f64 = 4e-6;
+/// CPU seconds per input row of a stage that reads tables, the default
+/// [`Stage::cost`] (measured on the default study, 2026-12-01: moments 0.34
+/// us, paper and figures 0.37, compare 2.2, fit and convergence 3.3-3.7;
+/// the sweep and evolve set their own).
+pub const CPU_PER_INPUT_ROW: f64 = 1e-6;
 
 /// One instance of a stage: its identity, everything its output depends on,
 /// and the computation.

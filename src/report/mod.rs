@@ -22,7 +22,7 @@ pub use numbers::with_error;
 pub use pairs::{PairPrediction, pairs_text};
 pub use rates::{SourcedTable, rate_text, theta_table};
 pub use show::show;
-pub use status::{cost_estimate, describe, hours, size, status, total_cost};
+pub use status::{cost_estimate, costs_by_stage, describe, hours, size, status, total_cost};
 pub use store::{audit, gc, verify};
 pub use summary::summary;
 

@@ -1,7 +1,7 @@
 //! `ternary status`: instances by freshness and why, and the estimated CPU
 //! time and store size of what is still to compute.
 
-use std::collections::BTreeSet;
+use std::collections::{BTreeMap, BTreeSet};
 use std::fmt::Write as _;
 
 use crate::pipeline::executor::{Freshness, StatusLine};
@@ -92,11 +92,117 @@ pub fn cost_estimate(costs: &[(InstanceId, Cost)], lines: &[StatusLine]) -> Stri
             .map(|(_, cost)| cost),
     );
     format!(
-        "estimate: {} CPU-hours and {} of store for the whole study; {} CPU-hours of it still to compute (an order of magnitude, from the default study's speed on a 2-core VM)\n",
+        "estimate: {} CPU-hours and {} of store for the whole study; {} CPU-hours of it still to compute (calibrated on the default study, 2-core VM){}\n",
         hours(whole.cpu_seconds),
         size(whole.bytes),
-        hours(pending.cpu_seconds)
+        hours(pending.cpu_seconds),
+        measured(costs, lines)
     )
+}
+
+/// `; measured: <h> CPU-hours for the <n> fresh instances estimated at <h>`
+/// over the fresh instances whose manifests record their CPU time; empty
+/// when none does.
+fn measured(costs: &[(InstanceId, Cost)], lines: &[StatusLine]) -> String {
+    let recorded: Vec<(&InstanceId, f64)> = lines
+        .iter()
+        .filter(|line| line.freshness == Freshness::Fresh)
+        .filter_map(|line| Some((&line.id, line.cpu_seconds?)))
+        .collect();
+    if recorded.is_empty() {
+        return String::new();
+    }
+    let ids: BTreeSet<&InstanceId> = recorded.iter().map(|(id, _)| *id).collect();
+    let estimated = total_cost(
+        costs
+            .iter()
+            .filter(|(id, _)| ids.contains(id))
+            .map(|(_, cost)| cost),
+    );
+    let seconds: f64 = recorded.iter().map(|(_, seconds)| seconds).sum();
+    format!(
+        "; measured: {} CPU-hours for the {} fresh instances estimated at {}",
+        hours(seconds),
+        recorded.len(),
+        hours(estimated.cpu_seconds)
+    )
+}
+
+/// `status --costs`: a line per stage (in the order the plan first runs
+/// it) with its instance
+/// count, the estimated CPU seconds of all of them, and for the fresh ones
+/// whose manifests record it the measured CPU seconds against their
+/// estimate: how well the estimate is calibrated, stage by stage.
+pub fn costs_by_stage(costs: &[(InstanceId, Cost)], lines: &[StatusLine]) -> String {
+    let measured: BTreeMap<&InstanceId, f64> = lines
+        .iter()
+        .filter(|line| line.freshness == Freshness::Fresh)
+        .filter_map(|line| Some((&line.id, line.cpu_seconds?)))
+        .collect();
+    let mut stages: Vec<(&str, StageCosts)> = Vec::new();
+    for (id, cost) in costs {
+        let index = match stages.iter().position(|(stage, _)| *stage == id.stage) {
+            Some(index) => index,
+            None => {
+                stages.push((&id.stage, StageCosts::default()));
+                stages.len() - 1
+            }
+        };
+        stages[index]
+            .1
+            .add(cost.cpu_seconds, measured.get(id).copied());
+    }
+    let width = stages
+        .iter()
+        .map(|(stage, _)| stage.len())
+        .max()
+        .unwrap_or(5);
+    let mut out = format!(
+        "{:<width$}  instances  estimated CPU s  measured CPU s (of estimated)  ratio\n",
+        "stage"
+    );
+    for (stage, sums) in stages {
+        let measured = match sums.recorded {
+            0 => "-".to_string(),
+            _ => format!(
+                "{:.0} ({:.0}, {} instances)",
+                sums.measured, sums.measured_estimate, sums.recorded
+            ),
+        };
+        let ratio = match sums.recorded {
+            0 => "-".to_string(),
+            _ if sums.measured_estimate == 0.0 => "-".to_string(),
+            _ => format!("{:.2}", sums.measured / sums.measured_estimate),
+        };
+        let _ = writeln!(
+            out,
+            "{stage:<width$}  {:>9}  {:>15.0}  {measured:>29}  {ratio:>5}",
+            sums.instances, sums.estimate
+        );
+    }
+    out
+}
+
+/// One stage's estimated and measured CPU seconds.
+#[derive(Default)]
+struct StageCosts {
+    instances: usize,
+    estimate: f64,
+    recorded: usize,
+    measured: f64,
+    measured_estimate: f64,
+}
+
+impl StageCosts {
+    fn add(&mut self, estimate: f64, measured: Option<f64>) {
+        self.instances += 1;
+        self.estimate += estimate;
+        if let Some(measured) = measured {
+            self.recorded += 1;
+            self.measured += measured;
+            self.measured_estimate += estimate;
+        }
+    }
 }
 
 /// An instance's state and why: `stale: <reasons>`, `missing: <reason>`.

@@ -41,10 +41,21 @@ impl CollisionsStage {
     }
 }
 
-/// CPU seconds per integrated scene: the default study's collisions, 970 CPU
-/// seconds for 19.6 million scenes of n = 2..12 and Lennard-Jones
-/// (2026-11-26, the 2-core VM; a Lennard-Jones scene costs more).
-const CPU_PER_SCENE: f64 = 5e-5;
+/// CPU seconds per integrated scene of an inverse power law at the engine
+/// tolerance [`SCENE_TOLERANCE`]: 19-22 us in the default study's sets of 1.6
+/// to 3.2 million scenes (2026-12-01, the 2-core VM, `ternary status --costs`).
+const CPU_PER_SCENE: f64 = 2.0e-5;
+
+/// The tolerance [`CPU_PER_SCENE`] holds at. The order-12 integrator takes
+/// `tolerance^(-1/12)` steps: 1.47x at 1e-12 (measured 1.46x), 0.83x at 1e-9
+/// (measured 0.91x).
+const SCENE_TOLERANCE: f64 = 1e-10;
+
+/// A well of depth `D` (in kT) makes a scene `1 + WELL_COST D^(1/4)` times
+/// dearer (bound and orbiting pairs): the default study's Lennard-Jones sets
+/// at 27, 37 and 51 us per scene for theta = 100, 1 and 0.05 (`D = 1/(4
+/// theta)`), within 10%.
+const WELL_COST: f64 = 1.2;
 
 /// Bytes of one scene's row in the events table (the same study: 52.6).
 const BYTES_PER_SCENE: f64 = 53.0;
@@ -79,7 +90,8 @@ impl Stage for CollisionsStage {
     }
 
     /// Scenes (launch points, times the rule's nodes under the quadrature)
-    /// at `CPU_PER_SCENE`, one events row of `BYTES_PER_SCENE` each.
+    /// at [`CPU_PER_SCENE`], scaled to the potential's well and the engine's
+    /// tolerance; one events row of `BYTES_PER_SCENE` each.
     fn cost(&self, _inputs: &[Cost]) -> Cost {
         let nodes = match self.params.sampling.offsets {
             OffsetIntegration::Quadrature(rule) => f64::from(rule.nodes()),
@@ -87,8 +99,10 @@ impl Stage for CollisionsStage {
         };
         let share = self.params.launch_share.unwrap_or(1.0);
         let scenes = self.params.sampling.total() as f64 * nodes * share;
+        let well = 1.0 + WELL_COST * libm::pow(self.params.potential.well_depth(), 0.25);
+        let steps = libm::pow(self.params.engine.tolerance / SCENE_TOLERANCE, -1.0 / 12.0);
         Cost {
-            cpu_seconds: scenes * CPU_PER_SCENE,
+            cpu_seconds: scenes * CPU_PER_SCENE * well * steps,
             bytes: scenes * BYTES_PER_SCENE,
             rows: scenes,
         }

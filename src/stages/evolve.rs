@@ -38,7 +38,7 @@ use crate::evolve::processes::{GridEvolution, Process, ProcessMoments};
 use crate::kernel::equilibrium::self_rates;
 use crate::kernel::{Draws, Event};
 use crate::pipeline::code::{self, Code};
-use crate::pipeline::{Input, InstanceId, Progress, Stage, StageError, Table};
+use crate::pipeline::{Cost, Input, InstanceId, Progress, Stage, StageError, Table};
 use crate::stats::Estimate;
 
 /// The `evolve` stage.
@@ -338,6 +338,12 @@ impl Stage for EvolveStage {
 
     fn work_units(&self) -> u64 {
         3
+    }
+
+    /// Every event read, 8 us each on the default study's grid (its three
+    /// generators built and propagated, 2026-12-01); a row per node and time.
+    fn cost(&self, inputs: &[Cost]) -> Cost {
+        Cost::reading(inputs, 8e-6, 4e3, 100.0)
     }
 
     fn run(&self, inputs: &[Input], progress: &Progress) -> Result<Vec<Table>, StageError> {

@@ -327,10 +327,16 @@ fn results_of(tables: &[Table], bins: usize) -> Result<Vec<RunResult>, StageErro
         .collect())
 }
 
-/// CPU seconds per neighbour encounter of a ring run: the default study's
-/// eleven rings, 527 CPU seconds for 1.3e7 encounters (2026-11-26, the 2-core
-/// VM); dense rings cost up to 3x, Lennard-Jones 30x (bound pairs).
-const CPU_PER_ENCOUNTER: f64 = 4e-5;
+/// CPU seconds per neighbour encounter of a ring run at the MD tolerance
+/// [`ENCOUNTER_TOLERANCE`]: the default study's eleven rings, 168 CPU seconds
+/// (2026-12-01, the 2-core VM, `ternary status --costs`); dense rings cost
+/// up to 3x, Lennard-Jones 8x (bound pairs).
+const CPU_PER_ENCOUNTER: f64 = 1.3e-5;
+
+/// The tolerance [`CPU_PER_ENCOUNTER`] holds at; the cost goes as
+/// `tolerance^(-0.12)` (the rings took 0.58x at 1e-8 what they took at 1e-10,
+/// 2026-11-29).
+const ENCOUNTER_TOLERANCE: f64 = 1e-8;
 
 /// The code this stage runs (fingerprinted by the build script).
 const CODE: &Code = code::of(file!());
@@ -367,7 +373,7 @@ impl Stage for MdStage {
     }
 
     /// Runs times neighbour encounters per run (`N rho v_th t_f`) at
-    /// `CPU_PER_ENCOUNTER`; small tables.
+    /// [`CPU_PER_ENCOUNTER`], scaled to the tolerance; small tables.
     fn cost(&self, _inputs: &[Cost]) -> Cost {
         let gas = &self.params.gas;
         let encounters = f64::from(self.params.particles)
@@ -375,7 +381,10 @@ impl Stage for MdStage {
             * gas.thermal_speed_um_per_ns()
             * self.params.final_time_ns;
         Cost {
-            cpu_seconds: f64::from(self.params.runs) * encounters * CPU_PER_ENCOUNTER,
+            cpu_seconds: f64::from(self.params.runs)
+                * encounters
+                * CPU_PER_ENCOUNTER
+                * libm::pow(self.params.tolerance / ENCOUNTER_TOLERANCE, -0.12),
             bytes: 3e4,
             rows: 100.0,
         }

@@ -9,13 +9,14 @@ use sha2::{Digest, Sha256};
 use super::lock::Lock;
 use super::syntax::{
     attributes, flatten_use, hex, is_test, normalize, parse, scan_tokens, text, type_path,
-    without_docs,
+    without_docs, without_estimates,
 };
 use super::{Graph, Kind, Module, Node, Scan, Sources};
 
 impl Graph {
-    pub(super) fn build(sources: &Sources) -> Result<Graph, String> {
+    pub(super) fn build(sources: &Sources, root_trait: &str) -> Result<Graph, String> {
         let mut graph = Graph {
+            root_trait: root_trait.to_string(),
             modules: Vec::new(),
             nodes: Vec::new(),
             externs: Lock::parse(sources.lock)?.root_dependencies(),
@@ -63,6 +64,7 @@ impl Graph {
     ) -> Result<(), String> {
         use syn::Item;
         let named = |ident: &syn::Ident| ident.to_string();
+        let item = without_estimates(item, &self.root_trait);
         match item {
             Item::Mod(m) => {
                 let name = named(&m.ident);

@@ -61,6 +61,31 @@ pub(super) fn is_test(attrs: &[syn::Attribute]) -> bool {
 
 /// The path of a type's last named segment chain, through references and
 /// parentheses (`&'a Foo<T>` -> `Foo`); `None` for tuples, arrays, slices.
+/// `item` without the [`ESTIMATES`](super::ESTIMATES) methods when it is
+/// the trait `root_trait` or an impl of it; any other item as it is.
+pub(super) fn without_estimates(item: syn::Item, root_trait: &str) -> syn::Item {
+    use syn::Item;
+    let estimate = |ident: &syn::Ident| super::ESTIMATES.iter().any(|name| ident == name);
+    match item {
+        Item::Trait(mut t) if t.ident == root_trait => {
+            t.items.retain(
+                |member| !matches!(member, syn::TraitItem::Fn(f) if estimate(&f.sig.ident)),
+            );
+            Item::Trait(t)
+        }
+        Item::Impl(mut imp)
+            if imp.trait_.as_ref().is_some_and(|(_, path, _)| {
+                path.segments.last().is_some_and(|s| s.ident == root_trait)
+            }) =>
+        {
+            imp.items
+                .retain(|member| !matches!(member, syn::ImplItem::Fn(f) if estimate(&f.sig.ident)));
+            Item::Impl(imp)
+        }
+        other => other,
+    }
+}
+
 pub(super) fn type_path(ty: &syn::Type) -> Option<Vec<String>> {
     match ty {
         syn::Type::Path(p) if p.qself.is_none() => Some(

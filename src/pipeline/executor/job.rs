@@ -7,12 +7,12 @@ use std::collections::{BTreeMap, VecDeque};
 use std::io::IsTerminal;
 use std::ops::Range;
 use std::path::Path;
-use std::time::Instant;
 
 use arrow::array::RecordBatch;
 use indicatif::{ProgressBar, ProgressStyle};
 
 use super::*;
+use crate::pipeline::clock::Stopwatch;
 use crate::pipeline::key::sha256_hex;
 use crate::pipeline::shards;
 use crate::pipeline::store::{
@@ -170,7 +170,7 @@ impl Job<'_> {
         replace: bool,
     ) -> Result<(Manifest, f64), ExecError> {
         let id = self.stage.id();
-        let started = Instant::now();
+        let started = Stopwatch::start();
         let mut staging = self.store.begin(&id.stage, &entry.key)?;
         let shards = shards::ranges(self.stage.shard_units(), self.options.sharding.shards);
         let tables = if shards.len() > 1 {
@@ -196,7 +196,7 @@ impl Job<'_> {
         let manifest = self.write(&mut staging, &id, entry, &tables, started)?;
         let manifest = staging.commit(manifest, replace)?;
         self.store.write_ref(&id.stage, &id.instance, entry)?;
-        Ok((manifest, started.elapsed().as_secs_f64()))
+        Ok((manifest, started.wall_seconds()))
     }
 
     /// Every file of `entry`'s artifact, computed from the stored inputs in
@@ -243,9 +243,9 @@ impl Job<'_> {
         if units.is_empty() || self.shard_manifest(entry, &units).is_ok() {
             return Ok(None);
         }
-        let started = Instant::now();
+        let started = Stopwatch::start();
         self.compute_shard(entry, &units)?;
-        Ok(Some(started.elapsed().as_secs_f64()))
+        Ok(Some(started.wall_seconds()))
     }
 
     /// The intact shard of `entry` over `units`, or why there is none.
@@ -269,7 +269,7 @@ impl Job<'_> {
             &shards::shard_stage(&id.stage),
             &shards::shard_instance(&id.instance, units),
         );
-        let started = Instant::now();
+        let started = Stopwatch::start();
         let mut staging = self.store.begin(&shard_id.stage, &shard.key)?;
         let loaded = load_inputs(self.store, self.stage, self.resolved, self.decoded)?;
         let tables = self.produce(self.stage.shard_tables(), |progress| {
@@ -333,7 +333,7 @@ impl Job<'_> {
         id: &InstanceId,
         entry: &InstanceRef,
         tables: &[Table],
-        started: Instant,
+        started: Stopwatch,
     ) -> Result<Manifest, ExecError> {
         for table in encoded_tables(id, entry, tables).map_err(stage_failure(id))? {
             staging.write_file(&table.file, &table.bytes, table.rows, table.content_sha256)?;
@@ -347,7 +347,8 @@ impl Job<'_> {
             inputs: entry.inputs.clone(),
             files: staging.files().to_vec(),
             tool: tool_version(),
-            wall_seconds: started.elapsed().as_secs_f64(),
+            wall_seconds: started.wall_seconds(),
+            cpu_seconds: started.cpu_seconds(),
             manifest_sha256: None,
         })
     }

@@ -49,6 +49,9 @@ pub struct StatusLine {
     /// For a shardable instance that is not fresh, in a sharded status: the
     /// shard indices present and missing.
     pub shards: Option<ShardProgress>,
+    /// For a fresh instance, the CPU seconds its computation took, when its
+    /// manifest records them.
+    pub cpu_seconds: Option<f64>,
 }
 
 /// Shards of one instance present and missing.
@@ -81,6 +84,7 @@ pub fn status(
         });
         let mut key = None;
         let mut progress = None;
+        let mut cpu_seconds = None;
         let freshness = match input_records(stage.as_ref(), &resolved) {
             None => {
                 let waiting: Vec<String> = stage
@@ -110,6 +114,7 @@ pub fn status(
                 );
                 let freshness = match checked(store, stage.as_ref(), &current) {
                     Ok(manifest) => {
+                        cpu_seconds = manifest.cpu_seconds;
                         resolved.insert(id.clone(), manifest);
                         Freshness::Fresh
                     }
@@ -134,6 +139,7 @@ pub fn status(
             key,
             freshness,
             shards: progress,
+            cpu_seconds,
         });
     }
     Ok(lines)

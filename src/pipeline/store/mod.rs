@@ -180,6 +180,11 @@ pub struct Manifest {
     pub tool: String,
     /// Wall time of the computation in seconds.
     pub wall_seconds: f64,
+    /// CPU time of the computation in seconds, every thread of the process
+    /// that ran it (absent where the platform does not tell, and in
+    /// manifests written before it was recorded).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cpu_seconds: Option<f64>,
     /// SHA-256 of the manifest's canonical JSON without this field, so that
     /// any edit shows ([`Manifest::sealed`]). Absent in manifests written
     /// before it existed, which are checked without it.
@@ -382,6 +387,7 @@ mod tests {
             files: files.to_vec(),
             tool: "test".into(),
             wall_seconds: 0.0,
+            cpu_seconds: None,
             manifest_sha256: None,
         }
     }
