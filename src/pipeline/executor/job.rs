@@ -15,9 +15,7 @@ use super::*;
 use crate::pipeline::clock::Stopwatch;
 use crate::pipeline::key::sha256_hex;
 use crate::pipeline::shards;
-use crate::pipeline::store::{
-    Depth, FileRecord, InstanceRef, Manifest, Staging, Store, table_files,
-};
+use crate::pipeline::store::{FileRecord, InstanceRef, Manifest, Staging, Store, table_files};
 use crate::pipeline::table::{TableError, is_table_file, read_parquet_bytes};
 use crate::pipeline::{Input, InstanceId, Progress, Stage, StageError, Table};
 
@@ -127,27 +125,21 @@ fn stage_failure(id: &InstanceId) -> impl Fn(TableError) -> ExecError + '_ {
     }
 }
 
-/// The intact shard of `stage`'s artifact `whole` over `units`, or why there
-/// is none (`None`: no shard artifact).
-pub(super) fn shard_manifest(
+/// The shard of `stage`'s artifact `whole` over `units`.
+pub(super) fn stored_shard(
     store: &Store,
     stage: &dyn Stage,
     whole: &InstanceRef,
     units: &Range<u32>,
-) -> Result<Manifest, Option<Vec<String>>> {
+) -> Stored {
     let shard = shards::shard_entry(stage, whole, units);
     let stage_name = shards::shard_stage(&stage.id().stage);
-    if !store.artifact_dir(&stage_name, &shard.key).is_dir() {
-        return Err(None);
-    }
-    store
-        .inspect(
-            &stage_name,
-            &shard.key,
-            Some(&table_files(stage.shard_tables())),
-            Depth::Hashes,
-        )
-        .map_err(Some)
+    inspected(
+        store,
+        &stage_name,
+        &shard.key,
+        &table_files(stage.shard_tables()),
+    )
 }
 
 /// One instance to compute: the store, the stage, its resolved inputs.
@@ -240,7 +232,7 @@ impl Job<'_> {
     pub(super) fn shard(&self, entry: &InstanceRef, index: u32) -> Result<Option<f64>, ExecError> {
         let sharding = self.options.sharding;
         let units = shards::range(self.stage.shard_units(), sharding.shards, index);
-        if units.is_empty() || self.shard_manifest(entry, &units).is_ok() {
+        if units.is_empty() || matches!(self.stored_shard(entry, &units), Stored::Intact(_)) {
             return Ok(None);
         }
         let started = Stopwatch::start();
@@ -248,13 +240,9 @@ impl Job<'_> {
         Ok(Some(started.wall_seconds()))
     }
 
-    /// The intact shard of `entry` over `units`, or why there is none.
-    fn shard_manifest(
-        &self,
-        entry: &InstanceRef,
-        units: &Range<u32>,
-    ) -> Result<Manifest, Option<Vec<String>>> {
-        shard_manifest(self.store, self.stage, entry, units)
+    /// The shard of `entry` over `units`.
+    fn stored_shard(&self, entry: &InstanceRef, units: &Range<u32>) -> Stored {
+        stored_shard(self.store, self.stage, entry, units)
     }
 
     /// Computes and commits the shard of `entry` over `units`.
@@ -289,9 +277,9 @@ impl Job<'_> {
         entry: &InstanceRef,
         units: &Range<u32>,
     ) -> Result<Vec<Table>, ExecError> {
-        let manifest = match self.shard_manifest(entry, units) {
-            Ok(manifest) => manifest,
-            Err(_) => self.compute_shard(entry, units)?,
+        let manifest = match self.stored_shard(entry, units).intact() {
+            Some(manifest) => manifest,
+            None => self.compute_shard(entry, units)?,
         };
         let dir = self.store.artifact_dir(&manifest.stage, &manifest.key);
         manifest

@@ -6,10 +6,12 @@
 //! store holds an intact artifact under that key (checked down to its file
 //! hashes) it is fresh, otherwise it is computed and committed atomically.
 //!
-//! One concern per file: checking and estimating a plan (`plan`), a run
-//! (`run`), computing one instance (`job`), the `verify --recompute` audit
+//! One concern per file: checking and estimating a plan (`plan`), what a run
+//! does with each instance (`decide`), carrying it out (`run`), computing one
+//! instance (`job`), the `verify --recompute` audit
 //! (`recompute`) and `status`; this file holds the types they share.
 
+mod decide;
 mod job;
 mod plan;
 mod recompute;
@@ -23,7 +25,7 @@ pub use status::{Freshness, ShardProgress, StatusLine, status};
 
 use std::collections::BTreeMap;
 
-use crate::pipeline::key::InputRecord;
+use crate::pipeline::key::{InputRecord, stage_key};
 use crate::pipeline::shards::Sharding;
 use crate::pipeline::store::{
     Depth, InstanceRef, Manifest, Store, StoreError, content_hashes, table_files,
@@ -209,16 +211,57 @@ fn input_records(
         .collect()
 }
 
-/// The artifact of `stage` under `key`, checked to file hashes: its manifest
-/// when intact, otherwise its problems (`None` when there is no artifact).
-fn checked(store: &Store, stage: &dyn Stage, key: &str) -> Result<Manifest, Option<Vec<String>>> {
-    let id = stage.id();
-    if !store.artifact_dir(&id.stage, key).is_dir() {
-        return Err(None);
+/// `stage` with its key from `inputs`: what its artifact and ref record.
+fn keyed(stage: &dyn Stage, inputs: Vec<InputRecord>) -> InstanceRef {
+    InstanceRef {
+        key: stage_key(
+            &stage.id().stage,
+            stage.code().fingerprint,
+            &stage.params(),
+            &inputs,
+        ),
+        code: stage.code().into(),
+        params: stage.params(),
+        inputs,
     }
-    store
-        .inspect(&id.stage, key, Some(&output_files(stage)), Depth::Hashes)
-        .map_err(Some)
+}
+
+/// What the store holds under a key, checked down to its file hashes.
+#[derive(Debug)]
+enum Stored {
+    /// An intact artifact.
+    Intact(Box<Manifest>),
+    /// No artifact.
+    Absent,
+    /// An artifact that fails its checks, with its problems.
+    Damaged(Vec<String>),
+}
+
+impl Stored {
+    /// The manifest of an intact artifact.
+    fn intact(self) -> Option<Manifest> {
+        match self {
+            Stored::Intact(manifest) => Some(*manifest),
+            Stored::Absent | Stored::Damaged(_) => None,
+        }
+    }
+}
+
+/// The artifact of `stage` under `key`.
+fn stored(store: &Store, stage: &dyn Stage, key: &str) -> Stored {
+    inspected(store, &stage.id().stage, key, &output_files(stage))
+}
+
+/// The artifact of the stage named `stage` under `key`, which must hold
+/// exactly `files`.
+fn inspected(store: &Store, stage: &str, key: &str, files: &[String]) -> Stored {
+    if !store.artifact_dir(stage, key).is_dir() {
+        return Stored::Absent;
+    }
+    match store.inspect(stage, key, Some(files), Depth::Hashes) {
+        Ok(manifest) => Stored::Intact(Box::new(manifest)),
+        Err(problems) => Stored::Damaged(problems),
+    }
 }
 
 /// Whether a stage `did` (wrote or drew) exactly the names it declares.

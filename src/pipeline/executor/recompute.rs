@@ -6,9 +6,9 @@ use std::time::Instant;
 
 use super::job::{DecodedTables, Job};
 use super::*;
-use crate::pipeline::key::{sha256_hex, stage_key};
+use crate::pipeline::key::sha256_hex;
 use crate::pipeline::shards::Sharding;
-use crate::pipeline::store::{InstanceRef, Manifest, Store};
+use crate::pipeline::store::{Manifest, Store};
 use crate::pipeline::{InstanceId, Stage};
 
 /// What `verify --recompute` found for one instance.
@@ -52,24 +52,16 @@ pub fn recompute(
         let id = stage.id();
         let selected = only.is_empty() || only.contains(&id.stage);
         let inputs = input_records(stage.as_ref(), &resolved);
-        let entry = inputs.map(|inputs| InstanceRef {
-            key: stage_key(
-                &id.stage,
-                stage.code().fingerprint,
-                &stage.params(),
-                &inputs,
-            ),
-            code: stage.code().into(),
-            params: stage.params(),
-            inputs,
-        });
+        let entry = inputs.map(|inputs| keyed(stage.as_ref(), inputs));
         let checked = entry
             .as_ref()
-            .map(|entry| checked(store, stage.as_ref(), &entry.key));
-        let (Some(entry), Some(Ok(manifest))) = (entry, &checked) else {
+            .map(|entry| stored(store, stage.as_ref(), &entry.key));
+        let (Some(entry), Some(Stored::Intact(manifest))) = (entry, &checked) else {
             if selected {
                 let reason = match checked {
-                    Some(Err(Some(problems))) => format!("damaged ({})", problems.join("; ")),
+                    Some(Stored::Damaged(problems)) => {
+                        format!("damaged ({})", problems.join("; "))
+                    }
                     Some(_) => "no artifact under the current key".to_string(),
                     None => "an input is not fresh".to_string(),
                 };
@@ -103,7 +95,7 @@ pub fn recompute(
             }
             audits.push((id.clone(), audit));
         }
-        resolved.insert(id, manifest.clone());
+        resolved.insert(id, Manifest::clone(manifest));
     }
     Ok(audits)
 }

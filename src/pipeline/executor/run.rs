@@ -4,9 +4,9 @@
 use std::collections::BTreeMap;
 use std::io::ErrorKind;
 
+use super::decide::{Candidate, Decision, decide};
 use super::job::{DecodedTables, Job};
 use super::*;
-use crate::pipeline::key::stage_key;
 use crate::pipeline::store::{InstanceRef, Manifest, Store, StoreError, StoreLock};
 use crate::pipeline::{InstanceId, Stage};
 
@@ -54,22 +54,29 @@ pub fn run(
         &[options.only.clone(), options.force.clone()].concat(),
     )?;
     let access = Access::acquire(store)?;
+    let writable = match &access {
+        Access::Locked { .. } => Ok(()),
+        Access::ReadOnly(reason) => Err(reason.as_str()),
+    };
     let mut resolved: BTreeMap<InstanceId, Manifest> = BTreeMap::new();
     let mut reports = Vec::new();
-    let sharding = options.sharding;
     let decoded = DecodedTables::default();
     let width = id_width(stages);
     for stage in stages {
         let id = stage.id();
-        let shardable = stage.shard_units() > 0;
-        let selected = (options.only.is_empty() || options.only.contains(&id.stage))
-            && (sharding.task.is_none() || shardable || stage.shard_prerequisite());
-        let Some(inputs) = input_records(stage.as_ref(), &resolved) else {
-            if selected && sharding.task.is_none() {
-                return Err(ExecError::Plan(format!(
-                    "{id}: an input is not available; run its upstream stages first (without --only)"
-                )));
-            }
+        let decision = decide(
+            candidate(stage.as_ref(), options, &resolved),
+            store,
+            writable,
+        )?;
+        let job = Job {
+            store,
+            stage: stage.as_ref(),
+            resolved: &resolved,
+            options,
+            decoded: &decoded,
+        };
+        let Some((key, action, manifest)) = carry_out(decision, &job, writable.is_ok())? else {
             reports.push(InstanceReport {
                 id,
                 key: None,
@@ -77,82 +84,10 @@ pub fn run(
             });
             continue;
         };
-        let key = stage_key(
-            &id.stage,
-            stage.code().fingerprint,
-            &stage.params(),
-            &inputs,
-        );
-        let forced = options.force.contains(&id.stage);
-        let entry = InstanceRef {
-            key: key.clone(),
-            code: stage.code().into(),
-            params: stage.params(),
-            inputs,
-        };
-        let action = match checked(store, stage.as_ref(), &key) {
-            Ok(manifest) if !(forced && selected) => {
-                if let Access::Locked { .. } = access {
-                    heal_ref(store, &id, &entry)?;
-                }
-                resolved.insert(id.clone(), manifest);
-                Action::Fresh
-            }
-            _ if !selected => Action::Skipped,
-            existing => {
-                if let Access::ReadOnly(reason) = &access {
-                    return Err(ExecError::ReadOnly {
-                        id,
-                        reason: reason.clone(),
-                    });
-                }
-                let mut replace = !matches!(existing, Err(None));
-                let repaired = existing.err().flatten().map(|problems| problems.join("; "));
-                let foreign = if replace {
-                    store.foreign_in_artifact(&id.stage, &key, &output_files(stage.as_ref()))
-                } else {
-                    Vec::new()
-                };
-                let mut set_aside = None;
-                if !foreign.is_empty() && sharding.task.is_none() {
-                    let aside = store.set_aside(&id.stage, &key)?;
-                    set_aside = Some(format!(
-                        "moved it to {} with {}, which ternary did not write",
-                        aside.display(),
-                        foreign.join(", ")
-                    ));
-                    replace = false;
-                }
-                let job = Job {
-                    store,
-                    stage: stage.as_ref(),
-                    resolved: &resolved,
-                    options,
-                    decoded: &decoded,
-                };
-                match sharding.task.filter(|_| shardable) {
-                    Some(index) => Action::Shard {
-                        index,
-                        seconds: job.shard(&entry, index)?,
-                    },
-                    None => {
-                        let (manifest, seconds) = job.compute(&entry, replace)?;
-                        resolved.insert(id.clone(), manifest);
-                        Action::Computed {
-                            seconds,
-                            repaired,
-                            set_aside,
-                        }
-                    }
-                }
-            }
-        };
-        let shown = match options.verbosity {
-            Verbosity::Quiet => false,
-            Verbosity::Normal => action != Action::Fresh,
-            Verbosity::Detailed => true,
-        };
-        if shown {
+        if let Some(manifest) = manifest {
+            resolved.insert(id.clone(), manifest);
+        }
+        if shown(options.verbosity, &action) {
             on_event(Event::Ran {
                 id: &id,
                 key: &key,
@@ -167,6 +102,84 @@ pub fn run(
         });
     }
     Ok(reports)
+}
+
+/// Whether a run at `verbosity` reports an instance it dealt with so.
+fn shown(verbosity: Verbosity, action: &Action) -> bool {
+    match verbosity {
+        Verbosity::Quiet => false,
+        Verbosity::Normal => *action != Action::Fresh,
+        Verbosity::Detailed => true,
+    }
+}
+
+/// `stage` as [`decide`] sees it under `options`, with the inputs `resolved`
+/// so far.
+fn candidate<'a>(
+    stage: &'a dyn Stage,
+    options: &RunOptions,
+    resolved: &BTreeMap<InstanceId, Manifest>,
+) -> Candidate<'a> {
+    let name = stage.id().stage;
+    let shard_task = options.sharding.task;
+    Candidate {
+        stage,
+        inputs: input_records(stage, resolved),
+        selected: (options.only.is_empty() || options.only.contains(&name))
+            && (shard_task.is_none() || stage.shard_units() > 0 || stage.shard_prerequisite()),
+        forced: options.force.contains(&name),
+        shard_task,
+    }
+}
+
+/// Carries out `decision` for `job`'s instance: its key, what was done and
+/// the manifest it resolves to (when its artifact is in the store after
+/// it); `None` for an instance without a key. A fresh instance's ref is
+/// healed when the store is `writable`.
+fn carry_out(
+    decision: Decision,
+    job: &Job<'_>,
+    writable: bool,
+) -> Result<Option<(String, Action, Option<Manifest>)>, ExecError> {
+    let id = job.stage.id();
+    Ok(Some(match decision {
+        Decision::Unkeyed => return Ok(None),
+        Decision::Skipped(entry) => (entry.key, Action::Skipped, None),
+        Decision::Fresh(entry, manifest) => {
+            if writable {
+                heal_ref(job.store, &id, &entry)?;
+            }
+            (entry.key, Action::Fresh, Some(*manifest))
+        }
+        Decision::Shard { entry, index } => {
+            let seconds = job.shard(&entry, index)?;
+            (entry.key, Action::Shard { index, seconds }, None)
+        }
+        Decision::Compute {
+            entry,
+            replace,
+            repaired,
+            foreign,
+        } => {
+            let set_aside = if foreign.is_empty() {
+                None
+            } else {
+                let aside = job.store.set_aside(&id.stage, &entry.key)?;
+                Some(format!(
+                    "moved it to {} with {}, which ternary did not write",
+                    aside.display(),
+                    foreign.join(", ")
+                ))
+            };
+            let (manifest, seconds) = job.compute(&entry, replace)?;
+            let action = Action::Computed {
+                seconds,
+                repaired,
+                set_aside,
+            };
+            (entry.key, action, Some(manifest))
+        }
+    }))
 }
 
 /// Rewrites a missing or outdated ref of a fresh instance (a run killed

@@ -4,10 +4,10 @@
 use std::collections::BTreeMap;
 use std::ops::Range;
 
-use super::job::shard_manifest;
+use super::job::stored_shard;
 use super::*;
 use crate::pipeline::code::CodeRecord;
-use crate::pipeline::key::{InputRecord, changed_params, stage_key};
+use crate::pipeline::key::{InputRecord, changed_params};
 use crate::pipeline::shards;
 use crate::pipeline::store::{InstanceRef, Manifest, Store};
 use crate::pipeline::{InstanceId, Stage};
@@ -106,31 +106,20 @@ pub fn status(
                 }
             }
             Some(inputs) => {
-                let current = stage_key(
-                    &id.stage,
-                    stage.code().fingerprint,
-                    &stage.params(),
-                    &inputs,
-                );
-                let freshness = match checked(store, stage.as_ref(), &current) {
-                    Ok(manifest) => {
+                let whole = keyed(stage.as_ref(), inputs);
+                let freshness = match stored(store, stage.as_ref(), &whole.key) {
+                    Stored::Intact(manifest) => {
                         cpu_seconds = manifest.cpu_seconds;
-                        resolved.insert(id.clone(), manifest);
+                        resolved.insert(id.clone(), *manifest);
                         Freshness::Fresh
                     }
-                    Err(Some(problems)) => Freshness::Damaged(problems),
-                    Err(None) => explain(stage.as_ref(), &current, &inputs, previous),
+                    Stored::Damaged(problems) => Freshness::Damaged(problems),
+                    Stored::Absent => explain(stage.as_ref(), &whole.key, &whole.inputs, previous),
                 };
                 if freshness != Freshness::Fresh && stage.shard_units() > 0 && shards > 1 {
-                    let whole = InstanceRef {
-                        key: current.clone(),
-                        code: stage.code().into(),
-                        params: stage.params(),
-                        inputs,
-                    };
                     progress = Some(shard_progress(store, stage.as_ref(), &whole, shards));
                 }
-                key = Some(current);
+                key = Some(whole.key);
                 freshness
             }
         };
@@ -153,7 +142,7 @@ fn shard_progress(
     shards: u32,
 ) -> ShardProgress {
     shard_progress_with(stage, shards, |units| {
-        shard_manifest(store, stage, whole, units).is_ok()
+        matches!(stored_shard(store, stage, whole, units), Stored::Intact(_))
     })
 }
 
