@@ -90,7 +90,7 @@ impl Stage for CollisionsStage {
     }
 
     /// Scenes (launch points, times the rule's nodes under the quadrature)
-    /// at [`CPU_PER_SCENE`], scaled to the potential's well and the engine's
+    /// at `CPU_PER_SCENE`, scaled to the potential's well and the engine's
     /// tolerance; one events row of `BYTES_PER_SCENE` each.
     fn cost(&self, _inputs: &[Cost]) -> Cost {
         let nodes = match self.params.sampling.offsets {

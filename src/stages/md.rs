@@ -373,7 +373,7 @@ impl Stage for MdStage {
     }
 
     /// Runs times neighbour encounters per run (`N rho v_th t_f`) at
-    /// [`CPU_PER_ENCOUNTER`], scaled to the tolerance; small tables.
+    /// `CPU_PER_ENCOUNTER`, scaled to the tolerance; small tables.
     fn cost(&self, _inputs: &[Cost]) -> Cost {
         let gas = &self.params.gas;
         let encounters = f64::from(self.params.particles)
