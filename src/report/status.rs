@@ -104,22 +104,17 @@ pub fn cost_estimate(costs: &[(InstanceId, Cost)], lines: &[StatusLine]) -> Stri
 /// over the fresh instances whose manifests record their CPU time; empty
 /// when none does.
 fn measured(costs: &[(InstanceId, Cost)], lines: &[StatusLine]) -> String {
-    let recorded: Vec<(&InstanceId, f64)> = lines
-        .iter()
-        .filter(|line| line.freshness == Freshness::Fresh)
-        .filter_map(|line| Some((&line.id, line.cpu_seconds?)))
-        .collect();
+    let recorded = recorded_cpu_seconds(lines);
     if recorded.is_empty() {
         return String::new();
     }
-    let ids: BTreeSet<&InstanceId> = recorded.iter().map(|(id, _)| *id).collect();
     let estimated = total_cost(
         costs
             .iter()
-            .filter(|(id, _)| ids.contains(id))
+            .filter(|(id, _)| recorded.contains_key(id))
             .map(|(_, cost)| cost),
     );
-    let seconds: f64 = recorded.iter().map(|(_, seconds)| seconds).sum();
+    let seconds: f64 = recorded.values().sum();
     format!(
         "; measured: {} CPU-hours for the {} fresh instances estimated at {}",
         hours(seconds),
@@ -128,17 +123,22 @@ fn measured(costs: &[(InstanceId, Cost)], lines: &[StatusLine]) -> String {
     )
 }
 
-/// `status --costs`: a line per stage (in the order the plan first runs
-/// it) with its instance
-/// count, the estimated CPU seconds of all of them, and for the fresh ones
-/// whose manifests record it the measured CPU seconds against their
-/// estimate: how well the estimate is calibrated, stage by stage.
-pub fn costs_by_stage(costs: &[(InstanceId, Cost)], lines: &[StatusLine]) -> String {
-    let measured: BTreeMap<&InstanceId, f64> = lines
+/// The CPU seconds of each fresh instance in `lines` whose manifest records
+/// them.
+fn recorded_cpu_seconds(lines: &[StatusLine]) -> BTreeMap<&InstanceId, f64> {
+    lines
         .iter()
         .filter(|line| line.freshness == Freshness::Fresh)
         .filter_map(|line| Some((&line.id, line.cpu_seconds?)))
-        .collect();
+        .collect()
+}
+
+/// `status --costs`: a line per stage (in the order the plan first runs
+/// it) with its instance count, the estimated CPU seconds of all of them, and for the fresh ones
+/// whose manifests record it the measured CPU seconds against their
+/// estimate: how well the estimate is calibrated, stage by stage.
+pub fn costs_by_stage(costs: &[(InstanceId, Cost)], lines: &[StatusLine]) -> String {
+    let measured = recorded_cpu_seconds(lines);
     let mut stages: Vec<(&str, StageCosts)> = Vec::new();
     for (id, cost) in costs {
         let index = match stages.iter().position(|(stage, _)| *stage == id.stage) {
