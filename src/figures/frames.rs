@@ -6,7 +6,8 @@ use std::io::Cursor;
 
 use arrow::array::RecordBatch;
 use polars::prelude::{
-    Column, DataFrame, DataType, IntoColumn, NamedFrom, ParquetReader, SerReader, Series,
+    ChunkCompareEq, Column, DataFrame, DataType, IntoColumn, NamedFrom, ParquetReader, SerReader,
+    Series,
 };
 
 use crate::contract::figures::points::{PANEL, SERIES, X, Y, Y_ERROR};
@@ -251,4 +252,28 @@ impl FigureRows {
             Y_ERROR.read(batch)?,
         ))
     }
+}
+
+/// The rows of `all` whose text column `key` equals `value`.
+pub(super) fn rows_where(all: &DataFrame, key: &str, value: &str) -> Result<DataFrame, StageError> {
+    let mask = all
+        .column(key)
+        .map_err(failed)?
+        .str()
+        .map_err(failed)?
+        .equal(value);
+    all.filter(&mask).map_err(failed)
+}
+
+/// The standard normal density at `xs`, a series `name` of `panel` without errors.
+pub(super) fn standard_normal(
+    panel: &str,
+    name: &str,
+    xs: Vec<f64>,
+) -> Result<DataFrame, StageError> {
+    let density = xs
+        .iter()
+        .map(|x| libm::exp(-0.5 * x * x) / libm::sqrt(2.0 * std::f64::consts::PI))
+        .collect();
+    series_of(panel, name, xs, density, None)
 }

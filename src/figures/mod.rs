@@ -10,15 +10,38 @@
 
 mod draw;
 pub mod frames;
+mod kernel_groups;
 mod text;
 
 pub mod catalogue;
+pub mod collapse;
+pub mod evolution;
+pub mod finite_size;
+pub mod gaps;
+pub mod kernel_fit;
+pub mod kernels;
+pub mod kernels_at_theta;
+pub mod kernels_density;
+pub mod kernels_u_prime;
+pub mod kicks;
+pub mod md_boltzmann;
+pub mod md_times;
+pub mod near_integrable;
+pub mod pulls;
+pub mod rates;
+pub mod spectrum;
+pub mod truncation;
 
-pub use catalogue::{DILUTE, FIGURES, Figure};
+pub use catalogue::{Figure, FigureKind};
 pub use draw::{PALETTE, Size, render, series_colours};
 pub use frames::{FigureRows, Point};
 
 use serde::Serialize;
+
+/// Kernel axis label.
+const G_AXIS: &str = "G(u' → u) [ρ² l v_th / v_th]";
+/// Velocity change axis label.
+const DU_AXIS: &str = "u − u' [v_th]";
 
 /// How a series is drawn.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]

@@ -4,7 +4,24 @@
 use super::rings::{collapse_rings, compared_rings};
 use crate::config::{MdParams, Study};
 use crate::contract::{self, instances};
-use crate::figures::{DILUTE, Figure, PALETTE};
+use crate::figures::collapse::Collapse;
+use crate::figures::evolution::Evolution;
+use crate::figures::finite_size::FiniteSize;
+use crate::figures::gaps::Gaps;
+use crate::figures::kernel_fit::KernelFit;
+use crate::figures::kernels::KernelsEveryN;
+use crate::figures::kernels_at_theta::KernelsAtTheta;
+use crate::figures::kernels_density::{DILUTE, KernelsAtDensity};
+use crate::figures::kernels_u_prime::KernelsAtUPrime;
+use crate::figures::kicks::Kicks;
+use crate::figures::md_boltzmann::MdBoltzmann;
+use crate::figures::md_times::MdTimes;
+use crate::figures::near_integrable::NearIntegrable;
+use crate::figures::pulls::Pulls;
+use crate::figures::rates::Rates;
+use crate::figures::spectrum::Spectrum;
+use crate::figures::truncation::Truncation;
+use crate::figures::{Figure, PALETTE};
 use crate::physics::potential::{Family, Potential};
 use crate::pipeline::{InstanceId, Stage};
 use crate::stages::figures::FiguresStage;
@@ -36,13 +53,13 @@ pub(super) fn figure_stages(study: &Study, plan: &[Box<dyn Stage>]) -> Vec<Figur
     let near_integrable = instances::near_integrable();
     if present(&near_integrable) {
         figures.push(FiguresStage::new(
-            Figure::NearIntegrable,
+            Figure::NearIntegrable(NearIntegrable),
             vec![near_integrable],
         ));
     }
     let pulls = instances::pulls();
     if present(&pulls) {
-        figures.push(FiguresStage::new(Figure::Pulls, vec![pulls]));
+        figures.push(FiguresStage::new(Figure::Pulls(Pulls), vec![pulls]));
     }
     figures.extend(evolution_figure(study, &present));
     figures.extend(kernels_at_density(study));
@@ -72,7 +89,10 @@ fn kernel_figures(study: &Study, kicked: &[Potential]) -> Vec<FiguresStage> {
         kicked.iter().partition(|p| p.family().theta().is_some());
     if !scale_free.is_empty() {
         let (labels, inputs) = kernels(&scale_free);
-        figures.push(FiguresStage::new(Figure::KernelsEveryN { labels }, inputs));
+        figures.push(FiguresStage::new(
+            Figure::KernelsEveryN(KernelsEveryN { labels }),
+            inputs,
+        ));
     }
     let mut families: Vec<(&dyn Family, Vec<Potential>)> = Vec::new();
     for p in &at_theta {
@@ -86,12 +106,12 @@ fn kernel_figures(study: &Study, kicked: &[Potential]) -> Vec<FiguresStage> {
     }
     for (family, members) in families {
         let (labels, inputs) = kernels(&spread(&members, PALETTE.len()));
-        let figure = Figure::KernelsAtTheta {
+        let figure = Figure::KernelsAtTheta(KernelsAtTheta {
             family: family.name().into(),
             prefix: family.prefix().into(),
             unit: family.length_unit().into(),
             labels,
-        };
+        });
         figures.push(FiguresStage::new(figure, inputs));
     }
     figures
@@ -108,29 +128,29 @@ fn main_figures(
     let (id, label) = (p.id(), p.family().label());
     let mut figures = vec![
         FiguresStage::new(
-            Figure::KernelFit {
+            Figure::KernelFit(KernelFit {
                 id: id.clone(),
                 label: label.clone(),
-            },
+            }),
             vec![
                 dilute(study, contract::kernel::STAGE, p),
                 dilute(study, contract::fit::STAGE, p),
             ],
         ),
         FiguresStage::new(
-            Figure::Truncation {
+            Figure::Truncation(Truncation {
                 id: id.clone(),
                 label: label.clone(),
-            },
+            }),
             vec![dilute(study, contract::moments::STAGE, p)],
         ),
     ];
     let sweep = InstanceId::new(contract::sweep::STAGE, &id);
     if present(&sweep) {
-        let rates = Figure::Rates {
+        let rates = Figure::Rates(Rates {
             id: id.clone(),
             label,
-        };
+        });
         figures.push(FiguresStage::new(rates, vec![sweep]));
     }
     let u_primes: Vec<f64> = study
@@ -144,23 +164,23 @@ fn main_figures(
             .iter()
             .map(|&u| instances::kernel(&study.kernel_params(*p, u, 0.0)))
             .collect();
-        let figure = Figure::KernelsAtUPrime {
+        let figure = Figure::KernelsAtUPrime(KernelsAtUPrime {
             id: id.clone(),
             u_primes,
-        };
+        });
         figures.push(FiguresStage::new(figure, inputs));
     }
     let spectrum = instances::spectrum(p);
     if present(&spectrum) {
-        let figure = Figure::Spectrum {
+        let figure = Figure::Spectrum(Spectrum {
             id: id.clone(),
             label: p.family().label(),
-        };
+        });
         figures.push(FiguresStage::new(figure, vec![spectrum]));
     }
     let scan = instances::scan(p);
     if present(&scan) {
-        figures.push(FiguresStage::new(Figure::Kicks { id }, vec![scan]));
+        figures.push(FiguresStage::new(Figure::Kicks(Kicks { id }), vec![scan]));
     }
     figures
 }
@@ -176,7 +196,8 @@ fn gaps_figure(
         .filter(|p| p.family().theta().is_none() && present(&instances::spectrum(p)))
         .count();
     let table = instances::table();
-    (with_spectrum >= 2 && present(&table)).then(|| FiguresStage::new(Figure::Gaps, vec![table]))
+    (with_spectrum >= 2 && present(&table))
+        .then(|| FiguresStage::new(Figure::Gaps(Gaps), vec![table]))
 }
 
 /// `h(u, t)` at up to [`EVOLUTION_CURVES`] of the evolution's times.
@@ -186,7 +207,7 @@ fn evolution_figure(study: &Study, present: &dyn Fn(&InstanceId) -> bool) -> Opt
     let id = InstanceId::new(contract::evolve::STAGE, &instance);
     (present(&id) && !evolve.times.is_empty()).then(|| {
         let times = spread(&evolve.times, EVOLUTION_CURVES);
-        FiguresStage::new(Figure::Evolution { instance, times }, vec![id])
+        FiguresStage::new(Figure::Evolution(Evolution { instance, times }), vec![id])
     })
 }
 
@@ -199,21 +220,21 @@ fn md_figures(study: &Study, present: &dyn Fn(&InstanceId) -> bool) -> Vec<Figur
         return Vec::new();
     };
     let from_compare = |figure: Figure| FiguresStage::new(figure, vec![compare.clone()]);
-    let mut figures = vec![from_compare(Figure::MdBoltzmann {
+    let mut figures = vec![from_compare(Figure::MdBoltzmann(MdBoltzmann {
         ring: first.name.clone(),
-    })];
+    }))];
     let compared = compared_rings(study);
     let compared: Vec<&MdParams> = compared.iter().collect();
     let collapsing = collapse_rings(study);
     if collapsing.len() > 1 {
         let rings = collapsing.iter().map(|r| r.name.clone()).collect();
         let labels = collapsing.iter().map(ring_label).collect();
-        figures.push(from_compare(Figure::Collapse { rings, labels }));
+        figures.push(from_compare(Figure::Collapse(Collapse { rings, labels })));
     }
     figures.extend(md_times(&compared).map(from_compare));
     // Finite size compares the rings at u' = 0: none, no figure.
     if !compared.is_empty() {
-        figures.push(from_compare(Figure::FiniteSize));
+        figures.push(from_compare(Figure::FiniteSize(FiniteSize)));
     }
     figures
 }
@@ -248,10 +269,10 @@ fn kernels_at_density(study: &Study) -> Option<FiguresStage> {
     }
     (inputs.len() > 1).then(|| {
         FiguresStage::new(
-            Figure::KernelsAtDensity {
+            Figure::KernelsAtDensity(KernelsAtDensity {
                 id: potential.id(),
                 labels,
-            },
+            }),
             inputs,
         )
     })
@@ -288,11 +309,11 @@ fn md_times(compared: &[&MdParams]) -> Option<Figure> {
             return None;
         }
         group.sort_by(|a, b| a.final_time_ns.total_cmp(&b.final_time_ns));
-        Some(Figure::MdTimes {
+        Some(Figure::MdTimes(MdTimes {
             ring: group.last().map(|r| r.name.clone()).unwrap_or_default(),
             rings: group.iter().map(|r| r.name.clone()).collect(),
             times_ns: group.iter().map(|r| r.final_time_ns).collect(),
-        })
+        }))
     })
 }
 

@@ -43,7 +43,7 @@ const CODE: &Code = code::of(file!());
 
 impl Stage for FiguresStage {
     fn id(&self) -> InstanceId {
-        InstanceId::new(contract::figures::STAGE, &self.figure.name())
+        InstanceId::new(contract::figures::STAGE, &self.figure.kind().name())
     }
 
     fn code(&self) -> &'static Code {
@@ -51,7 +51,7 @@ impl Stage for FiguresStage {
     }
 
     fn params(&self) -> Value {
-        json!({ "figure": self.figure, "layout": self.figure.layout() })
+        json!({ "figure": self.figure, "layout": self.figure.kind().layout() })
     }
 
     fn tables(&self) -> &'static [&'static str] {
@@ -59,7 +59,7 @@ impl Stage for FiguresStage {
     }
 
     fn files(&self) -> Vec<String> {
-        let name = self.figure.name();
+        let name = self.figure.kind().name();
         [Size::COLUMN_SVG.suffix, Size::SCREEN.suffix]
             .iter()
             .flat_map(|suffix| [format!("{name}{suffix}.svg"), format!("{name}{suffix}.png")])
@@ -75,19 +75,20 @@ impl Stage for FiguresStage {
     }
 
     fn run(&self, inputs: &[Input], progress: &Progress) -> Result<Vec<Table>, StageError> {
-        let frame = self.figure.frame(inputs)?;
+        let figure = self.figure.kind();
+        let frame = figure.frame(inputs)?;
         let points = frames::points(&frame)?;
         progress.advance(1);
-        let layout = serde_json::to_string(&self.figure.layout())
+        let layout = serde_json::to_string(&figure.layout())
             .map_err(|error| StageError::Input(format!("figure layout: {error}")))?;
-        let table = FigureRows::table(&points, &Self::SPEC, &self.figure.description())?
+        let table = FigureRows::table(&points, &Self::SPEC, &figure.description())?
             .with_metadata(AXES, layout);
         Ok(vec![table])
     }
 
     fn render(&self, tables: &[Table]) -> Result<Vec<(String, Vec<u8>)>, StageError> {
-        let points = FigureRows::read(&tables[0])?;
-        render(&self.figure.name(), &self.figure.layout(), &points)
-            .map_err(|error| StageError::Input(format!("drawing {}: {error}", self.figure.name())))
+        let (figure, points) = (self.figure.kind(), FigureRows::read(&tables[0])?);
+        render(&figure.name(), &figure.layout(), &points)
+            .map_err(|error| StageError::Input(format!("drawing {}: {error}", figure.name())))
     }
 }

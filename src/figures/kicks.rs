@@ -1,0 +1,53 @@
+//! `kicks_<id>`: the mono-energetic collisions' final velocities.
+
+use polars::prelude::DataFrame;
+use serde::Serialize;
+
+use super::frames::{frame, series_by, stack};
+use super::{Axis, FigureKind, Layout, Panel, Style};
+use crate::contract;
+use crate::pipeline::{Input, StageError};
+
+/// The special particle's final velocity against the launch delay, one
+/// curve per scanned launch pair (mono-energetic collisions).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Kicks {
+    /// The potential's id.
+    pub id: String,
+}
+
+impl FigureKind for Kicks {
+    fn name(&self) -> String {
+        format!("kicks_{}", self.id)
+    }
+
+    fn description(&self) -> String {
+        "final velocity u1f of the special particle (u1 = 0) against the launch delay, per scanned launch pair, +- error bound".into()
+    }
+
+    fn layout(&self) -> Layout {
+        Layout {
+            panels: vec![Panel::new(
+                "kick",
+                Axis::linear("launch delay Δt [l / v_th]"),
+                Axis::linear("u1f [v_th]"),
+                vec![("", Style::Line)],
+            )],
+        }
+    }
+
+    fn frame(&self, inputs: &[Input]) -> Result<DataFrame, StageError> {
+        use contract::scan::LAUNCH;
+        use contract::scan::curve::{LAUNCH_DELAY, TABLE, U1_FINAL, U1_FINAL_ERROR};
+        let input = &inputs[0];
+        let curve = frame(TABLE.of(input)?)?;
+        let columns = (LAUNCH_DELAY.name, U1_FINAL.name, Some(U1_FINAL_ERROR.name));
+        stack(series_by(
+            &curve,
+            "kick",
+            LAUNCH.name,
+            |launch| launch.to_string(),
+            columns,
+        )?)
+    }
+}

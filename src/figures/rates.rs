@@ -1,0 +1,66 @@
+//! `rates_<id>`: the self drift and variance rates against `u'`.
+
+use polars::prelude::DataFrame;
+use serde::Serialize;
+
+use super::frames::{frame, series, stack};
+use super::{Axis, FigureKind, Layout, Panel, Style};
+use crate::contract;
+use crate::pipeline::{Input, StageError};
+
+/// Self drift and variance rates against `u'`, and the Fokker-Planck drift.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Rates {
+    /// The potential's id.
+    pub id: String,
+    /// Its legend label.
+    pub label: String,
+}
+
+impl FigureKind for Rates {
+    fn name(&self) -> String {
+        format!("rates_{}", self.id)
+    }
+
+    fn description(&self) -> String {
+        "self variance rate D2 (a) and drift D1 with the Fokker-Planck drift (D2' - u D2)/2 (b) against u'".into()
+    }
+
+    fn layout(&self) -> Layout {
+        Layout {
+            panels: vec![
+                Panel::new(
+                    "variance",
+                    Axis::linear("u' [v_th]"),
+                    Axis::linear("D2 [ρ² l v_th]"),
+                    vec![("", Style::Band)],
+                ),
+                Panel::new(
+                    "drift",
+                    Axis::linear("u' [v_th]"),
+                    Axis::linear("D1 [ρ² l v_th]"),
+                    vec![("Fokker", Style::Band), ("", Style::Markers)],
+                ),
+            ],
+        }
+    }
+
+    fn frame(&self, inputs: &[Input]) -> Result<DataFrame, StageError> {
+        use contract::sweep::rates::{
+            FOKKER_PLANCK_DRIFT, SELF_DRIFT, SELF_VARIANCE, TABLE, U_PRIME,
+        };
+        let input = &inputs[0];
+        let table = frame(TABLE.of(input)?)?;
+        let pair = |pair: &contract::Pair| (U_PRIME.name, pair.value.name, Some(pair.stderr.name));
+        stack(vec![
+            series(&table, "variance", "D2 (Monte Carlo)", pair(&SELF_VARIANCE))?,
+            series(&table, "drift", "D1 (Monte Carlo)", pair(&SELF_DRIFT))?,
+            series(
+                &table,
+                "drift",
+                "Fokker-Planck (D2' − u D2)/2",
+                pair(&FOKKER_PLANCK_DRIFT),
+            )?,
+        ])
+    }
+}
