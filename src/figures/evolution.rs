@@ -8,8 +8,9 @@ use super::{Axis, FigureKind, Layout, Panel, Style};
 use crate::contract;
 use crate::pipeline::{Input, StageError};
 
-/// The tagged particle's `h(u, t)` approaching `f0` (a) and the early
-/// variance growing as `t kappa_2` (b).
+/// The tagged particle's `h(u, t)` approaching `f0` (a), the early
+/// variance growing as `t kappa_2` (b), and the early `h` scaled to unit
+/// variance against the standard normal (c).
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Evolution {
     /// The evolved kernel's instance (`ipp-6_u0_rho0`).

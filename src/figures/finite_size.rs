@@ -48,8 +48,7 @@ impl FigureKind for FiniteSize {
         use contract::compare::finite_size::{
             DENSITY, PARTICLES, RATIO, SCALED_TIME, TABLE, THERMAL_RATIO,
         };
-        let input = &inputs[0];
-        let rings = at_common_time(&frame(TABLE.of(input)?)?, SCALED_TIME.name)?;
+        let rings = at_common_time(&frame(TABLE.of(&inputs[0])?)?, SCALED_TIME.name)?;
         let named = |n: &str| format!("N = {n}");
         let pair = |pair: &contract::Pair| (DENSITY.name, pair.value.name, Some(pair.stderr.name));
         let mut parts = series_by(&rings, "tagged", PARTICLES.name, named, pair(&RATIO))?;

@@ -48,8 +48,7 @@ impl FigureKind for Gaps {
             A_N_UNTRUNCATED, GAP, GAP_OVER_VARIANCE_RATE, N, PARTICLE_GAP,
             PARTICLE_GAP_OVER_VARIANCE_RATE, TABLE, THETA,
         };
-        let input = &inputs[0];
-        let table = frame(TABLE.of(input)?)?;
+        let table = frame(TABLE.of(&inputs[0])?)?;
         let (n, theta) = (numbers(&table, N.name)?, numbers(&table, THETA.name)?);
         let power_law = |i: usize| n[i].is_finite() && theta[i].is_nan();
         let panel = |panel: &str, title: &str, pair: contract::Pair, positive: bool| {

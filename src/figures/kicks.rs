@@ -39,8 +39,7 @@ impl FigureKind for Kicks {
     fn frame(&self, inputs: &[Input]) -> Result<DataFrame, StageError> {
         use contract::scan::LAUNCH;
         use contract::scan::curve::{LAUNCH_DELAY, TABLE, U1_FINAL, U1_FINAL_ERROR};
-        let input = &inputs[0];
-        let curve = frame(TABLE.of(input)?)?;
+        let curve = frame(TABLE.of(&inputs[0])?)?;
         let columns = (LAUNCH_DELAY.name, U1_FINAL.name, Some(U1_FINAL_ERROR.name));
         stack(series_by(
             &curve,

@@ -38,8 +38,7 @@ impl FigureKind for Pulls {
     /// range in the outer bins, and the standard normal density.
     fn frame(&self, inputs: &[Input]) -> Result<DataFrame, StageError> {
         use contract::pulls::checks::{PULL, TABLE};
-        let input = &inputs[0];
-        let table = frame(TABLE.of(input)?)?;
+        let table = frame(TABLE.of(&inputs[0])?)?;
         let values: Vec<f64> = numbers(&table, PULL.name)?
             .into_iter()
             .filter(|v| v.is_finite())

@@ -49,8 +49,7 @@ impl FigureKind for Rates {
         use contract::sweep::rates::{
             FOKKER_PLANCK_DRIFT, SELF_DRIFT, SELF_VARIANCE, TABLE, U_PRIME,
         };
-        let input = &inputs[0];
-        let table = frame(TABLE.of(input)?)?;
+        let table = frame(TABLE.of(&inputs[0])?)?;
         let pair = |pair: &contract::Pair| (U_PRIME.name, pair.value.name, Some(pair.stderr.name));
         stack(vec![
             series(&table, "variance", "D2 (Monte Carlo)", pair(&SELF_VARIANCE))?,
