@@ -283,12 +283,12 @@ pub const SAME_SIDE_QUADRATURE_WIDTH: f64 = 1.25;
 /// The launch pair in `stratum` at the unit-square point `[x_first, x_second]`,
 /// with its proposal density of `(|u2|, |u3|)` under `launch`. With
 /// `fold_same_side`, a same-side point is first folded onto the half of the
-/// square below its diagonal ([`folded_through_smaller`]) and its speeds widened
+/// square below its diagonal ([`folded_same_side`]) and its speeds widened
 /// by [`SAME_SIDE_QUADRATURE_WIDTH`]: valid when the scene's
 /// integrand is symmetric under exchanging the two launches, as a launch
-/// pair's offset integral over a symmetric range is. The density stays that
-/// of the unordered pair (the folded points have twice it on their half, and
-/// each stands for both orderings). Launch pairs integrated over the offset
+/// pair's offset integral over a symmetric range is. The density is that
+/// of the unordered pair: the fold's density on its half over 2, since each
+/// folded point stands for both orderings. Launch pairs integrated over the offset
 /// (`fold_same_side`) draw the slow stratum: a slow launch's offset integral
 /// grows like `1/v`, so without it a pair with a slow launch has a weight of
 /// unbounded variance (single same-side such pairs carried the far kernel's
@@ -297,7 +297,7 @@ pub const SAME_SIDE_QUADRATURE_WIDTH: f64 = 1.25;
 /// recombination rates, which slow same-side pairs carry: at `theta = 100`
 /// the thermal rate fell 60% short of `3 K_b k_d`, and 4-9% at `theta <=
 /// 20`, docs/lennard-jones.md). Every pair is folded so that the stratum's
-/// edge stays straight ([`folded_through_smaller`]).
+/// edge stays straight ([`folded_same_side`]).
 /// With sampled offsets the stratum doubled the error of `a` and is not
 /// used.
 pub fn sample_launch(
@@ -317,35 +317,86 @@ pub fn sample_launch(
     } else {
         launch.without_slow_stratum()
     };
-    let ([x_first, x_second], width) = if fold {
-        (folded_through_smaller(point), SAME_SIDE_QUADRATURE_WIDTH)
+    let (folded, width) = if fold {
+        (
+            folded_same_side(point, launch.slow_share),
+            SAME_SIDE_QUADRATURE_WIDTH,
+        )
     } else {
-        (point, 1.0)
+        (
+            Folded {
+                coordinates: point,
+                density: 2.0,
+            },
+            1.0,
+        )
     };
+    let [x_first, x_second] = folded.coordinates;
     let first = launch.speed(x_first, 1.0, width);
     let second = launch.speed(x_second, third_sign, width);
     let pair = LaunchPair {
         u2: first,
         u3: third_sign * second,
     };
-    let density = launch.density(first, 1.0, width) * launch.density(second, third_sign, width);
+    let density = launch.density(first, 1.0, width)
+        * launch.density(second, third_sign, width)
+        * (0.5 * folded.density);
     (pair, density)
 }
 
-/// Maps the unit square onto its half `c_second <= c_first` with uniform
-/// density 2, the smaller coordinate from the first: `c_second = 1 -
-/// sqrt(1 - x_first)` (the smaller of two uniform coordinates), `c_first =
-/// c_second + x_second (1 - c_second)` (uniform above it). A same-side launch
-/// pair's offset integral vanishes along the diagonal `u2 = u3` (no
-/// three-body encounter without a relative speed) with a kink that runs
-/// obliquely through the square, which randomized quasi-Monte Carlo
-/// integrates poorly; folded, the diagonal is the edge `x_second = 0`. The
-/// slow stratum of the smaller speed (`c_second < slow_share`) is the strip
-/// `x_first < 1 - (1 - slow_share)^2`, bounded by a straight line.
-pub fn folded_through_smaller([x_first, x_second]: [f64; 2]) -> [f64; 2] {
-    // 1 - sqrt(1 - x), without the cancellation at small x.
-    let smaller = x_first / (1.0 + (1.0 - x_first).sqrt());
-    [smaller + x_second * (1.0 - smaller), smaller]
+/// A same-side point folded onto the half of the unit square below its
+/// diagonal: the launch coordinates `[c_first, c_second]` (`c_second <=
+/// c_first`) and the fold's density there (2 for a uniform fold; the
+/// half-square has area 1/2).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Folded {
+    /// `[c_first, c_second]`, the larger coordinate first.
+    pub coordinates: [f64; 2],
+    /// Density of the folded points on the half-square `c_second <= c_first`.
+    pub density: f64,
+}
+
+/// Folds the unit square onto its half `c_second <= c_first`, in two
+/// strata split at the dyadic `x_first = 2 slow`:
+/// * the slow strip, `x_first < 2 slow`: the smaller coordinate linear in
+///   `x_first`, `c_second = x_first / 2` (below `slow`), `c_first = c_second +
+///   x_second (1 - c_second)`, density `2 / (1 - c_second)`;
+/// * the rest, the triangle above `slow`: `c_first = slow + (1 - slow)
+///   sqrt(u)` (the larger of two uniform coordinates, `u` the rest of
+///   `x_first` rescaled to `[0, 1)`), `c_second = slow + x_second (c_first -
+///   slow)`, density `2 (1 - 2 slow) / (1 - slow)^2`.
+///
+/// A same-side launch pair's offset integral vanishes along the diagonal
+/// `u2 = u3` (no three-body encounter without a relative speed) with a kink
+/// that runs obliquely through the square, which randomized quasi-Monte Carlo
+/// integrates poorly; folded, the diagonal is the edge `x_second = 1` of the
+/// rest and `x_second = 0` of the strip. The slow stratum of the smaller
+/// speed (`c_second < slow`) is exactly the strip: a straight edge at a
+/// dyadic coordinate, so each stratum holds whole elementary intervals of
+/// the Sobol' points, and both maps are smooth where the integrand is not
+/// small (the square root's edge, `u -> 0`, is where both speeds are at the
+/// bottom of the rest: the smallest integrands). With `slow = 0` it is the
+/// fold through the larger coordinate alone. A fold with uniform density
+/// and a straight edge must take the smaller coordinate as `1 - sqrt(1 -
+/// x_first)`, whose square root sits where both launches are fast and the
+/// integrand is largest: that fold cost `a_6` 1.9x in error at 4096 launch
+/// pairs (docs/benchmarks.md, "The same-side fold").
+pub fn folded_same_side([x_first, x_second]: [f64; 2], slow: f64) -> Folded {
+    let strip = 2.0 * slow;
+    if x_first < strip {
+        let smaller = 0.5 * x_first;
+        Folded {
+            coordinates: [smaller + x_second * (1.0 - smaller), smaller],
+            density: 2.0 / (1.0 - smaller),
+        }
+    } else {
+        let rest = (x_first - strip) / (1.0 - strip);
+        let larger = slow + (1.0 - slow) * rest.sqrt();
+        Folded {
+            coordinates: [larger, slow + x_second * (larger - slow)],
+            density: 2.0 * (1.0 - strip) / ((1.0 - slow) * (1.0 - slow)),
+        }
+    }
 }
 
 /// Scene of the literal algorithm (physics.md §3) at `u' = 0` and density
@@ -720,45 +771,49 @@ mod tests {
         }
     }
 
-    /// The fold maps the unit square uniformly onto the half below its
-    /// diagonal, the smaller coordinate from the first one alone,
-    /// distributed as `1 - (1 - b)^2` (the slow stratum's edge is a
-    /// straight line).
+    /// The fold maps the unit square onto the half below its diagonal with
+    /// the density it states: weighted by `1 / density`, the folded points
+    /// measure every region `{larger <= a, smaller <= b}` as its area, with
+    /// and without a slow strip; the strip is exactly `smaller < slow`, and
+    /// the smaller coordinate is continuous across its edge `x_first = 2
+    /// slow` (the larger is not: the strata are mapped apart).
     #[test]
-    fn folding_covers_the_half_square_uniformly() {
+    fn folding_covers_the_half_square_with_its_density() {
         let grid = 400;
-        let folded: Vec<[f64; 2]> = (0..grid * grid)
-            .map(|k| {
-                let cell = |i: u32| (f64::from(i) + 0.5) / f64::from(grid);
-                folded_through_smaller([cell(k / grid), cell(k % grid)])
-            })
-            .collect();
-        assert!(folded.iter().all(|[larger, smaller]| smaller <= larger));
-        for a in [0.1, 0.5, 0.9] {
-            for b in [0.05, 0.3, 0.8] {
-                let fraction = folded
-                    .iter()
-                    .filter(|[larger, smaller]| *larger <= a && *smaller <= b)
-                    .count() as f64
-                    / folded.len() as f64;
-                // Uniform density 2 on {smaller <= larger}: measure of the region.
-                let lower = b.min(a);
-                let expected = 2.0 * (0.5 * lower * lower + (a - lower) * b);
-                assert!(
-                    (fraction - expected).abs() < 5e-3,
-                    "{a} {b}: {fraction} vs {expected}"
-                );
+        let cell = |i: u32| (f64::from(i) + 0.5) / f64::from(grid);
+        for slow in [0.0, 1.0 / 16.0, 1.0 / 64.0] {
+            let folded: Vec<Folded> = (0..grid * grid)
+                .map(|k| folded_same_side([cell(k / grid), cell(k % grid)], slow))
+                .collect();
+            assert!(folded.iter().all(|f| f.coordinates[1] <= f.coordinates[0]));
+            for a in [0.1, 0.5, 0.9] {
+                for b in [0.03, 0.05, 0.3, 0.8] {
+                    let measured = folded
+                        .iter()
+                        .filter(|f| f.coordinates[0] <= a && f.coordinates[1] <= b)
+                        .map(|f| 1.0 / f.density)
+                        .sum::<f64>()
+                        / folded.len() as f64;
+                    let lower = b.min(a);
+                    let area = 0.5 * lower * lower + (a - lower) * b;
+                    assert!(
+                        (measured - area).abs() < 2.5e-3,
+                        "slow {slow}, {a} {b}: {measured} vs {area}"
+                    );
+                }
             }
+            for x_first in [0.0, 0.5 * slow, 2.0 * slow - 1e-12, 2.0 * slow, 0.3, 0.999] {
+                let smaller = folded_same_side([x_first, 0.4], slow).coordinates[1];
+                assert_eq!(smaller < slow, x_first < 2.0 * slow, "{slow} {x_first}");
+            }
+            let below = folded_same_side([2.0 * slow - 1e-13, 0.7], slow).coordinates;
+            let above = folded_same_side([2.0 * slow, 0.7], slow).coordinates;
+            assert!((below[1] - above[1]).abs() < 1e-12, "{below:?} {above:?}");
         }
-        for (x, exact) in [
-            (1e-12, 0.5e-12 + 0.125e-24),
-            (0.0625, 1.0 - libm::sqrt(0.9375)),
-            (0.75, 0.5),
-        ] {
-            let [_, smaller] = folded_through_smaller([x, 0.3]);
-            assert_eq!(smaller, folded_through_smaller([x, 0.9])[1]);
-            assert!((smaller / exact - 1.0).abs() < 1e-14, "{x}: {smaller}");
-        }
+        // Without a strip: the larger of two uniform coordinates, `sqrt(x)`.
+        let plain = folded_same_side([0.25, 0.5], 0.0);
+        assert_eq!(plain.coordinates, [0.5, 0.25]);
+        assert_eq!(plain.density, 2.0);
     }
 
     /// The mixture density integrates to one (trapezoid on a wide grid plus
