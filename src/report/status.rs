@@ -237,3 +237,77 @@ fn two_digits(value: f64) -> String {
         _ => text,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A status line of `stage[instance]` in `freshness`, with `cpu_seconds`
+    /// recorded by its manifest.
+    fn line(stage: &str, freshness: Freshness, cpu_seconds: Option<f64>) -> StatusLine {
+        StatusLine {
+            id: InstanceId::new(stage, "a"),
+            key: None,
+            freshness,
+            shards: None,
+            cpu_seconds,
+        }
+    }
+
+    /// An estimate of `cpu_seconds` for `stage[a]`.
+    fn cost(stage: &str, cpu_seconds: f64) -> (InstanceId, Cost) {
+        let cost = Cost {
+            cpu_seconds,
+            bytes: 1e6,
+            rows: 0.0,
+        };
+        (InstanceId::new(stage, "a"), cost)
+    }
+
+    /// The measured line sums the recorded CPU of the fresh instances only,
+    /// against the estimate of exactly those: a stale instance's old time
+    /// and a fresh one without a record enter neither sum.
+    #[test]
+    fn the_measured_cpu_time_is_held_against_the_same_instances_estimate() {
+        let costs = [
+            cost("collisions", 3600.0),
+            cost("kernel", 1800.0),
+            cost("moments", 900.0),
+            cost("sweep", 7200.0),
+        ];
+        let lines = [
+            line("collisions", Freshness::Fresh, Some(5400.0)),
+            line("kernel", Freshness::Fresh, Some(720.0)),
+            line("moments", Freshness::Fresh, None),
+            line("sweep", Freshness::Stale(vec!["code".into()]), Some(9000.0)),
+        ];
+        let estimate = cost_estimate(&costs, &lines);
+        assert!(
+            estimate.ends_with(
+                "still to compute (calibrated on the default study, 2-core VM); measured: 1.7 CPU-hours for the 2 fresh instances estimated at 1.5\n"
+            ),
+            "{estimate}"
+        );
+        assert!(
+            estimate.starts_with("estimate: 3.8 CPU-hours"),
+            "{estimate}"
+        );
+        let table = costs_by_stage(&costs, &lines);
+        let row = |stage: &str| {
+            let row = table.lines().find(|l| l.starts_with(stage)).unwrap();
+            row.split_whitespace().skip(1).collect::<Vec<_>>().join(" ")
+        };
+        assert_eq!(row("collisions"), "1 3600 5400 (3600, 1 instances) 1.50");
+        assert_eq!(row("kernel"), "1 1800 720 (1800, 1 instances) 0.40");
+        assert_eq!(row("moments"), "1 900 - -");
+        assert_eq!(row("sweep"), "1 7200 - -");
+    }
+
+    /// Without any recorded CPU time there is no measured line.
+    #[test]
+    fn no_record_no_measured_line() {
+        let lines = [line("kernel", Freshness::Fresh, None)];
+        let estimate = cost_estimate(&[cost("kernel", 10.0)], &lines);
+        assert!(!estimate.contains("measured"), "{estimate}");
+    }
+}
