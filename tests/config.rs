@@ -35,6 +35,9 @@ points = 3
 [collisions.method_per_potential]
 "<id>" = "sampled"
 
+[collisions.strata_per_potential]
+"<id>" = { opposite = 64, same_side = 32 }
+
 [evolve]
 gas = "g"
 times_ns = [1.0]

@@ -51,6 +51,26 @@ pub struct CollisionsConfig {
     /// Per-potential replacements of `method`, keyed by potential id
     /// (`[collisions.method_per_potential]`, e.g. `"lj-0.1" = "sampled"`).
     pub method_per_potential: BTreeMap<String, OffsetMethod>,
+    /// Per-potential strata of the main set (the launch pairs at the kernel's
+    /// `u'` that `a_n` comes from, and the convergence study's
+    /// re-integrations of them), keyed by potential id
+    /// (`[collisions.strata_per_potential]`, e.g. `"ipp-6" = { opposite =
+    /// 4096, same_side = 2048 }`): the split the randomized quasi-Monte
+    /// Carlo errors ask for, in place of the pilot's, whose plain Monte
+    /// Carlo spreads do not see how fast each stratum's error falls. The
+    /// potential's other sets (the sweep's, those tuned to one `u'`) keep
+    /// the pilot.
+    pub strata_per_potential: BTreeMap<String, StrataPoints>,
+}
+
+/// Launch points per randomization of each stratum, both powers of two.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct StrataPoints {
+    /// Points with the launches on opposite sides.
+    pub opposite: u32,
+    /// Points with both launches on one side.
+    pub same_side: u32,
 }
 
 impl Default for CollisionsConfig {
@@ -71,6 +91,7 @@ impl Default for CollisionsConfig {
             quadrature: OffsetRule::default(),
             points_per_potential: BTreeMap::new(),
             method_per_potential: BTreeMap::new(),
+            strata_per_potential: BTreeMap::new(),
         }
     }
 }
@@ -85,6 +106,13 @@ pub enum OffsetMethod {
     /// The nested trapezoid rule on `tau = T sinh(s)` per launch pair, the
     /// launch pairs by two-dimensional randomized quasi-Monte Carlo.
     Quadrature,
+}
+
+impl StrataPoints {
+    /// Points per randomization, both strata.
+    pub fn total(&self) -> u32 {
+        self.opposite + self.same_side
+    }
 }
 
 /// Resolved parameters of a `collisions` instance.
@@ -292,6 +320,21 @@ impl CollisionsConfig {
             let potential = potential_named(id, potentials, key.clone())?;
             check_scenes(self, self.method_of(&potential), points, &key)?;
         }
+        for (id, strata) in &self.strata_per_potential {
+            let key = format!("collisions.strata_per_potential.{id}");
+            let potential = potential_named(id, potentials, key.clone())?;
+            for (stratum, points) in [
+                ("opposite", strata.opposite),
+                ("same_side", strata.same_side),
+            ] {
+                check(
+                    points >= 2 && points.is_power_of_two(),
+                    format!("{key}.{stratum}"),
+                    format!("{points} must be a power of two >= 2 (complete Sobol' nets)"),
+                )?;
+            }
+            check_scenes(self, self.method_of(&potential), strata.total(), &key)?;
+        }
         Ok(())
     }
 
@@ -366,14 +409,14 @@ impl CollisionsConfig {
 
     /// Resolved parameters of collision scenes of `potential` that draw
     /// `share` (in (0, 1]) of its points per randomization, at least 2 (the
-    /// whole set when `share` is 1).
+    /// whole set when `share` is 1), split by the pilot.
     pub fn params_with_share(
         &self,
         potential: Potential,
         engine: EngineSettings,
         share: f64,
     ) -> CollisionsParams {
-        let mut params = self.params(potential, engine);
+        let mut params = self.piloted_params(potential, engine);
         if share < 1.0 {
             params.points = ((f64::from(params.points) * share).round() as u32).max(2);
             params
@@ -383,8 +426,23 @@ impl CollisionsConfig {
         params
     }
 
-    /// Resolved parameters of the collision scenes of `potential`.
+    /// Resolved parameters of the main set of `potential`: its
+    /// `strata_per_potential` entry fixes the split, else the pilot's.
     pub fn params(&self, potential: Potential, engine: EngineSettings) -> CollisionsParams {
+        let mut params = self.piloted_params(potential, engine);
+        if let Some(strata) = self.strata_per_potential.get(&potential.id()) {
+            params.sampling.opposite_points = strata.opposite;
+            params.sampling.same_side_points = strata.same_side;
+            params.points = strata.total();
+            params.pilot_points = 0;
+        }
+        params
+    }
+
+    /// Resolved parameters of collision scenes of `potential` whose strata
+    /// split the pilot decides (`collisions.pilot_points`; without a pilot,
+    /// `same_side_fraction`).
+    pub fn piloted_params(&self, potential: Potential, engine: EngineSettings) -> CollisionsParams {
         let mut plan = SamplingPlan {
             seed: self.seed,
             randomizations: self.randomizations,

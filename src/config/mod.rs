@@ -45,7 +45,7 @@ use crate::physics::scene::EngineSettings;
 pub use check::{MAX_LIST, compact};
 pub use collisions::{
     CollisionsConfig, CollisionsParams, LaunchesParams, MAX_PILOT_POINTS, MAX_RANDOMIZATIONS,
-    MAX_SCENES, OffsetMethod,
+    MAX_SCENES, OffsetMethod, StrataPoints,
 };
 pub use convergence::{ConvergenceConfig, ConvergenceParams};
 pub use dissociation::{DissociationConfig, DissociationParams, MAX_DISSOCIATION_POINTS};

@@ -317,21 +317,18 @@ pub fn sample_launch(
     } else {
         launch.without_slow_stratum()
     };
-    let (folded, width) = if fold {
+    // The unordered pair's density factor: a folded point stands for both
+    // orderings, so its fold's density counts half.
+    let ([x_first, x_second], fold_density, width) = if fold {
+        let folded = folded_same_side(point, launch.slow_share);
         (
-            folded_same_side(point, launch.slow_share),
+            folded.coordinates,
+            0.5 * folded.density,
             SAME_SIDE_QUADRATURE_WIDTH,
         )
     } else {
-        (
-            Folded {
-                coordinates: point,
-                density: 2.0,
-            },
-            1.0,
-        )
+        (point, 1.0, 1.0)
     };
-    let [x_first, x_second] = folded.coordinates;
     let first = launch.speed(x_first, 1.0, width);
     let second = launch.speed(x_second, third_sign, width);
     let pair = LaunchPair {
@@ -340,7 +337,7 @@ pub fn sample_launch(
     };
     let density = launch.density(first, 1.0, width)
         * launch.density(second, third_sign, width)
-        * (0.5 * folded.density);
+        * fold_density;
     (pair, density)
 }
 

@@ -72,7 +72,10 @@ pub(super) fn tuned_collisions(
     potential: Potential,
     u_prime: f64,
 ) -> (String, CollisionsParams) {
-    let mut params = study.collisions_params(potential);
+    let mut params = study
+        .config
+        .collisions
+        .piloted_params(potential, study.engine());
     params.sampling.launch.shift = u_prime;
     params.sampling.launch.spread = 0.0;
     one_halving_finer(&mut params);
