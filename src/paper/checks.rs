@@ -351,11 +351,12 @@ fn exponent_row(
     let fit = if law.goodness.dof == 0 {
         "three rates fix the three parameters (no chi-square)".to_string()
     } else {
+        let dof = law.goodness.dof;
         format!(
-            "chi2/dof = {:.2} with {} degrees of freedom, {}",
-            law.goodness.per_dof(),
-            law.goodness.dof,
-            law.goodness.p_phrase()
+            "chi2 = {:.2} on {dof} degree{} of freedom, p = {} (the power law's test)",
+            law.goodness.chi2,
+            if dof == 1 { "" } else { "s" },
+            law.goodness.p_digits()
         )
     };
     let note = format!(

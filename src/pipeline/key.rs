@@ -118,6 +118,27 @@ pub fn changed_params(old: &Value, new: &Value) -> Vec<String> {
 
 fn diff(old: &Value, new: &Value, path: String, changes: &mut Vec<String>) {
     match (old, new) {
+        (Value::Array(a), Value::Array(b)) if a.len() == b.len() => {
+            for (i, (x, y)) in a.iter().zip(b).enumerate() {
+                diff(x, y, format!("{path}[{i}]"), changes);
+            }
+        }
+        (Value::Array(a), Value::Array(b)) => {
+            let missing = |from: &[Value], to: &[Value]| -> Vec<String> {
+                from.iter()
+                    .enumerate()
+                    .filter(|(_, x)| !to.contains(x))
+                    .map(|(i, x)| format!("[{i}] {}", brief(x)))
+                    .collect()
+            };
+            let mut change = format!("{}: {} -> {} entries", shown(&path), a.len(), b.len());
+            for (verb, entries) in [("removed", missing(a, b)), ("added", missing(b, a))] {
+                if !entries.is_empty() {
+                    change.push_str(&format!("; {verb} {}", entries.join(", ")));
+                }
+            }
+            changes.push(change);
+        }
         (Value::Object(a), Value::Object(b)) => {
             let mut names: Vec<&String> = a.keys().chain(b.keys()).collect();
             names.sort();
@@ -136,8 +157,30 @@ fn diff(old: &Value, new: &Value, path: String, changes: &mut Vec<String>) {
                 );
             }
         }
-        _ if old != new => changes.push(format!("{path}: {old} -> {new}")),
+        _ if old != new => changes.push(format!(
+            "{}: {} -> {}",
+            shown(&path),
+            brief(old),
+            brief(new)
+        )),
         _ => {}
+    }
+}
+
+/// A parameter path as `status` names it (`(all)` for the whole document).
+fn shown(path: &str) -> &str {
+    if path.is_empty() { "(all)" } else { path }
+}
+
+/// Longest value `status` shows whole, in characters of JSON.
+const BRIEF_CHARS: usize = 80;
+
+/// `value` as JSON, cut to [`BRIEF_CHARS`] with its length after it.
+fn brief(value: &Value) -> String {
+    let text = value.to_string();
+    match text.char_indices().nth(BRIEF_CHARS) {
+        Some((cut, _)) => format!("{}... ({} characters)", &text[..cut], text.chars().count()),
+        None => text,
     }
 }
 
@@ -145,6 +188,26 @@ fn diff(old: &Value, new: &Value, path: String, changes: &mut Vec<String>) {
 mod tests {
     use super::*;
     use serde_json::json;
+
+    #[test]
+    fn changed_params_name_list_entries_and_cut_long_values() {
+        let old = json!([{"name": "a", "n": 1}, {"name": "b", "n": 2}]);
+        let same_length = json!([{"name": "a", "n": 1}, {"name": "b", "n": 3}]);
+        assert_eq!(changed_params(&old, &same_length), ["[1].n: 2 -> 3"]);
+        let longer = json!([{"name": "a", "n": 1}, {"name": "c", "n": 4}, {"name": "b", "n": 2}]);
+        assert_eq!(
+            changed_params(&old, &longer),
+            [r#"(all): 2 -> 3 entries; added [1] {"n":4,"name":"c"}"#]
+        );
+        let long = json!({"list": "x".repeat(200)});
+        let changes = changed_params(&json!({"list": "y"}), &long);
+        assert_eq!(changes.len(), 1);
+        assert!(
+            changes[0].starts_with(r#"list: "y" -> "xxx"#),
+            "{changes:?}"
+        );
+        assert!(changes[0].ends_with("... (202 characters)"), "{changes:?}");
+    }
 
     #[test]
     fn canonical_json_sorts_keys_at_every_level() {
