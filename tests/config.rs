@@ -742,6 +742,44 @@ fn sweep_points_share_sizes_only_the_sweep_set() {
     assert_eq!(wide.expect("own set").points, 128);
 }
 
+/// `collisions.strata_per_potential` fixes the split of the potential's main
+/// set (no pilot) and of nothing else: the sweep's own set and the sets tuned
+/// to one `u'` keep the pilot and their points.
+#[test]
+fn strata_per_potential_fix_only_the_main_set() {
+    let fixed = STUDY.replace(
+        "[collisions.proposal]",
+        "[collisions.strata_per_potential]\n\"ipp-6\" = { opposite = 128, same_side = 64 }\n\n[collisions.proposal]",
+    );
+    assert_ne!(fixed, STUDY);
+    let path = std::path::Path::new("pipeline.toml");
+    let (study, piloted) = (
+        Study::parse(path, &fixed).expect("valid"),
+        Study::parse(path, STUDY).expect("valid"),
+    );
+    let potential = Potential::inverse_power(6.0);
+    let main = study.collisions_params(potential);
+    assert_eq!(
+        (
+            main.sampling.opposite_points,
+            main.sampling.same_side_points
+        ),
+        (128, 64)
+    );
+    assert_eq!((main.points, main.pilot_points), (192, 0));
+    assert_eq!(main.launches().pilot_points, 0);
+    assert!(piloted.collisions_params(potential).pilot_points > 0);
+    let wide = |study: &Study| ternary::plan::wide_collisions(study, potential).1;
+    assert_eq!(wide(&study), wide(&piloted));
+    assert!(wide(&study).expect("own set").pilot_points > 0);
+    // Another potential keeps the pilot.
+    let other = Potential::lennard_jones(0.1);
+    assert_eq!(
+        study.collisions_params(other),
+        piloted.collisions_params(other)
+    );
+}
+
 /// `sweep.randomizations` splits only the sweep's own scene set, and the
 /// sweep's quadrature takes one halving more than the kernel's.
 #[test]
