@@ -212,7 +212,7 @@ fn spline_end_row(
 /// elimination without pivoting (the Thomas algorithm): the pivots must stay
 /// away from zero, as they do for diagonally dominant rows and for the
 /// spline's (positive on uniform grids).
-fn solve_tridiagonal(mut rows: Vec<[f64; 4]>) -> Vec<f64> {
+pub fn solve_tridiagonal(mut rows: Vec<[f64; 4]>) -> Vec<f64> {
     for k in 1..rows.len() {
         let factor = rows[k][0] / rows[k - 1][1];
         rows[k][1] -= factor * rows[k - 1][2];

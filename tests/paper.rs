@@ -434,6 +434,116 @@ fn paper_rows_recompute_from_their_sources() {
     }
     recombination_agrees_between_scene_sets(&store);
     pulls_recompute_from_their_sources(&store, &summary);
+    kernel_models_fit_their_kernels(&store);
+}
+
+/// Every kernel of the reduced study but the vanishing n = 2 one has a
+/// model that passes its own test (chi2 within 0.7..1.5 of its expectation
+/// under flipped randomizations, p > 0.01), and the stored knots reproduce
+/// the stored chi2 from `kernel_log` alone: the spline through `(t, ln_G)`
+/// in `t = ln|du| + |du| / cutoff_scale`, straight beyond the end knots,
+/// averaged over each group (a 400-point midpoint rule here), against the
+/// group means with the variance of each pooled with its neighbours'.
+fn kernel_models_fit_their_kernels(store: &Path) {
+    use contract::fit::model_fit::*;
+    let mut refs: Vec<String> = fs::read_dir(store.join("refs/fit"))
+        .unwrap()
+        .map(|entry| {
+            entry
+                .unwrap()
+                .path()
+                .file_stem()
+                .unwrap()
+                .to_string_lossy()
+                .into_owned()
+        })
+        .collect();
+    refs.sort();
+    assert_eq!(refs.len(), 16, "{refs:?}");
+    for instance in refs {
+        let fit = table(store, "fit", &instance, "kernel_model_fit");
+        let status = &STATUS.read(&fit).unwrap()[0];
+        if instance.starts_with("ipp-2") {
+            assert!(
+                status.contains("fewer than three groups"),
+                "{instance}: {status}"
+            );
+            continue;
+        }
+        assert_eq!(status, "fitted", "{instance}");
+        let (chi2, expected) = (
+            CHI2.read(&fit).unwrap()[0],
+            CHI2_EXPECTED.read(&fit).unwrap()[0],
+        );
+        let p = P_VALUE.read(&fit).unwrap()[0];
+        assert!(
+            (0.7..=1.5).contains(&(chi2 / expected)) && p > 0.01,
+            "{instance}: chi2 {chi2}, expected {expected}, p {p}"
+        );
+        assert_eq!(CONVERGED.read(&fit).unwrap()[0], 1, "{instance}");
+        let mirrored = MIRRORED.read(&fit).unwrap()[0] == 1;
+        let recomputed = model_chi2(store, &instance, mirrored);
+        assert!(
+            (recomputed / chi2 - 1.0).abs() < 1e-6,
+            "{instance}: {recomputed} != {chi2}"
+        );
+    }
+}
+
+/// The chi2 of a kernel's stored model against its `kernel_log` groups
+/// ([`kernel_models_fit_their_kernels`]).
+fn model_chi2(store: &Path, instance: &str, mirrored: bool) -> f64 {
+    use contract::fit::model::*;
+    use contract::kernel::log::{DU_INNER, DU_OUTER};
+    use ternary::kernel::model::NaturalSpline;
+    let knots = table(store, "fit", instance, "kernel_model");
+    let log = table(store, "kernel", instance, "kernel_log");
+    let (sides, t, values, scales) = (
+        SIDE.read(&knots).unwrap(),
+        T.read(&knots).unwrap(),
+        LN_G.read(&knots).unwrap(),
+        CUTOFF_SCALE.read(&knots).unwrap(),
+    );
+    let (inner, outer) = (DU_INNER.read(&log).unwrap(), DU_OUTER.read(&log).unwrap());
+    let g = contract::kernel::G.read(&log).unwrap();
+    let mut chi2 = 0.0;
+    for (side, sign) in [("below", -1.0), ("above", 1.0)] {
+        if mirrored && side == "below" {
+            continue;
+        }
+        let rows: Vec<usize> = (0..sides.len()).filter(|&k| sides[k] == side).collect();
+        let t_side: Vec<f64> = rows.iter().map(|&k| t[k]).collect();
+        let ln_g: Vec<f64> = rows.iter().map(|&k| values[k].mean).collect();
+        let (spline, scale) = (NaturalSpline::through(&t_side, &ln_g), scales[rows[0]]);
+        let model = |x: f64| libm::exp(spline.value(libm::log(x) + x / scale));
+        let mut groups: Vec<usize> = (0..g.len()).filter(|&k| sign * inner[k] > 0.0).collect();
+        groups.sort_by(|&a, &b| (sign * inner[a]).total_cmp(&(sign * inner[b])));
+        // Groups without spread around them carry no error: dropped, then
+        // the rest pooled anew.
+        let pooled = |groups: &[usize]| -> Vec<f64> {
+            let variance: Vec<f64> = groups.iter().map(|&k| g[k].stderr * g[k].stderr).collect();
+            (0..variance.len())
+                .map(|i| {
+                    let window = &variance[i.saturating_sub(1)..(i + 2).min(variance.len())];
+                    window.iter().sum::<f64>() / window.len() as f64
+                })
+                .collect()
+        };
+        let spread = pooled(&groups);
+        groups = (0..groups.len())
+            .filter(|&i| spread[i] > 0.0)
+            .map(|i| groups[i])
+            .collect();
+        for (&k, pooled) in groups.iter().zip(pooled(&groups)) {
+            let (a, b) = (sign * inner[k], sign * outer[k]);
+            let mean = (0..400)
+                .map(|j| model(a + (f64::from(j) + 0.5) * (b - a) / 400.0))
+                .sum::<f64>()
+                / 400.0;
+            chi2 += (g[k].mean - mean).powi(2) / pooled;
+        }
+    }
+    chi2
 }
 
 /// The `pulls` table holds every cross-check of the study, each pull

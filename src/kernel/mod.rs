@@ -12,6 +12,7 @@
 pub mod binding;
 pub mod equilibrium;
 pub mod fit;
+pub mod model;
 pub mod segments;
 pub mod tail;
 

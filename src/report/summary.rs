@@ -12,7 +12,7 @@ use crate::pipeline::executor::InstanceReport;
 use crate::pipeline::store::Store;
 
 use super::tables::{
-    balance_table, compare_table, convergence_table, evolve_table, gases_table,
+    balance_table, compare_table, convergence_table, evolve_table, gases_table, kernel_model_table,
     largest_pulls_table, md_table, near_integrable_table, pulls_table, scan_table, spectrum_table,
     stationarity_table,
 };
@@ -57,6 +57,7 @@ pub(super) fn stage_tables(
     kick_floor: f64,
 ) -> Result<()> {
     gases_table(out, store, reports)?;
+    kernel_model_table(out, store, reports)?;
     convergence_table(out, store, reports)?;
     evolve_table(out, store, reports)?;
     spectrum_table(out, store, reports)?;

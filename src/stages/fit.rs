@@ -15,6 +15,7 @@ use crate::contract::{self, Rows};
 use crate::kernel::fit::{
     KernelFit, Protocol, Shape, Weighting, fit_kernel, systematic, varied_protocols,
 };
+use crate::kernel::model::{KernelModel, NoModel, Side, SideModel, fit_kernel_model, side_groups};
 use crate::pipeline::code::{self, Code};
 use crate::pipeline::{Input, InstanceId, Progress, Stage, StageError, Table};
 use crate::stats::Estimate;
@@ -48,7 +49,12 @@ impl Stage for FitStage {
     }
 
     fn tables(&self) -> &'static [&'static str] {
-        &[contract::fit::TABLE.name]
+        &[
+            contract::fit::TABLE.name,
+            contract::fit::model::TABLE.name,
+            contract::fit::model_covariance::TABLE.name,
+            contract::fit::model_fit::TABLE.name,
+        ]
     }
 
     fn inputs(&self) -> Vec<InstanceId> {
@@ -76,8 +82,15 @@ impl Stage for FitStage {
                 fit: fit_kernel(&fine, &offsets, protocol),
             })
             .collect();
+        let [below, above] = side_groups(&fine, &offsets, self.params.kernel.bin_width);
+        let model = fit_kernel_model(below, above);
         progress.advance(1);
-        Ok(vec![fit_table(&fits)?])
+        Ok(vec![
+            fit_table(&fits)?,
+            knots_table(&model)?,
+            covariance_table(&model)?,
+            model_fit_table(&model)?,
+        ])
     }
 }
 
@@ -166,5 +179,95 @@ fn fit_table(fits: &[ProtocolFit]) -> Result<Table, StageError> {
         .with(REPLICATES_FITTED, |row| row.fit.replicates.len() as u32)
         .with(UNCONVERGED_FITS, |row| row.fit.unconverged as u32)
         .with(STATUS, |row| row.status().to_string())
+        .table(&TABLE)?)
+}
+
+/// One knot of one side's model.
+struct KnotRow<'a> {
+    side: Side,
+    knot: usize,
+    model: &'a SideModel,
+}
+
+/// Every side's knots, below `u'` then above (none without a model).
+fn knot_rows(model: &Result<KernelModel, NoModel>) -> Vec<KnotRow<'_>> {
+    let Ok(model) = model else {
+        return Vec::new();
+    };
+    model
+        .both_sides()
+        .into_iter()
+        .flat_map(|(side, model)| {
+            (0..model.values.len()).map(move |knot| KnotRow { side, knot, model })
+        })
+        .collect()
+}
+
+/// `kernel_model`: one row per side and knot.
+fn knots_table(model: &Result<KernelModel, NoModel>) -> Result<Table, StageError> {
+    use contract::fit::model::*;
+    let rows = knot_rows(model);
+    let size = |row: &KnotRow| row.model.values.len();
+    Ok(Rows::new(&rows)
+        .with(SIDE, |row| row.side.name().to_string())
+        .with(KNOT, |row| row.knot as u32)
+        .with(DU, |row| {
+            row.side.sign() * row.model.knots.warp.x(row.model.knots.t[row.knot])
+        })
+        .with(T, |row| row.model.knots.t[row.knot])
+        .with(CUTOFF_SCALE, |row| row.model.knots.warp.cutoff_scale)
+        .estimate(LN_G, |row| Estimate {
+            mean: row.model.values[row.knot],
+            stderr: row.model.covariance[row.knot * (size(row) + 1)].sqrt(),
+        })
+        .table(&TABLE)?)
+}
+
+/// `kernel_model_covariance`: one row per side and pair of knots.
+fn covariance_table(model: &Result<KernelModel, NoModel>) -> Result<Table, StageError> {
+    use contract::fit::model_covariance::*;
+    let rows: Vec<(KnotRow, usize)> = knot_rows(model)
+        .into_iter()
+        .flat_map(|row| (0..row.model.values.len()).map(move |j| (KnotRow { ..row }, j)))
+        .collect();
+    Ok(Rows::new(&rows)
+        .with(contract::fit::model::SIDE, |(row, _)| {
+            row.side.name().to_string()
+        })
+        .with(KNOT_I, |(row, _)| row.knot as u32)
+        .with(KNOT_J, |(_, j)| *j as u32)
+        .with(COVARIANCE, |(row, j)| {
+            row.model.covariance[row.knot * row.model.values.len() + j]
+        })
+        .table(&TABLE)?)
+}
+
+/// `kernel_model_fit`: the goodness of fit, one row.
+fn model_fit_table(model: &Result<KernelModel, NoModel>) -> Result<Table, StageError> {
+    use contract::fit::model_fit::*;
+    let rows = [model.as_ref().ok()];
+    let value = |row: &Option<&KernelModel>, f: fn(&KernelModel) -> f64| row.map_or(f64::NAN, f);
+    let count = |row: &Option<&KernelModel>, f: fn(&KernelModel) -> usize| row.map_or(0, f) as u32;
+    let status = model.as_ref().map_or_else(|why| why.reason(), |_| "fitted");
+    Ok(Rows::new(&rows)
+        .with(STATUS, |_| status.to_string())
+        .with(MIRRORED, |row| count(row, |m| usize::from(m.mirrored)))
+        .with(GROUPS, |row| {
+            count(row, |m| m.sides.iter().map(|(_, s)| s.groups).sum())
+        })
+        .with(KNOTS, |row| {
+            count(row, |m| m.sides.iter().map(|(_, s)| s.values.len()).sum())
+        })
+        .with(DOF, |row| count(row, |m| m.goodness.dof))
+        .with(CHI2, |row| value(row, |m| m.goodness.chi2))
+        .with(CHI2_EXPECTED, |row| value(row, |m| m.goodness.expected))
+        .with(CHI2_SPREAD, |row| value(row, |m| m.goodness.spread))
+        .with(P_VALUE, |row| value(row, |m| m.goodness.p_value))
+        .with(SIGN_PATTERNS, |row| count(row, |m| m.goodness.patterns))
+        .with(CONVERGED, |row| {
+            count(row, |m| {
+                usize::from(m.sides.iter().all(|(_, s)| s.converged))
+            })
+        })
         .table(&TABLE)?)
 }

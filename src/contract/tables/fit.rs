@@ -126,3 +126,157 @@ pub const RANGE_MIN: Col<f64> = Col::f64("range_min", "v_th", "smallest |u - u'|
 pub const RANGE_MAX: Col<f64> = Col::f64("range_max", "v_th", "largest |u - u'| fitted");
 /// Whether the fit succeeded.
 pub const STATUS: Col<String> = Col::text("status", "fitted, or why not");
+
+/// Unit of `ln G`.
+const LN_G_UNIT: &str = "ln(rho^2 l v_th / v_th)";
+
+/// `kernel_model.parquet`: the kernel model's knots (`kernel::model`), one
+/// row per side and knot. On each side `ln G` is the natural cubic spline
+/// through `(t_k, ln_G_k)` in `t = ln|du| + |du| / cutoff_scale`, continued
+/// straight beyond the end knots.
+pub mod model {
+    use super::*;
+
+    /// The table.
+    pub const TABLE: TableSpec = TableSpec {
+        stage: STAGE,
+        name: "kernel_model",
+        description: "kernel model: on each side of u', ln G(u' -> u) is the natural cubic spline through (t, ln_G) in t = ln|du| + |du| / cutoff_scale, straight beyond the end knots; one row per side and knot",
+    };
+    /// Side of `u'`.
+    pub const SIDE: Col<String> = Col::text(
+        "side",
+        "below (u < u') or above (u > u'); a mirrored kernel's below rows repeat its above rows",
+    );
+    /// Knot number.
+    pub const KNOT: Col<u32> = Col::u32("knot", "1", "knot number on its side, from u' outwards");
+    /// The knot's `u - u'`.
+    pub const DU: Col<f64> = Col::f64(
+        "du",
+        "v_th",
+        "u - u' at the knot (negative below u'): the first at the innermost group's inner edge, the last at the outermost resolved group's outer edge",
+    );
+    /// The knot in the warped distance.
+    pub const T: Col<f64> = Col::f64("t", "1", "the knot in t = ln|du| + |du| / cutoff_scale");
+    /// The cut-off scale of the warp.
+    pub const CUTOFF_SCALE: Col<f64> = Col::f64(
+        "cutoff_scale",
+        "v_th",
+        "x_c of the side's warp t = ln|du| + |du| / x_c: a quarter of the last knot's |du|",
+    );
+    /// `ln G` at the knot.
+    pub const LN_G: Pair = Pair {
+        value: Col::f64(
+            "ln_G",
+            LN_G_UNIT,
+            "ln G at the knot: the spline's value there",
+        ),
+        stderr: Col::f64(
+            "ln_G_stderr",
+            LN_G_UNIT,
+            "standard error of ln_G: jackknife over the randomizations (kernel_model_covariance holds the covariance)",
+        ),
+    };
+}
+
+/// `kernel_model_covariance.parquet`: the jackknife covariance of each
+/// side's knot values, one row per side and pair of knots (with which the
+/// error of `ln G` anywhere is `sqrt(b^T C b)`, `b` the spline's cardinal
+/// basis there).
+pub mod model_covariance {
+    use super::*;
+
+    /// The table.
+    pub const TABLE: TableSpec = TableSpec {
+        stage: STAGE,
+        name: "kernel_model_covariance",
+        description: "jackknife covariance over the randomizations of the kernel model's ln_G at the knots of one side, one row per side and pair of knots",
+    };
+    /// The first knot.
+    pub const KNOT_I: Col<u32> = Col::u32("knot_i", "1", "knot number of the first value");
+    /// The second knot.
+    pub const KNOT_J: Col<u32> = Col::u32("knot_j", "1", "knot number of the second value");
+    /// The covariance.
+    pub const COVARIANCE: Col<f64> = Col::f64(
+        "covariance",
+        "ln(rho^2 l v_th / v_th)^2",
+        "covariance of ln_G at knot_i and knot_j: (R - 1)/R sum over the fits leaving out one randomization each",
+    );
+}
+
+/// `kernel_model_fit.parquet`: the kernel model's goodness of fit, one row.
+pub mod model_fit {
+    use super::*;
+
+    /// The table.
+    pub const TABLE: TableSpec = TableSpec {
+        stage: STAGE,
+        name: "kernel_model_fit",
+        description: "goodness of fit of the kernel model to the log-spaced groups of kernel_log, both sides together, calibrated by flipping the randomizations' deviations from the model (a wild bootstrap); one row",
+    };
+    /// Fitted, or why not.
+    pub const STATUS: Col<String> = Col::text(
+        "status",
+        "fitted, or why the kernel has no model (fewer than three randomizations, or a side with fewer than three groups measured to better than a third, as the vanishing n = 2 kernel)",
+    );
+    /// Whether one model stands for both sides.
+    pub const MIRRORED: Col<u32> = Col::u32(
+        "mirrored",
+        "1",
+        "1 when the two sides are equal in every randomization (the mirror images at u' = 0) and one model describes both, else 0",
+    );
+    /// Groups fitted.
+    pub const GROUPS: Col<u32> = Col::u32(
+        "groups",
+        "1",
+        "log-spaced groups fitted (one side's when mirrored)",
+    );
+    /// Knots.
+    pub const KNOTS: Col<u32> = Col::u32(
+        "knots",
+        "1",
+        "knots of every side: the model's parameters, chosen per side by leaving out each randomization in turn",
+    );
+    /// Degrees of freedom.
+    pub const DOF: Col<u32> = Col::u32("dof", "1", "groups minus knots");
+    /// Chi-square.
+    pub const CHI2: Col<f64> = Col::f64(
+        "chi2",
+        "1",
+        "sum over groups of (G - model)^2 / var, var the variance of the group mean pooled with its two neighbours'",
+    )
+    .or_null("no model (see status)");
+    /// Its expectation.
+    pub const CHI2_EXPECTED: Col<f64> = Col::f64(
+        "chi2_expected",
+        "1",
+        "mean chi2 of the model refitted to data whose randomizations' deviations from it are flipped in every sign pattern: what a model that follows the kernel gives (compare chi2 / chi2_expected with 1)",
+    )
+    .or_null("no model (see status)");
+    /// The spread of chi-square under the model.
+    pub const CHI2_SPREAD: Col<f64> = Col::f64(
+        "chi2_spread",
+        "1",
+        "standard deviation of the refitted chi2 over the sign patterns: how far from chi2_expected a model that follows the kernel may land",
+    )
+    .or_null("no model (see status)");
+    /// The p-value.
+    pub const P_VALUE: Col<f64> = Col::f64(
+        "p_value",
+        "1",
+        "share of sign patterns whose refitted chi2 reaches the observed one (the unflipped data counts, so p >= 1 / sign_patterns)",
+    )
+    .or_null("no model (see status)");
+    /// Patterns drawn.
+    pub const SIGN_PATTERNS: Col<u32> = Col::u32(
+        "sign_patterns",
+        "1",
+        "sign patterns drawn: all 2^R for R <= 12 randomizations, else 4096 fixed ones",
+    );
+    /// Whether the fits converged.
+    pub const CONVERGED: Col<u32> = Col::u32(
+        "converged",
+        "1",
+        "1 when every side's fit to the mean groups reached a minimum, else 0",
+    );
+}
