@@ -12,7 +12,12 @@ would, then
    the kernel's bins and compares it with the `moments` table's own value, within
    the table's standard error plus the bins' discretization bound,
 3. reads the `kernels` figure's `points.parquet` and checks that the figure shows
-   the same potentials.
+   the same potentials,
+4. evaluates each kernel's model (`kernel_model`: ln G a natural cubic spline in
+   t = ln|du| + |du| / cutoff_scale, straight beyond its end knots) with numpy
+   alone, with its error from `kernel_model_covariance`, and checks that its means
+   over the fitted groups and their chi-square reproduce `kernel_model_groups` and
+   `kernel_model_fit` (docs/kernel-model.md).
 
 It exits with status 1 if a check fails. Units: velocities in v_th, rates in
 rho^2 l v_th (docs/stages.md).
@@ -25,6 +30,7 @@ import sys
 
 import duckdb
 import matplotlib
+import numpy as np
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
@@ -47,11 +53,12 @@ def resources(bundle):
 
 
 def dilute_kernels_at_rest(bundle):
-    """{potential: {table name: path}} of the kernel tables (`kernel`, `kernel_log`)
-    and the `moments` table of every potential at u' = 0, dilute."""
+    """{potential: {table name: path}} of the kernel tables (`kernel`, `kernel_log`),
+    the `moments` table and the kernel model's tables of every potential at u' = 0,
+    dilute."""
     found = {}
     for stage, instance, table, _, path in resources(bundle):
-        if stage in ("kernel", "moments") and instance.endswith("_u0_rho0"):
+        if stage in ("kernel", "moments", "fit") and instance.endswith("_u0_rho0"):
             potential = instance.removesuffix("_u0_rho0")
             found.setdefault(potential, {})[table or stage] = path
     return found
@@ -108,6 +115,85 @@ def a_n_from_moments(moments_path):
     return row["self_variance"], row["self_variance_stderr"]
 
 
+class KernelModel:
+    """One side of a kernel's model: ln G(x) at x = |u - u'| > 0, and its standard
+    error, from the knots of `kernel_model` and their covariance."""
+
+    def __init__(self, knots_path, covariance_path, side="above"):
+        knots = pl.read_parquet(knots_path).filter(pl.col("side") == side).sort("knot")
+        self.t = knots["t"].to_numpy()
+        self.ln_g = knots["ln_G"].to_numpy()
+        self.cutoff_scale = knots["cutoff_scale"][0]
+        size = len(self.t)
+        covariance = pl.read_parquet(covariance_path).filter(pl.col("side") == side)
+        self.covariance = np.zeros((size, size))
+        self.covariance[covariance["knot_i"].to_numpy(), covariance["knot_j"].to_numpy()] = (
+            covariance["covariance"].to_numpy())
+
+    def basis(self, x):
+        """The natural cubic spline's cardinal basis at x (rows: points): S'' = 0 at
+        the end knots, straight beyond them."""
+        t, size = self.t, len(self.t)
+        h = np.diff(t)
+        system = np.zeros((size, size))
+        system[0, 0] = system[-1, -1] = 1.0
+        rhs = np.zeros((size, size))
+        for k in range(1, size - 1):
+            system[k, k - 1:k + 2] = h[k - 1] / 6, (h[k - 1] + h[k]) / 3, h[k] / 6
+            rhs[k, k - 1:k + 2] = 1 / h[k - 1], -1 / h[k - 1] - 1 / h[k], 1 / h[k]
+        curvature = np.linalg.solve(system, rhs)  # S'' at the knots per unit value
+        s = np.log(x) + x / self.cutoff_scale
+        k = np.clip(np.searchsorted(t, s) - 1, 0, size - 2)
+        a = (t[k + 1] - np.clip(s, t[0], t[-1])) / h[k]
+        b = 1 - a
+        unit = np.eye(size)
+        inside = (a[:, None] * unit[k] + b[:, None] * unit[k + 1]
+                  + ((a ** 3 - a)[:, None] * curvature[k] + (b ** 3 - b)[:, None] * curvature[k + 1])
+                  * (h[k] ** 2 / 6)[:, None])
+        first = unit[1] / h[0] - unit[0] / h[0] - h[0] * (2 * curvature[0] + curvature[1]) / 6
+        last = unit[-1] / h[-1] - unit[-2] / h[-1] + h[-1] * (curvature[-2] + 2 * curvature[-1]) / 6
+        inside = np.where((s < t[0])[:, None], unit[0] + (s - t[0])[:, None] * first, inside)
+        return np.where((s > t[-1])[:, None], unit[-1] + (s - t[-1])[:, None] * last, inside)
+
+    def ln_G(self, x):
+        return self.basis(np.atleast_1d(x)) @ self.ln_g
+
+    def ln_G_stderr(self, x):
+        b = self.basis(np.atleast_1d(x))
+        return np.sqrt(np.einsum("pi,ij,pj->p", b, self.covariance, b))
+
+    def group_means(self, inner, outer):
+        """The model's mean over each group [inner, outer] (8-point Gauss-Legendre)."""
+        nodes, weights = np.polynomial.legendre.leggauss(8)
+        x = 0.5 * (inner + outer)[:, None] + 0.5 * (outer - inner)[:, None] * nodes
+        values = np.exp(self.ln_G(x.ravel())).reshape(x.shape)
+        return 0.5 * values @ weights
+
+
+def check_kernel_model(potential, tables):
+    """The model evaluated here against the fit stage's own group means and chi-square."""
+    fit = pl.read_parquet(tables["kernel_model_fit"]).row(0, named=True)
+    if fit["status"] != "fitted":
+        print(f"  {potential}: no model ({fit['status']})")
+        return True
+    model = KernelModel(tables["kernel_model"], tables["kernel_model_covariance"])
+    groups = pl.read_parquet(tables["kernel_model_groups"]).filter(pl.col("du") > 0)
+    means = model.group_means(groups["du_inner"].to_numpy(), groups["du_outer"].to_numpy())
+    stored = groups["G_model"].to_numpy()
+    worst = np.max(np.abs(means / stored - 1))
+    chi2 = np.sum(((groups["G"].to_numpy() - means) / groups["G_stderr"].to_numpy()) ** 2)
+    if not fit["mirrored"]:
+        chi2 = None  # the side below has a model of its own; its groups are not summed here
+    x = 1e-3
+    g, error = np.exp(model.ln_G(x)[0]), model.ln_G_stderr(x)[0]
+    agrees = worst < 1e-9 and (chi2 is None or abs(chi2 / fit["chi2"] - 1) < 1e-9)
+    print(f"  {potential}: {len(model.t)} knots, G(0 -> {x}) = {g:.5g} +- {g * error:.2g}; "
+          f"group means within {worst:.1e} of the table's, chi2 {fit['chi2']:.1f} "
+          f"(expected {fit['chi2_expected']:.1f}, p = {fit['p_value']:.3f}) "
+          f"{'agrees' if agrees else 'DISAGREES'}")
+    return agrees
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("bundle", type=pathlib.Path)
@@ -144,6 +230,10 @@ def main():
     if missing:
         print(f"  the figure lacks {missing}")
         failed = True
+
+    print("kernel model, evaluated here from its knots:")
+    for potential, tables in two.items():
+        failed |= not check_kernel_model(potential, tables)
     sys.exit(1 if failed else 0)
 
 

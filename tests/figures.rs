@@ -214,7 +214,28 @@ fn expected(store: &Path, figure: &Artifact) -> Vec<Row> {
                     ("kernel".into(), "fit".into(), x, y, 0.0)
                 })
                 .collect();
-            [measured, line].concat()
+            // The model's group means and residuals above u', as the fit
+            // stage's kernel_model_groups holds them.
+            use contract::fit::model_groups::{DU, G_MODEL, RESIDUAL};
+            let groups = figure.input(store, 1).table("kernel_model_groups");
+            let (du, model, residual) = (
+                DU.read(&groups).unwrap(),
+                G_MODEL.read(&groups).unwrap(),
+                RESIDUAL.read(&groups).unwrap(),
+            );
+            let above = || (0..du.len()).filter(|&k| du[k] > 0.0);
+            let series = |panel: &str, values: &[f64]| -> Vec<Row> {
+                above()
+                    .map(|k| (panel.into(), "model".into(), du[k], values[k], 0.0))
+                    .collect()
+            };
+            [
+                measured,
+                line,
+                series("kernel", &model),
+                series("residuals", &residual),
+            ]
+            .concat()
         }
         "rates" => {
             use contract::sweep::rates::{FOKKER_PLANCK_DRIFT, SELF_DRIFT, SELF_VARIANCE, U_PRIME};

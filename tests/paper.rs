@@ -482,6 +482,13 @@ fn kernel_models_fit_their_kernels(store: &Path) {
         );
         assert_eq!(CONVERGED.read(&fit).unwrap()[0], 1, "{instance}");
         let mirrored = MIRRORED.read(&fit).unwrap()[0] == 1;
+        let groups = table(store, "fit", &instance, "kernel_model_groups");
+        let residuals = contract::fit::model_groups::RESIDUAL.read(&groups).unwrap();
+        let summed: f64 = residuals.iter().map(|r| r * r).sum();
+        assert!(
+            (summed / chi2 - 1.0).abs() < 1e-12,
+            "{instance}: residuals {summed} != {chi2}"
+        );
         let recomputed = model_chi2(store, &instance, mirrored);
         assert!(
             (recomputed / chi2 - 1.0).abs() < 1e-6,

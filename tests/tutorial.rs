@@ -88,7 +88,7 @@ fn the_tutorial_runs_as_written() {
     let export = ternary(&config, &["export", bundle.to_str().unwrap()]);
     assert!(export.status.success(), "{}", stderr(&export));
     assert!(
-        stdout(&export).starts_with("export: 27 tables, 16 figure files"),
+        stdout(&export).starts_with("export: 39 tables, 16 figure files"),
         "{}",
         stdout(&export)
     );
@@ -109,7 +109,7 @@ fn the_tutorial_runs_as_written() {
         "examples/bundle.py failed (install the README's test packages):\n{printed}\n{}",
         stderr(&example)
     );
-    assert_eq!(printed.matches(" agrees").count(), 2, "{printed}");
+    assert_eq!(printed.matches(" agrees").count(), 4, "{printed}");
     assert!(fs::metadata(dir.join("kernels.png")).unwrap().len() > 10_000);
     let _ = fs::remove_dir_all(&dir);
 }

@@ -1,4 +1,5 @@
-//! `kernel_fit_<id>`: a kernel with its fitted shape.
+//! `kernel_fit_<id>`: a kernel with its fitted shape, its model and the
+//! model's normalized residuals.
 
 use polars::prelude::DataFrame;
 use serde::Serialize;
@@ -9,7 +10,9 @@ use super::{Axis, DU_AXIS, FigureKind, G_AXIS, Layout, Panel, Style};
 use crate::contract;
 use crate::pipeline::{Input, StageError};
 
-/// `G(0 -> u)` of one potential with its fitted shape `alpha x^-beta exp(-x^2/2 sigma^2)`.
+/// `G(0 -> u)` of one potential with its fitted shape `alpha x^-beta
+/// exp(-x^2/2 sigma^2)` and its model (`kernel::model`), and the model's
+/// normalized residuals.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct KernelFit {
     /// The potential's id (the figure's name).
@@ -24,25 +27,56 @@ impl FigureKind for KernelFit {
     }
 
     fn description(&self) -> String {
-        "G(0 -> u) against u - u' > 0, +- standard error, with the fitted shape alpha x^-beta exp(-x^2 / 2 sigma^2); bars whose lower end is at or below zero are drawn open downward (an arrow to the frame's bottom)".into()
+        "(a) G(0 -> u) against u - u' > 0, +- standard error, with the fitted shape alpha x^-beta exp(-x^2 / 2 sigma^2) and the kernel model's mean over each group it was fitted to (docs/kernel-model.md); bars whose lower end is at or below zero are drawn open downward (an arrow to the frame's bottom). (b) The model's normalized residuals (G - model) / error per group, the error the fit weighs with (pooled with the neighbouring groups')".into()
     }
 
     fn layout(&self) -> Layout {
         Layout {
-            panels: vec![Panel::new(
-                "kernel",
-                Axis::log(DU_AXIS),
-                Axis::log(G_AXIS),
-                vec![("fit", Style::Line), ("Monte Carlo", Style::Markers)],
-            )],
+            panels: vec![
+                Panel::new(
+                    "kernel",
+                    Axis::log(DU_AXIS),
+                    Axis::log(G_AXIS),
+                    vec![
+                        ("fit", Style::Line),
+                        ("model", Style::Line),
+                        ("Monte Carlo", Style::Markers),
+                    ],
+                ),
+                Panel::new(
+                    "residuals",
+                    Axis::log(DU_AXIS),
+                    Axis::linear(RESIDUAL_AXIS),
+                    vec![("model", Style::Markers)],
+                ),
+            ],
         }
     }
 
     fn frame(&self, inputs: &[Input]) -> Result<DataFrame, StageError> {
         let measured = positive_kernel(&inputs[0], "kernel", "Monte Carlo", GROUPS_PER_DECADE)?;
         let fitted = fitted_shape(&measured, &inputs[1])?;
-        stack(vec![measured, fitted])
+        let [model, residuals] = model_series(&inputs[1])?;
+        stack(vec![measured, fitted, model, residuals])
     }
+}
+
+/// The residual panel's axis.
+const RESIDUAL_AXIS: &str = "(G - model) / error";
+
+/// The model's group means (panel `kernel`) and normalized residuals (panel
+/// `residuals`) above `u'` from `kernel_model_groups` (empty without a
+/// model).
+fn model_series(fit: &Input) -> Result<[DataFrame; 2], StageError> {
+    use contract::fit::model_groups::{DU, G_MODEL, RESIDUAL, TABLE};
+    let table = TABLE.of(fit)?;
+    let (du, model, residual) = (DU.read(table)?, G_MODEL.read(table)?, RESIDUAL.read(table)?);
+    let above: Vec<usize> = (0..du.len()).filter(|&k| du[k] > 0.0).collect();
+    let pick = |values: &[f64]| -> Vec<f64> { above.iter().map(|&k| values[k]).collect() };
+    Ok([
+        series_of("kernel", "model", pick(&du), pick(&model), None)?,
+        series_of("residuals", "model", pick(&du), pick(&residual), None)?,
+    ])
 }
 
 /// The fit's mean shape `alpha x^-beta exp(-x^2 / 2 sigma^2)` on the kernel's

@@ -15,7 +15,9 @@ use crate::contract::{self, Rows};
 use crate::kernel::fit::{
     KernelFit, Protocol, Shape, Weighting, fit_kernel, systematic, varied_protocols,
 };
-use crate::kernel::model::{KernelModel, NoModel, Side, SideModel, fit_kernel_model, side_groups};
+use crate::kernel::model::{
+    GroupFit, KernelModel, NoModel, Side, SideModel, fit_kernel_model, side_groups,
+};
 use crate::pipeline::code::{self, Code};
 use crate::pipeline::{Input, InstanceId, Progress, Stage, StageError, Table};
 use crate::stats::Estimate;
@@ -54,6 +56,7 @@ impl Stage for FitStage {
             contract::fit::model::TABLE.name,
             contract::fit::model_covariance::TABLE.name,
             contract::fit::model_fit::TABLE.name,
+            contract::fit::model_groups::TABLE.name,
         ]
     }
 
@@ -90,6 +93,7 @@ impl Stage for FitStage {
             knots_table(&model)?,
             covariance_table(&model)?,
             model_fit_table(&model)?,
+            groups_table(&model)?,
         ])
     }
 }
@@ -253,7 +257,7 @@ fn model_fit_table(model: &Result<KernelModel, NoModel>) -> Result<Table, StageE
         .with(STATUS, |_| status.to_string())
         .with(MIRRORED, |row| count(row, |m| usize::from(m.mirrored)))
         .with(GROUPS, |row| {
-            count(row, |m| m.sides.iter().map(|(_, s)| s.groups).sum())
+            count(row, |m| m.sides.iter().map(|(_, s)| s.groups.len()).sum())
         })
         .with(KNOTS, |row| {
             count(row, |m| m.sides.iter().map(|(_, s)| s.values.len()).sum())
@@ -269,5 +273,29 @@ fn model_fit_table(model: &Result<KernelModel, NoModel>) -> Result<Table, StageE
                 usize::from(m.sides.iter().all(|(_, s)| s.converged))
             })
         })
+        .table(&TABLE)?)
+}
+
+/// `kernel_model_groups`: every fitted group with the model's value there.
+fn groups_table(model: &Result<KernelModel, NoModel>) -> Result<Table, StageError> {
+    use contract::fit::model_groups::*;
+    let rows: Vec<(f64, GroupFit)> = model
+        .as_ref()
+        .map(|model| {
+            model
+                .sides
+                .iter()
+                .flat_map(|(side, fit)| fit.groups.iter().map(|group| (side.sign(), *group)))
+                .collect()
+        })
+        .unwrap_or_default();
+    Ok(Rows::new(&rows)
+        .with(DU, |(sign, g)| sign * 0.5 * (g.lower + g.upper))
+        .with(DU_INNER, |(sign, g)| sign * g.lower)
+        .with(DU_OUTER, |(sign, g)| sign * g.upper)
+        .with(G, |(_, g)| g.mean)
+        .with(G_STDERR, |(_, g)| g.stderr)
+        .with(G_MODEL, |(_, g)| g.model)
+        .with(RESIDUAL, |(_, g)| g.residual())
         .table(&TABLE)?)
 }

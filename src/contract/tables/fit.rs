@@ -130,6 +130,9 @@ pub const STATUS: Col<String> = Col::text("status", "fitted, or why not");
 /// Unit of `ln G`.
 const LN_G_UNIT: &str = "ln(rho^2 l v_th / v_th)";
 
+/// Unit of `G`.
+const G_UNIT: &str = "rho^2 l v_th / v_th";
+
 /// `kernel_model.parquet`: the kernel model's knots (`kernel::model`), one
 /// row per side and knot. On each side `ln G` is the natural cubic spline
 /// through `(t_k, ln_G_k)` in `t = ln|du| + |du| / cutoff_scale`, continued
@@ -278,5 +281,45 @@ pub mod model_fit {
         "converged",
         "1",
         "1 when every side's fit to the mean groups reached a minimum, else 0",
+    );
+}
+
+/// `kernel_model_groups.parquet`: the groups the kernel model was fitted
+/// to, with the model's value and the residual, one row per side and group.
+pub mod model_groups {
+    pub use super::super::kernel::log::{DU_INNER, DU_OUTER};
+    use super::*;
+
+    /// The table.
+    pub const TABLE: TableSpec = TableSpec {
+        stage: STAGE,
+        name: "kernel_model_groups",
+        description: "the log-spaced groups of kernel_log the kernel model is fitted to, with the model's mean over each group and the normalized residual, one row per side and group (one side when mirrored)",
+    };
+    /// The group's mean `u - u'`.
+    pub const DU: Col<f64> = Col::f64(
+        "du",
+        "v_th",
+        "middle of the group relative to u' (negative below u')",
+    );
+    /// The measured group mean.
+    pub const G: Col<f64> = Col::f64(
+        "G",
+        G_UNIT,
+        "the kernel's mean over the group, averaged over the randomizations (kernel_log's G)",
+    );
+    /// Its error as weighted.
+    pub const G_STDERR: Col<f64> = Col::f64(
+        "G_stderr",
+        G_UNIT,
+        "standard error of G pooled with the two neighbouring groups' (the root of the averaged variances): the fit's weight is its inverse square",
+    );
+    /// The model's group mean.
+    pub const G_MODEL: Col<f64> = Col::f64("G_model", G_UNIT, "the model's mean over the group");
+    /// The residual.
+    pub const RESIDUAL: Col<f64> = Col::f64(
+        "residual",
+        "1",
+        "(G - G_model) / G_stderr: chi2 is the sum of its squares",
     );
 }

@@ -235,6 +235,30 @@ impl Side {
     }
 }
 
+/// One group as the model's fit saw it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GroupFit {
+    /// Inner edge, `|u - u'|` (`v_th`).
+    pub lower: f64,
+    /// Outer edge (`v_th`).
+    pub upper: f64,
+    /// The group's mean kernel over the randomizations
+    /// (`rho^2 l v_th / v_th`).
+    pub mean: f64,
+    /// The standard error its weight is made of: the pooled variance's root.
+    pub stderr: f64,
+    /// The model's mean over the group.
+    pub model: f64,
+}
+
+impl GroupFit {
+    /// `(mean - model) / stderr`: the group's share of chi-square is its
+    /// square.
+    pub fn residual(&self) -> f64 {
+        (self.mean - self.model) / self.stderr
+    }
+}
+
 /// The fitted model of one side.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SideModel {
@@ -249,14 +273,8 @@ pub struct SideModel {
     /// Mean cross-validated score per group of the chosen knots (about 1 +
     /// 1/R for a model that follows the kernel).
     pub cross_validation: f64,
-    /// Groups fitted.
-    pub groups: usize,
-    /// Inner edge of the innermost group (`v_th`).
-    pub first: f64,
-    /// Outer edge of the outermost resolved group: the last knot (`v_th`).
-    pub resolved: f64,
-    /// Outer edge of the outermost group (`v_th`).
-    pub last: f64,
+    /// The groups fitted, nearest `u'` first.
+    pub groups: Vec<GroupFit>,
     /// Whether the fit to the mean groups converged.
     pub converged: bool,
 }
@@ -437,15 +455,21 @@ fn fit_side(groups: &SideGroups) -> Result<Fitted, NoModel> {
         .ok_or(NoModel::NoFit)?;
     let design = Design::new(&chosen.knots, &groups.lower, &groups.upper);
     let fit = fit_groups(&design, &chosen.knots, groups).ok_or(NoModel::NoFit)?;
+    let fitted = (0..mean.len())
+        .map(|g| GroupFit {
+            lower: groups.lower[g],
+            upper: groups.upper[g],
+            mean: mean[g],
+            stderr: variance[g].sqrt(),
+            model: fit.means[g],
+        })
+        .collect();
     let model = SideModel {
         covariance: jackknife_covariance(&chosen.left_out),
         values: fit.values,
         chi2: fit.chi2,
         cross_validation: chosen.score / mean.len() as f64,
-        groups: mean.len(),
-        first,
-        resolved: edge,
-        last: groups.upper[groups.upper.len() - 1],
+        groups: fitted,
         converged: fit.converged,
         knots: chosen.knots,
     };
@@ -549,7 +573,7 @@ fn sign_flip_test(sides: &[(Side, SideGroups)], fitted: &[Fitted]) -> Goodness {
         spread: variance.sqrt(),
         dof: fitted
             .iter()
-            .map(|f| f.model.groups - f.model.values.len())
+            .map(|f| f.model.groups.len() - f.model.values.len())
             .sum(),
         p_value: (1 + reached) as f64 / null.len() as f64,
         patterns: null.len(),
