@@ -435,6 +435,60 @@ fn paper_rows_recompute_from_their_sources() {
     recombination_agrees_between_scene_sets(&store);
     pulls_recompute_from_their_sources(&store, &summary);
     kernel_models_fit_their_kernels(&store);
+    kernel_command_evaluates_the_stored_model(&config, &store);
+}
+
+/// `ternary kernel` prints the stored model of a computed kernel, on either
+/// side, to the digits of its error (recomputed here from the knots), and
+/// refuses a potential or `u'` the study did not compute, naming it.
+fn kernel_command_evaluates_the_stored_model(config: &Path, store: &Path) {
+    use contract::fit::model::{CUTOFF_SCALE, LN_G, SIDE, T};
+    use ternary::kernel::model::NaturalSpline;
+    let printed = stdout(&ternary(
+        config,
+        &["kernel", "--n", "6", "--du", "1e-3", "--du", "-2e-3"],
+    ));
+    let knots = table(store, "fit", "ipp-6_u0_rho0", "kernel_model");
+    let (sides, t, ln_g, scale) = (
+        SIDE.read(&knots).unwrap(),
+        T.read(&knots).unwrap(),
+        LN_G.read(&knots).unwrap(),
+        CUTOFF_SCALE.read(&knots).unwrap(),
+    );
+    for (du, side) in [(1e-3, "above"), (-2e-3, "below")] {
+        let rows: Vec<usize> = (0..sides.len()).filter(|&k| sides[k] == side).collect();
+        let spline = NaturalSpline::through(
+            &rows.iter().map(|&k| t[k]).collect::<Vec<f64>>(),
+            &rows.iter().map(|&k| ln_g[k].mean).collect::<Vec<f64>>(),
+        );
+        let x = f64::abs(du);
+        let expected = libm::exp(spline.value(libm::log(x) + x / scale[rows[0]]));
+        let line = printed
+            .lines()
+            .find(|l| l.split_whitespace().next() == Some(&format!("{du}")))
+            .unwrap_or_else(|| panic!("no line for {du}: {printed}"));
+        let words: Vec<&str> = line.split_whitespace().collect();
+        let (value, error): (f64, f64) = (words[1].parse().unwrap(), words[3].parse().unwrap());
+        assert!(error > 0.0 && error < value, "{line}");
+        assert!(
+            (value - expected).abs() <= 0.5 * error,
+            "{line}: model {expected}"
+        );
+    }
+    for (args, named) in [
+        (&["kernel", "--n", "7", "--du", "1e-3"][..], "ipp-7"),
+        (
+            &["kernel", "--n", "6", "--u-prime", "-0.5", "--du", "1e-3"][..],
+            "--u-prime -0.5",
+        ),
+    ] {
+        let refused = ternary(config, args);
+        assert!(
+            !refused.status.success() && stderr(&refused).contains(named),
+            "{}",
+            stderr(&refused)
+        );
+    }
 }
 
 /// Every kernel of the reduced study but the vanishing n = 2 one has a

@@ -44,6 +44,9 @@ pub(super) enum Command {
     /// (a species of the table or given eps, sigma and mass) at a temperature
     /// and density, interpolated in theta = kT/eps from the study's table.
     Rate(RateArgs),
+    /// A computed kernel's model G(u' -> u' + du) at given du, each value with
+    /// its standard error (the fit stage's kernel_model tables).
+    Kernel(KernelArgs),
     /// Bound pairs forming and breaking in equilibrium ring MD, against what
     /// K_b and the dissociation scenes predict (a potential with a well).
     Pairs(PairsArgs),
@@ -233,6 +236,26 @@ pub(super) struct RateArgs {
     /// Linear density, particles per um.
     #[arg(long, allow_negative_numbers = true, value_parser = positive)]
     pub(super) density_per_um: Option<f64>,
+}
+
+/// Arguments of `ternary kernel`.
+#[derive(Args)]
+pub(super) struct KernelArgs {
+    /// The potential by id (e.g. ipp-6, lj-0.8).
+    #[arg(long, required_unless_present = "n", conflicts_with = "n")]
+    pub(super) potential: Option<String>,
+    /// An inverse power law of the study by its exponent (--n 6 is ipp-6).
+    #[arg(long, allow_negative_numbers = true, value_parser = positive)]
+    pub(super) n: Option<f64>,
+    /// The special particle's velocity u' of a computed kernel, v_th.
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    pub(super) u_prime: f64,
+    /// rho l of a computed kernel (0: dilute).
+    #[arg(long, default_value_t = 0.0)]
+    pub(super) density: f64,
+    /// u - u' at which to evaluate, v_th (non-zero; repeat for several).
+    #[arg(long, required = true, allow_hyphen_values = true, value_parser = non_zero)]
+    pub(super) du: Vec<f64>,
 }
 
 /// Arguments of `ternary pairs`.
@@ -437,6 +460,17 @@ pub(super) struct BenchMdArgs {
 }
 
 /// A finite number > 0.
+fn non_zero(text: &str) -> Result<f64, String> {
+    let value: f64 = text.parse().map_err(|e| format!("{e}"))?;
+    if value.is_finite() && value != 0.0 {
+        Ok(value)
+    } else {
+        Err(format!(
+            "{value} must be a finite number other than 0 (u' itself has no kernel value: G diverges there)"
+        ))
+    }
+}
+
 fn positive(text: &str) -> Result<f64, String> {
     let value: f64 = text.parse().map_err(|e| format!("{e}"))?;
     if value.is_finite() && value > 0.0 {

@@ -10,11 +10,12 @@ use std::sync::atomic::{AtomicU32, Ordering};
 use anyhow::{Context, Result, bail};
 
 use super::args::{
-    DagArgs, ExportArgs, MassArg, PairsArgs, RateArgs, ReadingArg, ReportArgs, RunArgs, ShowArgs,
-    SlurmSubmitArgs, StatusArgs, VerifyArgs,
+    DagArgs, ExportArgs, KernelArgs, MassArg, PairsArgs, RateArgs, ReadingArg, ReportArgs, RunArgs,
+    ShowArgs, SlurmSubmitArgs, StatusArgs, VerifyArgs,
 };
 use super::{Opening, emit, exit_code, load, open, print_event, within_limits};
 use ternary::config::{SlurmConfig, Study, compact};
+use ternary::contract::instances;
 use ternary::export::{self, ExportOptions};
 use ternary::physics::dissociation::{dissociation_rate, sobol_dissociation_scenes};
 use ternary::physics::md::CLUSTER_STEP_BUDGET;
@@ -200,6 +201,55 @@ pub(super) fn rate(config: &Path, args: RateArgs) -> Result<ExitCode> {
     let sourced = report::theta_table(&study, &store, &plan(&study))?;
     let rates = gas_rates(&sourced.table, &gas)?;
     emit(&report::rate_text(&description, &rates, &sourced.sources));
+    Ok(ExitCode::SUCCESS)
+}
+
+/// `ternary kernel`: the model of a kernel the study computed, at given `du`.
+pub(super) fn kernel(config: &Path, args: KernelArgs) -> Result<ExitCode> {
+    let (study, store) = load(config, Opening::Existing)?;
+    let wanted = match (&args.potential, args.n) {
+        (Some(id), _) => id.clone(),
+        (None, Some(n)) => format!("ipp-{n}"),
+        (None, None) => bail!("give --potential or --n"),
+    };
+    let potentials = study.potentials();
+    let ids: Vec<String> = potentials.iter().map(|p| p.id()).collect();
+    let potential = potentials.iter().find(|p| p.id() == wanted).with_context(|| {
+        format!(
+            "{wanted}: no kernel of it in {} (it has {}); a model between computed potentials is not available",
+            config.display(),
+            ids.join(", ")
+        )
+    })?;
+    let targets = study.kernel_targets();
+    if !targets.contains(&(args.u_prime, args.density)) {
+        let listed: Vec<String> = targets
+            .iter()
+            .map(|(u, rho)| format!("(u' {u}, density {rho})"))
+            .collect();
+        bail!(
+            "--u-prime {} --density {}: not a kernel of {} (it computes {})",
+            args.u_prime,
+            args.density,
+            config.display(),
+            listed.join(", ")
+        );
+    }
+    let kernel = study.kernel_params(*potential, args.u_prime, args.density);
+    let title = format!(
+        "G(u' -> u' + du) of {}, u' = {} v_th, rho l = {}",
+        potential.id(),
+        args.u_prime,
+        args.density
+    );
+    let id = instances::fit(&kernel);
+    emit(&report::kernel_model_text(
+        &store,
+        &plan(&study),
+        &id,
+        &title,
+        &args.du,
+    )?);
     Ok(ExitCode::SUCCESS)
 }
 

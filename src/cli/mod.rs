@@ -44,6 +44,7 @@ fn dispatch(cli: Cli) -> Result<ExitCode> {
         Command::Gc => commands::gc(config),
         Command::Show(args) => commands::show(config, args),
         Command::Rate(args) => commands::rate(config, args),
+        Command::Kernel(args) => commands::kernel(config, args),
         Command::Pairs(args) => commands::pairs(config, args),
         Command::Slurm {
             which: SlurmCommand::Submit(args),

@@ -7,6 +7,7 @@
 mod dag;
 mod folder;
 pub mod html;
+mod kernel_model;
 mod layout;
 mod numbers;
 mod pairs;
@@ -18,6 +19,7 @@ mod summary;
 mod tables;
 
 pub use dag::{DagFormat, dag};
+pub use kernel_model::kernel_model_text;
 pub use numbers::with_error;
 pub use pairs::{PairPrediction, pairs_text};
 pub use rates::{SourcedTable, rate_text, theta_table};

@@ -107,14 +107,14 @@ fn lennard_jones_rows(batch: &RecordBatch) -> Result<Vec<LennardJonesRow>> {
 }
 
 /// The manifest of artifact `key` of `stage`, its files checked to their hashes.
-fn intact(store: &Store, stage: &str, key: &str) -> Result<Manifest> {
+pub(super) fn intact(store: &Store, stage: &str, key: &str) -> Result<Manifest> {
     store
         .inspect(stage, key, None, Depth::Hashes)
         .map_err(|problems| anyhow!("{stage} artifact {key} is damaged: {}", problems.join("; ")))
 }
 
 /// Table `name` of the artifact `manifest` describes.
-fn table_of(store: &Store, manifest: &Manifest, name: &str) -> Result<RecordBatch> {
+pub(super) fn table_of(store: &Store, manifest: &Manifest, name: &str) -> Result<RecordBatch> {
     let path = store
         .artifact_dir(&manifest.stage, &manifest.key)
         .join(format!("{name}.parquet"));

@@ -53,6 +53,21 @@ impl Knots {
         NaturalSpline::through(&self.t, values).value(self.warp.t(x))
     }
 
+    /// Standard error of [`Knots::ln_g`] for knot values with covariance
+    /// `covariance` (row-major): `sqrt(b^T C b)`, `b` the cardinal basis at
+    /// `x`.
+    pub fn ln_g_stderr(&self, covariance: &[f64], x: f64) -> f64 {
+        let basis = &self.basis(&[x])[0];
+        let size = basis.len();
+        let mut variance = 0.0;
+        for i in 0..size {
+            for j in 0..size {
+                variance += basis[i] * covariance[i * size + j] * basis[j];
+            }
+        }
+        variance.max(0.0).sqrt()
+    }
+
     /// The cardinal basis at each of `x`: `basis[point][k]` is the spline
     /// through the `k`-th unit vector, so `ln G(x) = sum_k basis_k(x) y_k`.
     pub fn basis(&self, x: &[f64]) -> Vec<Vec<f64>> {

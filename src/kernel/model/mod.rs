@@ -285,18 +285,9 @@ impl SideModel {
         self.knots.ln_g(&self.values, x)
     }
 
-    /// Standard error of [`SideModel::ln_g`]: `sqrt(b^T C b)` with the
-    /// cardinal basis `b` at `x` and the knot values' covariance `C`.
+    /// Standard error of [`SideModel::ln_g`].
     pub fn ln_g_stderr(&self, x: f64) -> f64 {
-        let basis = &self.knots.basis(&[x])[0];
-        let size = basis.len();
-        let mut variance = 0.0;
-        for i in 0..size {
-            for j in 0..size {
-                variance += basis[i] * self.covariance[i * size + j] * basis[j];
-            }
-        }
-        variance.max(0.0).sqrt()
+        self.knots.ln_g_stderr(&self.covariance, x)
     }
 }
 
