@@ -270,9 +270,6 @@ pub struct SideModel {
     pub covariance: Vec<f64>,
     /// Weighted residual sum of squares of the fit to the mean groups.
     pub chi2: f64,
-    /// Mean cross-validated score per group of the chosen knots (about 1 +
-    /// 1/R for a model that follows the kernel).
-    pub cross_validation: f64,
     /// The groups fitted, nearest `u'` first.
     pub groups: Vec<GroupFit>,
     /// Whether the fit to the mean groups converged.
@@ -442,7 +439,7 @@ fn fit_side(groups: &SideGroups) -> Result<Fitted, NoModel> {
         .fold(f64::INFINITY, f64::min);
     let chosen = candidates
         .into_iter()
-        .find(|c| c.score <= 1.01 * best)
+        .find(|c| best.is_finite() && c.score <= 1.01 * best)
         .ok_or(NoModel::NoFit)?;
     let design = Design::new(&chosen.knots, &groups.lower, &groups.upper);
     let fit = fit_groups(&design, &chosen.knots, groups).ok_or(NoModel::NoFit)?;
@@ -459,7 +456,6 @@ fn fit_side(groups: &SideGroups) -> Result<Fitted, NoModel> {
         covariance: jackknife_covariance(&chosen.left_out),
         values: fit.values,
         chi2: fit.chi2,
-        cross_validation: chosen.score / mean.len() as f64,
         groups: fitted,
         converged: fit.converged,
         knots: chosen.knots,
@@ -603,4 +599,143 @@ fn sign_patterns(randomizations: usize) -> Vec<Vec<f64>> {
             (1..DRAWN_PATTERNS).map(|_| (0..randomizations).map(|_| sign(rng.random())).collect()),
         )
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand_distr::{Distribution, Normal};
+
+    /// The paper's shape, `0.2 x^-1.12 exp(-x^2 / 2 (0.02)^2)`.
+    fn kernel(x: f64) -> f64 {
+        0.2 * libm::pow(x, -1.12) * libm::exp(-x * x / (2.0 * 0.02 * 0.02))
+    }
+
+    const WIDTH: f64 = 5e-5;
+
+    /// Fine bins of width 5e-5 out to 0.1 on both sides, each the kernel's
+    /// mean over its bin (`dip` scales the bins in `[1.95e-3, 2.25e-3]`), in
+    /// `randomizations` randomizations with 1% independent noise per bin and
+    /// an absolute floor of 0.01, the same on both sides when `mirrored`.
+    fn bins(dip: f64, mirrored: bool, randomizations: usize) -> (Vec<Vec<f64>>, Vec<f64>) {
+        let centres: Vec<f64> = (-2000..=2000).map(|k| f64::from(k) * WIDTH).collect();
+        let mean = |c: f64| {
+            let x = c.abs();
+            let scale = if (1.95e-3..2.25e-3).contains(&x) {
+                dip
+            } else {
+                1.0
+            };
+            let pieces = 64;
+            scale
+                * (0..pieces)
+                    .map(|i| kernel(x - 0.5 * WIDTH + (f64::from(i) + 0.5) * WIDTH / 64.0))
+                    .sum::<f64>()
+                / f64::from(pieces)
+        };
+        let truth: Vec<f64> = centres
+            .iter()
+            .map(|&c| if c == 0.0 { 0.0 } else { mean(c) })
+            .collect();
+        let mut rng = StdRng::seed_from_u64(59);
+        let normal = Normal::new(0.0, 1.0).expect("a unit normal");
+        let fine = (0..randomizations)
+            .map(|_| {
+                let noise: Vec<f64> = (0..=2000).map(|_| normal.sample(&mut rng)).collect();
+                let other: Vec<f64> = (0..=2000).map(|_| normal.sample(&mut rng)).collect();
+                truth
+                    .iter()
+                    .enumerate()
+                    .map(|(k, g)| {
+                        let (index, above) = (k.abs_diff(2000), k >= 2000);
+                        let z = if above || mirrored {
+                            noise[index]
+                        } else {
+                            other[index]
+                        };
+                        g * (1.0 + 0.01 * z) + 0.01 * z
+                    })
+                    .collect()
+            })
+            .collect();
+        (fine, centres)
+    }
+
+    fn model_of(dip: f64, mirrored: bool, randomizations: usize) -> Result<KernelModel, NoModel> {
+        let (fine, centres) = bins(dip, mirrored, randomizations);
+        let [below, above] = side_groups(&fine, &centres, WIDTH);
+        fit_kernel_model(below, above)
+    }
+
+    /// Data drawn from a smooth kernel: the model passes its own test, its
+    /// residuals make its chi-square, and it recovers the kernel within its
+    /// errors where it is resolved.
+    #[test]
+    fn model_follows_a_smooth_kernel_within_its_errors() {
+        let model = model_of(1.0, false, 8).expect("a model");
+        assert!(!model.mirrored);
+        let test = model.goodness;
+        assert_eq!(test.patterns, 256);
+        assert!(test.p_value > 0.01, "{test:?}");
+        let ratio = test.chi2 / test.expected;
+        assert!((0.5..2.0).contains(&ratio), "chi2 / expected {ratio}");
+        let residuals: f64 = model
+            .sides
+            .iter()
+            .flat_map(|(_, side)| side.groups.iter().map(|g| g.residual() * g.residual()))
+            .sum();
+        assert!((residuals / test.chi2 - 1.0).abs() < 1e-12);
+        for (_, side) in &model.sides {
+            for x in [1e-4, 1e-3, 5e-3, 0.02, 0.04] {
+                let z = (side.ln_g(x) - libm::log(kernel(x))) / side.ln_g_stderr(x);
+                assert!(z.abs() < 4.0, "x = {x}: z = {z}");
+            }
+        }
+    }
+
+    /// A 3% dip in two groups near 2e-3, thirty of their errors, is
+    /// rejected: the test has power against what a smooth curve cannot follow.
+    #[test]
+    fn model_test_rejects_a_dip_it_cannot_follow() {
+        let test = model_of(0.97, false, 8).expect("a model").goodness;
+        assert!(test.p_value < 0.01, "{test:?}");
+        assert!(test.chi2 > 3.0 * test.expected, "{test:?}");
+    }
+
+    /// Sides equal in every randomization are one measurement: one model.
+    #[test]
+    fn mirror_images_take_one_model() {
+        let model = model_of(1.0, true, 8).expect("a model");
+        assert!(model.mirrored);
+        assert_eq!(model.sides.len(), 1);
+        assert_eq!(model.sides[0].0, Side::Above);
+        assert_eq!(model.both_sides().len(), 2);
+    }
+
+    /// Two randomizations cannot leave one out: no model, and why.
+    #[test]
+    fn two_randomizations_give_no_model() {
+        assert_eq!(
+            model_of(1.0, false, 2).err(),
+            Some(NoModel::TooFewRandomizations)
+        );
+    }
+
+    /// Every sign pattern up to 12 randomizations, the data's first; beyond,
+    /// 4096 drawn from a fixed seed, the same each time.
+    #[test]
+    fn sign_patterns_enumerate_then_draw() {
+        let eight = sign_patterns(8);
+        assert_eq!(eight.len(), 256);
+        assert!(eight[0].iter().all(|&e| e == 1.0));
+        let distinct: std::collections::BTreeSet<Vec<i8>> = eight
+            .iter()
+            .map(|p| p.iter().map(|&e| e as i8).collect())
+            .collect();
+        assert_eq!(distinct.len(), 256);
+        let drawn = sign_patterns(24);
+        assert_eq!(drawn.len(), DRAWN_PATTERNS);
+        assert!(drawn[0].iter().all(|&e| e == 1.0));
+        assert_eq!(drawn, sign_patterns(24));
+    }
 }
