@@ -6,6 +6,11 @@
 //! variations of range and weights whose half-spread is every row's systematic
 //! error. Standard errors and covariance from refitting every randomization
 //! alone (the `kernel` stage's `kernel_replicates` table).
+//!
+//! And the kernel model (`kernel::model`): `ln G` a natural cubic spline in
+//! `ln|du| + |du| / x_c` on each side of `u'`, fitted to the log-spaced
+//! groups, written as its knots, their covariance, its goodness of fit and
+//! the fitted groups with their residuals.
 
 use serde_json::Value;
 
