@@ -1021,3 +1021,52 @@ fn a_morse_gas_runs_end_to_end() {
     let a_n: f64 = row.split_whitespace().nth(1).unwrap().parse().unwrap();
     assert!(a_n > 0.0, "{row}");
 }
+
+/// `ternary kernel --n N` between computed inverse power laws: the five
+/// models interpolated in 1/n, each value with an error and the sources
+/// named; outside their range, or with fewer models, refused.
+#[test]
+fn kernel_models_interpolate_between_computed_exponents() {
+    let dir = workspace("kernel-interpolation");
+    let study = small_study("data")
+        .replace("inverse_power = [6]", "inverse_power = [4, 6, 8, 10, 12]")
+        .replace(
+            "randomizations = 2\npoints = 64",
+            "randomizations = 4\npoints = 128",
+        );
+    let config = write_config(&dir, &study);
+    let run = ternary(&config, &["run", "--quiet"]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let between = ternary(
+        &config,
+        &["kernel", "--n", "7", "--du", "1e-3", "--du", "-1e-2"],
+    );
+    let printed = stdout(&between);
+    assert!(between.status.success(), "{}", stderr(&between));
+    assert!(
+        printed.contains("through the models of n = 4, 6, 8, 10, 12"),
+        "{printed}"
+    );
+    for n in [4, 6, 8, 10, 12] {
+        assert!(
+            printed.contains(&format!("fit[ipp-{n}_u0_rho0] ")),
+            "{printed}"
+        );
+    }
+    for du in ["0.001", "-0.01"] {
+        let line = printed
+            .lines()
+            .find(|l| l.split_whitespace().next() == Some(du))
+            .unwrap_or_else(|| panic!("no line for {du}: {printed}"));
+        let words: Vec<&str> = line.split_whitespace().collect();
+        let (value, error): (f64, f64) = (words[1].parse().unwrap(), words[3].parse().unwrap());
+        assert!(value > 0.0 && error > 0.0 && error < value, "{line}");
+    }
+    let outside = ternary(&config, &["kernel", "--n", "14", "--du", "1e-3"]);
+    assert!(
+        !outside.status.success() && stderr(&outside).contains("needs 5"),
+        "{}",
+        stderr(&outside)
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
