@@ -1,4 +1,4 @@
-"""What a reader of a ternary bundle does, with polars, DuckDB and matplotlib only.
+"""What a reader of a ternary bundle does, with polars, DuckDB, numpy and matplotlib only.
 
     python3 examples/bundle.py BUNDLE [--out kernels.png]
 
