@@ -242,11 +242,16 @@ pub(super) struct RateArgs {
 #[derive(Args)]
 pub(super) struct KernelArgs {
     /// The potential by id (e.g. ipp-6, lj-0.8).
-    #[arg(long, required_unless_present = "n", conflicts_with = "n")]
+    #[arg(long, required_unless_present_any = ["n", "theta"], conflicts_with_all = ["n", "theta"])]
     pub(super) potential: Option<String>,
-    /// An inverse power law of the study by its exponent (--n 6 is ipp-6).
-    #[arg(long, allow_negative_numbers = true, value_parser = positive)]
+    /// An inverse power law by its exponent (--n 6 is ipp-6); between the
+    /// study's, their models interpolated in 1/n.
+    #[arg(long, allow_negative_numbers = true, value_parser = positive, conflicts_with = "theta")]
     pub(super) n: Option<f64>,
+    /// Lennard-Jones at theta = kT/eps (--theta 0.8 is lj-0.8); between the
+    /// study's, their models interpolated in ln theta.
+    #[arg(long, allow_negative_numbers = true, value_parser = positive)]
+    pub(super) theta: Option<f64>,
     /// The special particle's velocity u' of a computed kernel, v_th.
     #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
     pub(super) u_prime: f64,

@@ -25,7 +25,6 @@ use ternary::physics::pair_kinetics::{
 use ternary::physics::potential::{LennardJones, Potential};
 use ternary::physics::species::{self, MassChoice, Particle, Reading};
 use ternary::physics::units::{Mass, PhysicalGas};
-use ternary::pipeline::InstanceId;
 use ternary::pipeline::executor::{self, Action, Freshness, RunOptions, Verbosity};
 use ternary::pipeline::shards::Sharding;
 use ternary::plan::plan;
@@ -206,78 +205,133 @@ pub(super) fn rate(config: &Path, args: RateArgs) -> Result<ExitCode> {
 }
 
 /// `ternary kernel`: the model of a kernel the study computed, at given `du`,
-/// or for an inverse power law between computed ones (`--n`) the models
-/// interpolated in `1/n`.
+/// or between computed ones (`--n`, `--theta`) their models interpolated.
 pub(super) fn kernel(config: &Path, args: KernelArgs) -> Result<ExitCode> {
     let (study, store) = load(config, Opening::Existing)?;
     check_kernel_target(&study, config, &args)?;
-    let wanted = match (&args.potential, args.n) {
-        (Some(id), _) => id.clone(),
-        (None, Some(n)) => format!("ipp-{n}"),
-        (None, None) => bail!("give --potential or --n"),
+    let wanted = match (&args.potential, args.n, args.theta) {
+        (Some(id), _, _) => id.clone(),
+        (None, Some(n), _) => format!("ipp-{n}"),
+        (None, None, Some(theta)) => format!("lj-{theta}"),
+        (None, None, None) => bail!("give --potential, --n or --theta"),
     };
     let potentials = study.potentials();
     let at = |p: &Potential| instances::fit(&study.kernel_params(*p, args.u_prime, args.density));
-    let title = |id: &str| {
-        format!(
-            "G(u' -> u' + du) of {id}, u' = {} v_th, rho l = {}",
-            args.u_prime, args.density
-        )
-    };
+    let title = format!(
+        "G(u' -> u' + du) of {wanted}, u' = {} v_th, rho l = {}",
+        args.u_prime, args.density
+    );
     let plan = plan(&study);
     if let Some(potential) = potentials.iter().find(|p| p.id() == wanted) {
-        let text =
-            report::kernel_model_text(&store, &plan, &at(potential), &title(&wanted), &args.du)?;
-        emit(&text);
+        emit(&report::kernel_model_text(
+            &store,
+            &plan,
+            &at(potential),
+            &title,
+            &args.du,
+        )?);
         return Ok(ExitCode::SUCCESS);
     }
-    let sources = interpolation_sources(&potentials, args.n, config)
-        .with_context(|| format!("{wanted}: no kernel of it in {}", config.display()))?;
-    let sources: Vec<(f64, InstanceId)> = sources.iter().map(|(n, p)| (*n, at(p))).collect();
-    let n = args.n.unwrap_or_default();
-    let text =
-        report::interpolated_kernel_text(&store, &plan, &sources, (&title(&wanted), n), &args.du)?;
-    emit(&text);
+    let ids: Vec<String> = potentials.iter().map(|p| p.id()).collect();
+    let (method, nodes, coordinate) = interpolation_nodes(&potentials, &args)
+        .with_context(|| {
+            format!(
+                "{wanted}: no kernel of it in {} (it has {}); --n or --theta interpolates between computed ones with {INTERPOLATION_NODES} of them around it (inverse power laws with n > 2, in 1/n; Lennard-Jones, in ln theta)",
+                config.display(),
+                ids.join(", ")
+            )
+        })?;
+    let interpolation = report::Interpolation {
+        at: coordinate,
+        nodes: nodes.iter().map(|(c, p)| (*c, at(p))).collect(),
+        method,
+    };
+    emit(&report::interpolated_kernel_text(
+        &store,
+        &plan,
+        &interpolation,
+        &title,
+        &args.du,
+    )?);
     Ok(ExitCode::SUCCESS)
 }
 
-/// Inverse power laws a study needs around `n` to interpolate its kernel
-/// in `1/n`: five, as the validation measured (docs/kernel-model.md).
+/// Computed kernels to interpolate through, each as its coordinate (`1/n`,
+/// `ln theta`) and its potential.
+type Nodes = Vec<(f64, Potential)>;
+
+/// Computed kernels an interpolation needs around its target: five, as the
+/// validation measured (docs/kernel-model.md).
 const INTERPOLATION_NODES: usize = 5;
 
-/// The study's kicked inverse power laws (`n > 2`) to interpolate to `n`
-/// through: all of them when at least [`INTERPOLATION_NODES`] and `n` lies
-/// between the smallest and the largest; else why not.
-fn interpolation_sources(
+/// Lennard-Jones nodes closer than this in `ln theta` are one (0.1, 0.1052).
+const THETA_NODE_SEPARATION: f64 = 0.2;
+
+/// How to interpolate to `--n` (every kicked inverse power law, in `1/n`) or
+/// `--theta` (the nearest thetas at least [`THETA_NODE_SEPARATION`] apart,
+/// in `ln theta`): the method's line, the nodes (coordinate and potential)
+/// and the target's coordinate; `None` when there are fewer than
+/// [`INTERPOLATION_NODES`] or the target is not between them.
+fn interpolation_nodes(
     potentials: &[Potential],
-    n: Option<f64>,
-    config: &Path,
-) -> Result<Vec<(f64, Potential)>> {
-    let ids: Vec<String> = potentials.iter().map(|p| p.id()).collect();
-    let Some(n) = n else {
-        bail!("it has {}", ids.join(", "));
+    args: &KernelArgs,
+) -> Option<(String, Nodes, f64)> {
+    let (nodes, at, name) = match (args.n, args.theta) {
+        (Some(n), _) => {
+            let nodes: Nodes = potentials
+                .iter()
+                .filter_map(|p| match p {
+                    Potential::InversePower(law) if law.n > 2.0 => Some((1.0 / law.n, *p)),
+                    _ => None,
+                })
+                .collect();
+            (nodes, 1.0 / n, "1/n")
+        }
+        (None, Some(theta)) => (theta_nodes(potentials, theta), libm::log(theta), "ln theta"),
+        (None, None) => return None,
     };
-    let nodes: Vec<(f64, Potential)> = potentials
+    let (low, high) = nodes
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), (c, _)| {
+            (l.min(*c), h.max(*c))
+        });
+    if nodes.len() < INTERPOLATION_NODES || !(low < at && at < high) {
+        return None;
+    }
+    let ids: Vec<String> = nodes.iter().map(|(_, p)| p.id()).collect();
+    let method = format!(
+        "interpolated in {name} through the models of {} (Lagrange, degree {}; their errors through the weights, the models taken as independent; held-out kernels came within a median 0.3-0.6 of their combined errors: docs/kernel-model.md)",
+        ids.join(", "),
+        nodes.len() - 1
+    );
+    Some((method, nodes, at))
+}
+
+/// The study's Lennard-Jones potentials nearest `theta` in `ln theta`, each
+/// at least [`THETA_NODE_SEPARATION`] from those taken, up to
+/// [`INTERPOLATION_NODES`], as `(ln theta, potential)`.
+fn theta_nodes(potentials: &[Potential], theta: f64) -> Nodes {
+    let mut wells: Nodes = potentials
         .iter()
         .filter_map(|p| match p {
-            Potential::InversePower(law) if law.n > 2.0 => Some((law.n, *p)),
+            Potential::LennardJones(lj) => Some((libm::log(lj.theta), *p)),
             _ => None,
         })
         .collect();
-    let (low, high) = nodes
-        .iter()
-        .fold((f64::INFINITY, 0.0_f64), |(l, h), (m, _)| {
-            (l.min(*m), h.max(*m))
-        });
-    if nodes.len() < INTERPOLATION_NODES || !(low < n && n < high) {
-        bail!(
-            "it has {}; a model between computed inverse power laws needs {INTERPOLATION_NODES} of them with n > 2 around n = {n} ({} has {} from n = {low} to {high})",
-            ids.join(", "),
-            config.display(),
-            nodes.len()
-        );
+    let target = libm::log(theta);
+    wells.sort_by(|a, b| (a.0 - target).abs().total_cmp(&(b.0 - target).abs()));
+    let mut taken: Nodes = Vec::new();
+    for (coordinate, potential) in wells {
+        if taken.len() < INTERPOLATION_NODES
+            && taken
+                .iter()
+                .all(|(c, _)| (c - coordinate).abs() >= THETA_NODE_SEPARATION)
+        {
+            taken.push((coordinate, potential));
+        }
     }
-    Ok(nodes)
+    taken.sort_by(|a, b| a.0.total_cmp(&b.0));
+    taken
 }
 
 /// `--u-prime` and `--density` name a kernel the study computes.

@@ -11,7 +11,7 @@ use super::numbers::{fixed, significant, with_error};
 use super::rates::{intact, table_of};
 use super::show::current_artifact;
 use crate::contract;
-use crate::kernel::model::{Knots, Warp, interpolate_in_inverse_n};
+use crate::kernel::model::{Knots, Warp, interpolate};
 use crate::pipeline::store::Store;
 use crate::pipeline::{InstanceId, Stage};
 
@@ -123,33 +123,39 @@ pub fn kernel_model_text(
     Ok(out)
 }
 
-/// The text of `ternary kernel --n N` for an inverse power law the study did
-/// not compute: the models of those it did (`sources`: `n` and the `fit`
-/// instance, at the same `u'` and density), each evaluated at `du`, `ln G`
-/// interpolated to `n` through all of them in `1/n`
-/// ([`interpolate_in_inverse_n`]).
+/// How `ternary kernel` interpolates between computed potentials: the
+/// coordinate (`1/n`, `ln theta`) and each node's value of it with the
+/// `fit` instance of its kernel, the target's coordinate, and a line saying
+/// what was done.
+pub struct Interpolation {
+    /// `(coordinate, fit instance)` of each computed kernel used.
+    pub nodes: Vec<(f64, InstanceId)>,
+    /// The coordinate of the kernel asked for.
+    pub at: f64,
+    /// What the interpolation is, printed under the title.
+    pub method: String,
+}
+
+/// The text of `ternary kernel` for a potential the study did not compute:
+/// the models of those it did (`interpolation.nodes`, at the same `u'` and
+/// density), each evaluated at `du`, `ln G` interpolated through all of
+/// them ([`interpolate`]).
 pub fn interpolated_kernel_text(
     store: &Store,
     plan: &[Box<dyn Stage>],
-    sources: &[(f64, InstanceId)],
-    (title, n): (&str, f64),
+    interpolation: &Interpolation,
+    title: &str,
     du: &[f64],
 ) -> Result<String> {
     let mut evaluated = Vec::new();
-    for (computed, id) in sources {
+    for (coordinate, id) in &interpolation.nodes {
         match evaluate(store, plan, id, du)? {
-            Ok(model) => evaluated.push((*computed, model)),
-            Err(status) => anyhow::bail!("cannot interpolate to n = {n}: {status}"),
+            Ok(model) => evaluated.push((*coordinate, model)),
+            Err(status) => anyhow::bail!("cannot interpolate: {status}"),
         }
     }
-    let nodes: Vec<String> = evaluated.iter().map(|(m, _)| significant(*m)).collect();
     let mut out = String::new();
-    let _ = writeln!(
-        out,
-        "{title}: interpolated in 1/n through the models of n = {} (Lagrange, degree {}; their errors through the weights, the models taken as independent; n = 7 and 9 held out came within a median 0.55 of their combined errors: docs/kernel-model.md)",
-        nodes.join(", "),
-        evaluated.len() - 1
-    );
+    let _ = writeln!(out, "{title}: {}", interpolation.method);
     for (_, model) in &evaluated {
         let _ = writeln!(out, "  {}", model.source);
     }
@@ -157,9 +163,9 @@ pub fn interpolated_kernel_text(
         .map(|k| {
             let points: Vec<(f64, f64, f64)> = evaluated
                 .iter()
-                .map(|(m, model)| (*m, model.values[k].0, model.values[k].1))
+                .map(|(c, model)| (*c, model.values[k].0, model.values[k].1))
                 .collect();
-            let (ln_g, error) = interpolate_in_inverse_n(&points, n);
+            let (ln_g, error) = interpolate(&points, interpolation.at);
             let beyond = evaluated
                 .iter()
                 .any(|(_, model)| !model.values[k].2.is_empty());

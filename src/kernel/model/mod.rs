@@ -351,21 +351,19 @@ impl NoModel {
     }
 }
 
-/// A value known at several exponents `n` (`(n, value, standard error)`,
-/// distinct `n`) interpolated to `n`: the Lagrange polynomial in `1/n`
-/// through all of them, and its error `sqrt(sum (w_i e_i)^2)` with its
-/// weights `w_i` (the values taken as independent). In `1/n` because the
-/// kernel's small-kick exponent goes as `1 + 1/(n + 1)`; degree 4 through
-/// `n = 4..12` predicts held-out `n = 7, 9` within their errors
-/// (docs/kernel-model.md).
-pub fn interpolate_in_inverse_n(points: &[(f64, f64, f64)], n: f64) -> (f64, f64) {
-    let s: Vec<f64> = points.iter().map(|p| 1.0 / p.0).collect();
-    let target = 1.0 / n;
-    let weights: Vec<f64> = (0..s.len())
+/// A value known at several points of a coordinate (`(coordinate, value,
+/// standard error)`, distinct coordinates) interpolated to `at`: the
+/// Lagrange polynomial through all of them, and its error `sqrt(sum (w_i
+/// e_i)^2)` with its weights `w_i` (the values taken as independent). The
+/// kernel model takes `1/n` for the inverse power laws (the small-kick
+/// exponent goes as `1 + 1/(n + 1)`) and `ln theta` for Lennard-Jones;
+/// held-out kernels came within their errors (docs/kernel-model.md).
+pub fn interpolate(points: &[(f64, f64, f64)], at: f64) -> (f64, f64) {
+    let weights: Vec<f64> = (0..points.len())
         .map(|i| {
-            (0..s.len())
+            (0..points.len())
                 .filter(|&j| j != i)
-                .map(|j| (target - s[j]) / (s[i] - s[j]))
+                .map(|j| (at - points[j].0) / (points[i].0 - points[j].0))
                 .product()
         })
         .collect();
@@ -739,21 +737,21 @@ mod tests {
         assert_eq!(model.both_sides().len(), 2);
     }
 
-    /// The interpolation in `1/n` reproduces a polynomial of its degree in
-    /// `1/n` exactly, returns a node's own value there, and carries the
+    /// The interpolation reproduces a polynomial of its degree exactly (here
+    /// a cubic in `1/n`), returns a node's own value there, and carries the
     /// nodes' errors through its weights.
     #[test]
-    fn interpolation_in_inverse_n_is_exact_for_its_degree() {
-        let cubic = |n: f64| 2.0 - 3.0 / n + 0.5 / (n * n) - 1.5 / (n * n * n);
+    fn interpolation_is_exact_for_its_degree() {
+        let cubic = |s: f64| 2.0 - 3.0 * s + 0.5 * s * s - 1.5 * s * s * s;
         let points: Vec<(f64, f64, f64)> = [4.0, 6.0, 8.0, 12.0]
             .iter()
-            .map(|&n| (n, cubic(n), 0.1))
+            .map(|&n: &f64| (1.0 / n, cubic(1.0 / n), 0.1))
             .collect();
-        let (value, error) = interpolate_in_inverse_n(&points, 7.0);
-        assert!((value - cubic(7.0)).abs() < 1e-13);
+        let (value, error) = interpolate(&points, 1.0 / 7.0);
+        assert!((value - cubic(1.0 / 7.0)).abs() < 1e-13);
         assert!(error > 0.0 && error < 0.2);
-        let (at_node, node_error) = interpolate_in_inverse_n(&points, 8.0);
-        assert!((at_node - cubic(8.0)).abs() < 1e-13 && (node_error - 0.1).abs() < 1e-13);
+        let (at_node, node_error) = interpolate(&points, 1.0 / 8.0);
+        assert!((at_node - cubic(1.0 / 8.0)).abs() < 1e-13 && (node_error - 0.1).abs() < 1e-13);
     }
 
     /// Two randomizations cannot leave one out: no model, and why.
