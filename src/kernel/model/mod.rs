@@ -126,14 +126,6 @@ impl SideGroups {
         }
     }
 
-    /// `1 / var` of the pooled variances (0 where there is no spread).
-    fn weights(&self) -> Vec<f64> {
-        self.pooled_variance()
-            .iter()
-            .map(|&v| if v > 0.0 { 1.0 / v } else { 0.0 })
-            .collect()
-    }
-
     /// The groups without randomization `left_out`.
     fn without(&self, left_out: usize) -> SideGroups {
         let replicates = self
@@ -172,6 +164,15 @@ impl SideGroups {
             ..self.clone()
         }
     }
+}
+
+/// The fit's weights: `1 / var` of each group's pooled variance (0 where
+/// there is no spread).
+fn inverse_variances(variance: &[f64]) -> Vec<f64> {
+    variance
+        .iter()
+        .map(|&v| if v > 0.0 { 1.0 / v } else { 0.0 })
+        .collect()
 }
 
 /// The kernel's fine bins (`fine[r][bin]`, bin centres `centres` relative to
@@ -447,6 +448,7 @@ struct Fitted {
 fn fit_side(groups: &SideGroups) -> Result<Fitted, NoModel> {
     let mean = groups.mean();
     let variance = groups.pooled_variance();
+    let weights = inverse_variances(&variance);
     let resolved: Vec<usize> = (0..mean.len())
         .filter(|&g| mean[g] > RESOLVED_SIGNIFICANCE * variance[g].sqrt())
         .collect();
@@ -456,7 +458,7 @@ fn fit_side(groups: &SideGroups) -> Result<Fitted, NoModel> {
     let (first, edge) = (groups.lower[0], groups.upper[outermost]);
     let most = MAX_KNOTS.min(resolved.len() - 1).max(2);
     let candidates: Vec<Candidate> = (2..=most)
-        .map(|count| Candidate::scored(groups, Knots::uniform(first, edge, count)))
+        .map(|count| Candidate::scored(groups, Knots::uniform(first, edge, count), &weights))
         .collect();
     let best = candidates
         .iter()
@@ -503,9 +505,9 @@ struct Candidate {
 }
 
 impl Candidate {
-    fn scored(groups: &SideGroups, knots: Knots) -> Candidate {
+    /// `weights`: the full data's, which score every left-out randomization.
+    fn scored(groups: &SideGroups, knots: Knots, weights: &[f64]) -> Candidate {
         let design = Design::new(&knots, &groups.lower, &groups.upper);
-        let weights = groups.weights();
         let count = groups.randomizations();
         let mut score = 0.0;
         let mut left_out = Vec::with_capacity(count);
@@ -518,7 +520,7 @@ impl Candidate {
                 .replicates
                 .iter()
                 .zip(&fit.means)
-                .zip(&weights)
+                .zip(weights)
                 .map(|((row, m), w)| w * (row[r] - m) * (row[r] - m) / count as f64)
                 .sum::<f64>();
             left_out.push(fit.values);
@@ -536,7 +538,12 @@ impl Candidate {
 fn fit_groups(design: &Design, knots: &Knots, groups: &SideGroups) -> Option<Solution> {
     let (mean, variance) = (groups.mean(), groups.pooled_variance());
     let start = log_linear_start(knots, (&groups.lower, &groups.upper), &mean, &variance)?;
-    Some(least_squares(design, &mean, &groups.weights(), &start))
+    Some(least_squares(
+        design,
+        &mean,
+        &inverse_variances(&variance),
+        &start,
+    ))
 }
 
 /// `(R - 1) / R sum_r (c_r - c_bar)(c_r - c_bar)^T` of the leave-one-out fits.
@@ -598,7 +605,7 @@ fn refit_chi2(fitted: &Fitted, groups: &SideGroups) -> f64 {
     least_squares(
         &fitted.design,
         &groups.mean(),
-        &groups.weights(),
+        &inverse_variances(&groups.pooled_variance()),
         &fitted.model.values,
     )
     .chi2
