@@ -557,6 +557,18 @@ fn expected_groups(expected: &[f64], minimum: f64) -> Vec<Range<usize>> {
     groups
 }
 
+/// The median of `values` (the mean of the middle two for an even count;
+/// NaN when empty).
+pub fn median(values: &[f64]) -> f64 {
+    let mut sorted = values.to_vec();
+    sorted.sort_by(f64::total_cmp);
+    match sorted.len() {
+        0 => f64::NAN,
+        n if n % 2 == 1 => sorted[n / 2],
+        n => 0.5 * (sorted[n / 2 - 1] + sorted[n / 2]),
+    }
+}
+
 /// Kolmogorov-Smirnov test of `values` (at least one) against the uniform
 /// distribution on `[0, 1]`: the largest distance `D` between their
 /// empirical distribution and the identity, and the probability of a larger

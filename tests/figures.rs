@@ -435,7 +435,8 @@ fn expected(store: &Path, figure: &Artifact) -> Vec<Row> {
             .enumerate()
             .flat_map(|(k, u)| {
                 let kernel = figure.input(store, k);
-                let u = u.as_f64().unwrap();
+                // Labels print a minus sign, as typeset.
+                let u = u.as_f64().unwrap().to_string().replace('-', "\u{2212}");
                 let side = |name: &str, sign| grouped_side(&kernel, "kernels", name, sign, 20.0);
                 let above = side(&format!("u' = {u}, u > u'"), 1.0);
                 let below = side(&format!("u' = {u}, u < u'"), -1.0);

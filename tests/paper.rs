@@ -436,6 +436,7 @@ fn paper_rows_recompute_from_their_sources() {
     pulls_recompute_from_their_sources(&store, &summary);
     kernel_models_fit_their_kernels(&store);
     kernel_command_evaluates_the_stored_model(&config, &store);
+    held_out_kernels_recompute_from_the_models(&store);
 }
 
 /// `ternary kernel` prints the stored model of a computed kernel, on either
@@ -478,8 +479,8 @@ fn kernel_command_evaluates_the_stored_model(config: &Path, store: &Path) {
     for (args, named) in [
         (&["kernel", "--n", "7", "--du", "1e-3"][..], "ipp-7"),
         (
-            &["kernel", "--n", "6", "--u-prime", "-0.5", "--du", "1e-3"][..],
-            "--u-prime -0.5",
+            &["kernel", "--n", "6", "--u-prime", "-1.5", "--du", "1e-3"][..],
+            "--u-prime -1.5",
         ),
     ] {
         let refused = ternary(config, args);
@@ -513,7 +514,7 @@ fn kernel_models_fit_their_kernels(store: &Path) {
         })
         .collect();
     refs.sort();
-    assert_eq!(refs.len(), 16, "{refs:?}");
+    assert_eq!(refs.len(), 24, "{refs:?}");
     for instance in refs {
         let fit = table(store, "fit", &instance, "kernel_model_fit");
         let status = &STATUS.read(&fit).unwrap()[0];
@@ -549,6 +550,148 @@ fn kernel_models_fit_their_kernels(store: &Path) {
             "{instance}: {recomputed} != {chi2}"
         );
     }
+}
+
+/// The `interpolation` stage of the reduced study (u' = 0, 0.5, -0.25 and
+/// their mirror images: five u' nodes) holds out each kernel at u' = 0 and
+/// predicts it from the models at u' = -0.5 and 0.25 (mirror images of 0.5
+/// and -0.25: their sides swapped), -0.25 and 0.5. Every prediction is recomputed
+/// here from the stored knots (a 400-point midpoint rule for the group
+/// means, the Lagrange polynomial in u' through their logarithms), every z
+/// from its columns, and each summary row from its groups.
+fn held_out_kernels_recompute_from_the_models(store: &Path) {
+    use contract::interpolation::{groups, summary};
+    let rows = table(store, "interpolation", "kernels", "kernel_interpolation");
+    let (potential, u_prime, density, nodes) = (
+        contract::POTENTIAL.read(&rows).unwrap(),
+        groups::U_PRIME.read(&rows).unwrap(),
+        groups::RHO_L.read(&rows).unwrap(),
+        groups::NODES.read(&rows).unwrap(),
+    );
+    let (du, inner, outer) = (
+        groups::DU.read(&rows).unwrap(),
+        groups::DU_INNER.read(&rows).unwrap(),
+        groups::DU_OUTER.read(&rows).unwrap(),
+    );
+    let (g, predicted, z) = (
+        groups::G.read(&rows).unwrap(),
+        groups::G_PREDICTED.read(&rows).unwrap(),
+        groups::Z.read(&rows).unwrap(),
+    );
+    let coordinate = groups::COORDINATE.read(&rows).unwrap();
+    assert!(coordinate.iter().all(|c| c == "u'"), "{coordinate:?}");
+    assert!(u_prime.iter().all(|&u| u == 0.0), "{u_prime:?}");
+    let held: std::collections::BTreeSet<(String, String)> = (0..potential.len())
+        .map(|k| (potential[k].clone(), density[k].to_string()))
+        .collect();
+    // ipp-6, lj-0.1, lj-0.1052 at both densities (ipp-2 has no model).
+    assert_eq!(held.len(), 6, "{held:?}");
+    let lagrange = |at: f64, points: &[(f64, f64)]| -> f64 {
+        points
+            .iter()
+            .enumerate()
+            .map(|(i, (xi, yi))| {
+                let others = points.iter().enumerate().filter(|(j, _)| *j != i);
+                yi * others
+                    .map(|(_, (xj, _))| (at - xj) / (xi - xj))
+                    .product::<f64>()
+            })
+            .sum()
+    };
+    for k in 0..potential.len() {
+        assert_eq!(
+            nodes[k],
+            "u' = -0.5 (mirror image), -0.25, 0.25 (mirror image), 0.5"
+        );
+        let (a, b) = (inner[k].abs(), outer[k].abs());
+        assert!(a < du[k].abs() && du[k].abs() < b, "{k}");
+        let instance = |u: f64| format!("{}_u{u}_rho{}", potential[k], density[k]);
+        // A mirror image's group above u' is its stored kernel's below.
+        let side = |mirrored: bool| {
+            if (du[k] > 0.0) != mirrored {
+                "above"
+            } else {
+                "below"
+            }
+        };
+        let points: Vec<(f64, f64)> = [
+            (-0.5, 0.5, true),
+            (-0.25, -0.25, false),
+            (0.25, -0.25, true),
+            (0.5, 0.5, false),
+        ]
+        .iter()
+        .map(|&(node, stored, mirrored)| {
+            let mean = stored_group_mean(store, &instance(stored), side(mirrored), a, b);
+            (node, libm::log(mean))
+        })
+        .collect();
+        let expected = libm::exp(lagrange(0.0, &points));
+        assert!(
+            (predicted[k].mean / expected - 1.0).abs() < 1e-4,
+            "{}: {} != {expected}",
+            instance(0.0),
+            predicted[k].mean
+        );
+        let combined = libm::hypot(g[k].stderr, predicted[k].stderr);
+        assert!((z[k] - (g[k].mean - predicted[k].mean) / combined).abs() < 1e-12);
+        assert!(
+            g[k].mean > 3.0 * g[k].stderr,
+            "an unresolved group compared"
+        );
+    }
+    let summaries = table(
+        store,
+        "interpolation",
+        "kernels",
+        "kernel_interpolation_summary",
+    );
+    let (s_potential, s_density, counts, largest, beyond) = (
+        contract::POTENTIAL.read(&summaries).unwrap(),
+        summary::RHO_L.read(&summaries).unwrap(),
+        summary::GROUPS.read(&summaries).unwrap(),
+        summary::LARGEST_ABS_Z.read(&summaries).unwrap(),
+        summary::BEYOND_TWO.read(&summaries).unwrap(),
+    );
+    assert_eq!(s_potential.len(), held.len());
+    for s in 0..s_potential.len() {
+        let own: Vec<f64> = (0..potential.len())
+            .filter(|&k| potential[k] == s_potential[s] && density[k] == s_density[s])
+            .map(|k| z[k].abs())
+            .collect();
+        assert!(own.len() >= 10, "{}: {} groups", s_potential[s], own.len());
+        assert_eq!(counts[s] as usize, own.len());
+        assert_eq!(largest[s], own.iter().copied().fold(0.0, f64::max));
+        assert_eq!(beyond[s] as usize, own.iter().filter(|&&z| z > 2.0).count());
+    }
+}
+
+/// The mean of a stored model's `side` over `[a, b]` (`0 < a < b`): the
+/// spline through its knots in `t = ln x + x / cutoff_scale`, exponentiated,
+/// by a 400-point midpoint rule.
+fn stored_group_mean(store: &Path, instance: &str, side: &str, a: f64, b: f64) -> f64 {
+    use contract::fit::model::*;
+    use ternary::kernel::model::NaturalSpline;
+    let knots = table(store, "fit", instance, "kernel_model");
+    let (sides, t, values, scales) = (
+        SIDE.read(&knots).unwrap(),
+        T.read(&knots).unwrap(),
+        LN_G.read(&knots).unwrap(),
+        CUTOFF_SCALE.read(&knots).unwrap(),
+    );
+    let rows: Vec<usize> = (0..sides.len()).filter(|&k| sides[k] == side).collect();
+    let spline = NaturalSpline::through(
+        &rows.iter().map(|&k| t[k]).collect::<Vec<f64>>(),
+        &rows.iter().map(|&k| values[k].mean).collect::<Vec<f64>>(),
+    );
+    let scale = scales[rows[0]];
+    (0..400)
+        .map(|j| {
+            let x = a + (f64::from(j) + 0.5) * (b - a) / 400.0;
+            libm::exp(spline.value(libm::log(x) + x / scale))
+        })
+        .sum::<f64>()
+        / 400.0
 }
 
 /// The chi2 of a kernel's stored model against its `kernel_log` groups

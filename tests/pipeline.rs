@@ -1050,26 +1050,7 @@ fn kernel_models_interpolate_between_computed_exponents() {
         let run = ternary(config, &["run", "--quiet"]);
         assert!(run.status.success(), "{}", stderr(&run));
     }
-    let values = |config: &Path, n: &str| -> (String, Vec<(f64, f64)>) {
-        let output = ternary(
-            config,
-            &["kernel", "--n", n, "--du", "1e-3", "--du", "-1e-2"],
-        );
-        let printed = stdout(&output);
-        assert!(output.status.success(), "{}", stderr(&output));
-        let pairs = ["0.001", "-0.01"]
-            .iter()
-            .map(|du| {
-                let line = printed
-                    .lines()
-                    .find(|l| l.split_whitespace().next() == Some(du))
-                    .unwrap_or_else(|| panic!("no line for {du}: {printed}"));
-                let words: Vec<&str> = line.split_whitespace().collect();
-                (words[1].parse().unwrap(), words[3].parse().unwrap())
-            })
-            .collect();
-        (printed, pairs)
-    };
+    let values = |config: &Path, n: &str| kernel_values(config, &["--n", n], ["0.001", "-0.01"]);
     let (printed, between) = values(&computed, "7");
     assert!(
         printed.contains("through the models of ipp-4, ipp-6, ipp-8, ipp-10, ipp-12"),
@@ -1104,4 +1085,84 @@ fn kernel_models_interpolate_between_computed_exponents() {
         stderr(&outside)
     );
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// `ternary kernel --u-prime U` between computed u': the models of the
+/// four nearest kernels (mirror images `G(u' -> u) = G(-u' -> -u)`
+/// included) interpolated in u'. A mirror image is exact: u' = 0.5 at du
+/// is u' = -0.5 at -du to the printed digit. Left out: a study of u' = 0,
+/// -0.25, -0.5, -2 predicts the u' = -1 kernel that a study with it
+/// computes (the same scenes), within 3 combined errors; beyond the
+/// computed u' and their mirror images, refused.
+#[test]
+fn kernel_models_interpolate_in_u_prime() {
+    let dir = workspace("u-prime-interpolation");
+    let study = |u_primes: &str| {
+        small_study("data").replace(
+            "randomizations = 2\npoints = 64",
+            "randomizations = 8\npoints = 512",
+        ) + &format!("\n[kernel]\nu_prime = [{u_primes}]\n")
+    };
+    let computed = write_config(&dir, &study("0.0, -0.25, -0.5, -1.0, -2.0"));
+    let left_out = dir.join("left-out.toml");
+    std::fs::write(&left_out, study("0.0, -0.25, -0.5, -2.0")).unwrap();
+    for config in [&computed, &left_out] {
+        let run = ternary(config, &["run", "--quiet"]);
+        assert!(run.status.success(), "{}", stderr(&run));
+    }
+    let values = |config: &Path, u_prime: &str, du: [&str; 2]| {
+        kernel_values(config, &["--n", "6", "--u-prime", u_prime], du)
+    };
+    let (printed, mirrored) = values(&computed, "0.5", ["0.001", "-0.01"]);
+    assert!(printed.contains("mirror image"), "{printed}");
+    let (_, direct) = values(&computed, "-0.5", ["-0.001", "0.01"]);
+    assert_eq!(mirrored, direct);
+    let (_, computed_at) = values(&computed, "-1", ["0.001", "-0.01"]);
+    let (printed, predicted) = values(&left_out, "-1", ["0.001", "-0.01"]);
+    assert!(
+        printed.contains("interpolated in u' through the kernels at u' = -2, -0.5, -0.25, 0"),
+        "{printed}"
+    );
+    for ((g, e), (p, f)) in computed_at.iter().zip(&predicted) {
+        assert!(
+            (g - p).abs() < 3.0 * libm::hypot(*e, *f),
+            "computed {g} +- {e}, interpolated {p} +- {f}"
+        );
+    }
+    let outside = ternary(
+        &computed,
+        &["kernel", "--n", "6", "--u-prime", "-2.5", "--du", "1e-3"],
+    );
+    assert!(
+        !outside.status.success() && stderr(&outside).contains("nor between 4 of them"),
+        "{}",
+        stderr(&outside)
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// `ternary kernel` of the study `config` (`target`: its potential and `u'`
+/// arguments) at the two `du` (as it prints them): the printout and each
+/// `(G, standard error)`.
+fn kernel_values(config: &Path, target: &[&str], du: [&str; 2]) -> (String, Vec<(f64, f64)>) {
+    let mut args = vec!["kernel"];
+    args.extend_from_slice(target);
+    for at in du {
+        args.extend_from_slice(&["--du", at]);
+    }
+    let output = ternary(config, &args);
+    let printed = stdout(&output);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let pairs = du
+        .iter()
+        .map(|du| {
+            let line = printed
+                .lines()
+                .find(|l| l.split_whitespace().next() == Some(du))
+                .unwrap_or_else(|| panic!("no line for {du}: {printed}"));
+            let words: Vec<&str> = line.split_whitespace().collect();
+            (words[1].parse().unwrap(), words[3].parse().unwrap())
+        })
+        .collect();
+    (printed, pairs)
 }

@@ -767,7 +767,7 @@ fn a_study_beyond_the_limits_is_refused_unless_allowed() {
     );
     let default_study =
         fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("pipeline.toml")).unwrap();
-    let listed = "u_prime = [0.0, -0.25, -3.0]\ndensity = [0.0]\n";
+    let listed = "u_prime = [0.0, -0.25, -0.5, -1.0, -2.0, -3.0]\ndensity = [0.0]\n";
     assert_eq!(default_study.matches(listed).count(), 1);
     let at_load = default_study.replacen(listed, &lists(256, 256), 1);
     let config = write_config(&dir, &at_load);

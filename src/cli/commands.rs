@@ -17,6 +17,7 @@ use super::{Opening, emit, exit_code, load, open, print_event, within_limits};
 use ternary::config::{SlurmConfig, Study, compact};
 use ternary::contract::instances;
 use ternary::export::{self, ExportOptions};
+use ternary::kernel::model::{Family, POTENTIAL_NODES, U_PRIME_NODES, nearest_nodes};
 use ternary::physics::dissociation::{dissociation_rate, sobol_dissociation_scenes};
 use ternary::physics::md::CLUSTER_STEP_BUDGET;
 use ternary::physics::pair_kinetics::{
@@ -205,47 +206,32 @@ pub(super) fn rate(config: &Path, args: RateArgs) -> Result<ExitCode> {
 }
 
 /// `ternary kernel`: the model of a kernel the study computed, at given `du`,
-/// or between computed ones (`--n`, `--theta`) their models interpolated.
+/// or between computed ones (`--n`, `--theta`, `--u-prime`) their models
+/// interpolated.
 pub(super) fn kernel(config: &Path, args: KernelArgs) -> Result<ExitCode> {
     let (study, store) = load(config, Opening::Existing)?;
-    check_kernel_target(&study, config, &args)?;
     let wanted = match (&args.potential, args.n, args.theta) {
         (Some(id), _, _) => id.clone(),
         (None, Some(n), _) => format!("ipp-{n}"),
         (None, None, Some(theta)) => format!("lj-{theta}"),
         (None, None, None) => bail!("give --potential, --n or --theta"),
     };
+    let u_primes = u_prime_nodes(&study, config, &args)?;
     let potentials = study.potentials();
-    let at = |p: &Potential| instances::fit(&study.kernel_params(*p, args.u_prime, args.density));
     let title = format!(
         "G(u' -> u' + du) of {wanted}, u' = {} v_th, rho l = {}",
         args.u_prime, args.density
     );
     let plan = plan(&study);
-    if let Some(potential) = potentials.iter().find(|p| p.id() == wanted) {
+    let computed = potentials.iter().find(|p| p.id() == wanted);
+    if let (Some(potential), [(u_prime, false)]) = (computed, u_primes.as_slice()) {
+        let fit = instances::fit(&study.kernel_params(*potential, *u_prime, args.density));
         emit(&report::kernel_model_text(
-            &store,
-            &plan,
-            &at(potential),
-            &title,
-            &args.du,
+            &store, &plan, &fit, &title, &args.du,
         )?);
         return Ok(ExitCode::SUCCESS);
     }
-    let ids: Vec<String> = potentials.iter().map(|p| p.id()).collect();
-    let (method, nodes, coordinate) = interpolation_nodes(&potentials, &args)
-        .with_context(|| {
-            format!(
-                "{wanted}: no kernel of it in {} (it has {}); --n or --theta interpolates between computed ones with {INTERPOLATION_NODES} of them around it (inverse power laws with n > 2, in 1/n; Lennard-Jones, in ln theta)",
-                config.display(),
-                ids.join(", ")
-            )
-        })?;
-    let interpolation = report::Interpolation {
-        at: coordinate,
-        nodes: nodes.iter().map(|(c, p)| (*c, at(p))).collect(),
-        method,
-    };
+    let interpolation = interpolation(&study, config, &args, &wanted, &u_primes)?;
     emit(&report::interpolated_kernel_text(
         &store,
         &plan,
@@ -256,101 +242,141 @@ pub(super) fn kernel(config: &Path, args: KernelArgs) -> Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
-/// Computed kernels to interpolate through, each as its coordinate (`1/n`,
-/// `ln theta`) and its potential.
-type Nodes = Vec<(f64, Potential)>;
-
-/// Computed kernels an interpolation needs around its target: five, as the
-/// validation measured (docs/kernel-model.md).
-const INTERPOLATION_NODES: usize = 5;
-
-/// Lennard-Jones nodes closer than this in `ln theta` are one (0.1, 0.1052).
-const THETA_NODE_SEPARATION: f64 = 0.2;
-
-/// How to interpolate to `--n` (every kicked inverse power law, in `1/n`) or
-/// `--theta` (the nearest thetas at least [`THETA_NODE_SEPARATION`] apart,
-/// in `ln theta`): the method's line, the nodes (coordinate and potential)
-/// and the target's coordinate; `None` when there are fewer than
-/// [`INTERPOLATION_NODES`] or the target is not between them.
-fn interpolation_nodes(
-    potentials: &[Potential],
+/// How `ternary kernel` reaches `wanted` at `--u-prime` when the study did
+/// not compute that kernel: the nodes in the potentials' coordinate (the
+/// potential itself when computed) and in `u'` (`u_primes`, each with
+/// whether it is a mirror image), and the line saying so.
+fn interpolation(
+    study: &Study,
+    config: &Path,
     args: &KernelArgs,
-) -> Option<(String, Nodes, f64)> {
-    let (nodes, at, name) = match (args.n, args.theta) {
-        (Some(n), _) => {
-            let nodes: Nodes = potentials
-                .iter()
-                .filter_map(|p| match p {
-                    Potential::InversePower(law) if law.n > 2.0 => Some((1.0 / law.n, *p)),
-                    _ => None,
-                })
-                .collect();
-            (nodes, 1.0 / n, "1/n")
+    wanted: &str,
+    u_primes: &[(f64, bool)],
+) -> Result<report::Interpolation> {
+    let potentials = study.potentials();
+    let computed = potentials.iter().find(|p| p.id() == wanted);
+    let (mut method, around, coordinate) = match computed {
+        Some(potential) => (String::new(), vec![(0.0, *potential)], 0.0),
+        None => {
+            let ids: Vec<String> = potentials.iter().map(|p| p.id()).collect();
+            interpolation_nodes(&potentials, args).with_context(|| {
+                format!(
+                    "{wanted}: no kernel of it in {} (it has {}); --n or --theta interpolates between computed ones with {POTENTIAL_NODES} of them around it (inverse power laws with n > 2, in 1/n; Lennard-Jones, in ln theta)",
+                    config.display(),
+                    ids.join(", ")
+                )
+            })?
         }
-        (None, Some(theta)) => (theta_nodes(potentials, theta), libm::log(theta), "ln theta"),
-        (None, None) => return None,
     };
-    let (low, high) = nodes
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), (c, _)| {
-            (l.min(*c), h.max(*c))
-        });
-    if nodes.len() < INTERPOLATION_NODES || !(low < at && at < high) {
-        return None;
+    if u_primes.len() > 1 || u_primes[0].1 {
+        let listed: Vec<String> = u_primes.iter().map(|(u, _)| u.to_string()).collect();
+        let separator = if method.is_empty() { "" } else { "; " };
+        method = format!(
+            "{method}{separator}interpolated in u' through the kernels at u' = {} (those of positive u' the mirror images of the computed ones at -u', G(u' -> u) = G(-u' -> -u); Lagrange, degree {}; held-out kernels: docs/kernel-model.md)",
+            listed.join(", "),
+            u_primes.len() - 1
+        );
     }
-    let ids: Vec<String> = nodes.iter().map(|(_, p)| p.id()).collect();
-    let method = format!(
-        "interpolated in {name} through the models of {} (Lagrange, degree {}; their errors through the weights, the models taken as independent; held-out kernels came within a median 0.3-0.6 of their combined errors: docs/kernel-model.md)",
-        ids.join(", "),
-        nodes.len() - 1
-    );
-    Some((method, nodes, at))
-}
-
-/// The study's Lennard-Jones potentials nearest `theta` in `ln theta`, each
-/// at least [`THETA_NODE_SEPARATION`] from those taken, up to
-/// [`INTERPOLATION_NODES`], as `(ln theta, potential)`.
-fn theta_nodes(potentials: &[Potential], theta: f64) -> Nodes {
-    let mut wells: Nodes = potentials
+    let nodes = around
         .iter()
-        .filter_map(|p| match p {
-            Potential::LennardJones(lj) => Some((libm::log(lj.theta), *p)),
-            _ => None,
+        .flat_map(|(c, potential)| {
+            u_primes.iter().map(|&(u_prime, mirrored)| {
+                let stored = if mirrored { -u_prime } else { u_prime };
+                report::Node {
+                    coordinate: *c,
+                    u_prime,
+                    fit: instances::fit(&study.kernel_params(*potential, stored, args.density)),
+                    mirrored,
+                }
+            })
         })
         .collect();
-    let target = libm::log(theta);
-    wells.sort_by(|a, b| (a.0 - target).abs().total_cmp(&(b.0 - target).abs()));
-    let mut taken: Nodes = Vec::new();
-    for (coordinate, potential) in wells {
-        if taken.len() < INTERPOLATION_NODES
-            && taken
-                .iter()
-                .all(|(c, _)| (c - coordinate).abs() >= THETA_NODE_SEPARATION)
-        {
-            taken.push((coordinate, potential));
-        }
-    }
-    taken.sort_by(|a, b| a.0.total_cmp(&b.0));
-    taken
+    Ok(report::Interpolation {
+        nodes,
+        at: coordinate,
+        u_prime: args.u_prime,
+        method,
+    })
 }
 
-/// `--u-prime` and `--density` name a kernel the study computes.
-fn check_kernel_target(study: &Study, config: &Path, args: &KernelArgs) -> Result<()> {
+/// The `u'` of the kernels `--u-prime` takes, each with whether it is the
+/// mirror image of the computed kernel at `-u'`: the one computed (or
+/// mirrored) at `--u-prime`, else the [`U_PRIME_NODES`] nearest around it
+/// at `--density`; an error naming what the study computes when there are
+/// too few or `--u-prime` is not between them.
+fn u_prime_nodes(study: &Study, config: &Path, args: &KernelArgs) -> Result<Vec<(f64, bool)>> {
     let targets = study.kernel_targets();
-    if targets.contains(&(args.u_prime, args.density)) {
-        return Ok(());
+    let computed: Vec<f64> = targets
+        .iter()
+        .filter(|(_, rho)| *rho == args.density)
+        .map(|(u, _)| *u)
+        .collect();
+    let mut nodes: Vec<(f64, bool)> = computed.iter().map(|&u| (u, false)).collect();
+    nodes.extend(
+        computed
+            .iter()
+            .filter(|&&u| u != 0.0 && !computed.contains(&-u))
+            .map(|&u| (-u, true)),
+    );
+    if let Some(node) = nodes.iter().find(|(u, _)| *u == args.u_prime) {
+        return Ok(vec![*node]);
+    }
+    let coordinates: Vec<f64> = nodes.iter().map(|(u, _)| *u).collect();
+    if let Some(taken) = nearest_nodes(&coordinates, args.u_prime, U_PRIME_NODES, 0.0) {
+        return Ok(taken.iter().map(|&k| nodes[k]).collect());
     }
     let listed: Vec<String> = targets
         .iter()
         .map(|(u, rho)| format!("(u' {u}, density {rho})"))
         .collect();
     bail!(
-        "--u-prime {} --density {}: not a kernel of {} (it computes {})",
+        "--u-prime {} --density {}: not a kernel of {} (it computes {}), nor between {U_PRIME_NODES} of them at that density and their mirror images (u' -> -u')",
         args.u_prime,
         args.density,
         config.display(),
         listed.join(", ")
     )
+}
+
+/// Computed kernels to interpolate through, each as its coordinate (`1/n`,
+/// `ln theta`) and its potential.
+type Nodes = Vec<(f64, Potential)>;
+
+/// How to interpolate to `--n` (inverse power laws, in `1/n`) or `--theta`
+/// (Lennard-Jones, in `ln theta`): the method's line, the
+/// [`POTENTIAL_NODES`] nearest computed potentials around the target
+/// ([`nearest_nodes`]: coordinate and potential, in the study's order) and
+/// the target's coordinate; `None` when there are too few around it.
+fn interpolation_nodes(
+    potentials: &[Potential],
+    args: &KernelArgs,
+) -> Option<(String, Nodes, f64)> {
+    let wanted = match (args.n, args.theta) {
+        (Some(n), _) => Potential::inverse_power(n),
+        (None, Some(theta)) => Potential::lennard_jones(theta),
+        (None, None) => return None,
+    };
+    let (family, at) = Family::of(&wanted)?;
+    let family_nodes: Nodes = potentials
+        .iter()
+        .filter_map(|p| {
+            Family::of(p)
+                .filter(|(f, _)| *f == family)
+                .map(|(_, c)| (c, *p))
+        })
+        .collect();
+    let coordinates: Vec<f64> = family_nodes.iter().map(|(c, _)| *c).collect();
+    let mut taken = nearest_nodes(&coordinates, at, POTENTIAL_NODES, family.separation())?;
+    taken.sort_unstable();
+    let nodes: Nodes = taken.iter().map(|&k| family_nodes[k]).collect();
+    let ids: Vec<String> = nodes.iter().map(|(_, p)| p.id()).collect();
+    let method = format!(
+        "interpolated in {} through the models of {} (Lagrange, degree {}; their errors through the weights, the models taken as independent; held-out kernels came within a median 0.3-0.6 of their combined errors: docs/kernel-model.md)",
+        family.coordinate(),
+        ids.join(", "),
+        nodes.len() - 1
+    );
+    Some((method, nodes, at))
 }
 
 /// The fit of the bound-pair autocorrelation ends where it falls below this

@@ -115,6 +115,11 @@ pub fn sweep(potential: &Potential) -> InstanceId {
     InstanceId::new(super::sweep::STAGE, &potential.id())
 }
 
+/// The study's one `interpolation` instance.
+pub fn interpolation() -> InstanceId {
+    InstanceId::new(super::interpolation::STAGE, "kernels")
+}
+
 /// The study's one `pulls` instance.
 pub fn pulls() -> InstanceId {
     InstanceId::new(super::pulls::STAGE, "study")

@@ -18,8 +18,8 @@ use crate::physics::potential::Potential;
 use crate::pipeline::{InstanceId, Stage};
 use crate::stages::compare::{CompareParams, CompareStage};
 use crate::stages::{
-    convergence, dissociation, evolve, fit, gases, kernel, md, moments, near_integrable, pulls,
-    scan, spectrum, sweep, table,
+    convergence, dissociation, evolve, fit, gases, interpolation, kernel, md, moments,
+    near_integrable, pulls, scan, spectrum, sweep, table,
 };
 use collisions::push_collisions;
 
@@ -29,6 +29,7 @@ pub fn plan(study: &Study) -> Vec<Box<dyn Stage>> {
     for potential in study.potentials() {
         push_potential(&mut stages, study, potential);
     }
+    push_interpolation(&mut stages, study);
     push_gases(&mut stages, study);
     push_convergence(&mut stages, study);
     push_rings(&mut stages, study);
@@ -71,6 +72,24 @@ pub fn plan(study: &Study) -> Vec<Box<dyn Stage>> {
         stages.extend(figures.into_iter().map(|f| Box::new(f) as Box<dyn Stage>));
     }
     stages
+}
+
+/// The `interpolation` between the models of every kernel (each has a
+/// `fit`), when one of them can be held out.
+fn push_interpolation(stages: &mut Vec<Box<dyn Stage>>, study: &Study) {
+    let kernels = study
+        .potentials()
+        .into_iter()
+        .flat_map(|p| {
+            study
+                .kernel_targets()
+                .into_iter()
+                .map(move |(u_prime, density)| study.kernel_params(p, u_prime, density))
+        })
+        .collect();
+    if let Some(stage) = interpolation::InterpolationStage::planned(kernels) {
+        stages.push(Box::new(stage));
+    }
 }
 
 /// The `pulls` of the study's cross-checks, when it runs a sweep: the

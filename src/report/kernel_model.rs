@@ -4,23 +4,16 @@
 
 use std::fmt::Write as _;
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use arrow::array::RecordBatch;
 
 use super::numbers::{fixed, significant, with_error};
 use super::rates::{intact, table_of};
 use super::show::current_artifact;
 use crate::contract;
-use crate::kernel::model::{Knots, Warp, interpolate};
+use crate::kernel::model::{SideCurve, interpolate};
 use crate::pipeline::store::Store;
 use crate::pipeline::{InstanceId, Stage};
-
-/// One side's stored model: its knots, the knot values and their covariance.
-struct StoredSide {
-    knots: Knots,
-    values: Vec<f64>,
-    covariance: Vec<f64>,
-}
 
 /// A kernel's model evaluated at the `du` asked for.
 struct Evaluated {
@@ -54,18 +47,15 @@ fn evaluate(
         contract::fit::model_covariance::TABLE.name,
     )?;
     let sides = [
-        stored_side(&knots, &covariance, "below")?,
-        stored_side(&knots, &covariance, "above")?,
+        contract::fit::side_curve(&knots, &covariance, "below")?,
+        contract::fit::side_curve(&knots, &covariance, "above")?,
     ];
     let values = du
         .iter()
         .map(|&x| {
             let side = &sides[usize::from(x > 0.0)];
-            (
-                side.knots.ln_g(&side.values, x.abs()),
-                side.knots.ln_g_stderr(&side.covariance, x.abs()),
-                extrapolation(side, x.abs()),
-            )
+            let (ln_g, error) = side.ln_g(x.abs());
+            (ln_g, error, extrapolation(side, x.abs()))
         })
         .collect();
     Ok(Ok(Evaluated {
@@ -123,23 +113,40 @@ pub fn kernel_model_text(
     Ok(out)
 }
 
-/// How `ternary kernel` interpolates between computed potentials: the
-/// coordinate (`1/n`, `ln theta`) and each node's value of it with the
-/// `fit` instance of its kernel, the target's coordinate, and a line saying
-/// what was done.
+/// One computed kernel an interpolation goes through: its potential's
+/// coordinate (`1/n`, `ln theta`; any, when only `u'` is interpolated), its
+/// `u'` (a stored kernel's, or its mirror image's) and the `fit` instance
+/// of the stored kernel.
+pub struct Node {
+    /// The potential's coordinate.
+    pub coordinate: f64,
+    /// The node's `u'`, `v_th`.
+    pub u_prime: f64,
+    /// The `fit` instance of the stored kernel.
+    pub fit: InstanceId,
+    /// The node is the stored kernel's mirror image, `G(u' -> u' + du) =
+    /// G(-u' -> -u' - du)` (physics.md §3): evaluated at `-du`.
+    pub mirrored: bool,
+}
+
+/// How `ternary kernel` reaches a kernel the study did not compute: its
+/// nodes, grouped by potential in coordinate order, the target's
+/// coordinate and `u'`, and a line saying what was done.
 pub struct Interpolation {
-    /// `(coordinate, fit instance)` of each computed kernel used.
-    pub nodes: Vec<(f64, InstanceId)>,
-    /// The coordinate of the kernel asked for.
+    /// The computed kernels used.
+    pub nodes: Vec<Node>,
+    /// The coordinate of the potential asked for.
     pub at: f64,
+    /// The `u'` asked for, `v_th`.
+    pub u_prime: f64,
     /// What the interpolation is, printed under the title.
     pub method: String,
 }
 
-/// The text of `ternary kernel` for a potential the study did not compute:
-/// the models of those it did (`interpolation.nodes`, at the same `u'` and
-/// density), each evaluated at `du`, `ln G` interpolated through all of
-/// them ([`interpolate`]).
+/// The text of `ternary kernel` for a kernel the study did not compute:
+/// the models of those it did (`interpolation.nodes`), each evaluated at
+/// `du` (mirror images at `-du`); `ln G` interpolated in `u'` through each
+/// potential's nodes, then in the potentials' coordinate ([`interpolate`]).
 pub fn interpolated_kernel_text(
     store: &Store,
     plan: &[Box<dyn Stage>],
@@ -148,24 +155,41 @@ pub fn interpolated_kernel_text(
     du: &[f64],
 ) -> Result<String> {
     let mut evaluated = Vec::new();
-    for (coordinate, id) in &interpolation.nodes {
-        match evaluate(store, plan, id, du)? {
-            Ok(model) => evaluated.push((*coordinate, model)),
+    for node in &interpolation.nodes {
+        let sign = if node.mirrored { -1.0 } else { 1.0 };
+        let at: Vec<f64> = du.iter().map(|x| sign * x).collect();
+        match evaluate(store, plan, &node.fit, &at)? {
+            Ok(model) => evaluated.push((node, model)),
             Err(status) => anyhow::bail!("cannot interpolate: {status}"),
         }
     }
     let mut out = String::new();
     let _ = writeln!(out, "{title}: {}", interpolation.method);
-    for (_, model) in &evaluated {
-        let _ = writeln!(out, "  {}", model.source);
+    for (node, model) in &evaluated {
+        let mirror = if node.mirrored {
+            format!(" (its mirror image, at u' = {})", node.u_prime)
+        } else {
+            String::new()
+        };
+        let _ = writeln!(out, "  {}{mirror}", model.source);
     }
+    let mut coordinates: Vec<f64> = evaluated.iter().map(|(n, _)| n.coordinate).collect();
+    coordinates.dedup();
     let values: Vec<(f64, f64, String)> = (0..du.len())
         .map(|k| {
-            let points: Vec<(f64, f64, f64)> = evaluated
+            let per_potential: Vec<(f64, f64, f64)> = coordinates
                 .iter()
-                .map(|(c, model)| (*c, model.values[k].0, model.values[k].1))
+                .map(|&c| {
+                    let in_u_prime: Vec<(f64, f64, f64)> = evaluated
+                        .iter()
+                        .filter(|(n, _)| n.coordinate == c)
+                        .map(|(n, model)| (n.u_prime, model.values[k].0, model.values[k].1))
+                        .collect();
+                    let (value, error) = interpolate(&in_u_prime, interpolation.u_prime);
+                    (c, value, error)
+                })
                 .collect();
-            let (ln_g, error) = interpolate(&points, interpolation.at);
+            let (ln_g, error) = interpolate(&per_potential, interpolation.at);
             let beyond = evaluated
                 .iter()
                 .any(|(_, model)| !model.values[k].2.is_empty());
@@ -195,42 +219,9 @@ fn goodness_line(fit: &RecordBatch) -> Result<String> {
     ))
 }
 
-/// The knots of `side` (`below` or `above`) and their covariance.
-fn stored_side(knots: &RecordBatch, covariance: &RecordBatch, side: &str) -> Result<StoredSide> {
-    use contract::fit::model::{CUTOFF_SCALE, LN_G, SIDE, T};
-    use contract::fit::model_covariance::{COVARIANCE, KNOT_I, KNOT_J};
-    let sides = SIDE.read(knots)?;
-    let rows: Vec<usize> = (0..sides.len()).filter(|&k| sides[k] == side).collect();
-    let first = *rows
-        .first()
-        .with_context(|| format!("kernel_model has no knots {side} u'"))?;
-    let (t, values) = (T.read(knots)?, LN_G.read(knots)?);
-    let size = rows.len();
-    let mut matrix = vec![0.0; size * size];
-    let (covariance_sides, i, j) = (
-        SIDE.read(covariance)?,
-        KNOT_I.read(covariance)?,
-        KNOT_J.read(covariance)?,
-    );
-    let entries = COVARIANCE.read(covariance)?;
-    for k in (0..entries.len()).filter(|&k| covariance_sides[k] == side) {
-        matrix[i[k] as usize * size + j[k] as usize] = entries[k];
-    }
-    Ok(StoredSide {
-        knots: Knots {
-            warp: Warp {
-                cutoff_scale: CUTOFF_SCALE.read(knots)?[first],
-            },
-            t: rows.iter().map(|&k| t[k]).collect(),
-        },
-        values: rows.iter().map(|&k| values[k].mean).collect(),
-        covariance: matrix,
-    })
-}
-
 /// Where `x` lies outside the knots: the model continues straight in `t`
 /// there, past what was fitted (empty inside).
-fn extrapolation(side: &StoredSide, x: f64) -> String {
+fn extrapolation(side: &SideCurve, x: f64) -> String {
     let t = side.knots.warp.t(x);
     let (first, last) = (side.knots.t[0], side.knots.t[side.knots.t.len() - 1]);
     let edge = |t: f64| significant(side.knots.warp.x(t));

@@ -12,9 +12,9 @@ use crate::pipeline::executor::InstanceReport;
 use crate::pipeline::store::Store;
 
 use super::tables::{
-    balance_table, compare_table, convergence_table, evolve_table, gases_table, kernel_model_table,
-    largest_pulls_table, md_table, near_integrable_table, pulls_table, scan_table, spectrum_table,
-    stationarity_table,
+    balance_table, compare_table, convergence_table, evolve_table, gases_table,
+    kernel_interpolation_table, kernel_model_table, largest_pulls_table, md_table,
+    near_integrable_table, pulls_table, scan_table, spectrum_table, stationarity_table,
 };
 use super::{count, estimate, number, table_frames, text};
 
@@ -58,6 +58,7 @@ pub(super) fn stage_tables(
 ) -> Result<()> {
     gases_table(out, store, reports)?;
     kernel_model_table(out, store, reports)?;
+    kernel_interpolation_table(out, store, reports)?;
     convergence_table(out, store, reports)?;
     evolve_table(out, store, reports)?;
     spectrum_table(out, store, reports)?;

@@ -10,6 +10,7 @@ use crate::contract;
 use crate::pipeline::executor::InstanceReport;
 use crate::pipeline::store::Store;
 use crate::stats::ChiSquare;
+use polars::prelude::DataFrame;
 
 use super::{count, estimate, number, row_of, table_frames, text, titled_frames, variance};
 
@@ -677,4 +678,81 @@ pub(super) fn kernel_model_table(
     }
     out.table(&table);
     Ok(())
+}
+
+/// How well the kernel models interpolate (`interpolation` stage): per
+/// coordinate, every computed kernel held out and predicted from its
+/// neighbours, summed over the kernels.
+pub(super) fn kernel_interpolation_table(
+    out: &mut dyn Sink,
+    store: &Store,
+    reports: &[InstanceReport],
+) -> Result<()> {
+    use contract::interpolation::summary::*;
+    let frames = titled_frames(
+        out,
+        store,
+        reports,
+        &TABLE,
+        "kernel models between the computed kernels: each held out and predicted from its neighbours' models as `ternary kernel` interpolates them; z = (G - predicted) / combined error per log group, |z| > 2 for 4.6% of the groups and median |z| (the median of the held-out kernels') 0.674 when the errors are right (kernel_interpolation.parquet lists each group; docs/kernel-model.md)",
+    )?;
+    if frames.is_empty() {
+        return Ok(());
+    }
+    let mut table = Columns::new(&[
+        ("in", Align::Left),
+        ("held out", Align::Right),
+        ("groups", Align::Right),
+        ("|z| > 2", Align::Right),
+        ("median |z|", Align::Right),
+        ("largest |z|", Align::Right),
+        ("where", Align::Left),
+        ("largest deviation", Align::Right),
+    ]);
+    for (_, frame) in frames {
+        let coordinates: Vec<String> = (0..frame.height())
+            .map(|row| text(&frame, row, COORDINATE))
+            .collect::<Result<_>>()?;
+        let mut seen: Vec<&String> = coordinates.iter().collect();
+        seen.dedup();
+        for coordinate in seen {
+            let rows: Vec<usize> = (0..frame.height())
+                .filter(|&row| &coordinates[row] == coordinate)
+                .collect();
+            table.push(interpolation_row(&frame, coordinate, &rows)?);
+        }
+    }
+    out.table(&table);
+    Ok(())
+}
+
+/// One coordinate's row of [`kernel_interpolation_table`]: the sums over
+/// the summary's `rows` of it.
+fn interpolation_row(frame: &DataFrame, coordinate: &str, rows: &[usize]) -> Result<Vec<Cell>> {
+    use contract::interpolation::summary::*;
+    let sum = |col| -> Result<u32> { rows.iter().map(|&row| count(frame, row, col)).sum() };
+    let values =
+        |col| -> Result<Vec<f64>> { rows.iter().map(|&row| number(frame, row, col)).collect() };
+    let (groups, beyond) = (sum(GROUPS)?, sum(BEYOND_TWO)?);
+    let largest = values(LARGEST_ABS_Z)?;
+    let worst = (0..rows.len()).fold(0, |w, k| if largest[k] > largest[w] { k } else { w });
+    let row = rows[worst];
+    let deviation = values(LARGEST_DEVIATION)?.into_iter().fold(0.0, f64::max);
+    Ok(vec![
+        Cell::text(coordinate),
+        Cell::text(rows.len().to_string()),
+        Cell::text(groups.to_string()),
+        Cell::text(format!(
+            "{beyond} ({}%)",
+            fixed(100.0 * f64::from(beyond) / f64::from(groups.max(1)), 1)
+        )),
+        Cell::text(fixed(crate::stats::median(&values(MEDIAN_ABS_Z)?), 2)),
+        Cell::text(fixed(largest[worst], 2)),
+        Cell::text(format!(
+            "{} u' = {}",
+            text(frame, row, contract::POTENTIAL)?,
+            number(frame, row, U_PRIME)?
+        )),
+        Cell::text(format!("{}%", fixed(100.0 * deviation, 1))),
+    ])
 }

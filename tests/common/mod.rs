@@ -218,7 +218,7 @@ points = 256
 pilot_points = 64
 
 [kernel]
-u_prime = [0.0, 0.5]
+u_prime = [0.0, 0.5, -0.25]
 density = [0.0, 1e-3]
 
 [sweep]

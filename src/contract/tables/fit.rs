@@ -1,6 +1,9 @@
 //! The `fit` stage: `fit.parquet`, one row.
 
 use super::*;
+use crate::kernel::model::{Knots, SideCurve, Warp};
+use crate::pipeline::StageError;
+use arrow::array::RecordBatch;
 
 /// The stage, as named in instance ids and the store.
 pub const STAGE: &str = "fit";
@@ -205,6 +208,51 @@ pub mod model_covariance {
         "ln(rho^2 l v_th / v_th)^2",
         "covariance of ln_G at knot_i and knot_j: (R - 1)/R sum over the fits leaving out one randomization each",
     );
+}
+
+/// The model of `side` (`below` or `above` `u'`) of a `fit` instance:
+/// its knots from `kernel_model`, their covariance from
+/// `kernel_model_covariance`.
+pub fn side_curve(
+    knots: &RecordBatch,
+    covariance: &RecordBatch,
+    side: &str,
+) -> Result<SideCurve, StageError> {
+    use model::{CUTOFF_SCALE, LN_G, SIDE, T};
+    use model_covariance::{COVARIANCE, KNOT_I, KNOT_J};
+    let sides = SIDE.read(knots)?;
+    let rows: Vec<usize> = (0..sides.len()).filter(|&k| sides[k] == side).collect();
+    let first = *rows
+        .first()
+        .ok_or_else(|| StageError::Input(format!("kernel_model has no knots {side} u'")))?;
+    let (t, values) = (T.read(knots)?, LN_G.read(knots)?);
+    let size = rows.len();
+    let mut matrix = vec![0.0; size * size];
+    let (covariance_sides, i, j) = (
+        SIDE.read(covariance)?,
+        KNOT_I.read(covariance)?,
+        KNOT_J.read(covariance)?,
+    );
+    let entries = COVARIANCE.read(covariance)?;
+    for k in (0..entries.len()).filter(|&k| covariance_sides[k] == side) {
+        let (i, j) = (i[k] as usize, j[k] as usize);
+        if i >= size || j >= size {
+            return Err(StageError::Input(format!(
+                "kernel_model_covariance: knot ({i}, {j}) {side} u', beyond its {size} knots"
+            )));
+        }
+        matrix[i * size + j] = entries[k];
+    }
+    Ok(SideCurve {
+        knots: Knots {
+            warp: Warp {
+                cutoff_scale: CUTOFF_SCALE.read(knots)?[first],
+            },
+            t: rows.iter().map(|&k| t[k]).collect(),
+        },
+        values: rows.iter().map(|&k| values[k].mean).collect(),
+        covariance: matrix,
+    })
 }
 
 /// `kernel_model_fit.parquet`: the kernel model's goodness of fit, one row.

@@ -13,6 +13,7 @@ pub mod evolve;
 pub mod figures;
 pub mod fit;
 pub mod gases;
+pub mod interpolation;
 pub mod kernel;
 pub mod launches;
 pub mod md;

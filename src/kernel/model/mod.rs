@@ -38,9 +38,13 @@
 //!   and `p` the share of patterns whose chi-square reaches the observed one
 //!   (the identity counts: `p >= 1 / patterns`).
 
+mod interpolation;
 mod least_squares;
 mod spline;
 
+pub use interpolation::{
+    FEWEST_NODES, Family, POTENTIAL_NODES, SideCurve, U_PRIME_NODES, interpolate, nearest_nodes,
+};
 pub use least_squares::Knots;
 pub use spline::{NaturalSpline, Warp};
 
@@ -350,31 +354,6 @@ impl NoModel {
             NoModel::NoFit => "no fit could start (singular normal equations)",
         }
     }
-}
-
-/// A value known at several points of a coordinate (`(coordinate, value,
-/// standard error)`, distinct coordinates) interpolated to `at`: the
-/// Lagrange polynomial through all of them, and its error `sqrt(sum (w_i
-/// e_i)^2)` with its weights `w_i` (the values taken as independent). The
-/// kernel model takes `1/n` for the inverse power laws (the small-kick
-/// exponent goes as `1 + 1/(n + 1)`) and `ln theta` for Lennard-Jones;
-/// held-out kernels came within their errors (docs/kernel-model.md).
-pub fn interpolate(points: &[(f64, f64, f64)], at: f64) -> (f64, f64) {
-    let weights: Vec<f64> = (0..points.len())
-        .map(|i| {
-            (0..points.len())
-                .filter(|&j| j != i)
-                .map(|j| (at - points[j].0) / (points[i].0 - points[j].0))
-                .product()
-        })
-        .collect();
-    let value = weights.iter().zip(points).map(|(w, p)| w * p.1).sum();
-    let variance: f64 = weights
-        .iter()
-        .zip(points)
-        .map(|(w, p)| (w * p.2).powi(2))
-        .sum();
-    (value, variance.sqrt())
 }
 
 /// Why a kernel has no model.
@@ -742,23 +721,6 @@ mod tests {
         assert_eq!(model.sides.len(), 1);
         assert_eq!(model.sides[0].0, Side::Above);
         assert_eq!(model.both_sides().len(), 2);
-    }
-
-    /// The interpolation reproduces a polynomial of its degree exactly (here
-    /// a cubic in `1/n`), returns a node's own value there, and carries the
-    /// nodes' errors through its weights.
-    #[test]
-    fn interpolation_is_exact_for_its_degree() {
-        let cubic = |s: f64| 2.0 - 3.0 * s + 0.5 * s * s - 1.5 * s * s * s;
-        let points: Vec<(f64, f64, f64)> = [4.0, 6.0, 8.0, 12.0]
-            .iter()
-            .map(|&n: &f64| (1.0 / n, cubic(1.0 / n), 0.1))
-            .collect();
-        let (value, error) = interpolate(&points, 1.0 / 7.0);
-        assert!((value - cubic(1.0 / 7.0)).abs() < 1e-13);
-        assert!(error > 0.0 && error < 0.2);
-        let (at_node, node_error) = interpolate(&points, 1.0 / 8.0);
-        assert!((at_node - cubic(1.0 / 8.0)).abs() < 1e-13 && (node_error - 0.1).abs() < 1e-13);
     }
 
     /// Two randomizations cannot leave one out: no model, and why.

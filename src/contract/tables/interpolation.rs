@@ -1,0 +1,109 @@
+//! The `interpolation` stage: the kernel models interpolated between the
+//! computed kernels (in `1/n`, `ln theta` and `u'`), each computed kernel
+//! held out in turn and predicted from its neighbours.
+
+use super::*;
+
+/// The stage, as named in instance ids and the store.
+pub const STAGE: &str = "interpolation";
+
+/// Unit of `G`.
+const G_UNIT: &str = "rho^2 l v_th / v_th";
+
+/// Which held-out kernel, from which nodes: the columns both tables lead
+/// with.
+pub mod held_out {
+    pub use super::super::POTENTIAL;
+    use super::*;
+
+    /// Along what the kernel is interpolated.
+    pub const COORDINATE: Col<String> = Col::text(
+        "coordinate",
+        "what the kernel is interpolated in: 1/n (inverse power laws with n > 2), ln theta (Lennard-Jones) or u' (every modelled potential, mirror images G(u' -> u) = G(-u' -> -u) included)",
+    );
+    /// Its `u'`.
+    pub const U_PRIME: Col<f64> = Col::f64("u_prime", "v_th", "the held-out kernel's u'");
+    /// Its density.
+    pub const RHO_L: Col<f64> = Col::f64("density", "1", "the held-out kernel's rho l");
+    /// The kernels it is predicted from.
+    pub const NODES: Col<String> = Col::text(
+        "nodes",
+        "the kernels it is predicted from, as ternary kernel would choose them without it: potential ids (the same u'), or u' values (the same potential)",
+    );
+}
+
+/// `kernel_interpolation.parquet`: one row per held-out kernel and group.
+pub mod groups {
+    pub use super::super::kernel::log::{DU_INNER, DU_OUTER};
+    pub use super::held_out::*;
+    use super::*;
+
+    /// The table.
+    pub const TABLE: TableSpec = TableSpec {
+        stage: STAGE,
+        name: "kernel_interpolation",
+        description: "each computed kernel held out and predicted from its neighbours' models (ln of their group means interpolated by the Lagrange polynomial through the nodes), against its own log-spaced groups (kernel_model_groups); one row per held-out kernel and group",
+    };
+    /// The group's middle.
+    pub const DU: Col<f64> = Col::f64(
+        "du",
+        "v_th",
+        "middle of the group relative to u' (negative below u')",
+    );
+    /// The held-out kernel's group mean.
+    pub const G: Pair = pair!(
+        "G",
+        G_UNIT,
+        "the held-out kernel's mean over the group (kernel_model_groups)",
+        "its standard error pooled with the two neighbouring groups'"
+    );
+    /// The prediction.
+    pub const G_PREDICTED: Pair = pair!(
+        "G_predicted",
+        G_UNIT,
+        "exp of the Lagrange polynomial through the nodes' ln(group mean of the model)",
+        "G_predicted times the error of its logarithm: the nodes' ln G errors at the group's middle through the Lagrange weights, the nodes taken as independent"
+    );
+    /// The pull.
+    pub const Z: Col<f64> = Col::f64(
+        "z",
+        "1",
+        "(G - G_predicted) / sqrt(G_stderr^2 + G_predicted_stderr^2)",
+    );
+}
+
+/// `kernel_interpolation_summary.parquet`: one row per held-out kernel.
+pub mod summary {
+    pub use super::held_out::*;
+    use super::*;
+
+    /// The table.
+    pub const TABLE: TableSpec = TableSpec {
+        stage: STAGE,
+        name: "kernel_interpolation_summary",
+        description: "each held-out kernel's prediction from its neighbours, summarised over its groups (kernel_interpolation): the interpolation's error in the study's own terms; one row per held-out kernel",
+    };
+    /// Groups compared.
+    pub const GROUPS: Col<u32> = Col::u32("groups", "1", "groups compared");
+    /// Median |z|.
+    pub const MEDIAN_ABS_Z: Col<f64> = Col::f64(
+        "median_abs_z",
+        "1",
+        "median |z| over the groups: 0.674 when the prediction is right within the combined errors",
+    );
+    /// Largest |z|.
+    pub const LARGEST_ABS_Z: Col<f64> =
+        Col::f64("largest_abs_z", "1", "largest |z| over the groups");
+    /// Groups beyond two combined errors.
+    pub const BEYOND_TWO: Col<u32> = Col::u32(
+        "beyond_two",
+        "1",
+        "groups with |z| > 2: 4.6% of the groups by chance alone",
+    );
+    /// The largest relative deviation.
+    pub const LARGEST_DEVIATION: Col<f64> = Col::f64(
+        "largest_deviation",
+        "1",
+        "largest |G_predicted / G - 1| over the groups",
+    );
+}
