@@ -133,7 +133,7 @@ fn a_bundle_passes_tools_that_are_not_ours() {
     let output = export(&config, &bundle, &[]);
     assert!(output.status.success(), "{}", stderr(&output));
     assert!(
-        stdout(&output).starts_with("export: 17 tables, 16 figure files, "),
+        stdout(&output).starts_with("export: 18 tables, 16 figure files, "),
         "{}",
         stdout(&output)
     );
@@ -149,7 +149,7 @@ fn a_bundle_passes_tools_that_are_not_ours() {
             .unwrap();
     let resources = descriptor["resources"].as_array().unwrap();
     let count = |format: &str| resources.iter().filter(|r| r["format"] == format).count();
-    assert_eq!(count("parquet"), 17, "13 result tables and 4 figure tables");
+    assert_eq!(count("parquet"), 18, "14 result tables and 4 figure tables");
     assert_eq!(
         (count("svg"), count("png")),
         (8, 8 + 4),
@@ -159,7 +159,7 @@ fn a_bundle_passes_tools_that_are_not_ours() {
     assert!(bundle.join("report/index.html").is_file());
     assert_eq!(
         resources.len(),
-        17 + 16 + 4 + 5,
+        18 + 16 + 4 + 5,
         "and 4 documents and the report's page and figures"
     );
     for resource in resources.iter().filter(|r| r["type"] == "table") {

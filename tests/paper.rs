@@ -557,8 +557,10 @@ fn kernel_models_fit_their_kernels(store: &Path) {
 /// predicts it from the models at u' = -0.5 and 0.25 (mirror images of 0.5
 /// and -0.25: their sides swapped), -0.25 and 0.5. Every prediction is recomputed
 /// here from the stored knots (a 400-point midpoint rule for the group
-/// means, the Lagrange polynomial in u' through their logarithms), every z
-/// from its columns, and each summary row from its groups.
+/// means, the Lagrange polynomial in u' through their logarithms), and so
+/// is its own error estimate (the same without the farthest node); the
+/// held-out model is the one its fit stored, every z comes from its
+/// columns, and each summary row from its groups.
 fn held_out_kernels_recompute_from_the_models(store: &Path) {
     use contract::interpolation::{groups, summary};
     let rows = table(store, "interpolation", "kernels", "kernel_interpolation");
@@ -573,10 +575,15 @@ fn held_out_kernels_recompute_from_the_models(store: &Path) {
         groups::DU_INNER.read(&rows).unwrap(),
         groups::DU_OUTER.read(&rows).unwrap(),
     );
-    let (g, predicted, z) = (
+    let (g, model, predicted, z) = (
         groups::G.read(&rows).unwrap(),
+        groups::G_MODEL.read(&rows).unwrap(),
         groups::G_PREDICTED.read(&rows).unwrap(),
         groups::Z.read(&rows).unwrap(),
+    );
+    let (ln_ratio, correction) = (
+        groups::LN_RATIO.read(&rows).unwrap(),
+        groups::CORRECTION.read(&rows).unwrap(),
     );
     let coordinate = groups::COORDINATE.read(&rows).unwrap();
     assert!(coordinate.iter().all(|c| c == "u'"), "{coordinate:?}");
@@ -633,8 +640,21 @@ fn held_out_kernels_recompute_from_the_models(store: &Path) {
             instance(0.0),
             predicted[k].mean
         );
-        let combined = libm::hypot(g[k].stderr, predicted[k].stderr);
-        assert!((z[k] - (g[k].mean - predicted[k].mean) / combined).abs() < 1e-12);
+        // The held-out kernel's own model, as its fit stored it.
+        let fitted = table(store, "fit", &instance(0.0), "kernel_model_groups");
+        let middles = contract::fit::model_groups::DU.read(&fitted).unwrap();
+        let row = middles.iter().position(|&m| m == du[k]).unwrap();
+        let stored = contract::fit::model_groups::G_MODEL.read(&fitted).unwrap()[row];
+        assert!((model[k].mean / stored - 1.0).abs() < 1e-12, "{k}");
+        // One degree lower: without the farthest node, -0.5 (the first of
+        // the two as far).
+        let lower = libm::exp(lagrange(0.0, &points[1..]));
+        let expected_correction = libm::log(expected / lower);
+        assert!((correction[k] - expected_correction).abs() < 1e-4, "{k}");
+        let ratio = libm::log(model[k].mean / predicted[k].mean);
+        assert!((ln_ratio[k].mean - ratio).abs() < 1e-12, "{k}");
+        let stated = libm::hypot(correction[k], predicted[k].stderr / predicted[k].mean);
+        assert!((z[k] - ratio / stated).abs() < 1e-9, "{k}");
         assert!(
             g[k].mean > 3.0 * g[k].stderr,
             "an unresolved group compared"

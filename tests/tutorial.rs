@@ -88,7 +88,7 @@ fn the_tutorial_runs_as_written() {
     let export = ternary(&config, &["export", bundle.to_str().unwrap()]);
     assert!(export.status.success(), "{}", stderr(&export));
     assert!(
-        stdout(&export).starts_with("export: 39 tables, 16 figure files"),
+        stdout(&export).starts_with("export: 42 tables, 16 figure files"),
         "{}",
         stdout(&export)
     );

@@ -371,7 +371,7 @@ fn interpolation_nodes(
     let nodes: Nodes = taken.iter().map(|&k| family_nodes[k]).collect();
     let ids: Vec<String> = nodes.iter().map(|(_, p)| p.id()).collect();
     let method = format!(
-        "interpolated in {} through the models of {} (Lagrange, degree {}; their errors through the weights, the models taken as independent; held-out kernels came within a median 0.3-0.6 of their combined errors: docs/kernel-model.md)",
+        "interpolated in {} through the models of {} (Lagrange, degree {}; the error jackknifed over the randomizations the models share; held-out kernels: docs/kernel-model.md)",
         family.coordinate(),
         ids.join(", "),
         nodes.len() - 1

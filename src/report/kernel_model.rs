@@ -11,7 +11,7 @@ use super::numbers::{fixed, significant, with_error};
 use super::rates::{intact, table_of};
 use super::show::current_artifact;
 use crate::contract;
-use crate::kernel::model::{SideCurve, interpolate};
+use crate::kernel::model::{Replicated, SideCurve, combine, lagrange_weights, without_farthest};
 use crate::pipeline::store::Store;
 use crate::pipeline::{InstanceId, Stage};
 
@@ -21,8 +21,9 @@ struct Evaluated {
     source: String,
     /// The model's test, as a line.
     goodness: String,
-    /// Per `du`: `ln G`, its standard error, and where it lies beyond the knots.
-    values: Vec<(f64, f64, String)>,
+    /// Per `du`: `ln G` with its jackknife replicates, and where it lies
+    /// beyond the knots.
+    values: Vec<(Replicated, String)>,
 }
 
 /// The model of the `fit` instance `id` at each of `du`; `Ok(Err(status))`
@@ -40,22 +41,26 @@ fn evaluate(
     if status != "fitted" {
         return Ok(Err(format!("{id} {key}: no model: {status}")));
     }
-    let knots = table_of(store, &manifest, contract::fit::model::TABLE.name)?;
-    let covariance = table_of(
-        store,
-        &manifest,
-        contract::fit::model_covariance::TABLE.name,
-    )?;
+    let table = |spec: &contract::TableSpec| table_of(store, &manifest, spec.name);
+    let (knots, covariance, jackknife) = (
+        table(&contract::fit::model::TABLE)?,
+        table(&contract::fit::model_covariance::TABLE)?,
+        table(&contract::fit::model_jackknife::TABLE)?,
+    );
+    let tables = contract::fit::ModelTables {
+        knots: &knots,
+        covariance: &covariance,
+        jackknife: &jackknife,
+    };
     let sides = [
-        contract::fit::side_curve(&knots, &covariance, "below")?,
-        contract::fit::side_curve(&knots, &covariance, "above")?,
+        contract::fit::side_curve(&tables, "below")?,
+        contract::fit::side_curve(&tables, "above")?,
     ];
     let values = du
         .iter()
         .map(|&x| {
             let side = &sides[usize::from(x > 0.0)];
-            let (ln_g, error) = side.ln_g(x.abs());
-            (ln_g, error, extrapolation(side, x.abs()))
+            (side.ln_g(x.abs()), extrapolation(side, x.abs()))
         })
         .collect();
     Ok(Ok(Evaluated {
@@ -66,18 +71,24 @@ fn evaluate(
 }
 
 /// The header of the value table and one row: `du`, `G` with its error
-/// from `ln G` and its error, the relative error, a note.
-fn value_rows(out: &mut String, du: &[f64], values: &[(f64, f64, String)]) {
+/// from `ln G` and its error, the relative error, the interpolation's own
+/// estimate of its relative error (blank for a computed kernel), a note.
+fn value_rows(out: &mut String, du: &[f64], values: &[(f64, f64, f64, String)]) {
     let _ = writeln!(
         out,
-        "{:>12}  {:<28}  {:>9}  note",
-        "u - u' [v_th]", "G [rho^2 l v_th / v_th]", "rel. err"
+        "{:>12}  {:<28}  {:>9}  {:>9}  note",
+        "u - u' [v_th]", "G [rho^2 l v_th / v_th]", "rel. err", "interp."
     );
-    for (&x, (ln_g, error, note)) in du.iter().zip(values) {
+    for (&x, (ln_g, error, interpolation, note)) in du.iter().zip(values) {
         let g = libm::exp(*ln_g);
+        let interpolated = if interpolation.is_nan() {
+            String::new()
+        } else {
+            format!("{}%", fixed(100.0 * interpolation.abs(), 3))
+        };
         let _ = writeln!(
             out,
-            "{:>12}  {:<28}  {:>8}%  {note}",
+            "{:>12}  {:<28}  {:>8}%  {interpolated:>9}  {note}",
             significant(x),
             with_error(g, g * error, "-"),
             fixed(100.0 * error, 3),
@@ -107,7 +118,12 @@ pub fn kernel_model_text(
                 "{title} ({})\n{}",
                 evaluated.source, evaluated.goodness
             );
-            value_rows(&mut out, du, &evaluated.values);
+            let values: Vec<(f64, f64, f64, String)> = evaluated
+                .values
+                .iter()
+                .map(|(ln_g, note)| (ln_g.value, ln_g.stderr(), f64::NAN, note.clone()))
+                .collect();
+            value_rows(&mut out, du, &values);
         }
     }
     Ok(out)
@@ -146,7 +162,8 @@ pub struct Interpolation {
 /// The text of `ternary kernel` for a kernel the study did not compute:
 /// the models of those it did (`interpolation.nodes`), each evaluated at
 /// `du` (mirror images at `-du`); `ln G` interpolated in `u'` through each
-/// potential's nodes, then in the potentials' coordinate ([`interpolate`]).
+/// potential's nodes, then in the potentials' coordinate, its error
+/// jackknifed over the randomizations the kernels share ([`combine`]).
 pub fn interpolated_kernel_text(
     store: &Store,
     plan: &[Box<dyn Stage>],
@@ -173,36 +190,86 @@ pub fn interpolated_kernel_text(
         };
         let _ = writeln!(out, "  {}{mirror}", model.source);
     }
-    let mut coordinates: Vec<f64> = evaluated.iter().map(|(n, _)| n.coordinate).collect();
-    coordinates.dedup();
-    let values: Vec<(f64, f64, String)> = (0..du.len())
+    let weights = node_weights(interpolation, (false, false));
+    let values: Vec<(f64, f64, f64, String)> = (0..du.len())
         .map(|k| {
-            let per_potential: Vec<(f64, f64, f64)> = coordinates
+            let at_du: Vec<Replicated> = evaluated
                 .iter()
-                .map(|&c| {
-                    let in_u_prime: Vec<(f64, f64, f64)> = evaluated
-                        .iter()
-                        .filter(|(n, _)| n.coordinate == c)
-                        .map(|(n, model)| (n.u_prime, model.values[k].0, model.values[k].1))
-                        .collect();
-                    let (value, error) = interpolate(&in_u_prime, interpolation.u_prime);
-                    (c, value, error)
-                })
+                .map(|(_, model)| model.values[k].0.clone())
                 .collect();
-            let (ln_g, error) = interpolate(&per_potential, interpolation.at);
+            let (ln_g, error) = combine(&weights, &at_du);
+            let plain: Vec<f64> = at_du.iter().map(|v| v.value).collect();
+            let interpolation_error = correction(interpolation, &plain);
             let beyond = evaluated
                 .iter()
-                .any(|(_, model)| !model.values[k].2.is_empty());
+                .any(|(_, model)| !model.values[k].1.is_empty());
             let note = if beyond {
                 "beyond some model's knots: extrapolated"
             } else {
                 ""
             };
-            (ln_g, error, note.to_string())
+            (ln_g, error, interpolation_error, note.to_string())
         })
         .collect();
     value_rows(&mut out, du, &values);
     Ok(out)
+}
+
+/// Each node's weight in the interpolated `ln G`: its Lagrange weight in
+/// `u'` among its potential's nodes times its potential's in the
+/// potentials' coordinate (the two interpolations in turn are one linear
+/// combination); with `lower` (across the potentials, within `u'`), that
+/// interpolation one degree lower, its farthest node weighing 0.
+fn node_weights(interpolation: &Interpolation, lower: (bool, bool)) -> Vec<f64> {
+    let nodes = &interpolation.nodes;
+    let mut coordinates: Vec<f64> = nodes.iter().map(|n| n.coordinate).collect();
+    coordinates.dedup();
+    let across = weights_of(&coordinates, interpolation.at, lower.0);
+    nodes
+        .iter()
+        .map(|node| {
+            let same: Vec<f64> = nodes
+                .iter()
+                .filter(|n| n.coordinate == node.coordinate)
+                .map(|n| n.u_prime)
+                .collect();
+            let within = weights_of(&same, interpolation.u_prime, lower.1);
+            let k = same.iter().position(|&u| u == node.u_prime).unwrap_or(0);
+            let c = coordinates
+                .iter()
+                .position(|&c| c == node.coordinate)
+                .unwrap_or(0);
+            within[k] * across[c]
+        })
+        .collect()
+}
+
+/// The Lagrange weights of `nodes` at `at`, or (`lower`, more than one
+/// node) those of every node but the farthest, which weighs 0.
+fn weights_of(nodes: &[f64], at: f64, lower: bool) -> Vec<f64> {
+    let kept = without_farthest(nodes, at);
+    if !lower || kept.is_empty() {
+        return lagrange_weights(nodes, at);
+    }
+    let coordinates: Vec<f64> = kept.iter().map(|&k| nodes[k]).collect();
+    let mut weights = vec![0.0; nodes.len()];
+    for (&k, w) in kept.iter().zip(lagrange_weights(&coordinates, at)) {
+        weights[k] = w;
+    }
+    weights
+}
+
+/// The interpolation's own estimate of its error in `ln G` at one `du`:
+/// its differences from the interpolations one degree lower across the
+/// potentials and within `u'`, combined in quadrature (each the last
+/// correction of Neville's algorithm; 0 where there is one node).
+fn correction(interpolation: &Interpolation, values: &[f64]) -> f64 {
+    let at = |lower| -> f64 {
+        let weights = node_weights(interpolation, lower);
+        weights.iter().zip(values).map(|(w, v)| w * v).sum()
+    };
+    let full = at((false, false));
+    libm::hypot(full - at((true, false)), full - at((false, true)))
 }
 
 /// The model's test, as `kernel_model_fit` states it.

@@ -694,7 +694,7 @@ pub(super) fn kernel_interpolation_table(
         store,
         reports,
         &TABLE,
-        "kernel models between the computed kernels: each held out and predicted from its neighbours' models as `ternary kernel` interpolates them; z = (G - predicted) / combined error per log group, |z| > 2 for 4.6% of the groups and median |z| (the median of the held-out kernels') 0.674 when the errors are right (kernel_interpolation.parquet lists each group; docs/kernel-model.md)",
+        "kernel models between the computed kernels: each held out and predicted from its neighbours' models as `ternary kernel` interpolates them; z = ln(model / predicted) in the error `ternary kernel` states (its interpolation estimate and statistical error in quadrature) per log group, |z| > 2 for 4.6% of the groups and median |z| (the median of the held-out kernels') 0.674 when the errors are right (kernel_interpolation.parquet lists each group; docs/kernel-model.md)",
     )?;
     if frames.is_empty() {
         return Ok(());

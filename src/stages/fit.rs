@@ -9,8 +9,9 @@
 //!
 //! And the kernel model (`kernel::model`): `ln G` a natural cubic spline in
 //! `ln|du| + |du| / x_c` on each side of `u'`, fitted to the log-spaced
-//! groups, written as its knots, their covariance, its goodness of fit and
-//! the fitted groups with their residuals.
+//! groups, written as its knots, their covariance and its jackknife
+//! replicates, its goodness of fit and the fitted groups with their
+//! residuals.
 
 use serde_json::Value;
 
@@ -60,6 +61,7 @@ impl Stage for FitStage {
             contract::fit::TABLE.name,
             contract::fit::model::TABLE.name,
             contract::fit::model_covariance::TABLE.name,
+            contract::fit::model_jackknife::TABLE.name,
             contract::fit::model_fit::TABLE.name,
             contract::fit::model_groups::TABLE.name,
         ]
@@ -97,6 +99,7 @@ impl Stage for FitStage {
             fit_table(&fits)?,
             knots_table(&model)?,
             covariance_table(&model)?,
+            jackknife_table(&model)?,
             model_fit_table(&model)?,
             groups_table(&model)?,
         ])
@@ -248,6 +251,24 @@ fn covariance_table(model: &Result<KernelModel, NoModel>) -> Result<Table, Stage
         .with(COVARIANCE, |(row, j)| {
             row.model.covariance[row.knot * row.model.values.len() + j]
         })
+        .table(&TABLE)?)
+}
+
+/// `kernel_model_jackknife`: one row per side, left-out randomization and
+/// knot.
+fn jackknife_table(model: &Result<KernelModel, NoModel>) -> Result<Table, StageError> {
+    use contract::fit::model_jackknife::*;
+    let rows: Vec<(KnotRow, usize)> = knot_rows(model)
+        .into_iter()
+        .flat_map(|row| (0..row.model.left_out.len()).map(move |r| (KnotRow { ..row }, r)))
+        .collect();
+    Ok(Rows::new(&rows)
+        .with(contract::fit::model::SIDE, |(row, _)| {
+            row.side.name().to_string()
+        })
+        .with(RANDOMIZATION, |(_, r)| *r as u32)
+        .with(KNOT, |(row, _)| row.knot as u32)
+        .with(LN_G, |(row, r)| row.model.left_out[*r][row.knot])
         .table(&TABLE)?)
 }
 

@@ -7,9 +7,14 @@
 //! where only four remain), and in `u'` among one potential's kernels and
 //! their mirror images (the nearest four; the held-out kernel's own mirror
 //! image left out with it). At each of the held-out kernel's log-spaced
-//! groups, `ln` of every node's model mean over the group is interpolated by
-//! the Lagrange polynomial, and the prediction's error is the nodes' errors
-//! of `ln G` through its weights, the nodes taken as independent.
+//! groups measured to better than a third, `ln` of every node's model mean
+//! over the group is interpolated by the Lagrange polynomial and held
+//! against the held-out kernel's own model: `ln(model / prediction)`, the
+//! interpolation's error, with its noise (the whole difference recomputed
+//! without each randomization, `kernel_model_jackknife`, which the kernels
+//! share), and `z`, that error in the one `ternary kernel` states: the
+//! interpolation's own estimate (`without_farthest`) and the prediction's
+//! statistical error in quadrature.
 
 use serde_json::Value;
 
@@ -17,7 +22,8 @@ use crate::config::KernelParams;
 use crate::contract::instances;
 use crate::contract::{self, Rows};
 use crate::kernel::model::{
-    FEWEST_NODES, Family, POTENTIAL_NODES, SideCurve, U_PRIME_NODES, interpolate, nearest_nodes,
+    FEWEST_NODES, Family, POTENTIAL_NODES, Replicated, SideCurve, U_PRIME_NODES, combine,
+    lagrange_weights, nearest_nodes, without_farthest,
 };
 use crate::pipeline::code::{self, Code};
 use crate::pipeline::{Input, InstanceId, Progress, Stage, StageError, Table};
@@ -183,16 +189,17 @@ impl InterpolationStage {
 
 /// The stored model of the `fit` instance `id`, `None` without one.
 fn modelled(inputs: &[Input], id: &InstanceId) -> Result<Option<Modelled>, StageError> {
-    use contract::fit::{model, model_covariance, model_fit, model_groups};
+    use contract::fit::{model, model_covariance, model_fit, model_groups, model_jackknife};
     let status = &model_fit::STATUS.read(model_fit::TABLE.find(inputs, id)?)?[0];
     if status != "fitted" {
         return Ok(None);
     }
-    let (knots, covariance) = (
-        model::TABLE.find(inputs, id)?,
-        model_covariance::TABLE.find(inputs, id)?,
-    );
-    let side = |name| contract::fit::side_curve(knots, covariance, name);
+    let tables = contract::fit::ModelTables {
+        knots: model::TABLE.find(inputs, id)?,
+        covariance: model_covariance::TABLE.find(inputs, id)?,
+        jackknife: model_jackknife::TABLE.find(inputs, id)?,
+    };
+    let side = |name| contract::fit::side_curve(&tables, name);
     let table = model_groups::TABLE.find(inputs, id)?;
     let (du, inner, outer) = (
         model_groups::DU.read(table)?,
@@ -218,28 +225,39 @@ fn modelled(inputs: &[Input], id: &InstanceId) -> Result<Option<Modelled>, Stage
     }))
 }
 
-/// One held-out group: the case, the group and the prediction.
+/// One held-out group: the case, the group, the held-out kernel's model
+/// there and the prediction.
 struct Predicted {
     /// The case (index).
     case: usize,
     /// `(du, |inner edge|, |outer edge|, G)`.
     group: (f64, f64, f64, Estimate),
-    /// The prediction of `G` there.
+    /// The held-out kernel's model mean over the group.
+    model: Estimate,
+    /// The prediction of it from the nodes.
     predicted: Estimate,
+    /// `ln(model / predicted)` and its error, jackknifed over the
+    /// randomizations they share.
+    ln_ratio: (f64, f64),
+    /// The interpolation's own estimate of its error in `ln G`: the
+    /// prediction less the one through every node but the farthest.
+    correction: f64,
 }
 
 impl Predicted {
-    /// `(G - G_predicted) / combined error`.
+    /// `ln(model / predicted)` in the error `ternary kernel` states for
+    /// the prediction: its own estimate and its statistical error in
+    /// quadrature.
     fn z(&self) -> f64 {
-        let (g, p) = (self.group.3, self.predicted);
-        (g.mean - p.mean) / libm::hypot(g.stderr, p.stderr)
+        let statistical = self.predicted.stderr / self.predicted.mean;
+        self.ln_ratio.0 / libm::hypot(self.correction, statistical)
     }
 }
 
 /// A held-out group is compared where it is measured to better than a
-/// third (as the model's knots reach) and where every node's model was
-/// fitted: the far groups' noise and the models' straight continuation
-/// test nothing of the interpolation.
+/// third (as the model's knots reach) and where every model was fitted:
+/// the far groups' noise and the models' straight continuation test
+/// nothing of the interpolation.
 const RESOLVED: f64 = 3.0;
 
 /// The node's model of the side of `u'` a group at `du` lies on (a mirror
@@ -249,42 +267,74 @@ fn node_side<'m>(node: &Node, du: f64, models: &'m [Option<Modelled>]) -> Option
     Some(&models[node.kernel].as_ref()?.sides[side])
 }
 
+/// `exp` of a logarithm with its jackknife error, as a value and its
+/// first-order error.
+fn exponentiated((ln_value, error): (f64, f64)) -> Estimate {
+    let mean = libm::exp(ln_value);
+    Estimate {
+        mean,
+        stderr: mean * error,
+    }
+}
+
 /// The prediction of every group of `case`'s held-out kernel that is
-/// resolved and inside every node's knots.
+/// resolved and inside every model's knots: `ln` of the nodes' group means
+/// through the Lagrange weights, against the held-out kernel's own model,
+/// the difference jackknifed as one combination.
 fn predict(case: &Case, index: usize, models: &[Option<Modelled>]) -> Vec<Predicted> {
     let Some(held_out) = &models[case.held_out] else {
         return Vec::new();
+    };
+    let coordinates: Vec<f64> = case.nodes.iter().map(|n| n.coordinate).collect();
+    let weights = lagrange_weights(&coordinates, case.at);
+    let lower = without_farthest(&coordinates, case.at);
+    let lower_coordinates: Vec<f64> = lower.iter().map(|&k| coordinates[k]).collect();
+    let lower_weights = lagrange_weights(&lower_coordinates, case.at);
+    let own = Node {
+        kernel: case.held_out,
+        coordinate: case.at,
+        mirrored: false,
+    };
+    let covered = |du: f64, inner: f64, outer: f64| {
+        case.nodes
+            .iter()
+            .chain([&own])
+            .all(|node| node_side(node, du, models).is_some_and(|c| c.covers(inner, outer)))
     };
     held_out
         .groups
         .iter()
         .filter(|(du, inner, outer, g)| {
-            g.mean > RESOLVED * g.stderr
-                && case.nodes.iter().all(|node| {
-                    node_side(node, *du, models).is_some_and(|c| c.covers(*inner, *outer))
-                })
+            g.mean > RESOLVED * g.stderr && covered(*du, *inner, *outer)
         })
-        .map(|&group| {
+        .filter_map(|&group| {
             let (du, inner, outer, _) = group;
-            let points: Vec<(f64, f64, f64)> = case
-                .nodes
-                .iter()
-                .filter_map(|node| {
-                    let curve = node_side(node, du, models)?;
-                    let (ln_mean, error) = curve.ln_group_mean(inner, outer);
-                    Some((node.coordinate, ln_mean, error))
-                })
+            let mean_of =
+                |node: &Node| Some(node_side(node, du, models)?.ln_group_mean(inner, outer));
+            let nodes: Vec<Replicated> = case.nodes.iter().map(mean_of).collect::<Option<_>>()?;
+            let model = mean_of(&own)?;
+            let ratio_weights: Vec<f64> = [1.0]
+                .into_iter()
+                .chain(weights.iter().map(|w| -w))
                 .collect();
-            let (ln_g, error) = interpolate(&points, case.at);
-            let mean = libm::exp(ln_g);
-            Predicted {
+            let terms: Vec<Replicated> = [model.clone()]
+                .into_iter()
+                .chain(nodes.iter().cloned())
+                .collect();
+            let predicted = combine(&weights, &nodes);
+            let lower_value: f64 = lower
+                .iter()
+                .zip(&lower_weights)
+                .map(|(&k, w)| w * nodes[k].value)
+                .sum();
+            Some(Predicted {
                 case: index,
                 group,
-                predicted: Estimate {
-                    mean,
-                    stderr: mean * error,
-                },
-            }
+                model: exponentiated((model.value, model.stderr())),
+                predicted: exponentiated(predicted),
+                ln_ratio: combine(&ratio_weights, &terms),
+                correction: predicted.0 - lower_value,
+            })
         })
         .collect()
 }
@@ -400,7 +450,13 @@ impl InterpolationStage {
             .with(DU_INNER, |(_, p)| p.group.0.signum() * p.group.1)
             .with(DU_OUTER, |(_, p)| p.group.0.signum() * p.group.2)
             .estimate(G, |(_, p)| p.group.3)
+            .estimate(G_MODEL, |(_, p)| p.model)
             .estimate(G_PREDICTED, |(_, p)| p.predicted)
+            .estimate(LN_RATIO, |(_, p)| Estimate {
+                mean: p.ln_ratio.0,
+                stderr: p.ln_ratio.1,
+            })
+            .with(CORRECTION, |(_, p)| p.correction)
             .with(Z, |(_, p)| p.z())
             .table(&TABLE)?)
     }
@@ -417,7 +473,7 @@ impl InterpolationStage {
             })
             .collect();
         let abs_z = |own: &[&Predicted]| -> Vec<f64> { own.iter().map(|p| p.z().abs()).collect() };
-        let deviation = |p: &&Predicted| (p.predicted.mean / p.group.3.mean - 1.0).abs();
+        let deviation = |p: &&Predicted| (p.predicted.mean / p.model.mean - 1.0).abs();
         Ok(with_held_out(Rows::new(&rows), |(d, _)| d)
             .with(GROUPS, |(_, own)| own.len() as u32)
             .with(MEDIAN_ABS_Z, |(_, own)| median(&abs_z(own)))
@@ -426,6 +482,12 @@ impl InterpolationStage {
             })
             .with(BEYOND_TWO, |(_, own)| {
                 abs_z(own).iter().filter(|&&z| z > 2.0).count() as u32
+            })
+            .with(MEDIAN_ABS_LN_RATIO, |(_, own)| {
+                median(&own.iter().map(|p| p.ln_ratio.0.abs()).collect::<Vec<f64>>())
+            })
+            .with(MEDIAN_ABS_CORRECTION, |(_, own)| {
+                median(&own.iter().map(|p| p.correction.abs()).collect::<Vec<f64>>())
             })
             .with(LARGEST_DEVIATION, |(_, own)| {
                 own.iter().map(deviation).fold(0.0, f64::max)

@@ -210,31 +210,80 @@ pub mod model_covariance {
     );
 }
 
+/// `kernel_model_jackknife.parquet`: each side's knot values fitted
+/// without each randomization in turn, one row per side, randomization and
+/// knot: the covariance's source, and paired across the kernels computed
+/// from the same scenes (every `u'` of a potential) for the error of any
+/// function of several models.
+pub mod model_jackknife {
+    use super::*;
+
+    /// The table.
+    pub const TABLE: TableSpec = TableSpec {
+        stage: STAGE,
+        name: "kernel_model_jackknife",
+        description: "the kernel model's ln_G at the knots of one side fitted without one randomization (the jackknife replicates of kernel_model_covariance), one row per side, left-out randomization and knot",
+    };
+    /// The randomization left out.
+    pub const RANDOMIZATION: Col<u32> = Col::u32(
+        "randomization",
+        "1",
+        "the randomization left out (the kernel's randomization numbers: kernels of the same scenes share them)",
+    );
+    /// Knot number.
+    pub const KNOT: Col<u32> = Col::u32("knot", "1", "knot number on its side, from u' outwards");
+    /// `ln G` at the knot without the randomization.
+    pub const LN_G: Col<f64> = Col::f64(
+        "ln_G",
+        LN_G_UNIT,
+        "ln G at the knot fitted without the randomization: with R randomizations, kernel_model_covariance is (R - 1)/R sum over them of the deviations' products from their mean",
+    );
+}
+
+/// A `fit` instance's tables of its kernel model.
+pub struct ModelTables<'a> {
+    /// `kernel_model`.
+    pub knots: &'a RecordBatch,
+    /// `kernel_model_covariance`.
+    pub covariance: &'a RecordBatch,
+    /// `kernel_model_jackknife`.
+    pub jackknife: &'a RecordBatch,
+}
+
 /// The model of `side` (`below` or `above` `u'`) of a `fit` instance:
-/// its knots from `kernel_model`, their covariance from
-/// `kernel_model_covariance`.
-pub fn side_curve(
-    knots: &RecordBatch,
-    covariance: &RecordBatch,
-    side: &str,
-) -> Result<SideCurve, StageError> {
+/// its knots, their covariance and their jackknife replicates.
+pub fn side_curve(tables: &ModelTables, side: &str) -> Result<SideCurve, StageError> {
     use model::{CUTOFF_SCALE, LN_G, SIDE, T};
-    use model_covariance::{COVARIANCE, KNOT_I, KNOT_J};
-    let sides = SIDE.read(knots)?;
+    let sides = SIDE.read(tables.knots)?;
     let rows: Vec<usize> = (0..sides.len()).filter(|&k| sides[k] == side).collect();
     let first = *rows
         .first()
         .ok_or_else(|| StageError::Input(format!("kernel_model has no knots {side} u'")))?;
-    let (t, values) = (T.read(knots)?, LN_G.read(knots)?);
-    let size = rows.len();
+    let (t, values) = (T.read(tables.knots)?, LN_G.read(tables.knots)?);
+    Ok(SideCurve {
+        knots: Knots {
+            warp: Warp {
+                cutoff_scale: CUTOFF_SCALE.read(tables.knots)?[first],
+            },
+            t: rows.iter().map(|&k| t[k]).collect(),
+        },
+        values: rows.iter().map(|&k| values[k].mean).collect(),
+        covariance: covariance_of(tables.covariance, side, rows.len())?,
+        left_out: left_out_of(tables.jackknife, side, rows.len())?,
+    })
+}
+
+/// The `size` x `size` covariance of `side`'s knot values, row-major.
+fn covariance_of(batch: &RecordBatch, side: &str, size: usize) -> Result<Vec<f64>, StageError> {
+    use model_covariance::{COVARIANCE, KNOT_I, KNOT_J};
     let mut matrix = vec![0.0; size * size];
-    let (covariance_sides, i, j) = (
-        SIDE.read(covariance)?,
-        KNOT_I.read(covariance)?,
-        KNOT_J.read(covariance)?,
+    let (sides, i, j) = (
+        model::SIDE.read(batch)?,
+        KNOT_I.read(batch)?,
+        KNOT_J.read(batch)?,
     );
-    let entries = COVARIANCE.read(covariance)?;
-    for k in (0..entries.len()).filter(|&k| covariance_sides[k] == side) {
+    let entries = COVARIANCE.read(batch)?;
+    for k in (0..entries.len()).filter(|&k| sides[k] == side) {
         let (i, j) = (i[k] as usize, j[k] as usize);
         if i >= size || j >= size {
             return Err(StageError::Input(format!(
@@ -243,16 +292,33 @@ pub fn side_curve(
         }
         matrix[i * size + j] = entries[k];
     }
-    Ok(SideCurve {
-        knots: Knots {
-            warp: Warp {
-                cutoff_scale: CUTOFF_SCALE.read(knots)?[first],
-            },
-            t: rows.iter().map(|&k| t[k]).collect(),
-        },
-        values: rows.iter().map(|&k| values[k].mean).collect(),
-        covariance: matrix,
-    })
+    Ok(matrix)
+}
+
+/// `side`'s knot values fitted without each randomization,
+/// `[randomization][knot]` (`size` knots).
+fn left_out_of(batch: &RecordBatch, side: &str, size: usize) -> Result<Vec<Vec<f64>>, StageError> {
+    use model_jackknife::{KNOT, LN_G, RANDOMIZATION};
+    let (sides, randomization, knot) = (
+        model::SIDE.read(batch)?,
+        RANDOMIZATION.read(batch)?,
+        KNOT.read(batch)?,
+    );
+    let values = LN_G.read(batch)?;
+    let mut left_out: Vec<Vec<f64>> = Vec::new();
+    for k in (0..values.len()).filter(|&k| sides[k] == side) {
+        let (r, j) = (randomization[k] as usize, knot[k] as usize);
+        if j >= size {
+            return Err(StageError::Input(format!(
+                "kernel_model_jackknife: knot {j} {side} u', beyond its {size} knots"
+            )));
+        }
+        if r >= left_out.len() {
+            left_out.resize(r + 1, vec![f64::NAN; size]);
+        }
+        left_out[r][j] = values[k];
+    }
+    Ok(left_out)
 }
 
 /// `kernel_model_fit.parquet`: the kernel model's goodness of fit, one row.

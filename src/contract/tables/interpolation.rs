@@ -42,7 +42,7 @@ pub mod groups {
     pub const TABLE: TableSpec = TableSpec {
         stage: STAGE,
         name: "kernel_interpolation",
-        description: "each computed kernel held out and predicted from its neighbours' models (ln of their group means interpolated by the Lagrange polynomial through the nodes), against its own log-spaced groups (kernel_model_groups); one row per held-out kernel and group",
+        description: "each computed kernel held out and predicted from its neighbours' models (ln of their group means interpolated by the Lagrange polynomial through the nodes), against its own model at its log-spaced groups measured to better than a third (kernel_model_groups); one row per held-out kernel and group",
     };
     /// The group's middle.
     pub const DU: Col<f64> = Col::f64(
@@ -57,18 +57,38 @@ pub mod groups {
         "the held-out kernel's mean over the group (kernel_model_groups)",
         "its standard error pooled with the two neighbouring groups'"
     );
+    /// The held-out kernel's model there.
+    pub const G_MODEL: Pair = pair!(
+        "G_model",
+        G_UNIT,
+        "the held-out kernel's own model's mean over the group (kernel_model_groups' G_model)",
+        "G_model times the jackknife error of its logarithm (kernel_model_jackknife)"
+    );
     /// The prediction.
     pub const G_PREDICTED: Pair = pair!(
         "G_predicted",
         G_UNIT,
         "exp of the Lagrange polynomial through the nodes' ln(group mean of the model)",
-        "G_predicted times the error of its logarithm: the nodes' ln G errors at the group's middle through the Lagrange weights, the nodes taken as independent"
+        "G_predicted times the jackknife error of its logarithm: the Lagrange combination recomputed without each randomization, which the nodes share (their covariance included)"
+    );
+    /// The interpolation's error.
+    pub const LN_RATIO: Pair = pair!(
+        "ln_ratio",
+        "1",
+        "ln(G_model / G_predicted): the interpolation's error at the held-out kernel",
+        "its jackknife error, the held-out model and the nodes recomputed together without each randomization (they share scenes): the ratio's noise, beside which the interpolation's bias shows"
+    );
+    /// The interpolation's own estimate of it.
+    pub const CORRECTION: Col<f64> = Col::f64(
+        "correction",
+        "1",
+        "ln G_predicted less the same through every node but the farthest: the last correction of Neville's algorithm, the interpolation's own estimate of its error (what ternary kernel prints)",
     );
     /// The pull.
     pub const Z: Col<f64> = Col::f64(
         "z",
         "1",
-        "(G - G_predicted) / sqrt(G_stderr^2 + G_predicted_stderr^2)",
+        "ln_ratio over the error ternary kernel states for an interpolated kernel, sqrt(correction^2 + (G_predicted_stderr / G_predicted)^2): N(0, 1)-like when that error is right",
     );
 }
 
@@ -89,7 +109,7 @@ pub mod summary {
     pub const MEDIAN_ABS_Z: Col<f64> = Col::f64(
         "median_abs_z",
         "1",
-        "median |z| over the groups: 0.674 when the prediction is right within the combined errors",
+        "median |z| over the groups: 0.674 when the stated error is right",
     );
     /// Largest |z|.
     pub const LARGEST_ABS_Z: Col<f64> =
@@ -100,10 +120,22 @@ pub mod summary {
         "1",
         "groups with |z| > 2: 4.6% of the groups by chance alone",
     );
+    /// The interpolation's typical error.
+    pub const MEDIAN_ABS_LN_RATIO: Col<f64> = Col::f64(
+        "median_abs_ln_ratio",
+        "1",
+        "median |ln(G_model / G_predicted)| over the groups: the interpolation's typical relative error",
+    );
+    /// Its own estimate.
+    pub const MEDIAN_ABS_CORRECTION: Col<f64> = Col::f64(
+        "median_abs_correction",
+        "1",
+        "median |correction| over the groups: the interpolation's own estimate of that error",
+    );
     /// The largest relative deviation.
     pub const LARGEST_DEVIATION: Col<f64> = Col::f64(
         "largest_deviation",
         "1",
-        "largest |G_predicted / G - 1| over the groups",
+        "largest |G_predicted / G_model - 1| over the groups",
     );
 }

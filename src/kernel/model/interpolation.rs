@@ -90,25 +90,88 @@ pub fn nearest_nodes(
     (taken.len() == count && first < at && at < last).then_some(taken)
 }
 
-/// A value known at several points of a coordinate (`(coordinate, value,
-/// standard error)`, distinct coordinates) interpolated to `at`: the
-/// Lagrange polynomial through all of them, and its error `sqrt(sum (w_i
-/// e_i)^2)` with its weights `w_i` (the values taken as independent); one
-/// point is itself.
-pub fn interpolate(points: &[(f64, f64, f64)], at: f64) -> (f64, f64) {
-    let weights: Vec<f64> = (0..points.len())
+/// The Lagrange weights of the nodes `coordinates` (distinct) at `at`:
+/// the polynomial through `(x_i, y_i)` is `sum_i w_i y_i` there (one node
+/// weighs 1).
+pub fn lagrange_weights(coordinates: &[f64], at: f64) -> Vec<f64> {
+    (0..coordinates.len())
         .map(|i| {
-            (0..points.len())
+            (0..coordinates.len())
                 .filter(|&j| j != i)
-                .map(|j| (at - points[j].0) / (points[i].0 - points[j].0))
+                .map(|j| (at - coordinates[j]) / (coordinates[i] - coordinates[j]))
                 .product()
         })
-        .collect();
-    let value = weights.iter().zip(points).map(|(w, p)| w * p.1).sum();
+        .collect()
+}
+
+/// The nodes without the one farthest from `at` (the first on a tie):
+/// the interpolation one degree lower, whose difference from the full one
+/// is the last correction of Neville's algorithm, the interpolation's own
+/// estimate of its error (Numerical Recipes, 3rd ed., §3.2); empty for
+/// fewer than two nodes.
+pub fn without_farthest(coordinates: &[f64], at: f64) -> Vec<usize> {
+    if coordinates.len() < 2 {
+        return Vec::new();
+    }
+    let farthest = (0..coordinates.len()).fold(0, |f, k| {
+        if (coordinates[k] - at).abs() > (coordinates[f] - at).abs() {
+            k
+        } else {
+            f
+        }
+    });
+    (0..coordinates.len()).filter(|&k| k != farthest).collect()
+}
+
+/// A value with its jackknife replicates: the value from every
+/// randomization, and the value without each in turn.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Replicated {
+    /// The value.
+    pub value: f64,
+    /// The value without each randomization.
+    pub left_out: Vec<f64>,
+}
+
+impl Replicated {
+    /// The jackknife standard error, `sqrt((R - 1)/R sum_r (v_r -
+    /// v_bar)^2)`.
+    pub fn stderr(&self) -> f64 {
+        let count = self.left_out.len() as f64;
+        let centre = self.left_out.iter().sum::<f64>() / count;
+        let spread: f64 = self.left_out.iter().map(|v| (v - centre).powi(2)).sum();
+        ((count - 1.0) / count * spread).sqrt()
+    }
+}
+
+/// `sum_i w_i y_i` of values `y` with jackknife replicates, and its
+/// standard error. When every value has the same number of replicates,
+/// randomization `r` is taken to be the same scenes in each (every `u'` of
+/// a potential reweights one set; the potentials of a study draw the same
+/// launches), and the combination is jackknifed as a whole: its error
+/// carries every covariance between the values (and, were they
+/// independent, would still estimate `sqrt(sum (w_i e_i)^2)`). Otherwise
+/// the values are taken as independent.
+pub fn combine(weights: &[f64], values: &[Replicated]) -> (f64, f64) {
+    let value = weights.iter().zip(values).map(|(w, y)| w * y.value).sum();
+    let count = values.first().map_or(0, |y| y.left_out.len());
+    let paired = count > 1 && values.iter().all(|y| y.left_out.len() == count);
+    if paired {
+        let left_out = (0..count)
+            .map(|r| {
+                weights
+                    .iter()
+                    .zip(values)
+                    .map(|(w, y)| w * y.left_out[r])
+                    .sum()
+            })
+            .collect();
+        return (value, Replicated { value, left_out }.stderr());
+    }
     let variance: f64 = weights
         .iter()
-        .zip(points)
-        .map(|(w, p)| (w * p.2).powi(2))
+        .zip(values)
+        .map(|(w, y)| (w * y.stderr()).powi(2))
         .sum();
     (value, variance.sqrt())
 }
@@ -123,15 +186,22 @@ pub struct SideCurve {
     pub values: Vec<f64>,
     /// Their covariance, row-major.
     pub covariance: Vec<f64>,
+    /// The knot values fitted without each randomization,
+    /// `[randomization][knot]`: the covariance's replicates.
+    pub left_out: Vec<Vec<f64>>,
 }
 
 impl SideCurve {
-    /// `ln G` at distance `x > 0` from `u'`, with its standard error.
-    pub fn ln_g(&self, x: f64) -> (f64, f64) {
-        (
-            self.knots.ln_g(&self.values, x),
-            self.knots.ln_g_stderr(&self.covariance, x),
-        )
+    /// `ln G` at distance `x > 0` from `u'`, with its jackknife replicates.
+    pub fn ln_g(&self, x: f64) -> Replicated {
+        Replicated {
+            value: self.knots.ln_g(&self.values, x),
+            left_out: self
+                .left_out
+                .iter()
+                .map(|v| self.knots.ln_g(v, x))
+                .collect(),
+        }
     }
 
     /// Whether `[lower, upper]` (`v_th`) lies between the first and the
@@ -143,14 +213,14 @@ impl SideCurve {
     }
 
     /// `ln` of the model's mean `G` over `[lower, upper]` (`0 < lower <
-    /// upper`, `v_th`), with the standard error of `ln G` at the middle.
-    pub fn ln_group_mean(&self, lower: f64, upper: f64) -> (f64, f64) {
-        let mean = Design::new(&self.knots, &[lower], &[upper]).means(&self.values)[0];
-        let middle = 0.5 * (lower + upper);
-        (
-            libm::log(mean),
-            self.knots.ln_g_stderr(&self.covariance, middle),
-        )
+    /// upper`, `v_th`), with its jackknife replicates.
+    pub fn ln_group_mean(&self, lower: f64, upper: f64) -> Replicated {
+        let design = Design::new(&self.knots, &[lower], &[upper]);
+        let ln_mean = |values: &[f64]| libm::log(design.means(values)[0]);
+        Replicated {
+            value: ln_mean(&self.values),
+            left_out: self.left_out.iter().map(|v| ln_mean(v)).collect(),
+        }
     }
 }
 
@@ -158,23 +228,64 @@ impl SideCurve {
 mod tests {
     use super::*;
 
-    /// The interpolation reproduces a polynomial of its degree exactly,
-    /// returns a node's own value there, and carries the nodes' errors
-    /// through its weights.
+    /// The Lagrange weights reproduce a polynomial of their degree exactly
+    /// and a node's own value there; one node weighs 1.
     #[test]
-    fn lagrange_is_exact_for_a_cubic_and_its_error_follows_the_weights() {
+    fn lagrange_is_exact_for_its_degree() {
         let cubic = |x: f64| 1.0 - 2.0 * x + 0.5 * x * x * x;
-        let points: Vec<(f64, f64, f64)> = [0.0, 1.0, 2.5, 4.0]
-            .iter()
-            .map(|&x| (x, cubic(x), 0.1))
-            .collect();
-        let (value, error) = interpolate(&points, 3.0);
-        assert!((value - cubic(3.0)).abs() < 1e-12);
-        // At a node, the polynomial is that node alone.
-        let (at_node, node_error) = interpolate(&points, 1.0);
-        assert!((at_node - cubic(1.0)).abs() < 1e-12 && (node_error - 0.1).abs() < 1e-12);
-        assert!(error > 0.1, "between nodes the weights spread: {error}");
-        assert_eq!(interpolate(&points[..1], 7.0), (cubic(0.0), 0.1));
+        let nodes = [0.0, 1.0, 2.5, 4.0];
+        let at = |x: f64| -> f64 {
+            let w = lagrange_weights(&nodes, x);
+            w.iter().zip(&nodes).map(|(w, n)| w * cubic(*n)).sum()
+        };
+        assert!((at(3.0) - cubic(3.0)).abs() < 1e-12);
+        assert!((at(1.0) - cubic(1.0)).abs() < 1e-12);
+        assert_eq!(lagrange_weights(&[2.0], 7.0), vec![1.0]);
+    }
+
+    /// One degree lower drops the farthest node; its difference from the
+    /// full interpolation vanishes for a polynomial of the lower degree and
+    /// not for one of the full.
+    #[test]
+    fn neville_correction_sees_the_degree() {
+        let nodes = [0.0, 1.0, 2.0, 4.0];
+        assert_eq!(without_farthest(&nodes, 1.5), vec![0, 1, 2]);
+        assert_eq!(without_farthest(&nodes[..1], 1.5), Vec::<usize>::new());
+        let correction = |f: &dyn Fn(f64) -> f64| {
+            let lower: Vec<f64> = without_farthest(&nodes, 1.5)
+                .iter()
+                .map(|&k| nodes[k])
+                .collect();
+            let at = |xs: &[f64]| -> f64 {
+                let w = lagrange_weights(xs, 1.5);
+                w.iter().zip(xs).map(|(w, x)| w * f(*x)).sum()
+            };
+            at(&nodes) - at(&lower)
+        };
+        assert!(correction(&|x| 2.0 - x + 3.0 * x * x).abs() < 1e-12);
+        assert!(correction(&|x| x * x * x).abs() > 0.1);
+    }
+
+    /// Paired replicates carry the covariance: a difference of two values
+    /// that move together has no error, a sum twice one's; unpaired
+    /// (different counts) combine as independent.
+    #[test]
+    fn combined_errors_follow_the_pairing() {
+        let a = Replicated {
+            value: 1.0,
+            left_out: vec![1.1, 0.9, 1.0, 1.0],
+        };
+        let (difference, none) = combine(&[1.0, -1.0], &[a.clone(), a.clone()]);
+        assert_eq!((difference, none), (0.0, 0.0));
+        let (_, twice) = combine(&[1.0, 1.0], &[a.clone(), a.clone()]);
+        assert!((twice - 2.0 * a.stderr()).abs() < 1e-12);
+        let b = Replicated {
+            value: 2.0,
+            left_out: vec![2.0, 2.2, 1.8],
+        };
+        let (sum, independent) = combine(&[1.0, 1.0], &[a.clone(), b.clone()]);
+        assert_eq!(sum, 3.0);
+        assert!((independent - libm::hypot(a.stderr(), b.stderr())).abs() < 1e-12);
     }
 
     /// Nodes: the nearest, apart, on both sides of the target.

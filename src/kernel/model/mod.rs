@@ -43,7 +43,8 @@ mod least_squares;
 mod spline;
 
 pub use interpolation::{
-    FEWEST_NODES, Family, POTENTIAL_NODES, SideCurve, U_PRIME_NODES, interpolate, nearest_nodes,
+    FEWEST_NODES, Family, POTENTIAL_NODES, Replicated, SideCurve, U_PRIME_NODES, combine,
+    lagrange_weights, nearest_nodes, without_farthest,
 };
 pub use least_squares::Knots;
 pub use spline::{NaturalSpline, Warp};
@@ -273,6 +274,9 @@ pub struct SideModel {
     pub values: Vec<f64>,
     /// Jackknife covariance of `values` over the randomizations, row-major.
     pub covariance: Vec<f64>,
+    /// The knot values fitted without each randomization in turn (the
+    /// covariance's source; paired across kernels of the same scenes).
+    pub left_out: Vec<Vec<f64>>,
     /// Weighted residual sum of squares of the fit to the mean groups.
     pub chi2: f64,
     /// The groups fitted, nearest `u'` first.
@@ -460,6 +464,7 @@ fn fit_side(groups: &SideGroups) -> Result<Fitted, NoModel> {
         .collect();
     let model = SideModel {
         covariance: jackknife_covariance(&chosen.left_out),
+        left_out: chosen.left_out,
         values: fit.values,
         chi2: fit.chi2,
         groups: fitted,
