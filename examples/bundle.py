@@ -17,7 +17,14 @@ would, then
    t = ln|du| + |du| / cutoff_scale, straight beyond its end knots) with numpy
    alone, with its error from `kernel_model_covariance`, and checks that its means
    over the fitted groups and their chi-square reproduce `kernel_model_groups` and
-   `kernel_model_fit` (docs/kernel-model.md).
+   `kernel_model_fit` (docs/kernel-model.md),
+5. interpolates the models of the inverse power laws in 1/n to an n between the
+   first two (Lagrange through every one, `ln G` at each du), with its error
+   jackknifed over the randomizations the kernels share (`kernel_model_jackknife`:
+   each model refitted without one randomization) and the interpolation's own
+   estimate of its error (the same without the farthest node), as `ternary kernel
+   --n` states them; it checks first that the jackknife replicates give each
+   model's own error, as `kernel_model_covariance` does.
 
 It exits with status 1 if a check fails. Units: velocities in v_th, rates in
 rho^2 l v_th (docs/stages.md).
@@ -119,7 +126,7 @@ class KernelModel:
     """One side of a kernel's model: ln G(x) at x = |u - u'| > 0, and its standard
     error, from the knots of `kernel_model` and their covariance."""
 
-    def __init__(self, knots_path, covariance_path, side="above"):
+    def __init__(self, knots_path, covariance_path, side="above", jackknife_path=None):
         knots = pl.read_parquet(knots_path).filter(pl.col("side") == side).sort("knot")
         self.t = knots["t"].to_numpy()
         self.ln_g = knots["ln_G"].to_numpy()
@@ -129,6 +136,13 @@ class KernelModel:
         self.covariance = np.zeros((size, size))
         self.covariance[covariance["knot_i"].to_numpy(), covariance["knot_j"].to_numpy()] = (
             covariance["covariance"].to_numpy())
+        # The knots fitted without each randomization: [randomization, knot].
+        self.left_out = None
+        if jackknife_path is not None:
+            rows = pl.read_parquet(jackknife_path).filter(pl.col("side") == side)
+            self.left_out = np.full((rows["randomization"].max() + 1, size), np.nan)
+            self.left_out[rows["randomization"].to_numpy(), rows["knot"].to_numpy()] = (
+                rows["ln_G"].to_numpy())
 
     def basis(self, x):
         """The natural cubic spline's cardinal basis at x (rows: points): S'' = 0 at
@@ -162,6 +176,10 @@ class KernelModel:
         b = self.basis(np.atleast_1d(x))
         return np.sqrt(np.einsum("pi,ij,pj->p", b, self.covariance, b))
 
+    def ln_G_left_out(self, x):
+        """ln G at x from the knots fitted without each randomization: [randomization, point]."""
+        return self.left_out @ self.basis(np.atleast_1d(x)).T
+
     def group_means(self, inner, outer):
         """The model's mean over each group [inner, outer] (8-point Gauss-Legendre)."""
         nodes, weights = np.polynomial.legendre.leggauss(8)
@@ -191,6 +209,50 @@ def check_kernel_model(potential, tables):
           f"group means within {worst:.1e} of the table's, chi2 {fit['chi2']:.1f} "
           f"(expected {fit['chi2_expected']:.1f}, p = {fit['p_value']:.3f}) "
           f"{'agrees' if agrees else 'DISAGREES'}")
+    return agrees
+
+
+def jackknife_stderr(left_out):
+    """sqrt((R - 1)/R sum_r (v_r - mean)^2) over the first axis."""
+    count = left_out.shape[0]
+    return np.sqrt((count - 1) / count * np.sum((left_out - left_out.mean(axis=0)) ** 2, axis=0))
+
+
+def lagrange_weights(nodes, at):
+    """The weights of the values at `nodes` in the Lagrange polynomial at `at`."""
+    return np.array([np.prod([(at - nodes[j]) / (nodes[i] - nodes[j])
+                              for j in range(len(nodes)) if j != i])
+                     for i in range(len(nodes))])
+
+
+def interpolate_in_n(kernels, du):
+    """G(0 -> du) at an n halfway in 1/n between the bundle's first two inverse
+    power laws: ln G through every one's model (Lagrange in 1/n), its error
+    jackknifed over the shared randomizations, and the interpolation's own estimate
+    of its error (the polynomial less the one without the farthest node). Checks that
+    each model's jackknife replicates give its covariance's error."""
+    laws = sorted((float(p.removeprefix("ipp-")), p) for p in kernels
+                  if p.startswith("ipp-") and float(p.removeprefix("ipp-")) > 2)
+    if len(laws) < 3:
+        print(f"  fewer than three inverse power laws with n > 2 ({[p for _, p in laws]}): none")
+        return True
+    models = [KernelModel(kernels[p]["kernel_model"], kernels[p]["kernel_model_covariance"],
+                          jackknife_path=kernels[p]["kernel_model_jackknife"]) for _, p in laws]
+    agrees = all(np.allclose(jackknife_stderr(m.ln_G_left_out(du)), m.ln_G_stderr(du),
+                             rtol=1e-6) for m in models)
+    nodes = np.array([1 / n for n, _ in laws])
+    at = 0.5 * (nodes[0] + nodes[1])
+    weights = lagrange_weights(nodes, at)
+    ln_g = sum(w * m.ln_G(du)[0] for w, m in zip(weights, models))
+    left_out = sum(w * m.ln_G_left_out(du)[:, 0] for w, m in zip(weights, models))
+    error = jackknife_stderr(left_out[:, None])[0]
+    kept = np.argsort(np.abs(nodes - at))[:-1]
+    lower = sum(w * models[k].ln_G(du)[0]
+                for w, k in zip(lagrange_weights(nodes[kept], at), kept))
+    g = np.exp(ln_g)
+    print(f"  n = {1 / at:.4g} from {[p for _, p in laws]} in 1/n: G(0 -> {du}) = {g:.5g} "
+          f"+- {g * error:.2g} (interpolation {abs(ln_g - lower):.1%}); each model's "
+          f"jackknife gives its covariance's error {'agrees' if agrees else 'DISAGREES'}")
     return agrees
 
 
@@ -234,6 +296,8 @@ def main():
     print("kernel model, evaluated here from its knots:")
     for potential, tables in two.items():
         failed |= not check_kernel_model(potential, tables)
+    print("kernel model between the computed inverse power laws:")
+    failed |= not interpolate_in_n(kernels, 1e-3)
     sys.exit(1 if failed else 0)
 
 
