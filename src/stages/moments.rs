@@ -14,7 +14,7 @@ use crate::contract::readers::input_events;
 use crate::contract::{self, Rows};
 use crate::kernel::{MomentSums, moments, recombination_rates};
 use crate::pipeline::code::{self, Code};
-use crate::pipeline::{Input, InstanceId, Progress, Stage, StageError, Table};
+use crate::pipeline::{Cost, Input, InstanceId, Progress, Stage, StageError, Table};
 use crate::stats::Estimate;
 
 /// Truncation half-widths per decade below the window edge.
@@ -104,6 +104,12 @@ impl Stage for MomentsStage {
 
     fn work_units(&self) -> u64 {
         1
+    }
+
+    /// Every event read, 0.36 us each (the default study's 122 instances,
+    /// 36 CPU s measured against 103 s at the default 1 us, 2026-12-02).
+    fn cost(&self, inputs: &[Cost]) -> Cost {
+        Cost::reading(inputs, 0.36e-6, 1e3, 100.0)
     }
 
     fn run(&self, inputs: &[Input], progress: &Progress) -> Result<Vec<Table>, StageError> {
