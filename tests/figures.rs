@@ -437,9 +437,9 @@ fn expected(store: &Path, figure: &Artifact) -> Vec<Row> {
                 let kernel = figure.input(store, k);
                 // Labels print a minus sign, as typeset.
                 let u = u.as_f64().unwrap().to_string().replace('-', "\u{2212}");
-                let side = |name: &str, sign| grouped_side(&kernel, "kernels", name, sign, 20.0);
-                let above = side(&format!("u' = {u}, u > u'"), 1.0);
-                let below = side(&format!("u' = {u}, u < u'"), -1.0);
+                let name = format!("u' = {u}");
+                let above = grouped_side(&kernel, "above", &name, 1.0, 20.0);
+                let below = grouped_side(&kernel, "below", &name, -1.0, 20.0);
                 [above, below]
                     .concat()
                     .into_iter()

@@ -9,8 +9,9 @@ use super::{Axis, FigureKind, G_AXIS, Layout, Panel, Style};
 use crate::contract;
 use crate::pipeline::{Input, StageError};
 
-/// `G(u' -> u)` of one potential at each configured `u'` (dilute), both
-/// sides of `u'` on log axes of `|u - u'|` (paper: `u' = 0, -0.25, -3`).
+/// `G(u' -> u)` of one potential at each configured `u'` (dilute), above
+/// and below `u'` in two panels, on log axes of `|u - u'|` (paper: `u' = 0,
+/// -0.25, -3`).
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct KernelsAtUPrime {
     /// The potential's id.
@@ -25,20 +26,24 @@ impl FigureKind for KernelsAtUPrime {
     }
 
     fn description(&self) -> String {
-        "G(u' -> u) at each u' (dilute) against |u - u'| on both sides of u', log axes, +- standard error; bins grouped 20 per decade, groups with relative error above 0.5 left out".into()
+        "G(u' -> u) at each u' (dilute) against |u - u'|, above u' (left) and below (right), log axes, +- standard error; bins grouped 20 per decade, groups with relative error above 0.5 left out".into()
     }
 
+    /// One panel per side of `u'`, a colour and dash per `u'`: twelve
+    /// series in one panel repeated the palette's seven colours.
     fn layout(&self) -> Layout {
+        let side = |name, title| Panel {
+            dashed: true,
+            title,
+            ..Panel::new(
+                name,
+                Axis::log("|u − u'| [v_th]"),
+                Axis::log(G_AXIS),
+                vec![("", Style::Band)],
+            )
+        };
         Layout {
-            panels: vec![Panel {
-                dashed: true,
-                ..Panel::new(
-                    "kernels",
-                    Axis::log("|u − u'| [v_th]"),
-                    Axis::log(G_AXIS),
-                    vec![("", Style::Band)],
-                )
-            }],
+            panels: vec![side(ABOVE, "u > u'"), side(BELOW, "u < u'")],
         }
     }
 
@@ -56,13 +61,13 @@ impl FigureKind for KernelsAtUPrime {
 fn kernel_sides(input: &Input, u_prime: f64) -> Result<Vec<DataFrame>, StageError> {
     let (replicates, du) = contract::kernel::replicates::read(input)?;
     let below: Vec<f64> = du.iter().map(|d| -d).collect();
-    [("u > u'", du), ("u < u'", below)]
+    // The legend's minus sign is U+2212, as on the axes.
+    let name = format!("u' = {}", u_prime.to_string().replace('-', "−"));
+    [(ABOVE, du), (BELOW, below)]
         .iter()
-        .map(|(side, x)| {
-            // The legend's minus sign is U+2212, as on the axes.
-            let name = format!("u' = {}, {side}", u_prime.to_string().replace('-', "−"));
+        .map(|(panel, x)| {
             resolved(&log_groups(
-                ("kernels", &name),
+                (panel, &name),
                 x,
                 &replicates,
                 GROUPS_PER_DECADE,
@@ -70,3 +75,9 @@ fn kernel_sides(input: &Input, u_prime: f64) -> Result<Vec<DataFrame>, StageErro
         })
         .collect()
 }
+
+/// The panel of the kernels above `u'`.
+const ABOVE: &str = "above";
+
+/// The panel of the kernels below `u'`.
+const BELOW: &str = "below";
