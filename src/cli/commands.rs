@@ -17,7 +17,9 @@ use super::{Opening, emit, exit_code, load, open, print_event, within_limits};
 use ternary::config::{SlurmConfig, Study, compact};
 use ternary::contract::instances;
 use ternary::export::{self, ExportOptions};
-use ternary::kernel::model::{Family, POTENTIAL_NODES, U_PRIME_NODES, nearest_nodes};
+use ternary::kernel::model::{
+    Family, POTENTIAL_NODES, U_PRIME_NODES, nearest_nodes, u_prime_nodes,
+};
 use ternary::physics::dissociation::{dissociation_rate, sobol_dissociation_scenes};
 use ternary::physics::md::CLUSTER_STEP_BUDGET;
 use ternary::physics::pair_kinetics::{
@@ -216,7 +218,7 @@ pub(super) fn kernel(config: &Path, args: KernelArgs) -> Result<ExitCode> {
         (None, None, Some(theta)) => format!("lj-{theta}"),
         (None, None, None) => bail!("give --potential, --n or --theta"),
     };
-    let u_primes = u_prime_nodes(&study, config, &args)?;
+    let u_primes = u_prime_targets(&study, config, &args)?;
     let potentials = study.potentials();
     let title = format!(
         "G(u' -> u' + du) of {wanted}, u' = {} v_th, rho l = {}",
@@ -304,20 +306,17 @@ fn interpolation(
 /// mirrored) at `--u-prime`, else the [`U_PRIME_NODES`] nearest around it
 /// at `--density`; an error naming what the study computes when there are
 /// too few or `--u-prime` is not between them.
-fn u_prime_nodes(study: &Study, config: &Path, args: &KernelArgs) -> Result<Vec<(f64, bool)>> {
+fn u_prime_targets(study: &Study, config: &Path, args: &KernelArgs) -> Result<Vec<(f64, bool)>> {
     let targets = study.kernel_targets();
     let computed: Vec<f64> = targets
         .iter()
         .filter(|(_, rho)| *rho == args.density)
         .map(|(u, _)| *u)
         .collect();
-    let mut nodes: Vec<(f64, bool)> = computed.iter().map(|&u| (u, false)).collect();
-    nodes.extend(
-        computed
-            .iter()
-            .filter(|&&u| u != 0.0 && !computed.contains(&-u))
-            .map(|&u| (-u, true)),
-    );
+    let nodes: Vec<(f64, bool)> = u_prime_nodes(&computed)
+        .into_iter()
+        .map(|(u, _, mirrored)| (u, mirrored))
+        .collect();
     if let Some(node) = nodes.iter().find(|(u, _)| *u == args.u_prime) {
         return Ok(vec![*node]);
     }

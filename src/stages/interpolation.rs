@@ -23,7 +23,7 @@ use crate::contract::instances;
 use crate::contract::{self, Rows};
 use crate::kernel::model::{
     FEWEST_NODES, Family, POTENTIAL_NODES, Replicated, SideCurve, U_PRIME_NODES, combine,
-    lagrange_weights, nearest_nodes, without_farthest,
+    lagrange_weights, nearest_nodes, u_prime_nodes, without_farthest,
 };
 use crate::pipeline::code::{self, Code};
 use crate::pipeline::{Input, InstanceId, Progress, Stage, StageError, Table};
@@ -56,7 +56,7 @@ impl InterpolationStage {
         });
         let along_u_prime = all
             .iter()
-            .any(|&k| u_prime_nodes(&kernels, &all, k).len() > U_PRIME_NODES);
+            .any(|&k| potential_u_primes(&kernels, &all, k).len() > U_PRIME_NODES);
         (along_potentials || along_u_prime).then_some(InterpolationStage { kernels })
     }
 }
@@ -101,7 +101,7 @@ struct Case {
 /// The `u'` nodes of the potential and density of kernel `k` among the
 /// modelled kernels `modelled`: each kernel, and the mirror image of each
 /// at `u' != 0` whose `-u'` is not computed.
-fn u_prime_nodes(kernels: &[KernelParams], modelled: &[usize], k: usize) -> Vec<Node> {
+fn potential_u_primes(kernels: &[KernelParams], modelled: &[usize], k: usize) -> Vec<Node> {
     let same: Vec<usize> = modelled
         .iter()
         .copied()
@@ -109,21 +109,15 @@ fn u_prime_nodes(kernels: &[KernelParams], modelled: &[usize], k: usize) -> Vec<
             kernels[j].potential == kernels[k].potential && kernels[j].density == kernels[k].density
         })
         .collect();
-    let computed = |u: f64| same.iter().any(|&j| kernels[j].u_prime == u);
-    let direct = same.iter().map(|&j| Node {
-        kernel: j,
-        coordinate: kernels[j].u_prime,
-        mirrored: false,
-    });
-    let mirrors = same
-        .iter()
-        .filter(|&&j| kernels[j].u_prime != 0.0 && !computed(-kernels[j].u_prime))
-        .map(|&j| Node {
-            kernel: j,
-            coordinate: -kernels[j].u_prime,
-            mirrored: true,
-        });
-    direct.chain(mirrors).collect()
+    let computed: Vec<f64> = same.iter().map(|&j| kernels[j].u_prime).collect();
+    u_prime_nodes(&computed)
+        .into_iter()
+        .map(|(coordinate, index, mirrored)| Node {
+            kernel: same[index],
+            coordinate,
+            mirrored,
+        })
+        .collect()
 }
 
 /// The nodes among `candidates` that predict the value at `at`: the
@@ -170,7 +164,7 @@ impl InterpolationStage {
         }
         for &k in modelled {
             let at = self.kernels[k].u_prime;
-            let candidates: Vec<Node> = u_prime_nodes(&self.kernels, modelled, k)
+            let candidates: Vec<Node> = potential_u_primes(&self.kernels, modelled, k)
                 .into_iter()
                 .filter(|n| n.coordinate.abs() != at.abs())
                 .collect();

@@ -6,6 +6,7 @@
 
 use super::least_squares::{Design, Knots};
 use crate::physics::potential::Potential;
+use crate::stats::jackknife;
 
 /// Kernels an interpolation between potentials goes through: five, degree
 /// four, as the held-out n = 7, 9 and theta = 0.3, 3 measured
@@ -104,6 +105,20 @@ pub fn lagrange_weights(coordinates: &[f64], at: f64) -> Vec<f64> {
         .collect()
 }
 
+/// The `u'` nodes of one potential's kernels computed at the `u'` values
+/// `computed` (one density): each computed kernel, then the mirror image
+/// `G(u' -> u) = G(-u' -> -u)` of each at `u' != 0` whose `-u'` is not
+/// computed, as `(u', index into computed, mirrored)`.
+pub fn u_prime_nodes(computed: &[f64]) -> Vec<(f64, usize, bool)> {
+    let direct = computed.iter().enumerate().map(|(k, &u)| (u, k, false));
+    let mirrors = computed
+        .iter()
+        .enumerate()
+        .filter(|&(_, &u)| u != 0.0 && !computed.contains(&-u))
+        .map(|(k, &u)| (-u, k, true));
+    direct.chain(mirrors).collect()
+}
+
 /// The nodes without the one farthest from `at` (the first on a tie):
 /// the interpolation one degree lower, whose difference from the full one
 /// is the last correction of Neville's algorithm, the interpolation's own
@@ -134,13 +149,10 @@ pub struct Replicated {
 }
 
 impl Replicated {
-    /// The jackknife standard error, `sqrt((R - 1)/R sum_r (v_r -
-    /// v_bar)^2)`.
+    /// The jackknife standard error ([`jackknife`]).
     pub fn stderr(&self) -> f64 {
-        let count = self.left_out.len() as f64;
-        let centre = self.left_out.iter().sum::<f64>() / count;
-        let spread: f64 = self.left_out.iter().map(|v| (v - centre).powi(2)).sum();
-        ((count - 1.0) / count * spread).sqrt()
+        let rows: Vec<[f64; 1]> = self.left_out.iter().map(|&v| [v]).collect();
+        jackknife(&[self.value], &rows)[0].stderr
     }
 }
 

@@ -44,7 +44,7 @@ mod spline;
 
 pub use interpolation::{
     FEWEST_NODES, Family, POTENTIAL_NODES, Replicated, SideCurve, U_PRIME_NODES, combine,
-    lagrange_weights, nearest_nodes, without_farthest,
+    lagrange_weights, nearest_nodes, u_prime_nodes, without_farthest,
 };
 pub use least_squares::Knots;
 pub use spline::{NaturalSpline, Warp};
