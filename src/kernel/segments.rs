@@ -105,12 +105,16 @@ pub fn lay_track(
         }
         let halves = segment_masses(weights[i], weights[i + 1]);
         let ends = [outgoing[i], outgoing[i + 1]];
-        laid += if inner(i) || inner(i + 1) || monotone_around(outgoing, i) {
+        let beside_core = inner(i) || inner(i + 1);
+        laid += if monotone_around(outgoing, i) {
             Segment::monotone(matched, ends, halves, neighbours(outgoing, i))
                 .spread_tail(bins, part)
         } else if turns_once(outgoing, i) {
             Segment::turning(matched, ends, halves, neighbours(outgoing, i))
                 .spread_turning(bins, part)
+        } else if beside_core {
+            Segment::monotone(matched, ends, halves, neighbours(outgoing, i))
+                .spread_tail(bins, part)
         } else {
             add_point(bins, part, ends[0], halves[0]) + add_point(bins, part, ends[1], halves[1])
         };
@@ -723,6 +727,23 @@ mod track_tests {
         moves: &[f64],
         exact: &[f64],
     ) -> Vec<(f64, f64)> {
+        let decades: Vec<(f64, f64)> = (0..20)
+            .map(|i| 1e-4 * libm::pow(10f64, f64::from(i) / 8.0))
+            .map(|edge| (edge, edge * libm::pow(10f64, 0.125)))
+            .collect();
+        errors_in_groups(curves, step, moves, exact, &decades)
+    }
+
+    /// The relative error of `lay_track` averaged over the `moves` against
+    /// the `exact` measure in each group `[low, high)` of `|kick|`, as
+    /// `(low, error)`; groups the exact measure leaves empty are left out.
+    fn errors_in_groups(
+        curves: &[&dyn Fn(f64) -> f64],
+        step: f64,
+        moves: &[f64],
+        exact: &[f64],
+        groups: &[(f64, f64)],
+    ) -> Vec<(f64, f64)> {
         let bins = test_bins();
         let span = half_span(step);
         let mut laid = vec![0.0; bins.len()];
@@ -740,19 +761,16 @@ mod track_tests {
                 lay_track(&bins, &mut laid, 0.0, &outgoing, &weights);
             }
         }
-        (0..20)
-            .map(|i| 1e-4 * libm::pow(10f64, f64::from(i) / 8.0))
-            .map(|edge| {
+        groups
+            .iter()
+            .map(|&(low, high)| {
                 let group = |part: &[f64]| -> f64 {
                     (0..bins.len())
-                        .filter(|&k| {
-                            let kick = bins.centre(k).abs();
-                            kick >= edge && kick < edge * libm::pow(10f64, 0.125)
-                        })
+                        .filter(|&k| (low..high).contains(&bins.centre(k).abs()))
                         .map(|k| part[k])
                         .sum()
                 };
-                (edge, group(&laid) / group(exact) - 1.0)
+                (low, group(&laid) / group(exact) - 1.0)
             })
             .filter(|(_, error)| error.is_finite())
             .collect()
@@ -837,6 +855,40 @@ mod track_tests {
         let exact = exact_measure(&curves, 0.125);
         for (edge, error) in group_errors(&curves, 0.125, &moves, &exact) {
             assert!(error.abs() < 0.05, "|kick| from {edge:.2e}: {error:+.4}");
+        }
+    }
+
+    /// Weak collisions whose kick peaks just above `CORE_KICK` (bumps `a /
+    /// cosh(2 s)^3`, peaks `a` uniform from 1.5e-3 to 3.5e-3, no change of
+    /// sign): the peak's one or two nodes are the core, and the segments
+    /// beside them turn. Averaged over the grid's move and the population,
+    /// every group 1e-4 wide from 1e-3 to 3e-3 within 0.6% of the exact
+    /// measure (measured: -0.15% to +0.40%, +0.17% in [1.9, 2.0)e-3); the
+    /// segments beside the core follow the cubic through the turn up to the
+    /// cut. Laid along the straight (monotone) track
+    /// instead, which crosses `CORE_KICK` before the concave true one, the
+    /// segments put the offsets above the cut into the tail: +3.4% in
+    /// [1.9, 2.0)e-3 and +1.4% in [2.0, 2.1)e-3 (measured), the seam of the
+    /// kernels' `|du| ~ 2e-3` group.
+    #[test]
+    fn peaks_near_the_core_edge_are_cut_where_they_cross_it() {
+        let curves: Vec<Box<dyn Fn(f64) -> f64>> = (0..40)
+            .map(|k| 1.5e-3 + 2e-3 * (f64::from(k) + 0.5) / 40.0)
+            .map(|peak| {
+                Box::new(move |s: f64| peak / libm::cosh(2.0 * s).powi(3))
+                    as Box<dyn Fn(f64) -> f64>
+            })
+            .collect();
+        let curves: Vec<&dyn Fn(f64) -> f64> = curves.iter().map(|c| c.as_ref()).collect();
+        let moves: Vec<f64> = (0..512)
+            .map(|k| (f64::from(k) + 0.5) / 512.0 - 0.5)
+            .collect();
+        let groups: Vec<(f64, f64)> = (10..30)
+            .map(|k| (f64::from(k) * 1e-4, f64::from(k + 1) * 1e-4))
+            .collect();
+        let exact = exact_measure(&curves, 0.125);
+        for (low, error) in errors_in_groups(&curves, 0.125, &moves, &exact, &groups) {
+            assert!(error.abs() < 6e-3, "|kick| from {low:.2e}: {error:+.4}");
         }
     }
 }
