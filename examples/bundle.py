@@ -13,7 +13,8 @@ would, then
    the table's standard error plus the bins' discretization bound,
 3. reads the `kernels` figure's `points.parquet` and checks that the figure shows
    the same potentials,
-4. evaluates each kernel's model (`kernel_model`: ln G a natural cubic spline in
+4. evaluates each kernel's model, of the whole and of its self part (`kernel_model`,
+   `part` total and self: ln G a natural cubic spline in
    t = ln|du| + |du| / cutoff_scale, straight beyond its end knots) with numpy
    alone, with its error from `kernel_model_covariance`, and checks that its means
    over the fitted groups and their chi-square reproduce `kernel_model_groups` and
@@ -124,22 +125,25 @@ def a_n_from_moments(moments_path):
 
 class KernelModel:
     """One side of a kernel's model: ln G(x) at x = |u - u'| > 0, and its standard
-    error, from the knots of `kernel_model` and their covariance."""
+    error, from the knots of `kernel_model` and their covariance; `part` "total" (G)
+    or "self" (G_self; the bath part is the difference of the two)."""
 
-    def __init__(self, knots_path, covariance_path, side="above", jackknife_path=None):
-        knots = pl.read_parquet(knots_path).filter(pl.col("side") == side).sort("knot")
+    def __init__(self, knots_path, covariance_path, side="above", jackknife_path=None,
+                 part="total"):
+        ours = (pl.col("part") == part) & (pl.col("side") == side)
+        knots = pl.read_parquet(knots_path).filter(ours).sort("knot")
         self.t = knots["t"].to_numpy()
         self.ln_g = knots["ln_G"].to_numpy()
         self.cutoff_scale = knots["cutoff_scale"][0]
         size = len(self.t)
-        covariance = pl.read_parquet(covariance_path).filter(pl.col("side") == side)
+        covariance = pl.read_parquet(covariance_path).filter(ours)
         self.covariance = np.zeros((size, size))
         self.covariance[covariance["knot_i"].to_numpy(), covariance["knot_j"].to_numpy()] = (
             covariance["covariance"].to_numpy())
         # The knots fitted without each randomization: [randomization, knot].
         self.left_out = None
         if jackknife_path is not None:
-            rows = pl.read_parquet(jackknife_path).filter(pl.col("side") == side)
+            rows = pl.read_parquet(jackknife_path).filter(ours)
             self.left_out = np.full((rows["randomization"].max() + 1, size), np.nan)
             self.left_out[rows["randomization"].to_numpy(), rows["knot"].to_numpy()] = (
                 rows["ln_G"].to_numpy())
@@ -188,14 +192,17 @@ class KernelModel:
         return 0.5 * values @ weights
 
 
-def check_kernel_model(potential, tables):
-    """The model evaluated here against the fit stage's own group means and chi-square."""
-    fit = pl.read_parquet(tables["kernel_model_fit"]).row(0, named=True)
+def check_kernel_model(potential, tables, part):
+    """The model of `part` evaluated here against the fit stage's own group means and
+    chi-square."""
+    fit = (pl.read_parquet(tables["kernel_model_fit"]).filter(pl.col("part") == part)
+           .row(0, named=True))
     if fit["status"] != "fitted":
-        print(f"  {potential}: no model ({fit['status']})")
+        print(f"  {potential} {part}: no model ({fit['status']})")
         return True
-    model = KernelModel(tables["kernel_model"], tables["kernel_model_covariance"])
-    groups = pl.read_parquet(tables["kernel_model_groups"]).filter(pl.col("du") > 0)
+    model = KernelModel(tables["kernel_model"], tables["kernel_model_covariance"], part=part)
+    groups = (pl.read_parquet(tables["kernel_model_groups"])
+              .filter((pl.col("part") == part) & (pl.col("du") > 0)))
     means = model.group_means(groups["du_inner"].to_numpy(), groups["du_outer"].to_numpy())
     stored = groups["G_model"].to_numpy()
     worst = np.max(np.abs(means / stored - 1))
@@ -205,7 +212,8 @@ def check_kernel_model(potential, tables):
     x = 1e-3
     g, error = np.exp(model.ln_G(x)[0]), model.ln_G_stderr(x)[0]
     agrees = worst < 1e-9 and (chi2 is None or abs(chi2 / fit["chi2"] - 1) < 1e-9)
-    print(f"  {potential}: {len(model.t)} knots, G(0 -> {x}) = {g:.5g} +- {g * error:.2g}; "
+    symbol = "G" if part == "total" else "G_self"
+    print(f"  {potential} {part}: {len(model.t)} knots, {symbol}(0 -> {x}) = {g:.5g} +- {g * error:.2g}; "
           f"group means within {worst:.1e} of the table's, chi2 {fit['chi2']:.1f} "
           f"(expected {fit['chi2_expected']:.1f}, p = {fit['p_value']:.3f}) "
           f"{'agrees' if agrees else 'DISAGREES'}")
@@ -293,9 +301,10 @@ def main():
         print(f"  the figure lacks {missing}")
         failed = True
 
-    print("kernel model, evaluated here from its knots:")
+    print("kernel model (the whole and its self part), evaluated here from its knots:")
     for potential, tables in two.items():
-        failed |= not check_kernel_model(potential, tables)
+        for part in ("total", "self"):
+            failed |= not check_kernel_model(potential, tables, part)
     print("kernel model between the computed inverse power laws:")
     failed |= not interpolate_in_n(kernels, 1e-3)
     sys.exit(1 if failed else 0)

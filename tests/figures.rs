@@ -11,6 +11,7 @@ use arrow::array::RecordBatch;
 use serde_json::Value;
 use ternary::contract::{self, Pair};
 use ternary::figures::{PALETTE, Size};
+use ternary::kernel::model::Part;
 use ternary::pipeline::table::read_parquet;
 
 mod common;
@@ -214,8 +215,8 @@ fn expected(store: &Path, figure: &Artifact) -> Vec<Row> {
                     ("kernel".into(), "fit".into(), x, y, 0.0)
                 })
                 .collect();
-            // The model's group means and residuals above u', as the fit
-            // stage's kernel_model_groups holds them.
+            // The whole kernel's model: its group means and residuals above
+            // u', as the fit stage's kernel_model_groups holds them.
             use contract::fit::model_groups::{DU, G_MODEL, RESIDUAL};
             let groups = figure.input(store, 1).table("kernel_model_groups");
             let (du, model, residual) = (
@@ -223,7 +224,8 @@ fn expected(store: &Path, figure: &Artifact) -> Vec<Row> {
                 G_MODEL.read(&groups).unwrap(),
                 RESIDUAL.read(&groups).unwrap(),
             );
-            let above = || (0..du.len()).filter(|&k| du[k] > 0.0);
+            let total = contract::fit::part_rows(&groups, Part::Total).unwrap();
+            let above = || total.iter().copied().filter(|&k| du[k] > 0.0);
             let series = |panel: &str, values: &[f64]| -> Vec<Row> {
                 above()
                     .map(|k| (panel.into(), "model".into(), du[k], values[k], 0.0))

@@ -12,6 +12,7 @@ use arrow::array::RecordBatch;
 use ternary::binning::Bins;
 use ternary::contract;
 use ternary::contract::readers::collision_events;
+use ternary::kernel::model::Part;
 use ternary::kernel::{Target, histograms};
 use ternary::pipeline::{Input, InstanceId};
 use ternary::stats::Estimate;
@@ -456,8 +457,13 @@ fn kernel_command_evaluates_the_stored_model(config: &Path, store: &Path) {
         LN_G.read(&knots).unwrap(),
         CUTOFF_SCALE.read(&knots).unwrap(),
     );
+    let total = contract::fit::part_rows(&knots, Part::Total).unwrap();
     for (du, side) in [(1e-3, "above"), (-2e-3, "below")] {
-        let rows: Vec<usize> = (0..sides.len()).filter(|&k| sides[k] == side).collect();
+        let rows: Vec<usize> = total
+            .iter()
+            .copied()
+            .filter(|&k| sides[k] == side)
+            .collect();
         let spline = NaturalSpline::through(
             &rows.iter().map(|&k| t[k]).collect::<Vec<f64>>(),
             &rows.iter().map(|&k| ln_g[k].mean).collect::<Vec<f64>>(),
@@ -476,6 +482,7 @@ fn kernel_command_evaluates_the_stored_model(config: &Path, store: &Path) {
             "{line}: model {expected}"
         );
     }
+    parts_add_up(config);
     for (args, named) in [
         (&["kernel", "--n", "7", "--du", "1e-3"][..], "ipp-7"),
         (
@@ -492,11 +499,77 @@ fn kernel_command_evaluates_the_stored_model(config: &Path, store: &Path) {
     }
 }
 
+/// `ternary kernel --part`: the self and bath parts the command prints add
+/// up to the whole it prints, within the last digit of each, for a computed
+/// kernel (u' = 0.5, where the bath part is not the mirror of anything) and
+/// an interpolated one (u' = 0.1, between the computed ones), each with a
+/// positive error.
+fn parts_add_up(config: &Path) {
+    for u_prime in ["0.5", "0.1"] {
+        let value = |part: &str, du: &str| -> (f64, f64) {
+            let printed = stdout(&ternary(
+                config,
+                &[
+                    "kernel",
+                    "--n",
+                    "6",
+                    "--u-prime",
+                    u_prime,
+                    "--du",
+                    du,
+                    "--part",
+                    part,
+                ],
+            ));
+            let line = printed
+                .lines()
+                .find(|l| l.split_whitespace().next() == Some(du))
+                .unwrap_or_else(|| panic!("no line for {du}: {printed}"));
+            printed_estimate(line)
+        };
+        for du in ["0.001", "-0.02"] {
+            let (whole, whole_error) = value("total", du);
+            let (own, own_error) = value("self", du);
+            let (bath, bath_error) = value("bath", du);
+            assert!(whole_error > 0.0 && own_error > 0.0 && bath_error > 0.0);
+            // Each printed to two digits of its error: the sum within them.
+            let digits = 0.05 * (whole_error + own_error + bath_error);
+            assert!(
+                (own + bath - whole).abs() <= digits,
+                "u' {u_prime}, du {du}: {own} + {bath} != {whole}"
+            );
+        }
+    }
+}
+
+/// The value and error of a `ternary kernel` row (`du`, then `a ± b` or
+/// `(a ± b)eN`, then the relative error in %).
+fn printed_estimate(line: &str) -> (f64, f64) {
+    let words: Vec<&str> = line.split_whitespace().skip(1).collect();
+    let end = words.iter().position(|w| w.ends_with('%')).unwrap();
+    let text = words[..end].join(" ");
+    let (numbers, scale) = match text.split_once(")e") {
+        Some((inside, exponent)) => (
+            inside.trim_start_matches('('),
+            libm::pow(10.0, exponent.parse().unwrap()),
+        ),
+        None => (text.as_str(), 1.0),
+    };
+    let (value, error) = numbers
+        .split_once(" ± ")
+        .unwrap_or_else(|| panic!("{line}"));
+    (
+        scale * value.parse::<f64>().unwrap(),
+        scale * error.parse::<f64>().unwrap(),
+    )
+}
+
 /// Every kernel of the reduced study but the vanishing n = 2 one has a
-/// model that passes its own test (chi2 within 0.7..1.5 of its expectation
-/// under flipped randomizations, p > 0.01), and the stored knots reproduce
-/// the stored chi2 from `kernel_log` alone: the spline through `(t, ln_G)`
-/// in `t = ln|du| + |du| / cutoff_scale`, straight beyond the end knots,
+/// model of the whole and of its self part that pass their own tests
+/// (chi2 within 0.7..1.5 of its expectation under flipped randomizations,
+/// p > 0.01), and the stored knots of each reproduce its stored chi2 from
+/// `kernel_log` alone (`G`, `G_self`): the spline through `(t, ln_G)` in
+/// `t = ln|du| + |du| / cutoff_scale`, straight beyond the end knots,
 /// averaged over each group (a 400-point midpoint rule here), against the
 /// group means with the variance of each pooled with its neighbours'.
 fn kernel_models_fit_their_kernels(store: &Path) {
@@ -517,38 +590,46 @@ fn kernel_models_fit_their_kernels(store: &Path) {
     assert_eq!(refs.len(), 24, "{refs:?}");
     for instance in refs {
         let fit = table(store, "fit", &instance, "kernel_model_fit");
-        let status = &STATUS.read(&fit).unwrap()[0];
-        if instance.starts_with("ipp-2") {
-            assert!(
-                status.contains("fewer than three groups"),
-                "{instance}: {status}"
-            );
-            continue;
-        }
-        assert_eq!(status, "fitted", "{instance}");
-        let (chi2, expected) = (
-            CHI2.read(&fit).unwrap()[0],
-            CHI2_EXPECTED.read(&fit).unwrap()[0],
-        );
-        let p = P_VALUE.read(&fit).unwrap()[0];
-        assert!(
-            (0.7..=1.5).contains(&(chi2 / expected)) && p > 0.01,
-            "{instance}: chi2 {chi2}, expected {expected}, p {p}"
-        );
-        assert_eq!(CONVERGED.read(&fit).unwrap()[0], 1, "{instance}");
-        let mirrored = MIRRORED.read(&fit).unwrap()[0] == 1;
         let groups = table(store, "fit", &instance, "kernel_model_groups");
-        let residuals = contract::fit::model_groups::RESIDUAL.read(&groups).unwrap();
-        let summed: f64 = residuals.iter().map(|r| r * r).sum();
-        assert!(
-            (summed / chi2 - 1.0).abs() < 1e-12,
-            "{instance}: residuals {summed} != {chi2}"
-        );
-        let recomputed = model_chi2(store, &instance, mirrored);
-        assert!(
-            (recomputed / chi2 - 1.0).abs() < 1e-6,
-            "{instance}: {recomputed} != {chi2}"
-        );
+        for part in Part::MODELLED {
+            let row = contract::fit::goodness_row(&fit, part).unwrap();
+            let status = &STATUS.read(&fit).unwrap()[row];
+            let name = format!("{instance} {}", part.name());
+            if instance.starts_with("ipp-2") {
+                assert!(
+                    status.contains("fewer than three groups"),
+                    "{name}: {status}"
+                );
+                continue;
+            }
+            assert_eq!(status, "fitted", "{name}");
+            let (chi2, expected) = (
+                CHI2.read(&fit).unwrap()[row],
+                CHI2_EXPECTED.read(&fit).unwrap()[row],
+            );
+            let p = P_VALUE.read(&fit).unwrap()[row];
+            assert!(
+                (0.7..=1.5).contains(&(chi2 / expected)) && p > 0.01,
+                "{name}: chi2 {chi2}, expected {expected}, p {p}"
+            );
+            assert_eq!(CONVERGED.read(&fit).unwrap()[row], 1, "{name}");
+            let mirrored = MIRRORED.read(&fit).unwrap()[row] == 1;
+            let residuals = contract::fit::model_groups::RESIDUAL.read(&groups).unwrap();
+            let summed: f64 = contract::fit::part_rows(&groups, part)
+                .unwrap()
+                .iter()
+                .map(|&k| residuals[k] * residuals[k])
+                .sum();
+            assert!(
+                (summed / chi2 - 1.0).abs() < 1e-12,
+                "{name}: residuals {summed} != {chi2}"
+            );
+            let recomputed = model_chi2(store, &instance, part, mirrored);
+            assert!(
+                (recomputed / chi2 - 1.0).abs() < 1e-6,
+                "{name}: {recomputed} != {chi2}"
+            );
+        }
     }
 }
 
@@ -643,7 +724,11 @@ fn held_out_kernels_recompute_from_the_models(store: &Path) {
         // The held-out kernel's own model, as its fit stored it.
         let fitted = table(store, "fit", &instance(0.0), "kernel_model_groups");
         let middles = contract::fit::model_groups::DU.read(&fitted).unwrap();
-        let row = middles.iter().position(|&m| m == du[k]).unwrap();
+        let row = contract::fit::part_rows(&fitted, Part::Total)
+            .unwrap()
+            .into_iter()
+            .find(|&r| middles[r] == du[k])
+            .unwrap();
         let stored = contract::fit::model_groups::G_MODEL.read(&fitted).unwrap()[row];
         assert!((model[k].mean / stored - 1.0).abs() < 1e-12, "{k}");
         // One degree lower: without the farthest node, -0.5 (the first of
@@ -699,7 +784,11 @@ fn stored_group_mean(store: &Path, instance: &str, side: &str, a: f64, b: f64) -
         LN_G.read(&knots).unwrap(),
         CUTOFF_SCALE.read(&knots).unwrap(),
     );
-    let rows: Vec<usize> = (0..sides.len()).filter(|&k| sides[k] == side).collect();
+    let rows: Vec<usize> = contract::fit::part_rows(&knots, Part::Total)
+        .unwrap()
+        .into_iter()
+        .filter(|&k| sides[k] == side)
+        .collect();
     let spline = NaturalSpline::through(
         &rows.iter().map(|&k| t[k]).collect::<Vec<f64>>(),
         &rows.iter().map(|&k| values[k].mean).collect::<Vec<f64>>(),
@@ -714,9 +803,9 @@ fn stored_group_mean(store: &Path, instance: &str, side: &str, a: f64, b: f64) -
         / 400.0
 }
 
-/// The chi2 of a kernel's stored model against its `kernel_log` groups
-/// ([`kernel_models_fit_their_kernels`]).
-fn model_chi2(store: &Path, instance: &str, mirrored: bool) -> f64 {
+/// The chi2 of a kernel's stored model of `part` against its `kernel_log`
+/// groups ([`kernel_models_fit_their_kernels`]).
+fn model_chi2(store: &Path, instance: &str, part: Part, mirrored: bool) -> f64 {
     use contract::fit::model::*;
     use contract::kernel::log::{DU_INNER, DU_OUTER};
     use ternary::kernel::model::NaturalSpline;
@@ -729,13 +818,23 @@ fn model_chi2(store: &Path, instance: &str, mirrored: bool) -> f64 {
         CUTOFF_SCALE.read(&knots).unwrap(),
     );
     let (inner, outer) = (DU_INNER.read(&log).unwrap(), DU_OUTER.read(&log).unwrap());
-    let g = contract::kernel::G.read(&log).unwrap();
+    let g = match part {
+        Part::Total => contract::kernel::G,
+        Part::SelfPart => contract::kernel::G_SELF,
+    }
+    .read(&log)
+    .unwrap();
+    let modelled = contract::fit::part_rows(&knots, part).unwrap();
     let mut chi2 = 0.0;
     for (side, sign) in [("below", -1.0), ("above", 1.0)] {
         if mirrored && side == "below" {
             continue;
         }
-        let rows: Vec<usize> = (0..sides.len()).filter(|&k| sides[k] == side).collect();
+        let rows: Vec<usize> = modelled
+            .iter()
+            .copied()
+            .filter(|&k| sides[k] == side)
+            .collect();
         let t_side: Vec<f64> = rows.iter().map(|&k| t[k]).collect();
         let ln_g: Vec<f64> = rows.iter().map(|&k| values[k].mean).collect();
         let (spline, scale) = (NaturalSpline::through(&t_side, &ln_g), scales[rows[0]]);

@@ -109,7 +109,7 @@ fn the_tutorial_runs_as_written() {
         "examples/bundle.py failed (install the README's test packages):\n{printed}\n{}",
         stderr(&example)
     );
-    assert_eq!(printed.matches(" agrees").count(), 5, "{printed}");
+    assert_eq!(printed.matches(" agrees").count(), 7, "{printed}");
     assert!(fs::metadata(dir.join("kernels.png")).unwrap().len() > 10_000);
     let _ = fs::remove_dir_all(&dir);
 }

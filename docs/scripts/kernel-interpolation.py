@@ -8,7 +8,7 @@ kernels computed by the validation study.
     cargo run --release -- run --config docs/studies/kernel-validation.toml
     python3 docs/scripts/kernel-interpolation.py pipeline.toml docs/studies/kernel-validation.toml
 
-(The validation study shares the default store, `data/`; run both from the repository.)
+(The validation study keeps its store in docs/studies/data/; run both from the repository.)
 
 At each log-spaced group, ln G (the model's group mean) is interpolated through the five
 n by the Lagrange polynomial of degree 4 in 1/n (and, for comparison, in n and by
@@ -45,7 +45,7 @@ def kernel(config, potential):
     potential = potential if isinstance(potential, str) else f"ipp-{potential}"
     fit = artifact(config, "fit", f"{potential}_u0_rho0")
     groups = pq.read_table(fit / "kernel_model_groups.parquet").to_pandas()
-    groups = groups[groups.du > 0].sort_values("du")
+    groups = groups[(groups.part == "total") & (groups.du > 0)].sort_values("du")
     model = KernelModel(fit / "kernel_model.parquet", fit / "kernel_model_covariance.parquet")
     moments = pq.read_table(artifact(config, "moments", f"{potential}_u0_rho0") / "moments.parquet")
     moments = moments.to_pandas()

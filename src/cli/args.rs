@@ -261,6 +261,22 @@ pub(super) struct KernelArgs {
     /// u - u' at which to evaluate, v_th (non-zero; repeat for several).
     #[arg(long, required = true, allow_hyphen_values = true, value_parser = non_zero)]
     pub(super) du: Vec<f64>,
+    /// The part of the kernel: the whole, its self part (the special
+    /// particle's own velocity) or its bath part (the whole less the self).
+    #[arg(long, value_enum, default_value_t = PartArg::Total)]
+    pub(super) part: PartArg,
+}
+
+/// `--part` of `ternary kernel`.
+#[derive(Clone, Copy, ValueEnum)]
+pub(super) enum PartArg {
+    /// G, self plus bath.
+    Total,
+    /// G_self.
+    #[value(name = "self")]
+    SelfPart,
+    /// G_bath = G - G_self.
+    Bath,
 }
 
 /// Arguments of `ternary pairs`.

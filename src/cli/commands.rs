@@ -10,15 +10,15 @@ use std::sync::atomic::{AtomicU32, Ordering};
 use anyhow::{Context, Result, bail};
 
 use super::args::{
-    DagArgs, ExportArgs, KernelArgs, MassArg, PairsArgs, RateArgs, ReadingArg, ReportArgs, RunArgs,
-    ShowArgs, SlurmSubmitArgs, StatusArgs, VerifyArgs,
+    DagArgs, ExportArgs, KernelArgs, MassArg, PairsArgs, PartArg, RateArgs, ReadingArg, ReportArgs,
+    RunArgs, ShowArgs, SlurmSubmitArgs, StatusArgs, VerifyArgs,
 };
 use super::{Opening, emit, exit_code, load, open, print_event, within_limits};
 use ternary::config::{SlurmConfig, Study, compact};
 use ternary::contract::instances;
 use ternary::export::{self, ExportOptions};
 use ternary::kernel::model::{
-    Family, POTENTIAL_NODES, U_PRIME_NODES, nearest_nodes, u_prime_nodes,
+    Family, POTENTIAL_NODES, Part, U_PRIME_NODES, nearest_nodes, u_prime_nodes,
 };
 use ternary::physics::dissociation::{dissociation_rate, sobol_dissociation_scenes};
 use ternary::physics::md::CLUSTER_STEP_BUDGET;
@@ -220,8 +220,13 @@ pub(super) fn kernel(config: &Path, args: KernelArgs) -> Result<ExitCode> {
     };
     let u_primes = u_prime_targets(&study, config, &args)?;
     let potentials = study.potentials();
+    let (asked, symbol) = match args.part {
+        PartArg::Total => (report::Asked::Modelled(Part::Total), "G"),
+        PartArg::SelfPart => (report::Asked::Modelled(Part::SelfPart), "G_self"),
+        PartArg::Bath => (report::Asked::Bath, "G_bath"),
+    };
     let title = format!(
-        "G(u' -> u' + du) of {wanted}, u' = {} v_th, rho l = {}",
+        "{symbol}(u' -> u' + du) of {wanted}, u' = {} v_th, rho l = {}",
         args.u_prime, args.density
     );
     let plan = plan(&study);
@@ -229,7 +234,7 @@ pub(super) fn kernel(config: &Path, args: KernelArgs) -> Result<ExitCode> {
     if let (Some(potential), [(u_prime, false)]) = (computed, u_primes.as_slice()) {
         let fit = instances::fit(&study.kernel_params(*potential, *u_prime, args.density));
         emit(&report::kernel_model_text(
-            &store, &plan, &fit, &title, &args.du,
+            &store, &plan, &fit, &title, &args.du, asked,
         )?);
         return Ok(ExitCode::SUCCESS);
     }
@@ -240,6 +245,7 @@ pub(super) fn kernel(config: &Path, args: KernelArgs) -> Result<ExitCode> {
         &interpolation,
         &title,
         &args.du,
+        asked,
     )?);
     Ok(ExitCode::SUCCESS)
 }

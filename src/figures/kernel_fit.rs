@@ -8,6 +8,7 @@ use super::frames::{failed, frame, series_of, stack};
 use super::kernel_groups::{GROUPS_PER_DECADE, positive_kernel};
 use super::{Axis, DU_AXIS, FigureKind, G_AXIS, Layout, Panel, Style};
 use crate::contract;
+use crate::kernel::model::Part;
 use crate::pipeline::{Input, StageError};
 
 /// `G(0 -> u)` of one potential with its fitted shape `alpha x^-beta
@@ -71,7 +72,10 @@ fn model_series(fit: &Input) -> Result<[DataFrame; 2], StageError> {
     use contract::fit::model_groups::{DU, G_MODEL, RESIDUAL, TABLE};
     let table = TABLE.of(fit)?;
     let (du, model, residual) = (DU.read(table)?, G_MODEL.read(table)?, RESIDUAL.read(table)?);
-    let above: Vec<usize> = (0..du.len()).filter(|&k| du[k] > 0.0).collect();
+    let above: Vec<usize> = contract::fit::part_rows(table, Part::Total)?
+        .into_iter()
+        .filter(|&k| du[k] > 0.0)
+        .collect();
     let pick = |values: &[f64]| -> Vec<f64> { above.iter().map(|&k| values[k]).collect() };
     Ok([
         series_of("kernel", "model", pick(&du), pick(&model), None)?,

@@ -17,7 +17,8 @@ pub(super) fn positive_kernel(
     label: &str,
     per_decade: f64,
 ) -> Result<DataFrame, StageError> {
-    let (replicates, du) = contract::kernel::replicates::read(input)?;
+    let (replicates, du) =
+        contract::kernel::replicates::read(input, contract::kernel::replicates::G)?;
     log_groups((panel, label), &du, &replicates, per_decade)
 }
 

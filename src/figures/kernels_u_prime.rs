@@ -59,7 +59,8 @@ impl FigureKind for KernelsAtUPrime {
 /// `G(u' -> u)` of a kernel artifact above and below `u'`, each averaged
 /// over log-spaced groups of `|u - u'|` and left with its resolved groups.
 fn kernel_sides(input: &Input, u_prime: f64) -> Result<Vec<DataFrame>, StageError> {
-    let (replicates, du) = contract::kernel::replicates::read(input)?;
+    let (replicates, du) =
+        contract::kernel::replicates::read(input, contract::kernel::replicates::G)?;
     let below: Vec<f64> = du.iter().map(|d| -d).collect();
     // The legend's minus sign is U+2212, as on the axes.
     let name = format!("u' = {}", u_prime.to_string().replace('-', "−"));

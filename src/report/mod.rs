@@ -19,7 +19,7 @@ mod summary;
 mod tables;
 
 pub use dag::{DagFormat, dag};
-pub use kernel_model::{Interpolation, Node, interpolated_kernel_text, kernel_model_text};
+pub use kernel_model::{Asked, Interpolation, Node, interpolated_kernel_text, kernel_model_text};
 pub use numbers::with_error;
 pub use pairs::{PairPrediction, pairs_text};
 pub use rates::{SourcedTable, rate_text, theta_table};

@@ -642,13 +642,14 @@ pub(super) fn kernel_model_table(
         store,
         reports,
         &TABLE,
-        "kernel model: ln G a natural cubic spline in ln|du| + |du| / x_c on each side of u', fitted to kernel_log's groups; chi2 against its mean and spread under flipped randomizations (a wild bootstrap), p the share of flips reaching it (docs/kernel-model.md)",
+        "kernel model: ln G (part total) and ln G_self (part self) a natural cubic spline in ln|du| + |du| / x_c on each side of u', fitted to kernel_log's groups; chi2 against its mean and spread under flipped randomizations (a wild bootstrap), p the share of flips reaching it (docs/kernel-model.md)",
     )?;
     if frames.is_empty() {
         return Ok(());
     }
     let mut table = Columns::new(&[
         ("kernel", Align::Left),
+        ("part", Align::Left),
         ("knots", Align::Right),
         ("groups", Align::Right),
         ("chi2", Align::Right),
@@ -658,23 +659,26 @@ pub(super) fn kernel_model_table(
         ("status", Align::Left),
     ]);
     for (instance, frame) in frames {
-        let chi2 = number(&frame, 0, CHI2)?;
-        let expected = number(&frame, 0, CHI2_EXPECTED)?;
-        let spread = number(&frame, 0, CHI2_SPREAD)?;
-        table.push(vec![
-            Cell::text(instance.as_str()),
-            Cell::text(count(&frame, 0, KNOTS)?.to_string()),
-            Cell::text(count(&frame, 0, GROUPS)?.to_string()),
-            Cell::text(or_why(chi2, |c| fixed(c, 1), "-")),
-            Cell::text(or_why(
-                expected,
-                |e| format!("{} ± {}", fixed(e, 1), fixed(spread, 1)),
-                "-",
-            )),
-            Cell::text(or_why(chi2 / expected, |r| fixed(r, 2), "-")),
-            Cell::text(or_why(number(&frame, 0, P_VALUE)?, |p| fixed(p, 3), "-")),
-            Cell::text(text(&frame, 0, STATUS)?),
-        ]);
+        for row in 0..frame.height() {
+            let chi2 = number(&frame, row, CHI2)?;
+            let expected = number(&frame, row, CHI2_EXPECTED)?;
+            let spread = number(&frame, row, CHI2_SPREAD)?;
+            table.push(vec![
+                Cell::text(instance.as_str()),
+                Cell::text(text(&frame, row, contract::fit::model::PART)?),
+                Cell::text(count(&frame, row, KNOTS)?.to_string()),
+                Cell::text(count(&frame, row, GROUPS)?.to_string()),
+                Cell::text(or_why(chi2, |c| fixed(c, 1), "-")),
+                Cell::text(or_why(
+                    expected,
+                    |e| format!("{} ± {}", fixed(e, 1), fixed(spread, 1)),
+                    "-",
+                )),
+                Cell::text(or_why(chi2 / expected, |r| fixed(r, 2), "-")),
+                Cell::text(or_why(number(&frame, row, P_VALUE)?, |p| fixed(p, 3), "-")),
+                Cell::text(text(&frame, row, STATUS)?),
+            ]);
+        }
     }
     out.table(&table);
     Ok(())

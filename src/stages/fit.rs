@@ -11,7 +11,8 @@
 //! `ln|du| + |du| / x_c` on each side of `u'`, fitted to the log-spaced
 //! groups, written as its knots, their covariance and its jackknife
 //! replicates, its goodness of fit and the fitted groups with their
-//! residuals.
+//! residuals; for the whole kernel and for its self part (`part`), whose
+//! difference is the bath part.
 
 use serde_json::Value;
 
@@ -22,7 +23,7 @@ use crate::kernel::fit::{
     KernelFit, Protocol, Shape, Weighting, fit_kernel, systematic, varied_protocols,
 };
 use crate::kernel::model::{
-    GroupFit, KernelModel, NoModel, Side, SideModel, fit_kernel_model, side_groups,
+    GroupFit, KernelModel, NoModel, Part, Side, SideModel, fit_kernel_model, side_groups,
 };
 use crate::pipeline::code::{self, Code};
 use crate::pipeline::{Cost, Input, InstanceId, Progress, Stage, StageError, Table};
@@ -78,19 +79,21 @@ impl Stage for FitStage {
         1
     }
 
-    /// Every kernel row read, 3.2 us each: the shape's protocols and the
-    /// model's cross-validation and sign patterns (the default study's 114
-    /// instances, 25 CPU s measured against 8 s at the default 1 us,
-    /// 2026-12-02).
+    /// Every kernel row read, 6.4 us each: the shape's protocols and the
+    /// models' cross-validation and sign patterns, for the whole and its
+    /// self part (the default study's 114 instances, 25 CPU s measured with
+    /// the whole's model alone against 8 s at the default 1 us, 2026-12-02;
+    /// the self part's model doubles it).
     fn cost(&self, inputs: &[Cost]) -> Cost {
-        Cost::reading(inputs, 3.2e-6, 1e3, 100.0)
+        Cost::reading(inputs, 6.4e-6, 1e3, 100.0)
     }
 
     fn run(&self, inputs: &[Input], progress: &Progress) -> Result<Vec<Table>, StageError> {
         let input = inputs
             .first()
             .ok_or_else(|| StageError::Input("no kernel input".into()))?;
-        let (fine, offsets) = contract::kernel::replicates::read(input)?;
+        use contract::kernel::replicates::{G, G_SELF, read};
+        let (fine, offsets) = read(input, G)?;
         let fits: Vec<ProtocolFit> = self
             .protocols()
             .into_iter()
@@ -100,16 +103,24 @@ impl Stage for FitStage {
                 fit: fit_kernel(&fine, &offsets, protocol),
             })
             .collect();
-        let [below, above] = side_groups(&fine, &offsets, self.params.kernel.bin_width);
-        let model = fit_kernel_model(below, above);
+        let self_part = read(input, G_SELF)?.0;
+        let models: Vec<PartModel> = Part::MODELLED
+            .into_iter()
+            .zip([&fine, &self_part])
+            .map(|(part, replicates)| {
+                let [below, above] =
+                    side_groups(replicates, &offsets, self.params.kernel.bin_width);
+                (part, fit_kernel_model(below, above))
+            })
+            .collect();
         progress.advance(1);
         Ok(vec![
             fit_table(&fits)?,
-            knots_table(&model)?,
-            covariance_table(&model)?,
-            jackknife_table(&model)?,
-            model_fit_table(&model)?,
-            groups_table(&model)?,
+            knots_table(&models)?,
+            covariance_table(&models)?,
+            jackknife_table(&models)?,
+            model_fit_table(&models)?,
+            groups_table(&models)?,
         ])
     }
 }
@@ -202,33 +213,46 @@ fn fit_table(fits: &[ProtocolFit]) -> Result<Table, StageError> {
         .table(&TABLE)?)
 }
 
-/// One knot of one side's model.
+/// A part of the kernel and its model, or why it has none.
+type PartModel = (Part, Result<KernelModel, NoModel>);
+
+/// One knot of one side's model of one part.
 struct KnotRow<'a> {
+    part: Part,
     side: Side,
     knot: usize,
     model: &'a SideModel,
 }
 
-/// Every side's knots, below `u'` then above (none without a model).
-fn knot_rows(model: &Result<KernelModel, NoModel>) -> Vec<KnotRow<'_>> {
-    let Ok(model) = model else {
-        return Vec::new();
-    };
-    model
-        .both_sides()
-        .into_iter()
-        .flat_map(|(side, model)| {
-            (0..model.values.len()).map(move |knot| KnotRow { side, knot, model })
+/// Every part's knots, each side's below `u'` then above (none of a part
+/// without a model).
+fn knot_rows(models: &[PartModel]) -> Vec<KnotRow<'_>> {
+    models
+        .iter()
+        .filter_map(|(part, model)| Some((*part, model.as_ref().ok()?)))
+        .flat_map(|(part, model)| {
+            model
+                .both_sides()
+                .into_iter()
+                .flat_map(move |(side, model)| {
+                    (0..model.values.len()).map(move |knot| KnotRow {
+                        part,
+                        side,
+                        knot,
+                        model,
+                    })
+                })
         })
         .collect()
 }
 
-/// `kernel_model`: one row per side and knot.
-fn knots_table(model: &Result<KernelModel, NoModel>) -> Result<Table, StageError> {
+/// `kernel_model`: one row per part, side and knot.
+fn knots_table(models: &[PartModel]) -> Result<Table, StageError> {
     use contract::fit::model::*;
-    let rows = knot_rows(model);
+    let rows = knot_rows(models);
     let size = |row: &KnotRow| row.model.values.len();
     Ok(Rows::new(&rows)
+        .with(PART, |row| row.part.name().to_string())
         .with(SIDE, |row| row.side.name().to_string())
         .with(KNOT, |row| row.knot as u32)
         .with(DU, |row| {
@@ -243,14 +267,17 @@ fn knots_table(model: &Result<KernelModel, NoModel>) -> Result<Table, StageError
         .table(&TABLE)?)
 }
 
-/// `kernel_model_covariance`: one row per side and pair of knots.
-fn covariance_table(model: &Result<KernelModel, NoModel>) -> Result<Table, StageError> {
+/// `kernel_model_covariance`: one row per part, side and pair of knots.
+fn covariance_table(models: &[PartModel]) -> Result<Table, StageError> {
     use contract::fit::model_covariance::*;
-    let rows: Vec<(KnotRow, usize)> = knot_rows(model)
+    let rows: Vec<(KnotRow, usize)> = knot_rows(models)
         .into_iter()
         .flat_map(|row| (0..row.model.values.len()).map(move |j| (KnotRow { ..row }, j)))
         .collect();
     Ok(Rows::new(&rows)
+        .with(contract::fit::model::PART, |(row, _)| {
+            row.part.name().to_string()
+        })
         .with(contract::fit::model::SIDE, |(row, _)| {
             row.side.name().to_string()
         })
@@ -262,15 +289,18 @@ fn covariance_table(model: &Result<KernelModel, NoModel>) -> Result<Table, Stage
         .table(&TABLE)?)
 }
 
-/// `kernel_model_jackknife`: one row per side, left-out randomization and
-/// knot.
-fn jackknife_table(model: &Result<KernelModel, NoModel>) -> Result<Table, StageError> {
+/// `kernel_model_jackknife`: one row per part, side, left-out
+/// randomization and knot.
+fn jackknife_table(models: &[PartModel]) -> Result<Table, StageError> {
     use contract::fit::model_jackknife::*;
-    let rows: Vec<(KnotRow, usize)> = knot_rows(model)
+    let rows: Vec<(KnotRow, usize)> = knot_rows(models)
         .into_iter()
         .flat_map(|row| (0..row.model.left_out.len()).map(move |r| (KnotRow { ..row }, r)))
         .collect();
     Ok(Rows::new(&rows)
+        .with(contract::fit::model::PART, |(row, _)| {
+            row.part.name().to_string()
+        })
         .with(contract::fit::model::SIDE, |(row, _)| {
             row.side.name().to_string()
         })
@@ -280,15 +310,22 @@ fn jackknife_table(model: &Result<KernelModel, NoModel>) -> Result<Table, StageE
         .table(&TABLE)?)
 }
 
-/// `kernel_model_fit`: the goodness of fit, one row.
-fn model_fit_table(model: &Result<KernelModel, NoModel>) -> Result<Table, StageError> {
+/// `kernel_model_fit`: the goodness of fit, one row per part.
+fn model_fit_table(models: &[PartModel]) -> Result<Table, StageError> {
     use contract::fit::model_fit::*;
-    let rows = [model.as_ref().ok()];
-    let value = |row: &Option<&KernelModel>, f: fn(&KernelModel) -> f64| row.map_or(f64::NAN, f);
-    let count = |row: &Option<&KernelModel>, f: fn(&KernelModel) -> usize| row.map_or(0, f) as u32;
-    let status = model.as_ref().map_or_else(|why| why.reason(), |_| "fitted");
+    let rows: Vec<(Part, Option<&KernelModel>, &'static str)> = models
+        .iter()
+        .map(|(part, model)| {
+            let status = model.as_ref().map_or_else(|why| why.reason(), |_| "fitted");
+            (*part, model.as_ref().ok(), status)
+        })
+        .collect();
+    type Row<'a> = (Part, Option<&'a KernelModel>, &'static str);
+    let value = |row: &Row, f: fn(&KernelModel) -> f64| row.1.map_or(f64::NAN, f);
+    let count = |row: &Row, f: fn(&KernelModel) -> usize| row.1.map_or(0, f) as u32;
     Ok(Rows::new(&rows)
-        .with(STATUS, |_| status.to_string())
+        .with(contract::fit::model::PART, |row| row.0.name().to_string())
+        .with(STATUS, |row| row.2.to_string())
         .with(MIRRORED, |row| count(row, |m| usize::from(m.mirrored)))
         .with(GROUPS, |row| {
             count(row, |m| m.sides.iter().map(|(_, s)| s.groups.len()).sum())
@@ -310,26 +347,31 @@ fn model_fit_table(model: &Result<KernelModel, NoModel>) -> Result<Table, StageE
         .table(&TABLE)?)
 }
 
-/// `kernel_model_groups`: every fitted group with the model's value there.
-fn groups_table(model: &Result<KernelModel, NoModel>) -> Result<Table, StageError> {
+/// `kernel_model_groups`: every part's fitted groups with the model's
+/// value there.
+fn groups_table(models: &[PartModel]) -> Result<Table, StageError> {
     use contract::fit::model_groups::*;
-    let rows: Vec<(f64, GroupFit)> = model
-        .as_ref()
-        .map(|model| {
-            model
-                .sides
-                .iter()
-                .flat_map(|(side, fit)| fit.groups.iter().map(|group| (side.sign(), *group)))
-                .collect()
+    let rows: Vec<(Part, f64, GroupFit)> = models
+        .iter()
+        .filter_map(|(part, model)| Some((*part, model.as_ref().ok()?)))
+        .flat_map(|(part, model)| {
+            model.sides.iter().flat_map(move |(side, fit)| {
+                fit.groups
+                    .iter()
+                    .map(move |group| (part, side.sign(), *group))
+            })
         })
-        .unwrap_or_default();
+        .collect();
     Ok(Rows::new(&rows)
-        .with(DU, |(sign, g)| sign * 0.5 * (g.lower + g.upper))
-        .with(DU_INNER, |(sign, g)| sign * g.lower)
-        .with(DU_OUTER, |(sign, g)| sign * g.upper)
-        .with(G, |(_, g)| g.mean)
-        .with(G_STDERR, |(_, g)| g.stderr)
-        .with(G_MODEL, |(_, g)| g.model)
-        .with(RESIDUAL, |(_, g)| g.residual())
+        .with(contract::fit::model::PART, |(part, _, _)| {
+            part.name().to_string()
+        })
+        .with(DU, |(_, sign, g)| sign * 0.5 * (g.lower + g.upper))
+        .with(DU_INNER, |(_, sign, g)| sign * g.lower)
+        .with(DU_OUTER, |(_, sign, g)| sign * g.upper)
+        .with(G, |(_, _, g)| g.mean)
+        .with(G_STDERR, |(_, _, g)| g.stderr)
+        .with(G_MODEL, |(_, _, g)| g.model)
+        .with(RESIDUAL, |(_, _, g)| g.residual())
         .table(&TABLE)?)
 }

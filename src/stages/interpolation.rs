@@ -22,7 +22,7 @@ use crate::config::KernelParams;
 use crate::contract::instances;
 use crate::contract::{self, Rows};
 use crate::kernel::model::{
-    FEWEST_NODES, Family, POTENTIAL_NODES, Replicated, SideCurve, U_PRIME_NODES, combine,
+    FEWEST_NODES, Family, POTENTIAL_NODES, Part, Replicated, SideCurve, U_PRIME_NODES, combine,
     lagrange_weights, nearest_nodes, u_prime_nodes, without_farthest,
 };
 use crate::pipeline::code::{self, Code};
@@ -184,7 +184,9 @@ impl InterpolationStage {
 /// The stored model of the `fit` instance `id`, `None` without one.
 fn modelled(inputs: &[Input], id: &InstanceId) -> Result<Option<Modelled>, StageError> {
     use contract::fit::{model, model_covariance, model_fit, model_groups, model_jackknife};
-    let status = &model_fit::STATUS.read(model_fit::TABLE.find(inputs, id)?)?[0];
+    let goodness = model_fit::TABLE.find(inputs, id)?;
+    let status =
+        &model_fit::STATUS.read(goodness)?[contract::fit::goodness_row(goodness, Part::Total)?];
     if status != "fitted" {
         return Ok(None);
     }
@@ -193,7 +195,7 @@ fn modelled(inputs: &[Input], id: &InstanceId) -> Result<Option<Modelled>, Stage
         covariance: model_covariance::TABLE.find(inputs, id)?,
         jackknife: model_jackknife::TABLE.find(inputs, id)?,
     };
-    let side = |name| contract::fit::side_curve(&tables, name);
+    let side = |name| contract::fit::side_curve(&tables, Part::Total, name);
     let table = model_groups::TABLE.find(inputs, id)?;
     let (du, inner, outer) = (
         model_groups::DU.read(table)?,
@@ -204,7 +206,8 @@ fn modelled(inputs: &[Input], id: &InstanceId) -> Result<Option<Modelled>, Stage
         model_groups::G.read(table)?,
         model_groups::G_STDERR.read(table)?,
     );
-    let groups = (0..du.len())
+    let groups = contract::fit::part_rows(table, Part::Total)?
+        .into_iter()
         .map(|k| {
             let value = Estimate {
                 mean: g[k],

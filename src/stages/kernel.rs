@@ -60,12 +60,12 @@ impl Stage for KernelStage {
     }
 
     /// Every event read (1.0-2.1 us each in the default study, 2026-12-01);
-    /// the kernel and its per-randomization table, one row
-    /// per bin and per bin and randomization (16, the default; 12 bytes a
-    /// row in the default study).
+    /// the kernel and its per-randomization table (the whole and its self
+    /// part), one row per bin and per bin and randomization (16, the
+    /// default; 20 bytes a row in the default study, 2026-12-02).
     fn cost(&self, inputs: &[Cost]) -> Cost {
         let bins = self.params.window / self.params.bin_width;
-        Cost::reading(inputs, 1.4e-6, bins * 17.0, 12.0)
+        Cost::reading(inputs, 1.4e-6, bins * 17.0, 20.0)
     }
 
     fn run(&self, inputs: &[Input], progress: &Progress) -> Result<Vec<Table>, StageError> {
@@ -91,7 +91,7 @@ impl Stage for KernelStage {
             .with_metadata("ternary.failed_events", failed.to_string());
         Ok(vec![
             table,
-            replicates_table(&parts.total, &bins)?,
+            replicates_table(&parts, &bins)?,
             log_table(&parts, &bins)?,
         ])
     }
@@ -121,16 +121,18 @@ impl Parts {
     }
 }
 
-/// `G` of every randomization alone: one row per randomization and bin.
-fn replicates_table(total: &[Vec<f64>], bins: &Bins) -> Result<Table, StageError> {
+/// `G` and its self part of every randomization alone: one row per
+/// randomization and bin.
+fn replicates_table(parts: &Parts, bins: &Bins) -> Result<Table, StageError> {
     use contract::kernel::replicates::*;
-    let rows: Vec<(u32, usize)> = (0..total.len() as u32)
+    let rows: Vec<(u32, usize)> = (0..parts.total.len() as u32)
         .flat_map(|r| (0..bins.len()).map(move |k| (r, k)))
         .collect();
     Ok(Rows::new(&rows)
         .with(contract::kernel::DU, |&(_, k)| bins.centre(k))
         .with(RANDOMIZATION, |&(r, _)| r)
-        .with(G, |&(r, k)| total[r as usize][k])
+        .with(G, |&(r, k)| parts.total[r as usize][k])
+        .with(G_SELF, |&(r, k)| parts.self_part[r as usize][k])
         .table(&TABLE)?)
 }
 

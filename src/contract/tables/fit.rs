@@ -1,7 +1,7 @@
 //! The `fit` stage: `fit.parquet`, one row.
 
 use super::*;
-use crate::kernel::model::{Knots, SideCurve, Warp};
+use crate::kernel::model::{Knots, Part, SideCurve, Warp};
 use crate::pipeline::StageError;
 use arrow::array::RecordBatch;
 
@@ -147,8 +147,13 @@ pub mod model {
     pub const TABLE: TableSpec = TableSpec {
         stage: STAGE,
         name: "kernel_model",
-        description: "kernel model: on each side of u', ln G(u' -> u) is the natural cubic spline through (t, ln_G) in t = ln|du| + |du| / cutoff_scale, straight beyond the end knots; one row per side and knot",
+        description: "kernel model: on each side of u', ln G(u' -> u) (or ln G_self, by part) is the natural cubic spline through (t, ln_G) in t = ln|du| + |du| / cutoff_scale, straight beyond the end knots; one row per part, side and knot",
     };
+    /// The part of the kernel modelled.
+    pub const PART: Col<String> = Col::text(
+        "part",
+        "total (the kernel G, self plus bath) or self (its self part G_self: the special particle's own velocity); the bath part G - G_self is the difference of the two models, jackknifed over the randomizations they share",
+    );
     /// Side of `u'`.
     pub const SIDE: Col<String> = Col::text(
         "side",
@@ -196,7 +201,7 @@ pub mod model_covariance {
     pub const TABLE: TableSpec = TableSpec {
         stage: STAGE,
         name: "kernel_model_covariance",
-        description: "jackknife covariance over the randomizations of the kernel model's ln_G at the knots of one side, one row per side and pair of knots",
+        description: "jackknife covariance over the randomizations of the kernel model's ln_G at the knots of one side, one row per part, side and pair of knots",
     };
     /// The first knot.
     pub const KNOT_I: Col<u32> = Col::u32("knot_i", "1", "knot number of the first value");
@@ -222,7 +227,7 @@ pub mod model_jackknife {
     pub const TABLE: TableSpec = TableSpec {
         stage: STAGE,
         name: "kernel_model_jackknife",
-        description: "the kernel model's ln_G at the knots of one side fitted without one randomization (the jackknife replicates of kernel_model_covariance), one row per side, left-out randomization and knot",
+        description: "the kernel model's ln_G at the knots of one side fitted without one randomization (the jackknife replicates of kernel_model_covariance), one row per part, side, left-out randomization and knot",
     };
     /// The randomization left out.
     pub const RANDOMIZATION: Col<u32> = Col::u32(
@@ -250,15 +255,45 @@ pub struct ModelTables<'a> {
     pub jackknife: &'a RecordBatch,
 }
 
-/// The model of `side` (`below` or `above` `u'`) of a `fit` instance:
-/// its knots, their covariance and their jackknife replicates.
-pub fn side_curve(tables: &ModelTables, side: &str) -> Result<SideCurve, StageError> {
-    use model::{CUTOFF_SCALE, LN_G, SIDE, T};
-    let sides = SIDE.read(tables.knots)?;
-    let rows: Vec<usize> = (0..sides.len()).filter(|&k| sides[k] == side).collect();
-    let first = *rows
-        .first()
-        .ok_or_else(|| StageError::Input(format!("kernel_model has no knots {side} u'")))?;
+/// The rows of `batch` (a model table, with [`model::PART`]) of `part`.
+pub fn part_rows(batch: &RecordBatch, part: Part) -> Result<Vec<usize>, StageError> {
+    let parts = model::PART.read(batch)?;
+    Ok((0..parts.len())
+        .filter(|&k| parts[k] == part.name())
+        .collect())
+}
+
+/// The row of `kernel_model_fit` (`batch`) that tests `part`'s model.
+pub fn goodness_row(batch: &RecordBatch, part: Part) -> Result<usize, StageError> {
+    part_rows(batch, part)?.first().copied().ok_or_else(|| {
+        StageError::Input(format!(
+            "kernel_model_fit has no row of part {}",
+            part.name()
+        ))
+    })
+}
+
+/// The rows of `batch` (a table with [`model::PART`] and [`model::SIDE`])
+/// of `part`'s model on `side`.
+fn rows_of(batch: &RecordBatch, part: Part, side: &str) -> Result<Vec<usize>, StageError> {
+    let sides = model::SIDE.read(batch)?;
+    Ok(part_rows(batch, part)?
+        .into_iter()
+        .filter(|&k| sides[k] == side)
+        .collect())
+}
+
+/// The model of `part` on `side` (`below` or `above` `u'`) of a `fit`
+/// instance: its knots, their covariance and their jackknife replicates.
+pub fn side_curve(tables: &ModelTables, part: Part, side: &str) -> Result<SideCurve, StageError> {
+    use model::{CUTOFF_SCALE, LN_G, T};
+    let rows = rows_of(tables.knots, part, side)?;
+    let first = *rows.first().ok_or_else(|| {
+        StageError::Input(format!(
+            "kernel_model has no knots of part {} {side} u'",
+            part.name()
+        ))
+    })?;
     let (t, values) = (T.read(tables.knots)?, LN_G.read(tables.knots)?);
     Ok(SideCurve {
         knots: Knots {
@@ -268,22 +303,24 @@ pub fn side_curve(tables: &ModelTables, side: &str) -> Result<SideCurve, StageEr
             t: rows.iter().map(|&k| t[k]).collect(),
         },
         values: rows.iter().map(|&k| values[k].mean).collect(),
-        covariance: covariance_of(tables.covariance, side, rows.len())?,
-        left_out: left_out_of(tables.jackknife, side, rows.len())?,
+        covariance: covariance_of(tables.covariance, part, side, rows.len())?,
+        left_out: left_out_of(tables.jackknife, part, side, rows.len())?,
     })
 }
 
-/// The `size` x `size` covariance of `side`'s knot values, row-major.
-fn covariance_of(batch: &RecordBatch, side: &str, size: usize) -> Result<Vec<f64>, StageError> {
+/// The `size` x `size` covariance of `part`'s knot values on `side`,
+/// row-major.
+fn covariance_of(
+    batch: &RecordBatch,
+    part: Part,
+    side: &str,
+    size: usize,
+) -> Result<Vec<f64>, StageError> {
     use model_covariance::{COVARIANCE, KNOT_I, KNOT_J};
     let mut matrix = vec![0.0; size * size];
-    let (sides, i, j) = (
-        model::SIDE.read(batch)?,
-        KNOT_I.read(batch)?,
-        KNOT_J.read(batch)?,
-    );
+    let (i, j) = (KNOT_I.read(batch)?, KNOT_J.read(batch)?);
     let entries = COVARIANCE.read(batch)?;
-    for k in (0..entries.len()).filter(|&k| sides[k] == side) {
+    for k in rows_of(batch, part, side)? {
         let (i, j) = (i[k] as usize, j[k] as usize);
         if i >= size || j >= size {
             return Err(StageError::Input(format!(
@@ -295,18 +332,19 @@ fn covariance_of(batch: &RecordBatch, side: &str, size: usize) -> Result<Vec<f64
     Ok(matrix)
 }
 
-/// `side`'s knot values fitted without each randomization,
+/// `part`'s knot values on `side` fitted without each randomization,
 /// `[randomization][knot]` (`size` knots).
-fn left_out_of(batch: &RecordBatch, side: &str, size: usize) -> Result<Vec<Vec<f64>>, StageError> {
+fn left_out_of(
+    batch: &RecordBatch,
+    part: Part,
+    side: &str,
+    size: usize,
+) -> Result<Vec<Vec<f64>>, StageError> {
     use model_jackknife::{KNOT, LN_G, RANDOMIZATION};
-    let (sides, randomization, knot) = (
-        model::SIDE.read(batch)?,
-        RANDOMIZATION.read(batch)?,
-        KNOT.read(batch)?,
-    );
+    let (randomization, knot) = (RANDOMIZATION.read(batch)?, KNOT.read(batch)?);
     let values = LN_G.read(batch)?;
     let mut left_out: Vec<Vec<f64>> = Vec::new();
-    for k in (0..values.len()).filter(|&k| sides[k] == side) {
+    for k in rows_of(batch, part, side)? {
         let (r, j) = (randomization[k] as usize, knot[k] as usize);
         if j >= size {
             return Err(StageError::Input(format!(
@@ -329,7 +367,7 @@ pub mod model_fit {
     pub const TABLE: TableSpec = TableSpec {
         stage: STAGE,
         name: "kernel_model_fit",
-        description: "goodness of fit of the kernel model to the log-spaced groups of kernel_log, both sides together, calibrated by flipping the randomizations' deviations from the model (a wild bootstrap); one row",
+        description: "goodness of fit of the kernel model to the log-spaced groups of kernel_log, both sides together, calibrated by flipping the randomizations' deviations from the model (a wild bootstrap); one row per part (total, self)",
     };
     /// Fitted, or why not.
     pub const STATUS: Col<String> = Col::text(
@@ -408,7 +446,7 @@ pub mod model_groups {
     pub const TABLE: TableSpec = TableSpec {
         stage: STAGE,
         name: "kernel_model_groups",
-        description: "the log-spaced groups of kernel_log the kernel model is fitted to, with the model's mean over each group and the normalized residual, one row per side and group (one side when mirrored)",
+        description: "the log-spaced groups of kernel_log the kernel model is fitted to, with the model's mean over each group and the normalized residual, one row per part, side and group (one side when mirrored)",
     };
     /// The group's mean `u - u'`.
     pub const DU: Col<f64> = Col::f64(

@@ -59,16 +59,23 @@ pub mod replicates {
         G_UNIT,
         "kernel G(u' -> u) of this randomization alone: self plus bath",
     );
+    /// Its self part.
+    pub const G_SELF: Col<f64> = Col::f64(
+        "G_self",
+        G_UNIT,
+        "self part of G of this randomization alone (the bath part is G - G_self)",
+    );
 
     /// The kernel of every randomization (`[randomization][bin]`) from
     /// a `kernel` input's replicates table, and the bins' centres
-    /// relative to `u'`.
-    pub fn read(input: &Input) -> Result<(Vec<Vec<f64>>, Vec<f64>), StageError> {
+    /// relative to `u'`: the whole kernel (`column` [`G`]) or its self part
+    /// ([`G_SELF`]).
+    pub fn read(input: &Input, column: Col<f64>) -> Result<(Vec<Vec<f64>>, Vec<f64>), StageError> {
         let batch = TABLE.of(input)?;
         let (du, randomization, g) = (
             super::DU.read(batch)?,
             RANDOMIZATION.read(batch)?,
-            G.read(batch)?,
+            column.read(batch)?,
         );
         let mut kernels: Vec<Vec<f64>> = Vec::new();
         let mut offsets = Vec::new();

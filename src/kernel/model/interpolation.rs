@@ -165,27 +165,33 @@ impl Replicated {
 /// independent, would still estimate `sqrt(sum (w_i e_i)^2)`). Otherwise
 /// the values are taken as independent.
 pub fn combine(weights: &[f64], values: &[Replicated]) -> (f64, f64) {
-    let value = weights.iter().zip(values).map(|(w, y)| w * y.value).sum();
-    let count = values.first().map_or(0, |y| y.left_out.len());
-    let paired = count > 1 && values.iter().all(|y| y.left_out.len() == count);
-    if paired {
-        let left_out = (0..count)
-            .map(|r| {
-                weights
-                    .iter()
-                    .zip(values)
-                    .map(|(w, y)| w * y.left_out[r])
-                    .sum()
-            })
-            .collect();
-        return (value, Replicated { value, left_out }.stderr());
+    if let Some(combined) = combine_replicated(weights, values) {
+        return (combined.value, combined.stderr());
     }
+    let value = weights.iter().zip(values).map(|(w, y)| w * y.value).sum();
     let variance: f64 = weights
         .iter()
         .zip(values)
         .map(|(w, y)| (w * y.stderr()).powi(2))
         .sum();
     (value, variance.sqrt())
+}
+
+/// `sum_i w_i y_i` with its jackknife replicates, when every value has the
+/// same number (more than one) of replicates from the same randomizations
+/// ([`combine`]); `None` otherwise.
+pub fn combine_replicated(weights: &[f64], values: &[Replicated]) -> Option<Replicated> {
+    let count = values.first().map_or(0, |y| y.left_out.len());
+    if count < 2 || values.iter().any(|y| y.left_out.len() != count) {
+        return None;
+    }
+    let sum = |value: &dyn Fn(&Replicated) -> f64| -> f64 {
+        weights.iter().zip(values).map(|(w, y)| w * value(y)).sum()
+    };
+    Some(Replicated {
+        value: sum(&|y| y.value),
+        left_out: (0..count).map(|r| sum(&|y| y.left_out[r])).collect(),
+    })
 }
 
 /// One side's model as stored (`kernel_model`, `kernel_model_covariance`):

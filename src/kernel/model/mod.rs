@@ -44,7 +44,7 @@ mod spline;
 
 pub use interpolation::{
     FEWEST_NODES, Family, POTENTIAL_NODES, Replicated, SideCurve, U_PRIME_NODES, combine,
-    lagrange_weights, nearest_nodes, u_prime_nodes, without_farthest,
+    combine_replicated, lagrange_weights, nearest_nodes, u_prime_nodes, without_farthest,
 };
 pub use least_squares::Knots;
 pub use spline::{NaturalSpline, Warp};
@@ -237,6 +237,32 @@ impl Side {
         match self {
             Side::Below => "below",
             Side::Above => "above",
+        }
+    }
+}
+
+/// The part of the kernel a model describes (physics.md §3): the whole
+/// kernel `G`, or its self part `G_self` (the special particle's own
+/// velocity). The bath part, `G - G_self`, changes sign and is zero within
+/// its errors in most groups: it is the difference of the two models,
+/// jackknifed over the randomizations they share.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Part {
+    /// `G`, self plus bath.
+    Total,
+    /// `G_self`.
+    SelfPart,
+}
+
+impl Part {
+    /// Every part a kernel's model describes, the whole first.
+    pub const MODELLED: [Part; 2] = [Part::Total, Part::SelfPart];
+
+    /// `total` or `self`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Part::Total => "total",
+            Part::SelfPart => "self",
         }
     }
 }
