@@ -499,6 +499,10 @@ struct NodeFold<'a> {
     histogram: Histogram,
     /// The nodes of the current launch pair: each node's event and contributions.
     pair: Vec<(Event, Vec<Contribution>)>,
+    /// One track's outgoing velocities and its nodes' weights, reused from
+    /// track to track (every launch pair lays several).
+    track: Vec<f64>,
+    weights: Vec<f64>,
 }
 
 impl<'a> NodeFold<'a> {
@@ -507,6 +511,8 @@ impl<'a> NodeFold<'a> {
             bins,
             histogram: Histogram::new(bins),
             pair: Vec::new(),
+            track: Vec::new(),
+            weights: Vec::new(),
         }
     }
 
@@ -530,27 +536,32 @@ impl<'a> NodeFold<'a> {
     /// track's incoming velocity: every track conserves the number of
     /// particles exactly.
     fn place_pair(&mut self) {
-        let nodes = std::mem::take(&mut self.pair);
+        let mut nodes = std::mem::take(&mut self.pair);
         for run in nodes.chunk_by(|(_, a), (_, b)| a.len() == b.len()) {
             let images = run[0].1.len();
             for image in 0..images {
                 let first = &run[0].1[image];
-                let weights: Vec<f64> = run.iter().map(|(_, c)| c[image].weight).collect();
+                self.weights.clear();
+                self.weights
+                    .extend(run.iter().map(|(_, c)| c[image].weight));
                 for (rank, matched) in first.sorted_incoming().into_iter().enumerate() {
-                    let track: Vec<f64> =
-                        run.iter().map(|(_, c)| c[image].outgoing[rank]).collect();
+                    self.track.clear();
+                    self.track
+                        .extend(run.iter().map(|(_, c)| c[image].outgoing[rank]));
                     let laid = segments::lay_track(
                         self.bins,
                         self.histogram.part(rank, first.self_rank),
                         matched,
-                        &track,
-                        &weights,
+                        &self.track,
+                        &self.weights,
                     );
                     self.histogram
                         .add_at(self.bins, rank, first.self_rank, matched, -laid);
                 }
             }
         }
+        nodes.clear();
+        self.pair = nodes;
     }
 
     fn finish(mut self) -> Histogram {
