@@ -79,13 +79,12 @@ impl Stage for FitStage {
         1
     }
 
-    /// Every kernel row read, 6.4 us each: the shape's protocols and the
+    /// Every kernel row read, 4.6 us each: the shape's protocols and the
     /// models' cross-validation and sign patterns, for the whole and its
-    /// self part (the default study's 114 instances, 25 CPU s measured with
-    /// the whole's model alone against 8 s at the default 1 us, 2026-12-02;
-    /// the self part's model doubles it).
+    /// self part (the default study's 114 instances, 36 CPU s measured,
+    /// 2026-12-02; 25 s with the whole's model alone).
     fn cost(&self, inputs: &[Cost]) -> Cost {
-        Cost::reading(inputs, 6.4e-6, 1e3, 100.0)
+        Cost::reading(inputs, 4.6e-6, 1e3, 100.0)
     }
 
     fn run(&self, inputs: &[Input], progress: &Progress) -> Result<Vec<Table>, StageError> {

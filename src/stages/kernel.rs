@@ -59,13 +59,14 @@ impl Stage for KernelStage {
         1
     }
 
-    /// Every event read (1.0-2.1 us each in the default study, 2026-12-01);
+    /// Every event read (1.1 us each on average in the default study,
+    /// 2026-12-02: 110 CPU s for its 118 instances);
     /// the kernel and its per-randomization table (the whole and its self
     /// part), one row per bin and per bin and randomization (16, the
     /// default; 20 bytes a row in the default study, 2026-12-02).
     fn cost(&self, inputs: &[Cost]) -> Cost {
         let bins = self.params.window / self.params.bin_width;
-        Cost::reading(inputs, 1.4e-6, bins * 17.0, 20.0)
+        Cost::reading(inputs, 1.1e-6, bins * 17.0, 20.0)
     }
 
     fn run(&self, inputs: &[Input], progress: &Progress) -> Result<Vec<Table>, StageError> {
