@@ -210,7 +210,7 @@ pub fn kernel_model_text(
                         g,
                         stderr,
                         interpolation: f64::NAN,
-                        note: parts[0].values[k].1.clone(),
+                        note: beyond_knots(&parts, k),
                     }
                 })
                 .collect();
@@ -291,6 +291,17 @@ pub fn interpolated_kernel_text(
     Ok(out)
 }
 
+/// Where the `k`-th `du` lies beyond the knots of any of the `parts`'
+/// models (empty inside all).
+fn beyond_knots(parts: &[Evaluated], k: usize) -> String {
+    parts
+        .iter()
+        .map(|part| &part.values[k].1)
+        .find(|note| !note.is_empty())
+        .cloned()
+        .unwrap_or_default()
+}
+
 /// The printed row of the `k`-th `du`: the part `asked` interpolated
 /// through the `evaluated` nodes' models with `weights`, the
 /// interpolation's own estimate of its relative error, and a note where
@@ -313,7 +324,7 @@ fn interpolated_row(
         .collect();
     let beyond = evaluated
         .iter()
-        .any(|(_, parts)| !parts[0].values[k].1.is_empty());
+        .any(|(_, parts)| !beyond_knots(parts, k).is_empty());
     let note = if beyond {
         "beyond some model's knots: extrapolated"
     } else {
