@@ -266,20 +266,31 @@ fn knots_table(models: &[PartModel]) -> Result<Table, StageError> {
         .table(&TABLE)?)
 }
 
-/// `kernel_model_covariance`: one row per part, side and pair of knots.
-fn covariance_table(models: &[PartModel]) -> Result<Table, StageError> {
-    use contract::fit::model_covariance::*;
-    let rows: Vec<(KnotRow, usize)> = knot_rows(models)
+/// Every knot paired with each of `count(model)` indices of its side's
+/// model (the other knot, the left-out randomization).
+fn knot_pairs(models: &[PartModel], count: fn(&SideModel) -> usize) -> Vec<(KnotRow<'_>, usize)> {
+    knot_rows(models)
         .into_iter()
-        .flat_map(|row| (0..row.model.values.len()).map(move |j| (KnotRow { ..row }, j)))
-        .collect();
-    Ok(Rows::new(&rows)
+        .flat_map(|row| (0..count(row.model)).map(move |j| (KnotRow { ..row }, j)))
+        .collect()
+}
+
+/// The rows of a table of knot pairs, labelled with their part and side.
+fn labelled<'r, 'm>(rows: &'r [(KnotRow<'m>, usize)]) -> Rows<'r, (KnotRow<'m>, usize)> {
+    Rows::new(rows)
         .with(contract::fit::model::PART, |(row, _)| {
             row.part.name().to_string()
         })
         .with(contract::fit::model::SIDE, |(row, _)| {
             row.side.name().to_string()
         })
+}
+
+/// `kernel_model_covariance`: one row per part, side and pair of knots.
+fn covariance_table(models: &[PartModel]) -> Result<Table, StageError> {
+    use contract::fit::model_covariance::*;
+    let rows = knot_pairs(models, |model| model.values.len());
+    Ok(labelled(&rows)
         .with(KNOT_I, |(row, _)| row.knot as u32)
         .with(KNOT_J, |(_, j)| *j as u32)
         .with(COVARIANCE, |(row, j)| {
@@ -292,17 +303,8 @@ fn covariance_table(models: &[PartModel]) -> Result<Table, StageError> {
 /// randomization and knot.
 fn jackknife_table(models: &[PartModel]) -> Result<Table, StageError> {
     use contract::fit::model_jackknife::*;
-    let rows: Vec<(KnotRow, usize)> = knot_rows(models)
-        .into_iter()
-        .flat_map(|row| (0..row.model.left_out.len()).map(move |r| (KnotRow { ..row }, r)))
-        .collect();
-    Ok(Rows::new(&rows)
-        .with(contract::fit::model::PART, |(row, _)| {
-            row.part.name().to_string()
-        })
-        .with(contract::fit::model::SIDE, |(row, _)| {
-            row.side.name().to_string()
-        })
+    let rows = knot_pairs(models, |model| model.left_out.len());
+    Ok(labelled(&rows)
         .with(RANDOMIZATION, |(_, r)| *r as u32)
         .with(KNOT, |(row, _)| row.knot as u32)
         .with(LN_G, |(row, r)| row.model.left_out[*r][row.knot])
