@@ -769,6 +769,49 @@ fn held_out_kernels_recompute_from_the_models(store: &Path) {
         assert_eq!(largest[s], own.iter().copied().fold(0.0, f64::max));
         assert_eq!(beyond[s] as usize, own.iter().filter(|&&z| z > 2.0).count());
     }
+    coordinates_sum_their_kernels(store, &summaries);
+}
+
+/// The interpolation's per-coordinate table is its held-out kernels'
+/// summary rows summed: kernels, groups, groups beyond 2 and the largest
+/// |z| with the kernel it belongs to.
+fn coordinates_sum_their_kernels(store: &Path, summaries: &RecordBatch) {
+    use contract::interpolation::{coordinates, summary};
+    let along = table(
+        store,
+        "interpolation",
+        "kernels",
+        "kernel_interpolation_coordinates",
+    );
+    let coordinate = summary::COORDINATE.read(summaries).unwrap();
+    let potential = contract::POTENTIAL.read(summaries).unwrap();
+    let groups = summary::GROUPS.read(summaries).unwrap();
+    let beyond = summary::BEYOND_TWO.read(summaries).unwrap();
+    let largest = summary::LARGEST_ABS_Z.read(summaries).unwrap();
+    let names = coordinates::COORDINATE.read(&along).unwrap();
+    assert!(!names.is_empty());
+    let sums = (
+        coordinates::HELD_OUT.read(&along).unwrap(),
+        coordinates::GROUPS.read(&along).unwrap(),
+        coordinates::BEYOND_TWO.read(&along).unwrap(),
+        coordinates::LARGEST_ABS_Z.read(&along).unwrap(),
+        coordinates::LARGEST_POTENTIAL.read(&along).unwrap(),
+    );
+    for (c, name) in names.iter().enumerate() {
+        let rows: Vec<usize> = (0..coordinate.len())
+            .filter(|&k| &coordinate[k] == name)
+            .collect();
+        let sum = |of: &[u32]| rows.iter().map(|&k| of[k]).sum::<u32>();
+        assert_eq!(sums.0[c] as usize, rows.len(), "{name}");
+        assert_eq!(sums.1[c], sum(&groups), "{name}");
+        assert_eq!(sums.2[c], sum(&beyond), "{name}");
+        let worst = rows
+            .iter()
+            .copied()
+            .fold(rows[0], |w, k| if largest[k] > largest[w] { k } else { w });
+        assert_eq!(sums.3[c], largest[worst], "{name}");
+        assert_eq!(sums.4[c], potential[worst], "{name}");
+    }
 }
 
 /// The mean of a stored model's `side` over `[a, b]` (`0 < a < b`): the

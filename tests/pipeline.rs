@@ -981,6 +981,13 @@ fn run_leads_with_the_summary() {
         "{details}"
     );
     assert!(details.contains("mono-energetic scans"), "{details}");
+    // Every declared printout of a stage the study ran is printed.
+    for printout in ternary::contract::DETAILS {
+        let stage = printout.table.stage;
+        let ran = details.lines().any(|l| l.starts_with(&format!("{stage}[")));
+        let title = printout.title.split('{').next().unwrap_or_default();
+        assert_eq!(ran, details.contains(title), "{stage}: {details}");
+    }
 }
 
 /// A family added as one file runs end to end: a Morse gas (a well, so its

@@ -40,6 +40,7 @@ macro_rules! bounded {
 }
 
 pub mod instances;
+pub mod printout;
 pub mod readers;
 pub mod tables;
 

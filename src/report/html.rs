@@ -21,10 +21,11 @@ use anyhow::{Context, Result};
 use super::describe;
 use super::folder::ReportFolder;
 use super::layout::{Align, Cell, Columns, Sink};
+use super::printout::print;
 use super::summary::{paper_table, stage_tables, study_table};
-use super::tables::{largest_pulls_table, pulls_table};
 use crate::config::Study;
 use crate::contract;
+use crate::contract::pulls;
 use crate::pipeline::Stage;
 use crate::pipeline::executor::{
     self, Action, Freshness, InstanceReport, StatusLine, tool_version,
@@ -187,8 +188,10 @@ fn page(
         }),
         ("crosschecks", "Cross-checks: are the errors calibrated?", {
             let mut tables = Tables::default();
-            pulls_table(&mut tables, store, &reports)?;
-            largest_pulls_table(&mut tables, store, &reports)?;
+            let kick_floor = study.config.kernel.kick_floor;
+            for printout in [&pulls::summary::PRINTOUT, &pulls::checks::PRINTOUT] {
+                print(&mut tables, store, &reports, printout, kick_floor)?;
+            }
             tables.html
         }),
         ("figures", "Figures", figure_list(figures)),

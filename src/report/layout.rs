@@ -101,6 +101,11 @@ impl Columns {
         self.rows.push(row);
     }
 
+    /// Whether the table has no rows.
+    pub fn is_empty(&self) -> bool {
+        self.rows.is_empty()
+    }
+
     /// The headings and alignments.
     pub fn heads(&self) -> &[(String, Align)] {
         &self.heads

@@ -11,12 +11,12 @@ mod kernel_model;
 mod layout;
 mod numbers;
 mod pairs;
+mod printout;
 mod rates;
 mod show;
 mod status;
 mod store;
 mod summary;
-mod tables;
 
 pub use dag::{DagFormat, dag};
 pub use kernel_model::{Asked, Interpolation, Node, interpolated_kernel_text, kernel_model_text};
@@ -37,7 +37,7 @@ use polars::prelude::{DataFrame, ParquetReader, SerReader};
 use crate::contract::{Col, Pair, TableSpec};
 use crate::pipeline::executor::InstanceReport;
 use crate::pipeline::store::Store;
-use layout::{Cell, Sink};
+use layout::Cell;
 
 /// Cell `col` of `row` as a number (NaN when null).
 fn number(frame: &DataFrame, row: usize, col: Col<f64>) -> Result<f64> {
@@ -87,13 +87,6 @@ fn text(frame: &DataFrame, row: usize, col: Col<String>) -> Result<String> {
         .to_string())
 }
 
-/// The row whose label in `col` is `label`.
-fn row_of(frame: &DataFrame, col: Col<String>, label: &str) -> Result<usize> {
-    (0..frame.height())
-        .find(|&row| text(frame, row, col).is_ok_and(|l| l == label))
-        .with_context(|| format!("no {} `{label}`", col.name))
-}
-
 fn read_frame(path: &Path) -> Result<DataFrame> {
     let file = File::open(path).with_context(|| format!("opening {}", path.display()))?;
     ParquetReader::new(file)
@@ -103,22 +96,6 @@ fn read_frame(path: &Path) -> Result<DataFrame> {
 
 /// One table of each instance that has it: the instance and its frame.
 type InstanceFrames = Vec<(String, DataFrame)>;
-
-/// The frames of `spec`'s table, after `title` goes to `out` (nothing goes
-/// when no instance has the table).
-fn titled_frames(
-    out: &mut dyn Sink,
-    store: &Store,
-    reports: &[InstanceReport],
-    spec: &TableSpec,
-    title: &str,
-) -> Result<InstanceFrames> {
-    let frames = table_frames(store, reports, spec)?;
-    if !frames.is_empty() {
-        out.title(title);
-    }
-    Ok(frames)
-}
 
 /// The table `spec` of every intact artifact of its stage in a run.
 fn table_frames(

@@ -8,14 +8,11 @@ use polars::prelude::DataFrame;
 use super::layout::{Align, Cell, Columns, Sink};
 use super::numbers::{Notation, fixed, natural_notation, or_why, significant, written};
 use crate::contract;
+use crate::contract::{near_integrable::fits, pulls};
 use crate::pipeline::executor::InstanceReport;
 use crate::pipeline::store::Store;
 
-use super::tables::{
-    balance_table, compare_table, convergence_table, evolve_table, gases_table,
-    kernel_interpolation_table, kernel_model_table, largest_pulls_table, md_table,
-    near_integrable_table, pulls_table, scan_table, spectrum_table, stationarity_table,
-};
+use super::printout::print;
 use super::{count, estimate, number, table_frames, text};
 
 /// What a run computed, readable: `a_n` and the kernel shape, the paper
@@ -32,12 +29,24 @@ pub fn summary(
 ) -> Result<String> {
     let mut out = String::new();
     study_table(&mut out, store, reports)?;
-    near_integrable_table(&mut out, store, reports)?;
+    print(&mut out, store, reports, &fits::PRINTOUT, kick_floor)?;
     paper_table(&mut out, store, reports)?;
-    pulls_table(&mut out, store, reports)?;
+    print(
+        &mut out,
+        store,
+        reports,
+        &pulls::summary::PRINTOUT,
+        kick_floor,
+    )?;
     figures_line(&mut out, store, reports);
     if details {
-        largest_pulls_table(&mut out, store, reports)?;
+        print(
+            &mut out,
+            store,
+            reports,
+            &pulls::checks::PRINTOUT,
+            kick_floor,
+        )?;
         stage_tables(&mut out, store, reports, kick_floor)?;
     } else {
         out.title(
@@ -56,17 +65,10 @@ pub(super) fn stage_tables(
     reports: &[InstanceReport],
     kick_floor: f64,
 ) -> Result<()> {
-    gases_table(out, store, reports)?;
-    kernel_model_table(out, store, reports)?;
-    kernel_interpolation_table(out, store, reports)?;
-    convergence_table(out, store, reports)?;
-    evolve_table(out, store, reports)?;
-    spectrum_table(out, store, reports)?;
-    md_table(out, store, reports, kick_floor)?;
-    compare_table(out, store, reports)?;
-    scan_table(out, store, reports)?;
-    stationarity_table(out, store, reports)?;
-    balance_table(out, store, reports)
+    for printout in contract::DETAILS {
+        print(out, store, reports, printout, kick_floor)?;
+    }
+    Ok(())
 }
 
 /// How many figures the run's store holds and where (nothing when none).

@@ -353,8 +353,12 @@ impl Stage for InterpolationStage {
     }
 
     fn tables(&self) -> &'static [&'static str] {
-        use contract::interpolation::{groups, summary};
-        &[groups::TABLE.name, summary::TABLE.name]
+        use contract::interpolation::{coordinates, groups, summary};
+        &[
+            groups::TABLE.name,
+            summary::TABLE.name,
+            coordinates::TABLE.name,
+        ]
     }
 
     fn inputs(&self) -> Vec<InstanceId> {
@@ -381,6 +385,7 @@ impl Stage for InterpolationStage {
         Ok(vec![
             self.groups_table(&cases, &predicted)?,
             self.summary_table(&cases, &predicted)?,
+            self.coordinates_table(&cases, &predicted)?,
         ])
     }
 }
@@ -490,5 +495,97 @@ impl InterpolationStage {
                 own.iter().map(deviation).fold(0.0, f64::max)
             })
             .table(&TABLE)?)
+    }
+
+    /// One row per coordinate: its held-out kernels' groups summed.
+    fn coordinates_table(
+        &self,
+        cases: &[Case],
+        predicted: &[Predicted],
+    ) -> Result<Table, StageError> {
+        use contract::interpolation::coordinates::*;
+        let mut rows: Vec<Along> = Vec::new();
+        for (index, case) in cases.iter().enumerate() {
+            let own: Vec<f64> = predicted
+                .iter()
+                .filter(|p| p.case == index)
+                .map(|p| p.z().abs())
+                .collect();
+            let deviation = predicted
+                .iter()
+                .filter(|p| p.case == index)
+                .map(|p| (p.predicted.mean / p.model.mean - 1.0).abs())
+                .fold(0.0, f64::max);
+            let at = rows.iter().position(|r| r.coordinate == case.coordinate);
+            let along = match at {
+                Some(at) => &mut rows[at],
+                None => {
+                    rows.push(Along::new(case.coordinate));
+                    rows.last_mut().expect("just pushed")
+                }
+            };
+            along.add(self.describe(case), &own, deviation);
+        }
+        Ok(Rows::new(&rows)
+            .with(COORDINATE, |r| r.coordinate.to_string())
+            .with(HELD_OUT, |r| r.medians.len() as u32)
+            .with(GROUPS, |r| r.groups)
+            .with(BEYOND_TWO, |r| r.beyond_two)
+            .with(BEYOND_TWO_SHARE, |r| {
+                f64::from(r.beyond_two) / f64::from(r.groups.max(1))
+            })
+            .with(MEDIAN_ABS_Z, |r| median(&r.medians))
+            .with(LARGEST_ABS_Z, |r| r.largest)
+            .with(LARGEST_POTENTIAL, |r| r.largest_at.0.clone())
+            .with(LARGEST_U_PRIME, |r| r.largest_at.1)
+            .with(LARGEST_DEVIATION, |r| r.deviation)
+            .table(&TABLE)?)
+    }
+}
+
+/// The held-out kernels along one coordinate, summed.
+struct Along {
+    /// The coordinate.
+    coordinate: &'static str,
+    /// Groups compared.
+    groups: u32,
+    /// Groups with `|z| > 2`.
+    beyond_two: u32,
+    /// Each held-out kernel's median `|z|`.
+    medians: Vec<f64>,
+    /// The largest `|z|`.
+    largest: f64,
+    /// The potential and `u'` of the kernel with the largest `|z|`.
+    largest_at: (String, f64),
+    /// The largest `|G_predicted / G_model - 1|`.
+    deviation: f64,
+}
+
+impl Along {
+    /// Nothing held out yet along `coordinate`.
+    fn new(coordinate: &'static str) -> Along {
+        Along {
+            coordinate,
+            groups: 0,
+            beyond_two: 0,
+            medians: Vec::new(),
+            largest: 0.0,
+            largest_at: (String::new(), f64::NAN),
+            deviation: 0.0,
+        }
+    }
+
+    /// The held-out kernel `held_out`, with its groups' `|z|` and its
+    /// largest relative deviation.
+    fn add(&mut self, held_out: HeldOut, abs_z: &[f64], deviation: f64) {
+        self.groups += abs_z.len() as u32;
+        self.beyond_two += abs_z.iter().filter(|&&z| z > 2.0).count() as u32;
+        self.medians.push(median(abs_z));
+        let largest = abs_z.iter().copied().fold(0.0, f64::max);
+        if largest > self.largest || self.largest_at.0.is_empty() {
+            self.largest = largest;
+            self.largest_at = (held_out.potential, held_out.u_prime);
+        }
+        self.deviation = self.deviation.max(deviation);
     }
 }

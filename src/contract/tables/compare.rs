@@ -121,6 +121,36 @@ pub mod goodness {
         "verdict",
         "differs: the shape's p_value below 1e-3 or |variance_z| above 3.29 (thresholds::REJECTED_P, REJECTED_Z); agrees: neither; no test: no p_value and no variance ratio",
     );
+
+    /// What `ternary run --details` and the HTML report print of the table.
+    pub const PRINTOUT: Printout = Printout {
+        table: TABLE,
+        title: "MD against Boltzmann and the scaling collapse: the shape's chi2 per degree of freedom with the variance MD would have if it followed the reference, its p-value, and (sample) with the runs' own errors; the window variance over the reference's and its z; the verdict of both (differs: p < 1e-3 or |z| > 3.29)",
+        layout: Layout::Joined,
+        rows: Selection::All,
+        columns: &[
+            Printed::new(RING.name, Shown::Text(RING)),
+            Printed::new(REFERENCE.name, Shown::Text(REFERENCE)),
+            Printed::new(ESTIMATOR.name, Shown::Text(ESTIMATOR)),
+            Printed::new("chi2/dof", Shown::Fixed(CHI2_PER_DOF, 2)),
+            Printed::new(DOF.name, Shown::Count(DOF)),
+            Printed::new("p", Shown::Test(CHI2, DOF)),
+            Printed::new(
+                "sample chi2/dof",
+                Shown::Composite(
+                    "{} ({})",
+                    &[
+                        Shown::Fixed(SAMPLE_CHI2_PER_DOF, 2),
+                        Shown::Count(SAMPLE_DOF),
+                    ],
+                ),
+            ),
+            Printed::new("variance / reference", Shown::Estimate(VARIANCE_RATIO, "-")),
+            Printed::new("z", Shown::Fixed(VARIANCE_Z, 2)),
+            Printed::new(VERDICT.name, Shown::Text(VERDICT)),
+        ],
+        footnote: None,
+    };
 }
 
 /// `finite_size.parquet`: one row per ring.
@@ -193,4 +223,27 @@ pub mod finite_size {
         PROPAGATED
     )
     .or_null("not estimable: the ratio's denominator is zero");
+
+    /// What `ternary run --details` and the HTML report print of the table.
+    pub const PRINTOUT: Printout = Printout {
+        table: TABLE,
+        title: "finite size and density: window variance at t_f, MD / Boltzmann (+- standard errors); tagged: starts near u', thermal: every start",
+        layout: Layout::Joined,
+        rows: Selection::All,
+        columns: &[
+            Printed::new(RING.name, Shown::Text(RING)),
+            Printed::new("N", Shown::Count(PARTICLES)),
+            Printed::new("rho l", Shown::Scientific(DENSITY, 3)),
+            Printed::new("rho^2 l v_th t_f", Shown::Scientific(SCALED_TIME, 4)),
+            Printed::new(
+                super::super::estimator::TAGGED,
+                Shown::Estimate(RATIO, "0/0: no spread"),
+            ),
+            Printed::new(
+                super::super::estimator::THERMAL,
+                Shown::Estimate(THERMAL_RATIO, "0/0: no spread"),
+            ),
+        ],
+        footnote: None,
+    };
 }

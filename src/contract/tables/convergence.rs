@@ -74,3 +74,19 @@ pub const SHIFT_OVER_ERROR: Col<f64> = Col::f64(
     "1",
     "shift divided by the default's standard error: |value| << 1 means converged",
 );
+
+/// What `ternary run --details` and the HTML report print of the table.
+pub const PRINTOUT: Printout = Printout {
+    table: TABLE,
+    title: "convergence of a_n for {instance} (shift = a_n - default, paired over randomizations)",
+    layout: Layout::PerInstance,
+    rows: Selection::All,
+    columns: &[
+        Printed::new(PARAMETER.name, Shown::Text(PARAMETER)),
+        Printed::new(VALUE.name, Shown::Scientific(VALUE, 3)),
+        Printed::new(A_N.value.name, Shown::Estimate(A_N, "-")),
+        Printed::new(SHIFT.value.name, Shown::Estimate(SHIFT, "-")),
+        Printed::new("shift / a_n error", Shown::Fixed(SHIFT_OVER_ERROR, 3)),
+    ],
+    footnote: None,
+};

@@ -242,4 +242,28 @@ pub mod evolution_summary {
         "||S - S^T|| / ||S + S^T|| of S = f0^(-1/2) M f0^(1/2): the generator's detailed-balance violation, rounding for the Dirichlet form (removed)",
         JACKKNIFE
     );
+
+    /// What `ternary run --details` and the HTML report print of the table.
+    pub const PRINTOUT: Printout = Printout {
+        table: TABLE,
+        title: "evolution of h from delta(u - u') for {instance}: full = linearized operator, tagged = special particle, fokker_planck (+- jackknife errors)",
+        layout: Layout::PerInstance,
+        rows: Selection::All,
+        columns: &[
+            Printed::new(PROCESS.name, Shown::Text(PROCESS)),
+            Printed::new("t Gamma", Shown::Scientific(TIME_GAMMA, 3)),
+            Printed::new("t [ns]", Shown::Fixed(TIME_NS, 0)),
+            Printed::new(
+                "<(u-u')^2>, |u-u'|<=X",
+                Shown::Estimate(WINDOW_VARIANCE, "-"),
+            ),
+            Printed::new("<(u-u')^2>", Shown::Estimate(VARIANCE, "-")),
+            Printed::new(
+                "L1 distance to equilibrium",
+                Shown::Estimate(DISTANCE_TO_EQUILIBRIUM, "-"),
+            ),
+            Printed::new("relative entropy", Shown::Estimate(ENTROPY, "-")),
+        ],
+        footnote: None,
+    };
 }

@@ -434,6 +434,35 @@ pub mod model_fit {
         "1",
         "1 when every side's fit to the mean groups reached a minimum, else 0",
     );
+
+    /// What `ternary run --details` and the HTML report print of the table.
+    pub const PRINTOUT: Printout = Printout {
+        table: TABLE,
+        title: "kernel model: ln G (part total) and ln G_self (part self) a natural cubic spline in ln|du| + |du| / x_c on each side of u', fitted to kernel_log's groups; chi2 against its mean and spread under flipped randomizations (a wild bootstrap), p the share of flips reaching it (docs/kernel-model.md)",
+        layout: Layout::Joined,
+        rows: Selection::All,
+        columns: &[
+            Printed::new("kernel", Shown::Instance),
+            Printed::new("part", Shown::Text(super::model::PART)),
+            Printed::new("knots", Shown::Count(KNOTS)),
+            Printed::new("groups", Shown::Count(GROUPS)),
+            Printed::new("chi2", Shown::Fixed(CHI2, 1)),
+            Printed::new(
+                "expected",
+                Shown::Estimate(
+                    Pair {
+                        value: CHI2_EXPECTED,
+                        stderr: CHI2_SPREAD,
+                    },
+                    "-",
+                ),
+            ),
+            Printed::new("chi2/expected", Shown::Quotient(CHI2, CHI2_EXPECTED, 2)),
+            Printed::new("p", Shown::Fixed(P_VALUE, 3)),
+            Printed::new("status", Shown::Text(STATUS)),
+        ],
+        footnote: None,
+    };
 }
 
 /// `kernel_model_groups.parquet`: the groups the kernel model was fitted

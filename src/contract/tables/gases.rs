@@ -57,3 +57,29 @@ pub const RELAXATION_TIME: Pair = pair!(
     "standard error"
 )
 .or_null("Gamma is zero (no kicks): the gas never relaxes");
+
+/// What `ternary run --details` and the HTML report print of the table.
+pub const PRINTOUT: Printout = Printout {
+    table: TABLE,
+    title: "thermalization rates in physical units (Gamma = a_n rho^2 l v_th, +- standard error)",
+    layout: Layout::Joined,
+    rows: Selection::All,
+    columns: &[
+        Printed::new(GAS.name, Shown::Text(GAS)),
+        Printed::new(POTENTIAL.name, Shown::Text(POTENTIAL)),
+        Printed::new("kT [eV]", Shown::Scientific(KT, 3)),
+        Printed::new("rho l", Shown::Scientific(RHO_L, 3)),
+        Printed::new("Gamma [1/ns] (dilute)", Shown::Estimate(GAMMA, "-")),
+        Printed::new(
+            "paper's rule at rho l *",
+            Shown::Estimate(GAMMA_AT_DENSITY, "-"),
+        ),
+        Printed::new(
+            "1/Gamma [ns]",
+            Shown::Estimate(RELAXATION_TIME, "never: no kicks"),
+        ),
+    ],
+    footnote: Some(
+        "* Gamma times the paper's launch rule's finite-density factor exp(-r |delay|) in a box of L = kernel.launch_length: an artifact of that algorithm (it depends on L), not the gas's rate at rho l; MD's finite-density change has the opposite sign (finite_size table)",
+    ),
+};

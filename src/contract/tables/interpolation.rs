@@ -139,3 +139,96 @@ pub mod summary {
         "largest |G_predicted / G_model - 1| over the groups",
     );
 }
+
+/// `kernel_interpolation_coordinates.parquet`: one row per coordinate.
+pub mod coordinates {
+    pub use super::held_out::COORDINATE;
+    use super::*;
+
+    /// The table.
+    pub const TABLE: TableSpec = TableSpec {
+        stage: STAGE,
+        name: "kernel_interpolation_coordinates",
+        description: "how well the kernel models interpolate along each coordinate: the held-out kernels' groups (kernel_interpolation_summary) summed; one row per coordinate",
+    };
+    /// Kernels held out.
+    pub const HELD_OUT: Col<u32> = Col::u32("held_out", "1", "kernels held out and predicted");
+    /// Groups compared.
+    pub const GROUPS: Col<u32> =
+        Col::u32("groups", "1", "groups compared, over every held-out kernel");
+    /// Groups beyond two combined errors.
+    pub const BEYOND_TWO: Col<u32> = Col::u32(
+        "beyond_two",
+        "1",
+        "groups with |z| > 2: 4.6% of the groups by chance alone",
+    );
+    /// Their share.
+    pub const BEYOND_TWO_SHARE: Col<f64> = Col::f64(
+        "beyond_two_share",
+        "1",
+        "beyond_two / groups: 0.046 when the stated errors are right",
+    );
+    /// The held-out kernels' median |z|.
+    pub const MEDIAN_ABS_Z: Col<f64> = Col::f64(
+        "median_abs_z",
+        "1",
+        "median over the held-out kernels of their median |z| over groups: 0.674 when the stated errors are right",
+    );
+    /// Largest |z|.
+    pub const LARGEST_ABS_Z: Col<f64> =
+        Col::f64("largest_abs_z", "1", "largest |z| over every group");
+    /// Whose.
+    pub const LARGEST_POTENTIAL: Col<String> = Col::text(
+        "largest_potential",
+        "potential id of the held-out kernel with the largest |z|",
+    );
+    /// At what `u'`.
+    pub const LARGEST_U_PRIME: Col<f64> = Col::f64(
+        "largest_u_prime",
+        "v_th",
+        "u' of the held-out kernel with the largest |z|",
+    );
+    /// The largest relative deviation.
+    pub const LARGEST_DEVIATION: Col<f64> = Col::f64(
+        "largest_deviation",
+        "1",
+        "largest |G_predicted / G_model - 1| over every group",
+    );
+
+    /// What `ternary run --details` and the HTML report print of the table.
+    pub const PRINTOUT: Printout = Printout {
+        table: TABLE,
+        title: "kernel models between the computed kernels: each held out and predicted from its neighbours' models as `ternary kernel` interpolates them; z = ln(model / predicted) in the error `ternary kernel` states (its interpolation estimate and statistical error in quadrature) per log group, |z| > 2 for 4.6% of the groups and median |z| (the median of the held-out kernels') 0.674 when the errors are right (kernel_interpolation.parquet lists each group; docs/kernel-model.md)",
+        layout: Layout::Joined,
+        rows: Selection::All,
+        columns: &[
+            Printed::new("in", Shown::Text(COORDINATE)),
+            Printed::new("held out", Shown::Count(HELD_OUT)),
+            Printed::new("groups", Shown::Count(GROUPS)),
+            Printed::new(
+                "|z| > 2",
+                Shown::Composite(
+                    "{} ({})",
+                    &[
+                        Shown::Count(BEYOND_TWO),
+                        Shown::Percent(BEYOND_TWO_SHARE, 1),
+                    ],
+                ),
+            ),
+            Printed::new("median |z|", Shown::Fixed(MEDIAN_ABS_Z, 2)),
+            Printed::new("largest |z|", Shown::Fixed(LARGEST_ABS_Z, 2)),
+            Printed::new(
+                "where",
+                Shown::Composite(
+                    "{} u' = {}",
+                    &[
+                        Shown::Text(LARGEST_POTENTIAL),
+                        Shown::Significant(LARGEST_U_PRIME),
+                    ],
+                ),
+            ),
+            Printed::new("largest deviation", Shown::Percent(LARGEST_DEVIATION, 1)),
+        ],
+        footnote: None,
+    };
+}

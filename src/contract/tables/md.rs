@@ -56,6 +56,24 @@ pub mod summary {
         "sum (u - u')^2 h dx over the window",
         OVER_RUNS
     );
+
+    /// What `ternary run --details` and the HTML report print of the table.
+    pub const PRINTOUT: Printout = Printout {
+        table: TABLE,
+        title: "ring molecular dynamics: h(u, t_f) within the window (+- standard errors over runs)",
+        layout: Layout::Joined,
+        rows: Selection::All,
+        columns: &[
+            Printed::new(super::RING, Shown::Instance),
+            Printed::new(ESTIMATOR.name, Shown::Text(ESTIMATOR)),
+            Printed::new("sum h du", Shown::Estimate(NUMBER, "-")),
+            Printed::new(
+                "<(u-u')^2>_window [v_th^2]",
+                Shown::Variance(WINDOW_VARIANCE),
+            ),
+        ],
+        footnote: None,
+    };
 }
 
 /// `runs.parquet`: one row per run.
@@ -190,4 +208,18 @@ pub mod pairs {
     pub const FINAL: &str = "final";
     /// Row of the closed form `rho K_b`.
     pub const DILUTE_LIMIT: &str = "dilute_limit";
+
+    /// What `ternary run --details` and the HTML report print of the table.
+    pub const PRINTOUT: Printout = Printout {
+        table: TABLE,
+        title: "bound neighbour pairs per gap of the rings with a well: sampled at the start, after the dynamics, and the dilute limit rho K_b (+- standard errors over runs)",
+        layout: Layout::Joined,
+        rows: Selection::NonZero(BOUND_FRACTION.value),
+        columns: &[
+            Printed::new(super::RING, Shown::Instance),
+            Printed::new(STATE.name, Shown::Text(STATE)),
+            Printed::new("bound pairs per gap", Shown::Estimate(BOUND_FRACTION, "-")),
+        ],
+        footnote: None,
+    };
 }

@@ -26,7 +26,26 @@ pub mod spectrum;
 pub mod sweep;
 pub mod table;
 
+use super::printout::{Layout, Printed, Printout, Selection, Shown};
 use super::{Col, Pair, TableSpec, UNIT_PER_PANEL, UNIT_PER_ROW};
+
+/// The stages' tables that `ternary run --details` and the HTML report print
+/// after the study's own (`a_n`, the paper's, the pulls'), in order.
+pub const DETAILS: [&Printout; 13] = [
+    &gases::PRINTOUT,
+    &fit::model_fit::PRINTOUT,
+    &interpolation::coordinates::PRINTOUT,
+    &convergence::PRINTOUT,
+    &evolve::evolution_summary::PRINTOUT,
+    &spectrum::summary::PRINTOUT,
+    &md::summary::PRINTOUT,
+    &md::pairs::PRINTOUT,
+    &compare::goodness::PRINTOUT,
+    &compare::finite_size::PRINTOUT,
+    &scan::peak::PRINTOUT,
+    &sweep::stationarity::PRINTOUT,
+    &sweep::balance_tests::PRINTOUT,
+];
 
 /// Bin centre relative to `u'` (kernel, md and early-evolution tables).
 pub const DU: Col<f64> = Col::f64("du", "v_th", "bin centre relative to u'");

@@ -163,4 +163,24 @@ pub mod fits {
         "probability of a chi-square at least chi2 if the law holds (chi-square with dof degrees of freedom; the covariance is estimated, so this is approximate for few randomizations)",
     )
     .or_null(TOO_FEW);
+
+    /// What `ternary run --details` and the HTML report print of the table.
+    pub const PRINTOUT: Printout = Printout {
+        table: TABLE,
+        title: "near the Calogero point n = 2: rate = A (n - 2)^p exp(q (n - 2)), generalized least squares with the rates' covariance across n over the resolved rates (positive by 3 standard errors; four needed) [A: rho^2 l v_th, or 1 for a ratio] (+- fit errors; z: p against first-order perturbation theory with the law's truncation error, |p - p with s (n - 2)^2|, added; docs/spectrum.md)",
+        layout: Layout::Joined,
+        rows: Selection::All,
+        columns: &[
+            Printed::new(QUANTITY.name, Shown::Text(QUANTITY)),
+            Printed::new("p", Shown::Estimate(EXPONENT, "-")),
+            Printed::new("expected", Shown::Fixed(EXPECTED_EXPONENT, 0)),
+            Printed::new("z", Shown::Fixed(EXPONENT_Z, 2)),
+            Printed::new("A", Shown::Estimate(AMPLITUDE, "-")),
+            Printed::new("q", Shown::Estimate(CORRECTION, "-")),
+            Printed::new("chi2/dof", Shown::PerDof(CHI2, DOF)),
+            Printed::new("p-value", Shown::PValue(CHI2, DOF)),
+            Printed::new("fitted", Shown::Text(FITTED)),
+        ],
+        footnote: None,
+    };
 }

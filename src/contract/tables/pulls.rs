@@ -44,6 +44,25 @@ pub mod checks {
         "(first - second) / sqrt(first_stderr^2 + second_stderr^2)",
     )
     .or_null("neither estimate has an error");
+
+    /// What `ternary run --details` and the HTML report print of the table.
+    pub const PRINTOUT: Printout = Printout {
+        table: TABLE,
+        title: "the {count} largest pulls (a: first estimate, b: second or exact; units per check)",
+        layout: Layout::Joined,
+        rows: Selection::Largest {
+            col: PULL,
+            count: 10,
+        },
+        columns: &[
+            Printed::new("pull", Shown::Fixed(PULL, 2)),
+            Printed::new("subject", Shown::Text(SUBJECT)),
+            Printed::new("a", Shown::Estimate(FIRST, "-")),
+            Printed::new("b", Shown::Estimate(SECOND, "-")),
+            Printed::new("check", Shown::Text(CHECK)),
+        ],
+        footnote: None,
+    };
 }
 
 /// `pulls_summary.parquet`: one row.
@@ -89,4 +108,27 @@ pub mod summary {
         "verdict",
         "calibrated (at least 50 pulls, |mean| < 0.3, spread in [0.7, 1.3]), else what is wrong",
     );
+
+    /// What `ternary run --details` and the HTML report print of the table.
+    pub const PRINTOUT: Printout = Printout {
+        table: TABLE,
+        title: "cross-checks: pulls (a - b) / combined error of every quantity computed two independent ways or held against an exact value (recombination three ways, detailed balance); N(0, 1) when the errors are right (pulls.parquet lists each)",
+        layout: Layout::Joined,
+        rows: Selection::All,
+        columns: &[
+            Printed::new("pulls", Shown::Count(PULLS)),
+            Printed::new("mean", Shown::Estimate(MEAN, "-")),
+            Printed::new("spread", Shown::Fixed(SPREAD, 2)),
+            Printed::new("largest", Shown::Fixed(WORST_PULL, 2)),
+            Printed::new(
+                "where",
+                Shown::Composite(
+                    "{}: {}",
+                    &[Shown::Text(WORST_SUBJECT), Shown::Text(WORST_CHECK)],
+                ),
+            ),
+            Printed::new("verdict", Shown::Text(VERDICT)),
+        ],
+        footnote: None,
+    };
 }

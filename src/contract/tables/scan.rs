@@ -140,4 +140,24 @@ pub mod peak {
         "1",
         "largest |relative energy error| on the curve",
     );
+
+    /// What `ternary run --details` and the HTML report print of the table.
+    pub const PRINTOUT: Printout = Printout {
+        table: TABLE,
+        title: "mono-energetic scans: largest |u1f| (error bound) and its arrival offset",
+        layout: Layout::Joined,
+        rows: Selection::All,
+        columns: &[
+            Printed::new(super::super::POTENTIAL.name, Shown::Instance),
+            Printed::new(LAUNCH.name, Shown::Text(LAUNCH)),
+            Printed::new("|u1f,max| [v_th]", Shown::Estimate(U1_FINAL_MAX_ABS, "-")),
+            Printed::new(
+                "offset [l/v_th]",
+                Shown::Estimate(ARRIVAL_OFFSET_AT_MAX, "no peak"),
+            ),
+            Printed::new("failed", Shown::Count(FAILED_SCENES)),
+            Printed::new("max |dE/E|", Shown::Scientific(WORST_ENERGY_ERROR, 1)),
+        ],
+        footnote: None,
+    };
 }

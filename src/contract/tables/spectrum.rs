@@ -132,6 +132,26 @@ pub mod summary {
         JACKKNIFE
     )
     .or_null("a generator that is zero (n = 2)");
+
+    /// What `ternary run --details` and the HTML report print of the table.
+    pub const PRINTOUT: Printout = Printout {
+        table: TABLE,
+        title: "relaxation spectrum: the gap (slowest rate above the growing noise modes) of the linearized operator (full: the gas) and of the tagged particle, over Gamma = the tagged variance rate at u' = 0 [rho^2 l v_th] (+- jackknife errors; docs/spectrum.md)",
+        layout: Layout::Joined,
+        rows: Selection::All,
+        columns: &[
+            Printed::new("potential", Shown::Instance),
+            Printed::new(GENERATOR.name, Shown::Text(GENERATOR)),
+            Printed::new("Gamma", Shown::Estimate(VARIANCE_RATE, "-")),
+            Printed::new("gap", Shown::Estimate(GAP, "-")),
+            Printed::new(
+                "gap / Gamma",
+                Shown::Estimate(GAP_OVER_VARIANCE_RATE, "-: no kicks"),
+            ),
+            Printed::new("growing modes", Shown::Count(GROWING_MODES)),
+        ],
+        footnote: None,
+    };
 }
 
 /// `spectrum_conserved.parquet`: one row per generator and invariant.

@@ -206,6 +206,22 @@ pub mod stationarity {
         "share of relative_residual's spread carried by one randomization; above 0.5 one scene makes the error and the z-score is no evidence",
     )
     .or_null("not estimable: fewer than two randomizations");
+
+    /// What `ternary run --details` and the HTML report print of the table.
+    pub const PRINTOUT: Printout = Printout {
+        table: TABLE,
+        title: "Fokker-Planck stationarity, joint over u' < 0: the drift's relative excess along P = (D2' - u D2)/2, sum s (D1 - P) / sum |P| (s the sign of P; correlations from the randomizations; below 0 the drift is weaker than stationarity requires)",
+        layout: Layout::Joined,
+        rows: Selection::All,
+        columns: &[
+            Printed::new("potential", Shown::Instance),
+            Printed::new("points", Shown::Count(POINTS)),
+            Printed::new("relative residual", Shown::Estimate(RELATIVE_RESIDUAL, "-")),
+            Printed::new("z", Shown::Fixed(JOINT_Z, 2)),
+            Printed::new("", Shown::Evidence(LARGEST_SHARE)),
+        ],
+        footnote: None,
+    };
 }
 
 /// `balance_tests.parquet`: one joint detailed-balance test per separation.
@@ -254,4 +270,24 @@ pub mod balance_tests {
         "share of joint_imbalance's spread carried by one randomization; above 0.5 one scene makes the error (z ~ +-1 by construction) and the test is no evidence",
     )
     .or_null("not estimable: fewer than two randomizations or no counted pair");
+
+    /// What `ternary run --details` and the HTML report print of the table.
+    pub const PRINTOUT: Printout = Printout {
+        table: TABLE,
+        title: "detailed balance, joint over the pairs of each separation (sum of relative imbalances, correlations from the randomizations; pairs whose error one randomization carries left out)",
+        layout: Layout::Joined,
+        rows: Selection::All,
+        columns: &[
+            Printed::new("potential", Shown::Instance),
+            Printed::new("b - a", Shown::Fixed(SEPARATION, 3)),
+            Printed::new(
+                "pairs counted",
+                Shown::Composite("{}/{}", &[Shown::Count(COUNTED), Shown::Count(PAIRS)]),
+            ),
+            Printed::new("joint imbalance", Shown::Estimate(JOINT_IMBALANCE, "-")),
+            Printed::new("z", Shown::Fixed(JOINT_Z, 2)),
+            Printed::new("", Shown::Evidence(JOINT_LARGEST_SHARE)),
+        ],
+        footnote: None,
+    };
 }

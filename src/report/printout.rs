@@ -1,0 +1,258 @@
+//! The one printer of every table a stage declares a
+//! [`Printout`](contract::printout::Printout) for: its title, its rows and
+//! each printed column's cells, as the console and the HTML report show them.
+
+use anyhow::Result;
+use polars::prelude::DataFrame;
+
+use super::layout::{Align, Cell, Columns, Sink};
+use super::numbers::{fixed, or_why, significant};
+use super::{count, estimate, number, table_frames, text, variance};
+use crate::contract::printout::{Layout, Printout, Selection, Shown};
+use crate::pipeline::executor::InstanceReport;
+use crate::pipeline::store::Store;
+use crate::stats::ChiSquare;
+use crate::thresholds::DOMINATED_SHARE;
+
+/// `printout`'s table of every instance in `reports` that has it (nothing
+/// when none has a row to print); variances below `kick_floor^2` (`v_th`,
+/// the study's `kernel.kick_floor`) are the engine's rounding.
+pub(super) fn print(
+    out: &mut dyn Sink,
+    store: &Store,
+    reports: &[InstanceReport],
+    printout: &Printout,
+    kick_floor: f64,
+) -> Result<()> {
+    let frames = table_frames(store, reports, &printout.table)?;
+    let title = match printout.rows {
+        Selection::Largest { count, .. } => printout.title.replace("{count}", &count.to_string()),
+        _ => printout.title.to_string(),
+    };
+    let tables: Vec<(String, Columns)> = match printout.layout {
+        Layout::Joined => vec![(title, columns(&frames, printout, kick_floor)?)],
+        Layout::PerInstance => frames
+            .chunks(1)
+            .map(|one| {
+                let title = title.replace("{instance}", &one[0].0);
+                Ok((title, columns(one, printout, kick_floor)?))
+            })
+            .collect::<Result<_>>()?,
+    };
+    let shown: Vec<_> = tables
+        .iter()
+        .filter(|(_, table)| !table.is_empty())
+        .collect();
+    for (title, table) in &shown {
+        out.title(title);
+        out.table(table);
+    }
+    match printout.footnote {
+        Some(footnote) if !shown.is_empty() => out.line(footnote),
+        _ => {}
+    }
+    Ok(())
+}
+
+/// The table of `frames`' selected rows.
+fn columns(
+    frames: &[(String, DataFrame)],
+    printout: &Printout,
+    kick_floor: f64,
+) -> Result<Columns> {
+    let heads: Vec<(&str, Align)> = printout
+        .columns
+        .iter()
+        .map(|printed| (printed.head, alignment(&printed.shown)))
+        .collect();
+    let mut table = Columns::new(&heads);
+    for (instance, frame) in frames {
+        for row in selected(frame, printout.rows)? {
+            let shown = |printed: &crate::contract::printout::Printed| {
+                cell(frame, row, instance, &printed.shown, kick_floor)
+            };
+            table.push(printout.columns.iter().map(shown).collect::<Result<_>>()?);
+        }
+    }
+    Ok(table)
+}
+
+/// Text, estimates and verdicts line up left, numbers right; a composite as
+/// its first part.
+fn alignment(shown: &Shown) -> Align {
+    match shown {
+        Shown::Instance
+        | Shown::Text(_)
+        | Shown::Estimate(..)
+        | Shown::Variance(_)
+        | Shown::Evidence(_) => Align::Left,
+        Shown::Composite(_, parts) => parts.first().map_or(Align::Left, alignment),
+        _ => Align::Right,
+    }
+}
+
+/// The rows of `frame` that `selection` prints, in the order printed.
+fn selected(frame: &DataFrame, selection: Selection) -> Result<Vec<usize>> {
+    let rows = 0..frame.height();
+    Ok(match selection {
+        Selection::All => rows.collect(),
+        Selection::NonZero(col) => {
+            let mut kept = Vec::new();
+            for row in rows {
+                if number(frame, row, col)? != 0.0 {
+                    kept.push(row);
+                }
+            }
+            kept
+        }
+        Selection::Largest { col, count } => {
+            let mut ranked: Vec<(usize, f64)> = rows
+                .map(|row| Ok((row, number(frame, row, col)?)))
+                .collect::<Result<_>>()?;
+            ranked.retain(|(_, x)| x.is_finite());
+            ranked.sort_by(|a, b| b.1.abs().total_cmp(&a.1.abs()));
+            ranked.into_iter().take(count).map(|(row, _)| row).collect()
+        }
+    })
+}
+
+/// Cell `shown` of `row` of `instance`'s `frame`.
+fn cell(
+    frame: &DataFrame,
+    row: usize,
+    instance: &str,
+    shown: &Shown,
+    kick_floor: f64,
+) -> Result<Cell> {
+    let bare = |x: f64, format: &dyn Fn(f64) -> String| Cell::text(or_why(x, format, "-"));
+    Ok(match *shown {
+        Shown::Instance => Cell::text(instance),
+        Shown::Text(col) => Cell::text(text(frame, row, col)?),
+        Shown::Count(col) => Cell::text(count(frame, row, col)?.to_string()),
+        Shown::Estimate(pair, undefined) => estimate(frame, row, pair, undefined)?,
+        Shown::Variance(pair) => variance(frame, row, pair, kick_floor)?,
+        Shown::Fixed(col, decimals) => bare(number(frame, row, col)?, &|x| fixed(x, decimals)),
+        Shown::Significant(col) => bare(number(frame, row, col)?, &significant),
+        Shown::Percent(col, decimals) => bare(number(frame, row, col)?, &|x| {
+            format!("{}%", fixed(100.0 * x, decimals))
+        }),
+        Shown::Scientific(col, decimals) => {
+            bare(number(frame, row, col)?, &|x| format!("{x:.decimals$e}"))
+        }
+        Shown::Quotient(numerator, denominator, decimals) => bare(
+            number(frame, row, numerator)? / number(frame, row, denominator)?,
+            &|x| fixed(x, decimals),
+        ),
+        Shown::PerDof(chi2, dof) => bare(
+            number(frame, row, chi2)? / f64::from(count(frame, row, dof)?),
+            &|x| fixed(x, 2),
+        ),
+        Shown::PValue(chi2, dof) => Cell::text(chi_square(frame, row, chi2, dof)?.p_digits()),
+        Shown::Test(chi2, dof) => {
+            let test = chi_square(frame, row, chi2, dof)?;
+            bare(test.chi2, &|_| test.p_text())
+        }
+        Shown::Evidence(share) => Cell::text(evidence_verdict(number(frame, row, share)?)),
+        Shown::Composite(template, parts) => {
+            let mut pieces = template.split("{}");
+            let mut composed = pieces.next().unwrap_or_default().to_string();
+            for (part, piece) in parts.iter().zip(pieces) {
+                composed += &cell(frame, row, instance, part, kick_floor)?.to_string();
+                composed += piece;
+            }
+            Cell::text(composed)
+        }
+    })
+}
+
+/// The chi-square in `row`'s columns `chi2` and `dof`.
+fn chi_square(
+    frame: &DataFrame,
+    row: usize,
+    chi2: crate::contract::Col<f64>,
+    dof: crate::contract::Col<u32>,
+) -> Result<ChiSquare> {
+    Ok(ChiSquare {
+        chi2: number(frame, row, chi2)?,
+        dof: count(frame, row, dof)? as usize,
+    })
+}
+
+/// Whether a joint test whose spread one randomization carries `share` of
+/// is evidence: empty when it is, else why not.
+fn evidence_verdict(share: f64) -> String {
+    if share <= DOMINATED_SHARE {
+        String::new()
+    } else if share.is_nan() {
+        "no evidence: no kicks or no pairs".to_string()
+    } else {
+        format!(
+            "no evidence: one randomization carries {:.0}% of the spread",
+            100.0 * share
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::contract::Col;
+    use polars::prelude::{IntoColumn, NamedFrom, Series};
+
+    const PULL: Col<f64> = Col::f64("pull", "1", "a pull");
+    const LABEL: Col<String> = Col::text("label", "which");
+    const COUNTED: Col<u32> = Col::u32("counted", "1", "counted");
+    const PAIRS: Col<u32> = Col::u32("pairs", "1", "pairs");
+
+    /// Four rows: pulls 0.5, -3, NaN, 0 labelled a..d, 2 of 4 counted.
+    fn frame() -> DataFrame {
+        DataFrame::new(
+            4,
+            vec![
+                Series::new(PULL.name.into(), vec![0.5, -3.0, f64::NAN, 0.0]).into_column(),
+                Series::new(LABEL.name.into(), vec!["a", "b", "c", "d"]).into_column(),
+                Series::new(COUNTED.name.into(), vec![2u32; 4]).into_column(),
+                Series::new(PAIRS.name.into(), vec![4u32; 4]).into_column(),
+            ],
+        )
+        .expect("a frame")
+    }
+
+    /// The largest rows come largest |value| first, without non-numbers;
+    /// rows whose value is zero are left out on request.
+    #[test]
+    fn selections_rank_and_filter_rows() {
+        let frame = frame();
+        let largest = Selection::Largest {
+            col: PULL,
+            count: 2,
+        };
+        assert_eq!(selected(&frame, largest).unwrap(), vec![1, 0]);
+        assert_eq!(
+            selected(&frame, Selection::NonZero(PULL)).unwrap(),
+            vec![0, 1, 2]
+        );
+        assert_eq!(selected(&frame, Selection::All).unwrap().len(), 4);
+    }
+
+    /// A composite fills its template's places in order; shares print as
+    /// percentages, non-numbers as `-`.
+    #[test]
+    fn cells_show_what_their_column_declares() {
+        let frame = frame();
+        let shown = |row: usize, shown: Shown| cell(&frame, row, "ipp-6", &shown, 1e-9).unwrap();
+        let counted = Shown::Composite(
+            "{} of {} ({})",
+            &[
+                Shown::Count(COUNTED),
+                Shown::Count(PAIRS),
+                Shown::Text(LABEL),
+            ],
+        );
+        assert_eq!(shown(1, counted).to_string(), "2 of 4 (b)");
+        assert_eq!(shown(0, Shown::Percent(PULL, 1)).to_string(), "50.0%");
+        assert_eq!(shown(2, Shown::Fixed(PULL, 2)).to_string(), "-");
+        assert_eq!(shown(1, Shown::Instance).to_string(), "ipp-6");
+        assert_eq!(shown(0, Shown::Scientific(PULL, 1)).to_string(), "5.0e-1");
+    }
+}
