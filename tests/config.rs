@@ -38,6 +38,9 @@ points = 3
 [collisions.strata_per_potential]
 "<id>" = { opposite = 64, same_side = 32 }
 
+[collisions.slow_launch_per_potential]
+"<id>" = { share = 0.25, speed = 0.5 }
+
 [evolve]
 gas = "g"
 times_ns = [1.0]
@@ -781,6 +784,35 @@ fn strata_per_potential_fix_only_the_main_set() {
     assert_eq!(
         study.collisions_params(other),
         piloted.collisions_params(other)
+    );
+}
+
+/// `collisions.slow_launch_per_potential` sets the slow stratum of the
+/// potential's main set and of nothing else: its sweep set and the other
+/// potentials keep the global one.
+#[test]
+fn slow_launch_per_potential_sets_only_the_main_set() {
+    let widened = STUDY.replace(
+        "[collisions.proposal]",
+        "[collisions.slow_launch_per_potential]\n\"ipp-6\" = { share = 0.25, speed = 0.5 }\n\n[collisions.proposal]",
+    );
+    assert_ne!(widened, STUDY);
+    let path = std::path::Path::new("pipeline.toml");
+    let (study, global) = (
+        Study::parse(path, &widened).expect("valid"),
+        Study::parse(path, STUDY).expect("valid"),
+    );
+    let potential = Potential::inverse_power(6.0);
+    let launch = study.collisions_params(potential).sampling.launch;
+    assert_eq!((launch.slow_share, launch.slow_speed), (0.25, 0.5));
+    let global_launch = global.collisions_params(potential).sampling.launch;
+    assert_ne!(global_launch.slow_speed, 0.5);
+    let wide = |study: &Study| ternary::plan::wide_collisions(study, potential).1;
+    assert_eq!(wide(&study), wide(&global));
+    let other = Potential::lennard_jones(0.1);
+    assert_eq!(
+        study.collisions_params(other),
+        global.collisions_params(other)
     );
 }
 

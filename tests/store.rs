@@ -555,7 +555,7 @@ fn a_waiting_run_names_the_lock_holder_plainly() {
 fn counts_ranges_and_ids_are_bounded_at_load() {
     let dir = workspace("bounds");
     let study = small_study("data");
-    let cases: [(&str, &str, &str); 11] = [
+    let cases: [(&str, &str, &str); 12] = [
         ("points = 7", "points = 4000000000", "scan.points"),
         (
             "randomizations = 2",
@@ -593,6 +593,11 @@ fn counts_ranges_and_ids_are_bounded_at_load() {
             "pilot_points = 0",
             "pilot_points = 0\n\n[collisions.strata_per_potential]\n\"ipp-6\" = { opposite = 64, same_side = 24 }",
             "collisions.strata_per_potential.ipp-6.same_side",
+        ),
+        (
+            "pilot_points = 0",
+            "pilot_points = 0\n\n[collisions.slow_launch_per_potential]\n\"ipp-6\" = { share = 0.3, speed = 0.5 }",
+            "collisions.slow_launch_per_potential.ipp-6.share",
         ),
         (
             "[sweep]\nenabled = false",

@@ -61,6 +61,25 @@ pub struct CollisionsConfig {
     /// potential's other sets (the sweep's, those tuned to one `u'`) keep
     /// the pilot.
     pub strata_per_potential: BTreeMap<String, StrataPoints>,
+    /// Per-potential slow strata of the main set, keyed by potential id
+    /// (`[collisions.slow_launch_per_potential]`, e.g. `"lj-1" = { share =
+    /// 0.25, speed = 0.5 }`), in place of `slow_launch_share` and
+    /// `slow_launch_speed`: where a potential's far kernel comes from pairs
+    /// whose slower launch is below `speed` (a well's bound and orbiting
+    /// pairs), a wider stratum bounds their weights. The potential's other
+    /// sets keep the global stratum.
+    pub slow_launch_per_potential: BTreeMap<String, SlowLaunch>,
+}
+
+/// The slow stratum of one potential's main set.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct SlowLaunch {
+    /// Share of each launch coordinate in the stratum: 0 or a power of 1/2
+    /// from 1/2 to 1/1024.
+    pub share: f64,
+    /// Upper end of the stratum's speeds, `v_th`, in (0, 1].
+    pub speed: f64,
 }
 
 /// Launch points per randomization of each stratum, both powers of two.
@@ -92,6 +111,7 @@ impl Default for CollisionsConfig {
             points_per_potential: BTreeMap::new(),
             method_per_potential: BTreeMap::new(),
             strata_per_potential: BTreeMap::new(),
+            slow_launch_per_potential: BTreeMap::new(),
         }
     }
 }
@@ -197,6 +217,24 @@ fn check_scenes(
     )
 }
 
+/// `slow` is a stratum the Sobol' points resolve: a dyadic share
+/// (`share_key`) and a speed in (0, 1] (`speed_key`).
+fn check_slow_launch(slow: SlowLaunch, share_key: &str, speed_key: &str) -> Result<(), Invalid> {
+    check(
+        is_dyadic_share(slow.share),
+        share_key,
+        format!(
+            "{} must be 0 or a power of 1/2 from 1/2 to 1/1024 (whole elementary intervals of the Sobol' points)",
+            slow.share
+        ),
+    )?;
+    check(
+        slow.speed > 0.0 && slow.speed <= 1.0,
+        speed_key,
+        format!("{} is outside (0, 1]", slow.speed),
+    )
+}
+
 /// `true` for 0 and `2^-k`, `k = 1..=10`.
 fn is_dyadic_share(share: f64) -> bool {
     share == 0.0 || (1..=10).any(|k| share == libm::pow(0.5, f64::from(k)))
@@ -274,19 +312,19 @@ impl CollisionsConfig {
             "collisions.launch_spread",
             format!("{} is outside [0, 3]", sampling.launch_spread),
         )?;
-        check(
-            is_dyadic_share(sampling.slow_launch_share),
+        check_slow_launch(
+            SlowLaunch {
+                share: sampling.slow_launch_share,
+                speed: sampling.slow_launch_speed,
+            },
             "collisions.slow_launch_share",
-            format!(
-                "{} must be 0 or a power of 1/2 from 1/2 to 1/1024 (whole elementary intervals of the Sobol' points)",
-                sampling.slow_launch_share
-            ),
-        )?;
-        check(
-            sampling.slow_launch_speed > 0.0 && sampling.slow_launch_speed <= 1.0,
             "collisions.slow_launch_speed",
-            format!("{} is outside (0, 1]", sampling.slow_launch_speed),
         )?;
+        for (id, &slow) in &self.slow_launch_per_potential {
+            let key = format!("collisions.slow_launch_per_potential.{id}");
+            potential_named(id, potentials, key.clone())?;
+            check_slow_launch(slow, &format!("{key}.share"), &format!("{key}.speed"))?;
+        }
         let proposal = &sampling.proposal;
         for (key, value) in [
             ("core_weight", proposal.core_weight),
@@ -395,15 +433,19 @@ impl CollisionsConfig {
 
     /// The launch-speed proposal of the kernel's scenes.
     pub fn launch(&self) -> LaunchProposal {
+        self.launch_with(SlowLaunch {
+            share: self.slow_launch_share,
+            speed: self.slow_launch_speed,
+        })
+    }
+
+    /// The launch-speed proposal with the slow stratum `slow`.
+    fn launch_with(&self, slow: SlowLaunch) -> LaunchProposal {
         LaunchProposal {
             shift: self.launch_shift,
             spread: self.launch_spread,
-            slow_share: self.slow_launch_share,
-            slow_speed: if self.slow_launch_share > 0.0 {
-                self.slow_launch_speed
-            } else {
-                0.0
-            },
+            slow_share: slow.share,
+            slow_speed: if slow.share > 0.0 { slow.speed } else { 0.0 },
         }
     }
 
@@ -427,9 +469,13 @@ impl CollisionsConfig {
     }
 
     /// Resolved parameters of the main set of `potential`: its
-    /// `strata_per_potential` entry fixes the split, else the pilot's.
+    /// `strata_per_potential` entry fixes the split, else the pilot's, and
+    /// its `slow_launch_per_potential` entry the slow stratum.
     pub fn params(&self, potential: Potential, engine: EngineSettings) -> CollisionsParams {
         let mut params = self.piloted_params(potential, engine);
+        if let Some(slow) = self.slow_launch_per_potential.get(&potential.id()) {
+            params.sampling.launch = self.launch_with(*slow);
+        }
         if let Some(strata) = self.strata_per_potential.get(&potential.id()) {
             params.sampling.opposite_points = strata.opposite;
             params.sampling.same_side_points = strata.same_side;
