@@ -578,10 +578,10 @@ fn expected(store: &Path, figure: &Artifact) -> Vec<Row> {
             rows
         }
         "gaps" => {
-            use contract::table::{
-                A_N_UNTRUNCATED, GAP, GAP_OVER_VARIANCE_RATE, N, PARTICLE_GAP,
-                PARTICLE_GAP_OVER_VARIANCE_RATE, THETA,
+            use contract::spectrum::study::{
+                GAP, GAP_OVER_VARIANCE_RATE, PARTICLE_GAP, PARTICLE_GAP_OVER_VARIANCE_RATE,
             };
+            use contract::table::{A_N_UNTRUNCATED, N, THETA};
             let table = figure.input(store, 0).table("table");
             let n = N.optional(&table).unwrap();
             let theta = THETA.optional(&table).unwrap();

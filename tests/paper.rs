@@ -434,6 +434,7 @@ fn paper_rows_recompute_from_their_sources() {
         rate_reproduces_the_nitrogen_row(&config, &store, (ours[k], converged[k]));
     }
     recombination_agrees_between_scene_sets(&store);
+    the_study_table_holds_what_its_suppliers_computed(&store);
     pulls_recompute_from_their_sources(&store, &summary);
     kernel_models_fit_their_kernels(&store);
     kernel_command_evaluates_the_stored_model(&config, &store);
@@ -1084,7 +1085,9 @@ fn rate_reproduces_the_nitrogen_row(config: &Path, store: &Path, paper: (Estimat
     let l = 3.698e-4 * libm::pow(0.1052, -1.0 / 6.0); // um
     let formula = 1.0 / (a_n.mean * 0.01 * l * v_th);
     // A bound pair lives 1 / (k_d rho v_th), k_d the table row's own.
-    let k_d = contract::table::DISSOCIATION_RATE.read(&rows).unwrap()[k];
+    let k_d = contract::dissociation::study::DISSOCIATION_RATE
+        .read(&rows)
+        .unwrap()[k];
     let dissociation = molecule.dissociation;
     assert_eq!(
         (dissociation.value, dissociation.statistical),
@@ -1153,6 +1156,39 @@ fn rate_reproduces_the_nitrogen_row(config: &Path, store: &Path, paper: (Estimat
 /// and from the sweep's own scene set (another launch proposal and seed):
 /// independent estimates of one number, within errors; zero without a well,
 /// its thermal average too.
+/// Every study-table column another stage supplies holds, bit for bit, that
+/// stage's value for the row's potential, and is null where the study runs
+/// no such instance (the gaps without a spectrum, `k_d` without a well).
+fn the_study_table_holds_what_its_suppliers_computed(store: &Path) {
+    let rows = table(store, "table", "study", "table");
+    let potentials = contract::table::POTENTIAL.read(&rows).unwrap();
+    let (mut read, mut null) = (0, 0);
+    for column in contract::STUDY_COLUMNS.iter().copied().flatten() {
+        let values = column.column.read(&rows).unwrap();
+        for (k, potential) in potentials.iter().enumerate() {
+            let stage = column.source.stage;
+            if store
+                .join(format!("refs/{stage}/{potential}.json"))
+                .exists()
+            {
+                let source = table(store, stage, potential, column.source.name);
+                let expected = column.read(&source).unwrap();
+                assert_eq!(
+                    (values[k].mean.to_bits(), values[k].stderr.to_bits()),
+                    (expected.mean.to_bits(), expected.stderr.to_bits()),
+                    "{} of {potential}",
+                    column.column.value.name
+                );
+                read += 1;
+            } else {
+                assert!(values[k].mean.is_nan(), "{potential}");
+                null += 1;
+            }
+        }
+    }
+    assert!(read > 0 && null > 0, "{read} read, {null} null");
+}
+
 fn recombination_agrees_between_scene_sets(store: &Path) {
     use contract::sweep::recombination::{RATE_COLUMN, U_PRIME};
     let sweep_rate = |potential: &str| {

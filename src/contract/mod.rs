@@ -42,6 +42,7 @@ macro_rules! bounded {
 pub mod instances;
 pub mod printout;
 pub mod readers;
+pub mod study_column;
 pub mod tables;
 
 pub use tables::*;

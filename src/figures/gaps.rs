@@ -44,10 +44,10 @@ impl FigureKind for Gaps {
     /// The gaps figure's panels from the `table` stage's rows of inverse power
     /// laws (no `theta`) with a gap; panel (b) only its positive rates.
     fn frame(&self, inputs: &[Input]) -> Result<DataFrame, StageError> {
-        use contract::table::{
-            A_N_UNTRUNCATED, GAP, GAP_OVER_VARIANCE_RATE, N, PARTICLE_GAP,
-            PARTICLE_GAP_OVER_VARIANCE_RATE, TABLE, THETA,
+        use contract::spectrum::study::{
+            GAP, GAP_OVER_VARIANCE_RATE, PARTICLE_GAP, PARTICLE_GAP_OVER_VARIANCE_RATE,
         };
+        use contract::table::{A_N_UNTRUNCATED, N, TABLE, THETA};
         let table = frame(TABLE.of(&inputs[0])?)?;
         let (n, theta) = (numbers(&table, N.name)?, numbers(&table, THETA.name)?);
         let power_law = |i: usize| n[i].is_finite() && theta[i].is_nan();

@@ -12,8 +12,10 @@ mod rings;
 
 pub use collisions::wide_collisions;
 
+use std::collections::HashSet;
+
 use crate::config::Study;
-use crate::contract::instances;
+use crate::contract::{self, instances};
 use crate::physics::potential::Potential;
 use crate::pipeline::{InstanceId, Stage};
 use crate::stages::compare::{CompareParams, CompareStage};
@@ -39,7 +41,7 @@ pub fn plan(study: &Study) -> Vec<Box<dyn Stage>> {
         .map(|&p| study.kernel_params(p, 0.0, 0.0))
         .collect();
     // Each potential's instance of a stage, where the plan holds one.
-    let ids: std::collections::HashSet<InstanceId> = stages.iter().map(|s| s.id()).collect();
+    let ids: HashSet<InstanceId> = stages.iter().map(|s| s.id()).collect();
     let planned = |instance: fn(&Potential) -> InstanceId| -> Vec<InstanceId> {
         let potentials = study.potentials();
         let ids_of = potentials.iter().map(instance);
@@ -58,8 +60,7 @@ pub fn plan(study: &Study) -> Vec<Box<dyn Stage>> {
     );
     stages.push(Box::new(table::TableStage::new(
         rows,
-        dissociations,
-        spectra,
+        suppliers(study, &ids),
     )));
     if let Some((name, params)) = paper::balance_collisions(study) {
         push_collisions(&mut stages, params, name);
@@ -72,6 +73,21 @@ pub fn plan(study: &Study) -> Vec<Box<dyn Stage>> {
         stages.extend(figures.into_iter().map(|f| Box::new(f) as Box<dyn Stage>));
     }
     stages
+}
+
+/// The planned instances (`ids`) of the stages that supply columns of the
+/// study table, each potential's once.
+fn suppliers(study: &Study, ids: &HashSet<InstanceId>) -> Vec<InstanceId> {
+    let mut suppliers = Vec::new();
+    for potential in study.potentials() {
+        for column in contract::STUDY_COLUMNS.iter().copied().flatten() {
+            let id = InstanceId::new(column.source.stage, &potential.id());
+            if ids.contains(&id) && !suppliers.contains(&id) {
+                suppliers.push(id);
+            }
+        }
+    }
+    suppliers
 }
 
 /// The `interpolation` between the models of every kernel (each has a

@@ -88,7 +88,8 @@ struct LennardJonesRow {
 
 /// Every Lennard-Jones row of a `table`.
 fn lennard_jones_rows(batch: &RecordBatch) -> Result<Vec<LennardJonesRow>> {
-    use contract::table::{A_N, DISSOCIATION_RATE, THERMAL_RECOMBINATION, THETA};
+    use contract::dissociation::study::{DISSOCIATION_RATE, THERMAL_RECOMBINATION};
+    use contract::table::{A_N, THETA};
     let (thetas, rates) = (THETA.optional(batch)?, A_N.read(batch)?);
     let recombination = THERMAL_RECOMBINATION.read(batch)?;
     let dissociation = DISSOCIATION_RATE.read(batch)?;

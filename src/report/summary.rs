@@ -232,6 +232,8 @@ pub(super) fn study_table(
     store: &Store,
     reports: &[InstanceReport],
 ) -> Result<()> {
+    use contract::dissociation::study::DISSOCIATION_RATE;
+    use contract::spectrum::study::{GAP_OVER_VARIANCE_RATE, PARTICLE_GAP_OVER_VARIANCE_RATE};
     use contract::table::*;
     let Some((_, frame)) = table_frames(store, reports, &TABLE)?.into_iter().next() else {
         return Ok(());

@@ -19,10 +19,9 @@ use crate::stats::Estimate;
 pub struct TableStage {
     /// The `u' = 0`, dilute-limit moments parameters of every potential.
     rows: Vec<KernelParams>,
-    /// The `dissociation` instances the study runs (potentials with a well).
-    dissociations: Vec<InstanceId>,
-    /// The `spectrum` instances the study runs.
-    spectra: Vec<InstanceId>,
+    /// The instances the study runs of the stages that supply columns
+    /// (`contract::STUDY_COLUMNS`), one per potential they run for.
+    suppliers: Vec<InstanceId>,
 }
 
 /// A quantity the study does not compute (null in the table).
@@ -32,64 +31,33 @@ const NOT_COMPUTED: Estimate = Estimate {
 };
 
 impl TableStage {
-    /// A table over these potentials, with the dissociation rates of those
-    /// whose `dissociation` instance is listed and the gaps of those whose
-    /// `spectrum` instance is.
-    pub fn new(
-        rows: Vec<KernelParams>,
-        dissociations: Vec<InstanceId>,
-        spectra: Vec<InstanceId>,
-    ) -> TableStage {
-        TableStage {
-            rows,
-            dissociations,
-            spectra,
-        }
+    /// A table over these potentials, with the supplied columns of those
+    /// whose supplying instance is listed in `suppliers`.
+    pub fn new(rows: Vec<KernelParams>, suppliers: Vec<InstanceId>) -> TableStage {
+        TableStage { rows, suppliers }
     }
 
-    /// The dissociation rate of `params`' potential and the thermal
-    /// recombination rate detailed balance gives from it, NaN where none runs.
-    fn dissociation(
+    /// Every supplied column of `params`' potential, in
+    /// `contract::STUDY_COLUMNS` order: NaN where the study does not run
+    /// the supplying stage for it.
+    fn supplied(
         &self,
         inputs: &[Input],
         params: &KernelParams,
-    ) -> Result<[Estimate; 2], StageError> {
-        use contract::dissociation::{BALANCED_RECOMBINATION, DISSOCIATION_RATE, TABLE};
-        let instance = instances::dissociation(&params.potential);
-        if !self.dissociations.contains(&instance) {
-            return Ok([NOT_COMPUTED; 2]);
+    ) -> Result<Vec<Estimate>, StageError> {
+        let potential = params.potential.id();
+        let mut values = Vec::new();
+        for column in contract::STUDY_COLUMNS.iter().copied().flatten() {
+            let instance = InstanceId::new(column.source.stage, &potential);
+            values.push(if self.suppliers.contains(&instance) {
+                column.read(column.source.find(inputs, &instance)?)?
+            } else {
+                NOT_COMPUTED
+            });
         }
-        let table = TABLE.find(inputs, &instance)?;
-        Ok([
-            DISSOCIATION_RATE.read(table)?[0],
-            BALANCED_RECOMBINATION.read(table)?[0],
-        ])
-    }
-
-    /// The gap of the linearized operator and of the tagged generator of
-    /// `params`' potential, each in rate units and over `Gamma`
-    /// (`[gap, gap / Gamma]` per generator), NaN where no spectrum runs.
-    fn gaps(&self, inputs: &[Input], params: &KernelParams) -> Result<Gaps, StageError> {
-        use contract::spectrum::summary::{GAP, GAP_OVER_VARIANCE_RATE, GENERATOR, TABLE};
-        let instance = instances::spectrum(&params.potential);
-        if !self.spectra.contains(&instance) {
-            return Ok([[NOT_COMPUTED; 2]; 2]);
-        }
-        let table = TABLE.find(inputs, &instance)?;
-        let (gaps, ratios) = (GAP.read(table)?, GAP_OVER_VARIANCE_RATE.read(table)?);
-        let of = |generator: &str| -> Result<[Estimate; 2], StageError> {
-            let row = GENERATOR.row_of(table, generator)?;
-            Ok([gaps[row], ratios[row]])
-        };
-        Ok([
-            of(contract::spectrum::FULL)?,
-            of(contract::spectrum::TAGGED)?,
-        ])
+        Ok(values)
     }
 }
-
-/// `[gap, gap / Gamma]` of the linearized operator and of the tagged generator.
-type Gaps = [[Estimate; 2]; 2];
 
 /// One potential's row.
 struct PotentialRow {
@@ -98,13 +66,10 @@ struct PotentialRow {
     a_n_untruncated: Estimate,
     /// Rate of encounters leaving a bound pair and a free atom.
     recombination: Estimate,
-    /// Rate at which thermal atoms break a bound pair, and the thermal
-    /// recombination rate detailed balance gives from it (NaN: not computed).
-    dissociation: [Estimate; 2],
     /// `alpha`, `beta`, `sigma` of the fit.
     shape: [Estimate; 3],
-    /// The relaxation gaps (NaN: no spectrum).
-    gaps: Gaps,
+    /// The columns other stages supply (NaN: not computed).
+    supplied: Vec<Estimate>,
     /// Scanned launch pairs with their `|u1f,max|` and its error bound.
     maxima: Vec<(String, Estimate)>,
     events: u32,
@@ -134,18 +99,31 @@ impl TableStage {
             a_n: self_variance_at(moments, params.converged_truncation())?,
             a_n_untruncated: self_variance_at(moments, f64::INFINITY)?,
             recombination: contract::moments::RECOMBINATION_RATE.read(moments)?[0],
-            dissociation: self.dissociation(inputs, params)?,
             shape: [
                 first(contract::fit::ALPHA, contract::fit::ALPHA_SYSTEMATIC)?,
                 first(contract::fit::BETA, contract::fit::BETA_SYSTEMATIC)?,
                 first(contract::fit::SIGMA, contract::fit::SIGMA_SYSTEMATIC)?,
             ],
-            gaps: self.gaps(inputs, params)?,
+            supplied: self.supplied(inputs, params)?,
             maxima: launches.into_iter().zip(maxima).collect(),
             events: contract::moments::EVENTS.read(moments)?[0],
             failed_events: contract::moments::FAILED_EVENTS.read(moments)?[0],
         })
     }
+}
+
+/// The supplied columns of every row, in `contract::STUDY_COLUMNS` order.
+fn supplied_columns(rows: &[PotentialRow]) -> Vec<Column> {
+    contract::STUDY_COLUMNS
+        .iter()
+        .copied()
+        .flatten()
+        .enumerate()
+        .flat_map(|(k, column)| {
+            let values: Vec<Estimate> = rows.iter().map(|r| r.supplied[k]).collect();
+            column.column.columns(&values)
+        })
+        .collect()
 }
 
 /// The scan maxima's columns, one pair per launch pair of the first potential.
@@ -189,8 +167,7 @@ impl Stage for TableStage {
     fn params(&self) -> Value {
         serde_json::json!({
             "rows": self.rows,
-            "dissociations": self.dissociations.iter().map(ToString::to_string).collect::<Vec<_>>(),
-            "spectra": self.spectra.iter().map(ToString::to_string).collect::<Vec<_>>(),
+            "suppliers": self.suppliers.iter().map(ToString::to_string).collect::<Vec<_>>(),
         })
     }
 
@@ -208,8 +185,7 @@ impl Stage for TableStage {
                     instances::scan(&params.potential),
                 ]
             })
-            .chain(self.dissociations.iter().cloned())
-            .chain(self.spectra.iter().cloned())
+            .chain(self.suppliers.iter().cloned())
             .collect()
     }
 
@@ -243,15 +219,10 @@ impl Stage for TableStage {
             .estimate(A_N, |r| r.a_n)
             .estimate(A_N_UNTRUNCATED, |r| r.a_n_untruncated)
             .estimate(RECOMBINATION_RATE, |r| r.recombination)
-            .estimate(THERMAL_RECOMBINATION, |r| r.dissociation[1])
-            .estimate(DISSOCIATION_RATE, |r| r.dissociation[0])
             .estimate(ALPHA, |r| r.shape[0])
             .estimate(BETA, |r| r.shape[1])
             .estimate(SIGMA, |r| r.shape[2])
-            .estimate(GAP, |r| r.gaps[0][0])
-            .estimate(GAP_OVER_VARIANCE_RATE, |r| r.gaps[0][1])
-            .estimate(PARTICLE_GAP, |r| r.gaps[1][0])
-            .estimate(PARTICLE_GAP_OVER_VARIANCE_RATE, |r| r.gaps[1][1])
+            .columns(supplied_columns(&rows))
             .columns(scan_maxima(&rows)?)
             .with(EVENTS, |r| r.events)
             .with(FAILED_EVENTS, |r| r.failed_events)

@@ -75,3 +75,42 @@ pub mod recombination {
         SPREAD
     );
 }
+
+/// The dissociation stage's columns of the study table (`table`, one row per
+/// potential).
+pub mod study {
+    use super::*;
+
+    /// The dissociation rate `k_d`.
+    pub const DISSOCIATION_RATE: Pair = pair!(
+        "dissociation_rate",
+        "rho v_th",
+        "k_d: rate at which thermal atoms break a thermal bound pair into three free atoms, per pair, dilute limit (the dissociation stage)",
+        "standard error of dissociation_rate (spread of randomizations)"
+    )
+    .or_null("no well (nothing binds), or the dissociation stage is disabled");
+    /// The thermal recombination rate from detailed balance.
+    pub const THERMAL_RECOMBINATION: Pair = pair!(
+        "thermal_recombination_rate",
+        RATE,
+        "recombination rate per atom averaged over thermal atoms, from detailed balance with dissociation: 3 K_b k_d (the dissociation stage; the sweep's scenes measure it directly, less precisely)",
+        "standard error of thermal_recombination_rate (spread of randomizations)"
+    )
+    .or_null("no well (nothing binds), or the dissociation stage is disabled");
+
+    /// Where the study table reads them: the potential's dissociation row.
+    pub const COLUMNS: [StudyColumn; 2] = [
+        StudyColumn {
+            column: THERMAL_RECOMBINATION,
+            source: TABLE,
+            row: None,
+            value: super::BALANCED_RECOMBINATION,
+        },
+        StudyColumn {
+            column: DISSOCIATION_RATE,
+            source: TABLE,
+            row: None,
+            value: super::DISSOCIATION_RATE,
+        },
+    ];
+}

@@ -27,6 +27,7 @@ pub mod sweep;
 pub mod table;
 
 use super::printout::{Layout, Printed, Printout, Selection, Shown};
+use super::study_column::StudyColumn;
 use super::{Col, Pair, TableSpec, UNIT_PER_PANEL, UNIT_PER_ROW};
 
 /// The stages' tables that `ternary run --details` and the HTML report print
@@ -46,6 +47,12 @@ pub const DETAILS: [&Printout; 13] = [
     &sweep::stationarity::PRINTOUT,
     &sweep::balance_tests::PRINTOUT,
 ];
+
+/// The study table's columns that other stages supply (`table` reads each
+/// from the supplying stage's instance of the row's potential, where the
+/// study has one), in the table's order.
+pub const STUDY_COLUMNS: [&[StudyColumn]; 2] =
+    [&dissociation::study::COLUMNS, &spectrum::study::COLUMNS];
 
 /// Bin centre relative to `u'` (kernel, md and early-evolution tables).
 pub const DU: Col<f64> = Col::f64("du", "v_th", "bin centre relative to u'");

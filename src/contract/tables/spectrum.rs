@@ -288,3 +288,72 @@ pub mod jackknife {
         "spectrum_summary's gap on the other randomizations (the same rank, growing_modes + 1)",
     );
 }
+
+/// The spectrum stage's columns of the study table (`table`, one row per
+/// potential).
+pub mod study {
+    use super::*;
+
+    /// Why a gap is null.
+    const NO_SPECTRUM: &str =
+        "the spectrum stage is disabled, or Gamma = 0 (n = 2: every rate vanishes)";
+    /// The gap of the linearized operator.
+    pub const GAP: Pair = pair!(
+        "gap",
+        RATE_UNIT,
+        "relaxation gap of the gas: the slowest relaxation rate of the linearized three-body operator on the spectrum's grid, above any growing (noise) modes (spectrum_summary: gap and growing_modes)",
+        "jackknife standard error over randomizations"
+    )
+    .or_null(NO_SPECTRUM);
+    /// The gap over `Gamma`.
+    pub const GAP_OVER_VARIANCE_RATE: Pair = pair!(
+        "gap_over_variance_rate",
+        "1",
+        "gap / Gamma, Gamma = the tagged variance rate at u' = 0 from the same scenes (a_n without a window), per replicate",
+        "jackknife standard error over randomizations"
+    )
+    .or_null(NO_SPECTRUM);
+    /// The gap of the tagged generator.
+    pub const PARTICLE_GAP: Pair = pair!(
+        "particle_gap",
+        RATE_UNIT,
+        "relaxation gap of one particle: the slowest relaxation rate of the tagged particle's generator (how fast one particle forgets its velocity), above any growing (noise) modes",
+        "jackknife standard error over randomizations"
+    )
+    .or_null(NO_SPECTRUM);
+    /// The particle gap over `Gamma`.
+    pub const PARTICLE_GAP_OVER_VARIANCE_RATE: Pair = pair!(
+        "particle_gap_over_variance_rate",
+        "1",
+        "particle_gap / Gamma, per replicate",
+        "jackknife standard error over randomizations"
+    )
+    .or_null(NO_SPECTRUM);
+
+    /// Where the study table reads them: the potential's spectrum summary,
+    /// the row of each generator.
+    pub const COLUMNS: [StudyColumn; 4] = [
+        gap(GAP, FULL, super::summary::GAP),
+        gap(
+            GAP_OVER_VARIANCE_RATE,
+            FULL,
+            super::summary::GAP_OVER_VARIANCE_RATE,
+        ),
+        gap(PARTICLE_GAP, TAGGED, super::summary::GAP),
+        gap(
+            PARTICLE_GAP_OVER_VARIANCE_RATE,
+            TAGGED,
+            super::summary::GAP_OVER_VARIANCE_RATE,
+        ),
+    ];
+
+    /// `column` read as `value` from the summary row of `generator`.
+    const fn gap(column: Pair, generator: &'static str, value: Pair) -> StudyColumn {
+        StudyColumn {
+            column,
+            source: super::summary::TABLE,
+            row: Some((GENERATOR, generator)),
+            value,
+        }
+    }
+}

@@ -53,57 +53,6 @@ pub const RECOMBINATION_RATE: Pair = pair!(
     "rate at which the special particle at u' = 0 (dilute limit) takes part in a three-body encounter that leaves a bound pair and a free atom; 0 without a well",
     "standard error of recombination_rate (spread of randomizations)"
 );
-/// The dissociation rate `k_d`.
-pub const DISSOCIATION_RATE: Pair = pair!(
-    "dissociation_rate",
-    "rho v_th",
-    "k_d: rate at which thermal atoms break a thermal bound pair into three free atoms, per pair, dilute limit (the dissociation stage)",
-    "standard error of dissociation_rate (spread of randomizations)"
-)
-.or_null("no well (nothing binds), or the dissociation stage is disabled");
-/// The thermal recombination rate from detailed balance.
-pub const THERMAL_RECOMBINATION: Pair = pair!(
-    "thermal_recombination_rate",
-    RATE,
-    "recombination rate per atom averaged over thermal atoms, from detailed balance with dissociation: 3 K_b k_d (the dissociation stage; the sweep's scenes measure it directly, less precisely)",
-    "standard error of thermal_recombination_rate (spread of randomizations)"
-)
-.or_null("no well (nothing binds), or the dissociation stage is disabled");
-/// Why a gap is null.
-const NO_SPECTRUM: &str =
-    "the spectrum stage is disabled, or Gamma = 0 (n = 2: every rate vanishes)";
-/// The gap of the linearized operator.
-pub const GAP: Pair = pair!(
-    "gap",
-    RATE,
-    "relaxation gap of the gas: the slowest relaxation rate of the linearized three-body operator on the spectrum's grid, above any growing (noise) modes (spectrum_summary: gap and growing_modes)",
-    "jackknife standard error over randomizations"
-)
-.or_null(NO_SPECTRUM);
-/// The gap over `Gamma`.
-pub const GAP_OVER_VARIANCE_RATE: Pair = pair!(
-    "gap_over_variance_rate",
-    "1",
-    "gap / Gamma, Gamma = the tagged variance rate at u' = 0 from the same scenes (a_n without a window), per replicate",
-    "jackknife standard error over randomizations"
-)
-.or_null(NO_SPECTRUM);
-/// The gap of the tagged generator.
-pub const PARTICLE_GAP: Pair = pair!(
-    "particle_gap",
-    RATE,
-    "relaxation gap of one particle: the slowest relaxation rate of the tagged particle's generator (how fast one particle forgets its velocity), above any growing (noise) modes",
-    "jackknife standard error over randomizations"
-)
-.or_null(NO_SPECTRUM);
-/// The particle gap over `Gamma`.
-pub const PARTICLE_GAP_OVER_VARIANCE_RATE: Pair = pair!(
-    "particle_gap_over_variance_rate",
-    "1",
-    "particle_gap / Gamma, per replicate",
-    "jackknife standard error over randomizations"
-)
-.or_null(NO_SPECTRUM);
 /// Amplitude of the shape.
 pub const ALPHA: Pair = Pair {
     value: Col::f64(
