@@ -382,9 +382,9 @@ fn comments_in_the_real_source_change_nothing_and_the_report_is_no_stage_code() 
     );
     assert!(
         stages_changed_by(
-            "src/report/summary.rs",
-            "format!(\"{:.3}%\", 100.0 * a_err / a.abs())",
-            "format!(\"{:.4}%\", 100.0 * a_err / a.abs())",
+            "src/report/printout.rs",
+            "format!(\"{:.3}%\", 100.0 * r)",
+            "format!(\"{:.4}%\", 100.0 * r)",
         )
         .is_empty()
     );
@@ -446,7 +446,7 @@ const LONGEST_FILE: usize = 900;
 /// Functions of src/ (outside src/stages/, which has none) longer than
 /// [`LONGEST_FUNCTION`]: `(file, function, why)`. An entry that no longer
 /// names a long function fails the test, so the list only shrinks.
-const LONG_FUNCTIONS: [(&str, &str, &str); 36] = [
+const LONG_FUNCTIONS: [(&str, &str, &str); 35] = [
     (
         "src/figures/draw.rs",
         "chart",
@@ -535,11 +535,6 @@ const LONG_FUNCTIONS: [(&str, &str, &str); 36] = [
     (
         "src/report/summary.rs",
         "paper_table",
-        "a printer, a column per line (issue 57 item 2)",
-    ),
-    (
-        "src/report/summary.rs",
-        "study_table",
         "a printer, a column per line (issue 57 item 2)",
     ),
     (

@@ -100,6 +100,12 @@ pub enum Shown {
     /// Several cells' texts in one: each `{}` of the template, in order,
     /// takes the next part's text.
     Composite(&'static str, &'static [Shown]),
+    /// A standard error relative to its value, as a percentage to three
+    /// decimals (`-` for a zero value).
+    Relative(Pair),
+    /// The text given where the pair is exactly `0 ± 0` (nothing to
+    /// measure: no kicks, no well), else the cell shown.
+    Unless(Pair, &'static str, &'static Shown),
 }
 
 impl Printed {

@@ -22,7 +22,7 @@ use super::describe;
 use super::folder::ReportFolder;
 use super::layout::{Align, Cell, Columns, Sink};
 use super::printout::print;
-use super::summary::{paper_table, stage_tables, study_table};
+use super::summary::{paper_table, stage_tables};
 use crate::config::Study;
 use crate::contract;
 use crate::contract::pulls;
@@ -178,7 +178,14 @@ fn page(
         ("missing", "Not fresh", not_fresh(instances)),
         ("summary", "Thermalization constants", {
             let mut tables = Tables::default();
-            study_table(&mut tables, store, &reports)?;
+            let table = &contract::table::PRINTOUT;
+            print(
+                &mut tables,
+                store,
+                &reports,
+                table,
+                study.config.kernel.kick_floor,
+            )?;
             tables.html
         }),
         ("paper", "The paper's numbers", {

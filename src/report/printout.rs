@@ -8,10 +8,11 @@ use polars::prelude::DataFrame;
 use super::layout::{Align, Cell, Columns, Sink};
 use super::numbers::{fixed, or_why, significant};
 use super::{count, estimate, number, table_frames, text, variance};
+use crate::contract::Pair;
 use crate::contract::printout::{Layout, Printout, Selection, Shown};
 use crate::pipeline::executor::InstanceReport;
 use crate::pipeline::store::Store;
-use crate::stats::ChiSquare;
+use crate::stats::{ChiSquare, Estimate};
 use crate::thresholds::DOMINATED_SHARE;
 
 /// `printout`'s table of every instance in `reports` that has it (nothing
@@ -87,6 +88,7 @@ fn alignment(shown: &Shown) -> Align {
         | Shown::Variance(_)
         | Shown::Evidence(_) => Align::Left,
         Shown::Composite(_, parts) => parts.first().map_or(Align::Left, alignment),
+        Shown::Unless(_, _, shown) => alignment(shown),
         _ => Align::Right,
     }
 }
@@ -153,6 +155,39 @@ fn cell(
             bare(test.chi2, &|_| test.p_text())
         }
         Shown::Evidence(share) => Cell::text(evidence_verdict(number(frame, row, share)?)),
+        Shown::Relative(_) | Shown::Unless(..) | Shown::Composite(..) => {
+            compound(frame, row, instance, shown, kick_floor)?
+        }
+    })
+}
+
+/// Cell `shown` of `row` of `instance`'s `frame`, for the kinds built from
+/// other cells or from a value and its error together.
+fn compound(
+    frame: &DataFrame,
+    row: usize,
+    instance: &str,
+    shown: &Shown,
+    kick_floor: f64,
+) -> Result<Cell> {
+    Ok(match *shown {
+        Shown::Relative(pair) => {
+            let estimate = estimate_of(frame, row, pair)?;
+            let relative = if estimate.mean == 0.0 {
+                f64::NAN
+            } else {
+                estimate.stderr / estimate.mean.abs()
+            };
+            Cell::text(or_why(relative, |r| format!("{:.3}%", 100.0 * r), "-"))
+        }
+        Shown::Unless(pair, text, shown) => {
+            let estimate = estimate_of(frame, row, pair)?;
+            if estimate.mean == 0.0 && estimate.stderr == 0.0 {
+                Cell::text(text)
+            } else {
+                cell(frame, row, instance, shown, kick_floor)?
+            }
+        }
         Shown::Composite(template, parts) => {
             let mut pieces = template.split("{}");
             let mut composed = pieces.next().unwrap_or_default().to_string();
@@ -162,6 +197,15 @@ fn cell(
             }
             Cell::text(composed)
         }
+        _ => cell(frame, row, instance, shown, kick_floor)?,
+    })
+}
+
+/// The value and error in `row`'s columns `pair`.
+fn estimate_of(frame: &DataFrame, row: usize, pair: Pair) -> Result<Estimate> {
+    Ok(Estimate {
+        mean: number(frame, row, pair.value)?,
+        stderr: number(frame, row, pair.stderr)?,
     })
 }
 
@@ -196,13 +240,25 @@ fn evidence_verdict(share: f64) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::contract::Col;
+    use crate::contract::{Col, Pair};
     use polars::prelude::{IntoColumn, NamedFrom, Series};
 
     const PULL: Col<f64> = Col::f64("pull", "1", "a pull");
     const LABEL: Col<String> = Col::text("label", "which");
     const COUNTED: Col<u32> = Col::u32("counted", "1", "counted");
     const PAIRS: Col<u32> = Col::u32("pairs", "1", "pairs");
+    const ZERO: Col<f64> = Col::f64("zero", "1", "nothing measured");
+    /// The pulls as their own errors.
+    const OWN: Pair = Pair {
+        value: PULL,
+        stderr: PULL,
+    };
+    /// `0 ± 0` in every row.
+    const NOTHING: Pair = Pair {
+        value: ZERO,
+        stderr: ZERO,
+    };
+    const FIT: Shown = Shown::Estimate(OWN, "no fit");
 
     /// Four rows: pulls 0.5, -3, NaN, 0 labelled a..d, 2 of 4 counted.
     fn frame() -> DataFrame {
@@ -213,6 +269,7 @@ mod tests {
                 Series::new(LABEL.name.into(), vec!["a", "b", "c", "d"]).into_column(),
                 Series::new(COUNTED.name.into(), vec![2u32; 4]).into_column(),
                 Series::new(PAIRS.name.into(), vec![4u32; 4]).into_column(),
+                Series::new(ZERO.name.into(), vec![0.0; 4]).into_column(),
             ],
         )
         .expect("a frame")
@@ -254,5 +311,11 @@ mod tests {
         assert_eq!(shown(2, Shown::Fixed(PULL, 2)).to_string(), "-");
         assert_eq!(shown(1, Shown::Instance).to_string(), "ipp-6");
         assert_eq!(shown(0, Shown::Scientific(PULL, 1)).to_string(), "5.0e-1");
+        // A relative error; `0 ± 0` says why there is no estimate.
+        assert_eq!(shown(0, Shown::Relative(OWN)).to_string(), "100.000%");
+        assert_eq!(shown(3, Shown::Relative(OWN)).to_string(), "-");
+        let unless = |row, pair| shown(row, Shown::Unless(pair, "no kicks", &FIT)).to_string();
+        assert_eq!(unless(0, NOTHING), "no kicks");
+        assert_eq!(unless(2, OWN), "no fit");
     }
 }

@@ -13,7 +13,7 @@ use crate::pipeline::executor::InstanceReport;
 use crate::pipeline::store::Store;
 
 use super::printout::print;
-use super::{count, estimate, number, table_frames, text};
+use super::{estimate, number, table_frames, text};
 
 /// What a run computed, readable: `a_n` and the kernel shape, the paper
 /// table and where the figures are; with `details`, then every stage's
@@ -28,7 +28,13 @@ pub fn summary(
     details: bool,
 ) -> Result<String> {
     let mut out = String::new();
-    study_table(&mut out, store, reports)?;
+    print(
+        &mut out,
+        store,
+        reports,
+        &contract::table::PRINTOUT,
+        kick_floor,
+    )?;
     print(&mut out, store, reports, &fits::PRINTOUT, kick_floor)?;
     paper_table(&mut out, store, reports)?;
     print(
@@ -224,83 +230,4 @@ fn table_i_matrix(out: &mut dyn Sink, frame: &DataFrame, rows: &[usize]) -> Resu
     }
     out.table(&table);
     Ok(())
-}
-
-/// The `table` stage's output: `a_n` with standard errors per potential.
-pub(super) fn study_table(
-    out: &mut dyn Sink,
-    store: &Store,
-    reports: &[InstanceReport],
-) -> Result<()> {
-    use contract::dissociation::study::DISSOCIATION_RATE;
-    use contract::spectrum::study::{GAP_OVER_VARIANCE_RATE, PARTICLE_GAP_OVER_VARIANCE_RATE};
-    use contract::table::*;
-    let Some((_, frame)) = table_frames(store, reports, &TABLE)?.into_iter().next() else {
-        return Ok(());
-    };
-    out.title(
-        "thermalization constants a_n = self variance rate at u' = 0, dilute limit, of scenes whose three atoms leave free, where converged: |u-u'| <= window/2, untruncated with a well [rho^2 l v_th]; recombination: rate of encounters leaving a bound pair [rho^2 l v_th]; dissociation: rate at which atoms break a bound pair, per pair; kernel shape near u' (+- standard errors; shape: statistical and fit-protocol errors combined); relaxation gap of the gas (linearized operator) and of one particle over Gamma (the tagged variance rate at u' = 0, untruncated)",
-    );
-    let mut table = Columns::new(&[
-        (POTENTIAL.name, Align::Left),
-        ("a_n (converged)", Align::Left),
-        ("rel.err", Align::Right),
-        ("a_n untruncated", Align::Left),
-        ("recombination", Align::Left),
-        ("dissociation [rho v_th]", Align::Left),
-        (BETA.value.name, Align::Left),
-        ("sigma [v_th]", Align::Left),
-        ("gap/Gamma gas", Align::Left),
-        ("1 particle", Align::Left),
-        ("failed", Align::Right),
-    ]);
-    for row in 0..frame.height() {
-        let (a, a_err) = (
-            number(&frame, row, A_N.value)?,
-            number(&frame, row, A_N.stderr)?,
-        );
-        let relative = if a == 0.0 {
-            "-".to_string()
-        } else {
-            format!("{:.3}%", 100.0 * a_err / a.abs())
-        };
-        // No shape to fit when nothing was kicked (the integrable n = 2).
-        let no_shape = if a == 0.0 && a_err == 0.0 {
-            "no kicks"
-        } else {
-            "no fit"
-        };
-        table.push(vec![
-            Cell::text(text(&frame, row, POTENTIAL)?),
-            Cell::estimate(a, a_err, "-"),
-            Cell::text(relative),
-            estimate(&frame, row, A_N_UNTRUNCATED, "-")?,
-            recombination(&frame, row)?,
-            estimate(&frame, row, DISSOCIATION_RATE, "-")?,
-            estimate(&frame, row, BETA, no_shape)?,
-            estimate(&frame, row, SIGMA, no_shape)?,
-            estimate(&frame, row, GAP_OVER_VARIANCE_RATE, "-")?,
-            estimate(&frame, row, PARTICLE_GAP_OVER_VARIANCE_RATE, "-")?,
-            Cell::text(format!(
-                "{}/{}",
-                count(&frame, row, FAILED_EVENTS)?,
-                count(&frame, row, EVENTS)?
-            )),
-        ]);
-    }
-    out.table(&table);
-    Ok(())
-}
-
-/// The recombination rate of a `table` row: "-" without a well (exactly
-/// zero, no scene can bind).
-fn recombination(frame: &DataFrame, row: usize) -> Result<Cell> {
-    use contract::table::RECOMBINATION_RATE;
-    let rate = number(frame, row, RECOMBINATION_RATE.value)?;
-    let error = number(frame, row, RECOMBINATION_RATE.stderr)?;
-    Ok(if rate == 0.0 && error == 0.0 {
-        Cell::text("-".to_string())
-    } else {
-        Cell::estimate(rate, error, "-")
-    })
 }

@@ -84,6 +84,56 @@ pub const EVENTS: Col<u32> = Col::u32(super::EVENTS, "1", "scenes drawn for the 
 /// Scenes failed.
 pub const FAILED_EVENTS: Col<u32> = Col::u32(super::FAILED_EVENTS, "1", "scenes that failed");
 
+/// What `ternary run` and the HTML report print of the table, first.
+pub const PRINTOUT: Printout = Printout {
+    table: TABLE,
+    title: "thermalization constants a_n = self variance rate at u' = 0, dilute limit, of scenes whose three atoms leave free, where converged: |u-u'| <= window/2, untruncated with a well [rho^2 l v_th]; recombination: rate of encounters leaving a bound pair [rho^2 l v_th]; dissociation: rate at which atoms break a bound pair, per pair; kernel shape near u' (+- standard errors; shape: statistical and fit-protocol errors combined); relaxation gap of the gas (linearized operator) and of one particle over Gamma (the tagged variance rate at u' = 0, untruncated)",
+    layout: Layout::Joined,
+    rows: Selection::All,
+    columns: &[
+        Printed::new(POTENTIAL.name, Shown::Text(POTENTIAL)),
+        Printed::new("a_n (converged)", Shown::Estimate(A_N, "-")),
+        Printed::new("rel.err", Shown::Relative(A_N)),
+        Printed::new("a_n untruncated", Shown::Estimate(A_N_UNTRUNCATED, "-")),
+        Printed::new(
+            "recombination",
+            Shown::Unless(
+                RECOMBINATION_RATE,
+                "-",
+                &Shown::Estimate(RECOMBINATION_RATE, "-"),
+            ),
+        ),
+        Printed::new(
+            "dissociation [rho v_th]",
+            Shown::Estimate(super::dissociation::study::DISSOCIATION_RATE, "-"),
+        ),
+        Printed::new(
+            BETA.value.name,
+            Shown::Unless(A_N, "no kicks", &Shown::Estimate(BETA, "no fit")),
+        ),
+        Printed::new(
+            "sigma [v_th]",
+            Shown::Unless(A_N, "no kicks", &Shown::Estimate(SIGMA, "no fit")),
+        ),
+        Printed::new(
+            "gap/Gamma gas",
+            Shown::Estimate(super::spectrum::study::GAP_OVER_VARIANCE_RATE, "-"),
+        ),
+        Printed::new(
+            "1 particle",
+            Shown::Estimate(super::spectrum::study::PARTICLE_GAP_OVER_VARIANCE_RATE, "-"),
+        ),
+        Printed::new(
+            "failed",
+            Shown::Composite(
+                "{}/{}",
+                &[Shown::Count(FAILED_EVENTS), Shown::Count(EVENTS)],
+            ),
+        ),
+    ],
+    footnote: None,
+};
+
 /// `u1f_max_<launch>` and `u1f_max_<launch>_error`: the scan maximum of
 /// a launch pair per potential, with its error bound.
 pub fn scan_maximum(launch: &str, maxima: Vec<f64>, errors: Vec<f64>) -> [Column; 2] {
