@@ -37,6 +37,7 @@ use polars::prelude::{DataFrame, ParquetReader, SerReader};
 use crate::contract::{Col, Pair, TableSpec};
 use crate::pipeline::executor::InstanceReport;
 use crate::pipeline::store::Store;
+use crate::stats::Estimate;
 use layout::Cell;
 
 /// Cell `col` of `row` as a number (NaN when null).
@@ -44,14 +45,19 @@ fn number(frame: &DataFrame, row: usize, col: Col<f64>) -> Result<f64> {
     Ok(frame.column(col.name)?.f64()?.get(row).unwrap_or(f64::NAN))
 }
 
+/// Cells `pair` of `row` as a value and its error (NaN where null).
+fn pair_of(frame: &DataFrame, row: usize, pair: Pair) -> Result<Estimate> {
+    Ok(Estimate {
+        mean: number(frame, row, pair.value)?,
+        stderr: number(frame, row, pair.stderr)?,
+    })
+}
+
 /// Cells `pair` of `row` as a `value ± error` cell (`undefined` when the
 /// value is not a number).
 fn estimate(frame: &DataFrame, row: usize, pair: Pair, undefined: &str) -> Result<Cell> {
-    Ok(Cell::estimate(
-        number(frame, row, pair.value)?,
-        number(frame, row, pair.stderr)?,
-        undefined,
-    ))
+    let Estimate { mean, stderr } = pair_of(frame, row, pair)?;
+    Ok(Cell::estimate(mean, stderr, undefined))
 }
 
 /// Cells `pair` of `row`, a variance of velocities `[v_th^2]`: one whose
@@ -61,10 +67,10 @@ fn estimate(frame: &DataFrame, row: usize, pair: Pair, undefined: &str) -> Resul
 /// printed `(3.83 ± 0.72)e-23`), and says so.
 fn variance(frame: &DataFrame, row: usize, pair: Pair, kick_floor: f64) -> Result<Cell> {
     let floor = kick_floor.powi(2);
-    let (value, error) = (
-        number(frame, row, pair.value)?,
-        number(frame, row, pair.stderr)?,
-    );
+    let Estimate {
+        mean: value,
+        stderr: error,
+    } = pair_of(frame, row, pair)?;
     Ok(if value != 0.0 && value.abs() + error < floor {
         Cell::text(format!("< {floor:e} (engine floor)"))
     } else {

@@ -7,12 +7,11 @@ use polars::prelude::DataFrame;
 
 use super::layout::{Align, Cell, Columns, Sink};
 use super::numbers::{fixed, or_why, significant};
-use super::{count, estimate, number, table_frames, text, variance};
-use crate::contract::Pair;
+use super::{count, estimate, number, pair_of, table_frames, text, variance};
 use crate::contract::printout::{Layout, Printout, Selection, Shown};
 use crate::pipeline::executor::InstanceReport;
 use crate::pipeline::store::Store;
-use crate::stats::{ChiSquare, Estimate};
+use crate::stats::ChiSquare;
 use crate::thresholds::DOMINATED_SHARE;
 
 /// `printout`'s table of every instance in `reports` that has it (nothing
@@ -172,7 +171,7 @@ fn compound(
 ) -> Result<Cell> {
     Ok(match *shown {
         Shown::Relative(pair) => {
-            let estimate = estimate_of(frame, row, pair)?;
+            let estimate = pair_of(frame, row, pair)?;
             let relative = if estimate.mean == 0.0 {
                 f64::NAN
             } else {
@@ -181,7 +180,7 @@ fn compound(
             Cell::text(or_why(relative, |r| format!("{:.3}%", 100.0 * r), "-"))
         }
         Shown::Unless(pair, text, shown) => {
-            let estimate = estimate_of(frame, row, pair)?;
+            let estimate = pair_of(frame, row, pair)?;
             if estimate.mean == 0.0 && estimate.stderr == 0.0 {
                 Cell::text(text)
             } else {
@@ -198,14 +197,6 @@ fn compound(
             Cell::text(composed)
         }
         _ => cell(frame, row, instance, shown, kick_floor)?,
-    })
-}
-
-/// The value and error in `row`'s columns `pair`.
-fn estimate_of(frame: &DataFrame, row: usize, pair: Pair) -> Result<Estimate> {
-    Ok(Estimate {
-        mean: number(frame, row, pair.value)?,
-        stderr: number(frame, row, pair.stderr)?,
     })
 }
 
