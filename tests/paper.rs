@@ -76,7 +76,7 @@ fn paper_rows_recompute_from_their_sources() {
     let line = |n: &str| {
         summary
             .lines()
-            .skip_while(|l| !l.starts_with("Table I, published | ours (z)"))
+            .skip_while(|l| !l.contains("Table I: published | ours (z)"))
             .find(|l| l.split_whitespace().next() == Some(n))
             .unwrap_or_else(|| panic!("no Table I line for n = {n}: {summary}"))
             .to_string()

@@ -22,17 +22,41 @@ pub struct Printout {
     pub rows: Selection,
     /// The printed columns, left to right.
     pub columns: &'static [Printed],
-    /// A line printed after the table (what a column's marker means).
-    pub footnote: Option<&'static str>,
+    /// What is printed after the table.
+    pub footnote: Footnote,
+}
+
+/// What a printout prints after its table.
+#[derive(Clone, Copy, Debug)]
+pub enum Footnote {
+    /// Nothing.
+    None,
+    /// One line (what a column's marker means).
+    Line(&'static str),
+    /// A line per printed row, `<row>. <text>`: the row's number in its
+    /// table (as [`Shown::Row`] prints it) and its text in the column.
+    PerRow(Col<String>),
 }
 
 /// How a table's instances are laid out.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug)]
 pub enum Layout {
     /// One table under one title, the instances' rows one after another.
     Joined,
     /// One titled table per instance.
     PerInstance,
+    /// One table of the selected rows as a grid: a line per distinct value
+    /// of `lines` (ascending, labelled by it to six significant digits under
+    /// the first printed column's head), a column per distinct text of
+    /// `across` (in the order they first appear, headed by it), each cell
+    /// the first printed column's cell of the row with that line and
+    /// column (`-` where there is none). Table I, `n` against its columns.
+    Pivot {
+        /// The column whose values label the lines.
+        lines: Col<f64>,
+        /// The column whose texts head the grid's columns.
+        across: Col<String>,
+    },
 }
 
 /// Which rows of an instance's table are printed.
@@ -51,6 +75,10 @@ pub enum Selection {
         /// How many rows.
         count: usize,
     },
+    /// The rows whose `col` is a number (not null or NaN).
+    Given(Col<f64>),
+    /// The rows whose `col` is not a number.
+    Missing(Col<f64>),
 }
 
 /// One printed column: its head and what each cell shows.
@@ -68,6 +96,8 @@ pub struct Printed {
 pub enum Shown {
     /// The instance the row belongs to.
     Instance,
+    /// The row's number in its instance's table, counted from 1.
+    Row,
     /// A label.
     Text(Col<String>),
     /// A count.
@@ -75,11 +105,22 @@ pub enum Shown {
     /// `value ± error` to the digits the error justifies, or the text given
     /// when the value is not a number.
     Estimate(Pair, &'static str),
+    /// The same, or the row's text in the column given when the value is
+    /// not a number (why there is none).
+    EstimateElse(Pair, Col<String>),
+    /// `value(error)`, the error in units of the value's last digit; the
+    /// value alone to six significant digits when its error is below a
+    /// part in 1e6 (a bound that adds no digit a reader compares).
+    Concise(Pair),
     /// A variance of velocities `[v_th^2]`: below the square of the study's
     /// kick floor it is the engine's rounding and says so.
     Variance(Pair),
     /// A number to fixed decimals.
     Fixed(Col<f64>, usize),
+    /// A number with its sign to fixed decimals in parentheses after a
+    /// space (` (+1.2)`), nothing when it is not a number: a z-score
+    /// appended to another cell.
+    Appended(Col<f64>, usize),
     /// A number to six significant digits.
     Significant(Col<f64>),
     /// A share as a percentage to the given decimals (`12.5%`).

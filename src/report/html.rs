@@ -22,7 +22,7 @@ use super::describe;
 use super::folder::ReportFolder;
 use super::layout::{Align, Cell, Columns, Sink};
 use super::printout::print;
-use super::summary::{paper_table, stage_tables};
+use super::summary::stage_tables;
 use crate::config::Study;
 use crate::contract;
 use crate::contract::pulls;
@@ -190,7 +190,10 @@ fn page(
         }),
         ("paper", "The paper's numbers", {
             let mut tables = Tables::default();
-            paper_table(&mut tables, store, &reports)?;
+            let kick_floor = study.config.kernel.kick_floor;
+            for printout in contract::paper::PRINTOUTS {
+                print(&mut tables, store, &reports, printout, kick_floor)?;
+            }
             tables.html
         }),
         ("crosschecks", "Cross-checks: are the errors calibrated?", {

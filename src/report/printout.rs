@@ -6,9 +6,10 @@ use anyhow::Result;
 use polars::prelude::DataFrame;
 
 use super::layout::{Align, Cell, Columns, Sink};
-use super::numbers::{fixed, or_why, significant};
+use super::numbers::{Notation, fixed, natural_notation, or_why, significant, written};
 use super::{count, estimate, number, pair_of, table_frames, text, variance};
-use crate::contract::printout::{Layout, Printout, Selection, Shown};
+use crate::contract::Col;
+use crate::contract::printout::{Footnote, Layout, Printed, Printout, Selection, Shown};
 use crate::pipeline::executor::InstanceReport;
 use crate::pipeline::store::Store;
 use crate::stats::ChiSquare;
@@ -38,6 +39,9 @@ pub(super) fn print(
                 Ok((title, columns(one, printout, kick_floor)?))
             })
             .collect::<Result<_>>()?,
+        Layout::Pivot { lines, across } => {
+            vec![(title, grid(&frames, printout, (lines, across), kick_floor)?)]
+        }
     };
     let shown: Vec<_> = tables
         .iter()
@@ -47,11 +51,72 @@ pub(super) fn print(
         out.title(title);
         out.table(table);
     }
-    match printout.footnote {
-        Some(footnote) if !shown.is_empty() => out.line(footnote),
-        _ => {}
+    if !shown.is_empty() {
+        footnote(out, &frames, printout)?;
     }
     Ok(())
+}
+
+/// What `printout` prints after its table of `frames`.
+fn footnote(out: &mut dyn Sink, frames: &[(String, DataFrame)], printout: &Printout) -> Result<()> {
+    match printout.footnote {
+        Footnote::None => {}
+        Footnote::Line(line) => out.line(line),
+        Footnote::PerRow(col) => {
+            for (_, frame) in frames {
+                for row in selected(frame, printout.rows)? {
+                    let number = format!("{}.", row + 1);
+                    out.line(&format!("{number:<4} {}", text(frame, row, col)?));
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The [`Layout::Pivot`] grid of `frames`' selected rows: a line per
+/// distinct value of `lines`, a column per distinct text of `across`, each
+/// cell the first printed column's.
+fn grid(
+    frames: &[(String, DataFrame)],
+    printout: &Printout,
+    (lines, across): (Col<f64>, Col<String>),
+    kick_floor: f64,
+) -> Result<Columns> {
+    let Some(Printed { head, shown }) = printout.columns.first() else {
+        return Ok(Columns::new(&[]));
+    };
+    let mut cells: Vec<(f64, String, Cell)> = Vec::new();
+    for (instance, frame) in frames {
+        for row in selected(frame, printout.rows)? {
+            let at = (number(frame, row, lines)?, text(frame, row, across)?);
+            cells.push((at.0, at.1, cell(frame, row, instance, shown, kick_floor)?));
+        }
+    }
+    let mut labels: Vec<f64> = cells.iter().map(|(line, ..)| *line).collect();
+    labels.sort_by(f64::total_cmp);
+    labels.dedup();
+    let mut heads: Vec<&str> = Vec::new();
+    for (_, column, _) in &cells {
+        if !heads.contains(&column.as_str()) {
+            heads.push(column);
+        }
+    }
+    let columns: Vec<(&str, Align)> = std::iter::once((*head, Align::Right))
+        .chain(heads.iter().map(|column| (*column, Align::Left)))
+        .collect();
+    let mut table = Columns::new(&columns);
+    for label in labels {
+        let at = |column: &&str| {
+            cells
+                .iter()
+                .find(|(line, across, _)| *line == label && across == column)
+                .map_or_else(|| Cell::text("-"), |(.., cell)| cell.clone())
+        };
+        let line = std::iter::once(Cell::text(significant(label)));
+        table.push(line.chain(heads.iter().map(at)).collect());
+    }
+    Ok(table)
 }
 
 /// The table of `frames`' selected rows.
@@ -84,6 +149,8 @@ fn alignment(shown: &Shown) -> Align {
         Shown::Instance
         | Shown::Text(_)
         | Shown::Estimate(..)
+        | Shown::EstimateElse(..)
+        | Shown::Concise(_)
         | Shown::Variance(_)
         | Shown::Evidence(_) => Align::Left,
         Shown::Composite(_, parts) => parts.first().map_or(Align::Left, alignment),
@@ -114,6 +181,16 @@ fn selected(frame: &DataFrame, selection: Selection) -> Result<Vec<usize>> {
             ranked.sort_by(|a, b| b.1.abs().total_cmp(&a.1.abs()));
             ranked.into_iter().take(count).map(|(row, _)| row).collect()
         }
+        Selection::Given(col) | Selection::Missing(col) => {
+            let given = matches!(selection, Selection::Given(_));
+            let mut kept = Vec::new();
+            for row in rows {
+                if number(frame, row, col)?.is_finite() == given {
+                    kept.push(row);
+                }
+            }
+            kept
+        }
     })
 }
 
@@ -128,11 +205,17 @@ fn cell(
     let bare = |x: f64, format: &dyn Fn(f64) -> String| Cell::text(or_why(x, format, "-"));
     Ok(match *shown {
         Shown::Instance => Cell::text(instance),
+        Shown::Row => Cell::text((row + 1).to_string()),
         Shown::Text(col) => Cell::text(text(frame, row, col)?),
         Shown::Count(col) => Cell::text(count(frame, row, col)?.to_string()),
         Shown::Estimate(pair, undefined) => estimate(frame, row, pair, undefined)?,
         Shown::Variance(pair) => variance(frame, row, pair, kick_floor)?,
         Shown::Fixed(col, decimals) => bare(number(frame, row, col)?, &|x| fixed(x, decimals)),
+        Shown::Appended(col, decimals) => Cell::text(or_why(
+            number(frame, row, col)?,
+            |x| format!(" ({x:+.decimals$})"),
+            "",
+        )),
         Shown::Significant(col) => bare(number(frame, row, col)?, &significant),
         Shown::Percent(col, decimals) => bare(number(frame, row, col)?, &|x| {
             format!("{}%", fixed(100.0 * x, decimals))
@@ -154,9 +237,11 @@ fn cell(
             bare(test.chi2, &|_| test.p_text())
         }
         Shown::Evidence(share) => Cell::text(evidence_verdict(number(frame, row, share)?)),
-        Shown::Relative(_) | Shown::Unless(..) | Shown::Composite(..) => {
-            compound(frame, row, instance, shown, kick_floor)?
-        }
+        Shown::Relative(_)
+        | Shown::Unless(..)
+        | Shown::Composite(..)
+        | Shown::EstimateElse(..)
+        | Shown::Concise(_) => compound(frame, row, instance, shown, kick_floor)?,
     })
 }
 
@@ -170,6 +255,8 @@ fn compound(
     kick_floor: f64,
 ) -> Result<Cell> {
     Ok(match *shown {
+        Shown::EstimateElse(pair, why) => estimate(frame, row, pair, &text(frame, row, why)?)?,
+        Shown::Concise(pair) => Cell::text(concise(frame, row, pair)?),
         Shown::Relative(pair) => {
             let estimate = pair_of(frame, row, pair)?;
             let relative = if estimate.mean == 0.0 {
@@ -198,6 +285,21 @@ fn compound(
         }
         _ => cell(frame, row, instance, shown, kick_floor)?,
     })
+}
+
+/// `pair` of `row` as `value(error)`, or the value alone to six
+/// significant digits when its error is below a part in 1e6.
+fn concise(frame: &DataFrame, row: usize, pair: crate::contract::Pair) -> Result<String> {
+    let estimate = pair_of(frame, row, pair)?;
+    let (value, error) = (estimate.mean, estimate.stderr);
+    if error < 1e-6 * value.abs() {
+        return Ok(significant(value));
+    }
+    let notation = Notation {
+        concise: true,
+        ..natural_notation(value, error)
+    };
+    Ok(written(value, error, "-", notation))
 }
 
 /// The chi-square in `row`'s columns `chi2` and `dof`.
@@ -250,6 +352,11 @@ mod tests {
         stderr: ZERO,
     };
     const FIT: Shown = Shown::Estimate(OWN, "no fit");
+    /// The pulls with no error at all.
+    const EXACT: Pair = Pair {
+        value: PULL,
+        stderr: ZERO,
+    };
 
     /// Four rows: pulls 0.5, -3, NaN, 0 labelled a..d, 2 of 4 counted.
     fn frame() -> DataFrame {
@@ -308,5 +415,59 @@ mod tests {
         let unless = |row, pair| shown(row, Shown::Unless(pair, "no kicks", &FIT)).to_string();
         assert_eq!(unless(0, NOTHING), "no kicks");
         assert_eq!(unless(2, OWN), "no fit");
+        // A z-score appended, nothing for a non-number; the row's number
+        // from 1; a concise estimate, or the value alone within 1e-6.
+        assert_eq!(shown(1, Shown::Appended(PULL, 1)).to_string(), " (-3.0)");
+        assert_eq!(shown(2, Shown::Appended(PULL, 1)).to_string(), "");
+        assert_eq!(shown(2, Shown::Row).to_string(), "3");
+        assert_eq!(shown(0, Shown::Concise(OWN)).to_string(), "0.50(50)");
+        assert_eq!(shown(0, Shown::Concise(EXACT)).to_string(), "0.5");
+        let why = |row| shown(row, Shown::EstimateElse(OWN, LABEL)).to_string();
+        assert_eq!(why(2), "c");
+    }
+
+    /// A pivot's one printed column: its head labels the lines.
+    const CELLS: [Printed; 1] = [Printed::new("n", Shown::Fixed(ZERO, 2))];
+
+    /// A pivot lays the selected rows out as a grid: a line per value of
+    /// one column (ascending), a column per text of another (in order of
+    /// appearance), `-` where no row has the pair; rows whose line value is
+    /// not a number are left to another printout.
+    #[test]
+    fn a_pivot_lays_rows_out_as_a_grid() {
+        let frame = DataFrame::new(
+            4,
+            vec![
+                Series::new(PULL.name.into(), vec![6.0, 2.0, 6.0, f64::NAN]).into_column(),
+                Series::new(LABEL.name.into(), vec!["a_n", "a_n", "beta", "note"]).into_column(),
+                Series::new(ZERO.name.into(), vec![0.25, 0.0, 1.5, 9.0]).into_column(),
+            ],
+        )
+        .expect("a frame");
+        let printout = Printout {
+            table: crate::contract::TableSpec {
+                stage: "paper",
+                name: "paper",
+                description: "a test",
+            },
+            title: "pivot",
+            layout: Layout::Pivot {
+                lines: PULL,
+                across: LABEL,
+            },
+            rows: Selection::Given(PULL),
+            columns: &CELLS,
+            footnote: Footnote::None,
+        };
+        let frames = [("study".to_string(), frame)];
+        let table = grid(&frames, &printout, (PULL, LABEL), 1e-9).unwrap();
+        let heads: Vec<&str> = table.heads().iter().map(|(h, _)| h.as_str()).collect();
+        assert_eq!(heads, ["n", "a_n", "beta"]);
+        assert_eq!(
+            table.shown_rows(),
+            [["2", "0.00", "-"], ["6", "0.25", "1.50"]]
+        );
+        let rest = selected(&frames[0].1, Selection::Missing(PULL)).unwrap();
+        assert_eq!(rest, [3]);
     }
 }

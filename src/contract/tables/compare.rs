@@ -149,7 +149,7 @@ pub mod goodness {
             Printed::new("z", Shown::Fixed(VARIANCE_Z, 2)),
             Printed::new(VERDICT.name, Shown::Text(VERDICT)),
         ],
-        footnote: None,
+        footnote: Footnote::None,
     };
 }
 
@@ -244,6 +244,6 @@ pub mod finite_size {
                 Shown::Estimate(THERMAL_RATIO, "0/0: no spread"),
             ),
         ],
-        footnote: None,
+        footnote: Footnote::None,
     };
 }

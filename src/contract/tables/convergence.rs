@@ -88,5 +88,5 @@ pub const PRINTOUT: Printout = Printout {
         Printed::new(SHIFT.value.name, Shown::Estimate(SHIFT, "-")),
         Printed::new("shift / a_n error", Shown::Fixed(SHIFT_OVER_ERROR, 3)),
     ],
-    footnote: None,
+    footnote: Footnote::None,
 };

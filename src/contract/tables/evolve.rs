@@ -264,6 +264,6 @@ pub mod evolution_summary {
             ),
             Printed::new("relative entropy", Shown::Estimate(ENTROPY, "-")),
         ],
-        footnote: None,
+        footnote: Footnote::None,
     };
 }

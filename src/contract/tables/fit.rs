@@ -461,7 +461,7 @@ pub mod model_fit {
             Printed::new("p", Shown::Fixed(P_VALUE, 3)),
             Printed::new("status", Shown::Text(STATUS)),
         ],
-        footnote: None,
+        footnote: Footnote::None,
     };
 }
 

@@ -79,7 +79,7 @@ pub const PRINTOUT: Printout = Printout {
             Shown::Estimate(RELAXATION_TIME, "never: no kicks"),
         ),
     ],
-    footnote: Some(
+    footnote: Footnote::Line(
         "* Gamma times the paper's launch rule's finite-density factor exp(-r |delay|) in a box of L = kernel.launch_length: an artifact of that algorithm (it depends on L), not the gas's rate at rho l; MD's finite-density change has the opposite sign (finite_size table)",
     ),
 };

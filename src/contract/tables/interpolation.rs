@@ -229,6 +229,6 @@ pub mod coordinates {
             ),
             Printed::new("largest deviation", Shown::Percent(LARGEST_DEVIATION, 1)),
         ],
-        footnote: None,
+        footnote: Footnote::None,
     };
 }

@@ -72,7 +72,7 @@ pub mod summary {
                 Shown::Variance(WINDOW_VARIANCE),
             ),
         ],
-        footnote: None,
+        footnote: Footnote::None,
     };
 }
 
@@ -220,6 +220,6 @@ pub mod pairs {
             Printed::new(STATE.name, Shown::Text(STATE)),
             Printed::new("bound pairs per gap", Shown::Estimate(BOUND_FRACTION, "-")),
         ],
-        footnote: None,
+        footnote: Footnote::None,
     };
 }

@@ -26,7 +26,7 @@ pub mod spectrum;
 pub mod sweep;
 pub mod table;
 
-use super::printout::{Layout, Printed, Printout, Selection, Shown};
+use super::printout::{Footnote, Layout, Printed, Printout, Selection, Shown};
 use super::study_column::StudyColumn;
 use super::{Col, Pair, TableSpec, UNIT_PER_PANEL, UNIT_PER_ROW};
 

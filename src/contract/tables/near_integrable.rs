@@ -181,6 +181,6 @@ pub mod fits {
             Printed::new("p-value", Shown::PValue(CHI2, DOF)),
             Printed::new("fitted", Shown::Text(FITTED)),
         ],
-        footnote: None,
+        footnote: Footnote::None,
     };
 }

@@ -66,3 +66,53 @@ pub const CONVERGED: Col<String> = Col::text(
 );
 /// Where the definitions differ, and how to read the row.
 pub const NOTE: Col<String> = Col::text("note", "where the definitions differ");
+
+/// Table I as the paper prints it: a line per `n`, each cell `published |
+/// ours (z)`, ours under the paper's definition (the other rows and the
+/// notes have the rest).
+pub const TABLE_I: Printout = Printout {
+    table: TABLE,
+    title: "the paper (Phys. Rev. E 110, 014114), Table I: published | ours (z) (a_n at |u - u'| <= 0.04; shape: our fit up to 0.04, statistical and protocol errors combined; |u1f,max| to 6 digits, its error bound below 1e-6)",
+    layout: Layout::Pivot {
+        lines: TABLE_I_N,
+        across: TABLE_I_COLUMN,
+    },
+    rows: Selection::Given(TABLE_I_N),
+    columns: &[Printed::new(
+        "n",
+        Shown::Composite(
+            "{} | {}{}",
+            &[
+                Shown::Significant(PUBLISHED.value),
+                Shown::Concise(OURS),
+                Shown::Appended(Z, 1),
+            ],
+        ),
+    )],
+    footnote: Footnote::None,
+};
+
+/// The paper's other numbers, each row with its note.
+pub const PRINTOUT: Printout = Printout {
+    table: TABLE,
+    title: "the paper (Phys. Rev. E 110, 014114), its other numbers: published against ours under its definition (+- standard errors; published: +- as printed, else rounding); converged: ours under our definition where it differs",
+    layout: Layout::Joined,
+    rows: Selection::Missing(TABLE_I_N),
+    columns: &[
+        Printed::new("", Shown::Row),
+        Printed::new("published", Shown::Estimate(PUBLISHED, "-")),
+        Printed::new("ours", Shown::Estimate(OURS, "-")),
+        Printed::new("ours/pub", Shown::Quotient(OURS.value, PUBLISHED.value, 4)),
+        Printed::new("z", Shown::Fixed(Z, 2)),
+        Printed::new("converged", Shown::EstimateElse(OURS_CONVERGED, CONVERGED)),
+        Printed::new("unit", Shown::Text(UNIT)),
+        Printed::new(
+            "quantity [source]",
+            Shown::Composite("{} [{}]", &[Shown::Text(QUANTITY), Shown::Text(SOURCE)]),
+        ),
+    ],
+    footnote: Footnote::PerRow(NOTE),
+};
+
+/// What the summary and the report print of the paper table, in order.
+pub const PRINTOUTS: [&Printout; 2] = [&TABLE_I, &PRINTOUT];

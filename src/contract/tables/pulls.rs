@@ -61,7 +61,7 @@ pub mod checks {
             Printed::new("b", Shown::Estimate(SECOND, "-")),
             Printed::new("check", Shown::Text(CHECK)),
         ],
-        footnote: None,
+        footnote: Footnote::None,
     };
 }
 
@@ -129,6 +129,6 @@ pub mod summary {
             ),
             Printed::new("verdict", Shown::Text(VERDICT)),
         ],
-        footnote: None,
+        footnote: Footnote::None,
     };
 }

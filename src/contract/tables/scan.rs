@@ -158,6 +158,6 @@ pub mod peak {
             Printed::new("failed", Shown::Count(FAILED_SCENES)),
             Printed::new("max |dE/E|", Shown::Scientific(WORST_ENERGY_ERROR, 1)),
         ],
-        footnote: None,
+        footnote: Footnote::None,
     };
 }

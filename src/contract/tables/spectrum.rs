@@ -150,7 +150,7 @@ pub mod summary {
             ),
             Printed::new("growing modes", Shown::Count(GROWING_MODES)),
         ],
-        footnote: None,
+        footnote: Footnote::None,
     };
 }
 

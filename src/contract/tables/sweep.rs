@@ -220,7 +220,7 @@ pub mod stationarity {
             Printed::new("z", Shown::Fixed(JOINT_Z, 2)),
             Printed::new("", Shown::Evidence(LARGEST_SHARE)),
         ],
-        footnote: None,
+        footnote: Footnote::None,
     };
 }
 
@@ -288,6 +288,6 @@ pub mod balance_tests {
             Printed::new("z", Shown::Fixed(JOINT_Z, 2)),
             Printed::new("", Shown::Evidence(JOINT_LARGEST_SHARE)),
         ],
-        footnote: None,
+        footnote: Footnote::None,
     };
 }

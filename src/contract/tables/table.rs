@@ -131,7 +131,7 @@ pub const PRINTOUT: Printout = Printout {
             ),
         ),
     ],
-    footnote: None,
+    footnote: Footnote::None,
 };
 
 /// `u1f_max_<launch>` and `u1f_max_<launch>_error`: the scan maximum of
