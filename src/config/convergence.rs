@@ -94,12 +94,7 @@ impl ConvergenceConfig {
             ("densities", &self.densities, 0.0, 0.1),
             ("offset_bounds", &self.offset_bounds, 1e-3, 1e6),
             ("tolerances", &self.tolerances, 1e-16, 1e-3),
-            (
-                "bin_widths",
-                &self.bin_widths,
-                1e-7,
-                0.5 * context.kernel.window,
-            ),
+            ("bin_widths", &self.bin_widths, 1e-7, context.kernel.edge()),
         ];
         for (name, values, low, high) in lists {
             check_length(values, &format!("convergence.{name}"))?;

@@ -110,15 +110,22 @@ impl KernelParams {
         }
     }
 
-    /// The truncation `X` at which `a_n` has converged and is read: half
-    /// the window; none for a family with a well, whose free-atom kicks
+    /// The window's edge: the largest `|u - u'|` the kernel's window holds,
+    /// half the window, `v_th`. Self rates summed within it are the
+    /// untruncated ones of an inverse power law.
+    pub fn edge(&self) -> f64 {
+        0.5 * self.window
+    }
+
+    /// The truncation `X` at which `a_n` has converged and is read: the
+    /// window's [`edge`](Self::edge); none for a family with a well, whose free-atom kicks
     /// reach O(v_th) beyond any window (Lennard-Jones at `theta = 0.1`:
     /// `a(X)` grows 16-fold from `X = 0.1` and levels off near `X = 1.6`).
     pub fn converged_truncation(&self) -> f64 {
         if self.potential.family().has_well() {
             f64::INFINITY
         } else {
-            0.5 * self.window
+            self.edge()
         }
     }
 }
@@ -127,6 +134,12 @@ impl KernelParams {
 pub const MAX_BINS: f64 = 1e6;
 
 impl KernelConfig {
+    /// The window's edge, half the window (`v_th`), as every kernel of the
+    /// study resolves it ([`KernelParams::edge`]).
+    pub fn edge(&self) -> f64 {
+        0.5 * self.window
+    }
+
     /// Checks the targets (within reach of the launch proposal), the bins and the fit range.
     pub(super) fn validate(&self, launch: &LaunchProposal) -> Result<(), Invalid> {
         let kernel = self;
@@ -204,11 +217,11 @@ impl KernelConfig {
         )?;
         for (k, &x) in kernel.truncations.iter().enumerate() {
             check(
-                x.is_finite() && x > 0.0 && x <= 0.5 * kernel.window,
+                x.is_finite() && x > 0.0 && x <= kernel.edge(),
                 format!("kernel.truncations[{k}]"),
                 format!(
                     "X = {x} must be in (0, kernel.window / 2 = {}]",
-                    0.5 * kernel.window
+                    kernel.edge()
                 ),
             )?;
         }
@@ -219,7 +232,7 @@ impl KernelConfig {
         )?;
         let [low, high] = kernel.fit_range;
         check(
-            low > 0.0 && low < high && high <= 0.5 * kernel.window && low < PAPER_TRUNCATION,
+            low > 0.0 && low < high && high <= kernel.edge() && low < PAPER_TRUNCATION,
             "kernel.fit_range",
             format!(
                 "[{low}, {high}] must satisfy 0 < min < max <= window/2 and min < {PAPER_TRUNCATION} (the paper's truncation, where its protocol's fit ends)"

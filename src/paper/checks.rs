@@ -238,7 +238,7 @@ fn rates(
 ) -> Result<(Estimate, Converged, String), StageError> {
     let moments = contract::moments::TABLE.find(inputs, &instances::moments(params))?;
     let paper = self_variance_at(moments, PAPER_TRUNCATION)?;
-    let edge = 0.5 * params.window;
+    let edge = params.edge();
     let window = self_variance_at(moments, edge)?;
     let truncated = "ours counts |u - u'| <= 0.04 like the paper";
     if params.potential.family().has_well() {
@@ -587,7 +587,7 @@ fn scaling_kernel(
     let collisions = instances::collisions(&cold.moments.potential.id());
     let (events, draws, _) = collision_events(input(inputs, &collisions)?)?;
     let rate = |ring: &ScalingRing| {
-        let edge = 0.5 * ring.moments.window;
+        let edge = ring.moments.edge();
         self_rates(&events, &ring.moments.target(), edge, &draws).variance
     };
     let units = hot.rate_unit_per_ns / cold.rate_unit_per_ns;

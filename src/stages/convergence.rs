@@ -36,13 +36,9 @@ impl ConvergenceStage {
         ConvergenceStage { params }
     }
 
-    fn edge(&self) -> f64 {
-        0.5 * self.params.kernel.window
-    }
-
     /// `a_n` per replicate from unbinned self kicks within half the window.
     fn self_variance(&self, events: &[Event], draws: &Draws, target: &Target) -> Vec<f64> {
-        self_rates(events, target, self.edge(), draws).variance
+        self_rates(events, target, self.params.kernel.edge(), draws).variance
     }
 
     /// `a_n` per replicate from the binned self kernel: `sum_k G_self,k x_k^2 dx`.

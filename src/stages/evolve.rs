@@ -75,7 +75,7 @@ impl EvolveStage {
     /// `rho^2 l v_th`: `Gamma` in scaled units.
     fn gamma(&self, events: &[Event], draws: &Draws) -> f64 {
         let target = self.params.kernel.target();
-        let rates = self_rates(events, &target, 0.5 * self.params.kernel.window, draws);
+        let rates = self_rates(events, &target, self.params.kernel.edge(), draws);
         Estimate::from_replicates(&rates.variance).mean
     }
 
@@ -225,7 +225,7 @@ impl EvolveStage {
     ) -> Result<Table, StageError> {
         use contract::evolve::evolution_summary::*;
         let u_prime = self.params.kernel.u_prime;
-        let reach = 0.5 * self.params.kernel.window;
+        let reach = self.params.kernel.edge();
         let none = Estimate {
             mean: f64::NAN,
             stderr: f64::NAN,

@@ -53,7 +53,7 @@ impl MomentsStage {
     /// (and, for a family with a well, on to [`BEYOND_WINDOW_DECADES`]
     /// beyond it) and the added truncations, ascending, then infinity.
     fn truncations(&self) -> Vec<f64> {
-        let edge = 0.5 * self.params.window;
+        let edge = self.params.edge();
         let below = TRUNCATIONS_PER_DECADE * TRUNCATION_DECADES;
         let above = if self.params.potential.family().has_well() {
             TRUNCATIONS_PER_DECADE * BEYOND_WINDOW_DECADES

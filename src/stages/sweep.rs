@@ -64,7 +64,7 @@ impl SweepStage {
 
     /// Self drift and variance rates (within half the window) per replicate at every grid point.
     fn rates(&self, events: &[Event], draws: &Draws, grid: &[f64]) -> Vec<SelfRates> {
-        let edge = 0.5 * self.params.kernel.window;
+        let edge = self.params.kernel.edge();
         grid.par_iter()
             .map(|&u| self_rates(events, &self.target(u), edge, draws))
             .collect()
