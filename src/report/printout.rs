@@ -8,8 +8,8 @@ use polars::prelude::DataFrame;
 use super::layout::{Align, Cell, Columns, Sink};
 use super::numbers::{Notation, fixed, natural_notation, or_why, significant, written};
 use super::{count, estimate, number, pair_of, table_frames, text, variance};
-use crate::contract::Col;
 use crate::contract::printout::{Footnote, Layout, Printed, Printout, Selection, Shown};
+use crate::contract::{Col, Pair};
 use crate::pipeline::executor::InstanceReport;
 use crate::pipeline::store::Store;
 use crate::stats::ChiSquare;
@@ -89,8 +89,11 @@ fn grid(
     let mut cells: Vec<(f64, String, Cell)> = Vec::new();
     for (instance, frame) in frames {
         for row in selected(frame, printout.rows)? {
-            let at = (number(frame, row, lines)?, text(frame, row, across)?);
-            cells.push((at.0, at.1, cell(frame, row, instance, shown, kick_floor)?));
+            cells.push((
+                number(frame, row, lines)?,
+                text(frame, row, across)?,
+                cell(frame, row, instance, shown, kick_floor)?,
+            ));
         }
     }
     let mut labels: Vec<f64> = cells.iter().map(|(line, ..)| *line).collect();
@@ -133,9 +136,7 @@ fn columns(
     let mut table = Columns::new(&heads);
     for (instance, frame) in frames {
         for row in selected(frame, printout.rows)? {
-            let shown = |printed: &crate::contract::printout::Printed| {
-                cell(frame, row, instance, &printed.shown, kick_floor)
-            };
+            let shown = |printed: &Printed| cell(frame, row, instance, &printed.shown, kick_floor);
             table.push(printout.columns.iter().map(shown).collect::<Result<_>>()?);
         }
     }
@@ -289,7 +290,7 @@ fn compound(
 
 /// `pair` of `row` as `value(error)`, or the value alone to six
 /// significant digits when its error is below a part in 1e6.
-fn concise(frame: &DataFrame, row: usize, pair: crate::contract::Pair) -> Result<String> {
+fn concise(frame: &DataFrame, row: usize, pair: Pair) -> Result<String> {
     let estimate = pair_of(frame, row, pair)?;
     let (value, error) = (estimate.mean, estimate.stderr);
     if error < 1e-6 * value.abs() {
@@ -303,12 +304,7 @@ fn concise(frame: &DataFrame, row: usize, pair: crate::contract::Pair) -> Result
 }
 
 /// The chi-square in `row`'s columns `chi2` and `dof`.
-fn chi_square(
-    frame: &DataFrame,
-    row: usize,
-    chi2: crate::contract::Col<f64>,
-    dof: crate::contract::Col<u32>,
-) -> Result<ChiSquare> {
+fn chi_square(frame: &DataFrame, row: usize, chi2: Col<f64>, dof: Col<u32>) -> Result<ChiSquare> {
     Ok(ChiSquare {
         chi2: number(frame, row, chi2)?,
         dof: count(frame, row, dof)? as usize,
@@ -333,7 +329,6 @@ fn evidence_verdict(share: f64) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::contract::{Col, Pair};
     use polars::prelude::{IntoColumn, NamedFrom, Series};
 
     const PULL: Col<f64> = Col::f64("pull", "1", "a pull");
