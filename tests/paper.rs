@@ -8,7 +8,7 @@
 use std::fs;
 use std::path::Path;
 
-use arrow::array::RecordBatch;
+use arrow_array::RecordBatch;
 use ternary::binning::Bins;
 use ternary::contract;
 use ternary::contract::readers::collision_events;

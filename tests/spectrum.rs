@@ -16,7 +16,7 @@ use std::fs;
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
-use arrow::array::RecordBatch;
+use arrow_array::RecordBatch;
 use common::{SYMMETRIC_SCAN, stderr, ternary, workspace, write_config};
 use ternary::contract;
 use ternary::pipeline::table::read_parquet;

@@ -12,7 +12,7 @@
 
 use std::marker::PhantomData;
 
-use arrow::array::{Float64Array, RecordBatch};
+use arrow_array::{Float64Array, RecordBatch};
 
 use crate::pipeline::table::{TableError, column, f64_values, text_values, u32_values};
 use crate::pipeline::{Column, Input, InstanceId, StageError, Table};

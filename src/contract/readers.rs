@@ -3,7 +3,7 @@
 //! reader lives here, beside the columns it reads, so that no stage imports
 //! another.
 
-use arrow::array::RecordBatch;
+use arrow_array::RecordBatch;
 
 use crate::kernel::{Draws, Event};
 use crate::physics::sampling::{LaunchPoint, Stratum};

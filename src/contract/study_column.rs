@@ -5,7 +5,7 @@
 //! potential, so a stage that adds a per-potential column edits neither the
 //! study table's contract nor the `table` stage.
 
-use arrow::array::RecordBatch;
+use arrow_array::RecordBatch;
 
 use super::{Col, Pair, TableSpec};
 use crate::pipeline::StageError;

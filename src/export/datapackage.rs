@@ -6,7 +6,7 @@ use std::fs;
 use std::path::Path;
 
 use anyhow::{Result, bail};
-use arrow::datatypes::DataType;
+use arrow_schema::DataType;
 use serde_json::{Value, json};
 
 use super::citation::orcid_url;

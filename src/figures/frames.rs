@@ -4,7 +4,7 @@
 
 use std::io::Cursor;
 
-use arrow::array::RecordBatch;
+use arrow_array::RecordBatch;
 use polars::prelude::{
     ChunkCompareEq, Column, DataFrame, DataType, IntoColumn, NamedFrom, ParquetReader, SerReader,
     Series,

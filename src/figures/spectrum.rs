@@ -93,7 +93,7 @@ const SPECTRUM_SHAPES: u32 = 2;
 /// The slowest [`SPECTRUM_MODES`] rates of `generator` over `Gamma` against
 /// the mode number, as the series `title`.
 fn generator_rates(
-    table: &arrow::array::RecordBatch,
+    table: &arrow_array::RecordBatch,
     generator: &str,
     title: &str,
 ) -> Result<DataFrame, StageError> {
@@ -115,7 +115,7 @@ fn generator_rates(
 
 /// `f0 g_k(u)` of the slowest [`SPECTRUM_SHAPES`] modes of `generator`.
 fn mode_shapes(
-    table: &arrow::array::RecordBatch,
+    table: &arrow_array::RecordBatch,
     generator: &str,
     title: &str,
 ) -> Result<Vec<DataFrame>, StageError> {
@@ -145,7 +145,7 @@ fn mode_shapes(
 /// The slowest rate of `generator` from groups of each size: sizes and the
 /// groups' mean rate (the all-randomization estimate has no spread: error 0).
 fn slowest_by_group(
-    table: &arrow::array::RecordBatch,
+    table: &arrow_array::RecordBatch,
     generator: &str,
 ) -> Result<(Vec<f64>, Vec<Estimate>), StageError> {
     use contract::spectrum::scenes::{GENERATOR, MODE, RANDOMIZATIONS, RATE};

@@ -9,7 +9,7 @@
 //! (`X = window / 2`), where the self variance rate has converged; `Gamma =
 //! a_n rho^2 l v_th` follows whichever `a_n` is used.
 
-use arrow::array::RecordBatch;
+use arrow_array::RecordBatch;
 use serde::Serialize;
 
 use super::published::{Column, Published, SYMMETRIC_LAUNCH};

@@ -9,8 +9,8 @@ use std::collections::{BTreeMap, HashMap};
 use std::path::Path;
 use std::sync::Arc;
 
-use arrow::array::{ArrayRef, Float64Array, RecordBatch, StringArray, UInt32Array};
-use arrow::datatypes::{Field, Schema};
+use arrow_array::{ArrayRef, Float64Array, RecordBatch, StringArray, UInt32Array};
+use arrow_schema::{Field, Schema};
 use parquet::arrow::ArrowWriter;
 use parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder;
 use parquet::basic::{Compression, ZstdLevel};
@@ -126,7 +126,7 @@ pub enum TableError {
         /// The table.
         name: String,
         /// The cause.
-        source: arrow::error::ArrowError,
+        source: arrow_schema::ArrowError,
     },
     /// Parquet encoding or decoding failed.
     #[error("parquet: {0}")]
@@ -155,7 +155,7 @@ impl Table {
         if let Some(column) = infinite {
             return Err(TableError::Arrow {
                 name: name.to_string(),
-                source: arrow::error::ArrowError::InvalidArgumentError(format!(
+                source: arrow_schema::ArrowError::InvalidArgumentError(format!(
                     "column `{}` holds an infinite value",
                     column.field.name()
                 )),
@@ -226,7 +226,7 @@ impl Table {
             } else {
                 return Err(TableError::Arrow {
                     name: self.name.clone(),
-                    source: arrow::error::ArrowError::NotYetImplemented(format!(
+                    source: arrow_schema::ArrowError::NotYetImplemented(format!(
                         "content hash of column `{}` of type {}",
                         field.name(),
                         field.data_type()
@@ -286,7 +286,7 @@ impl Table {
 pub fn column<'a, T: 'static>(batch: &'a RecordBatch, name: &str) -> Result<&'a T, TableError> {
     let missing = || TableError::Arrow {
         name: name.to_string(),
-        source: arrow::error::ArrowError::SchemaError(format!(
+        source: arrow_schema::ArrowError::SchemaError(format!(
             "column `{name}` is missing or has an unexpected type"
         )),
     };
@@ -357,7 +357,7 @@ fn key_values(metadata: &parquet::file::metadata::FileMetaData) -> BTreeMap<Stri
 /// Parquet file, read from its footer without decoding the data.
 pub fn read_parquet_footer(
     path: &Path,
-) -> Result<(arrow::datatypes::SchemaRef, BTreeMap<String, String>, u64), TableError> {
+) -> Result<(arrow_schema::SchemaRef, BTreeMap<String, String>, u64), TableError> {
     let file = std::fs::File::open(path).map_err(|source| TableError::Io {
         path: path.display().to_string(),
         source,
@@ -385,7 +385,7 @@ pub fn read_parquet_bytes(
         .build()?
         .collect::<Result<Vec<_>, _>>()
         .map_err(arrow_error)?;
-    let batch = arrow::compute::concat_batches(&schema, &batches).map_err(arrow_error)?;
+    let batch = arrow_select::concat::concat_batches(&schema, &batches).map_err(arrow_error)?;
     Ok((batch, metadata))
 }
 
@@ -425,7 +425,7 @@ impl Table {
     pub fn concatenate(parts: Vec<Table>) -> Result<Table, TableError> {
         let first = parts.first().ok_or_else(|| TableError::Arrow {
             name: "(no table)".into(),
-            source: arrow::error::ArrowError::InvalidArgumentError("nothing to concatenate".into()),
+            source: arrow_schema::ArrowError::InvalidArgumentError("nothing to concatenate".into()),
         })?;
         let (name, metadata, schema) = (
             first.name.clone(),
@@ -435,14 +435,14 @@ impl Table {
         if let Some(other) = parts.iter().find(|part| part.metadata != metadata) {
             return Err(TableError::Arrow {
                 name: name.clone(),
-                source: arrow::error::ArrowError::InvalidArgumentError(format!(
+                source: arrow_schema::ArrowError::InvalidArgumentError(format!(
                     "shards disagree on the metadata of `{}`",
                     other.name
                 )),
             });
         }
         let batches: Vec<RecordBatch> = parts.into_iter().map(|part| part.batch).collect();
-        let batch = arrow::compute::concat_batches(&schema, &batches).map_err(|source| {
+        let batch = arrow_select::concat::concat_batches(&schema, &batches).map_err(|source| {
             TableError::Arrow {
                 name: name.clone(),
                 source,

@@ -5,7 +5,7 @@
 use std::fmt::Write as _;
 
 use anyhow::Result;
-use arrow::array::RecordBatch;
+use arrow_array::RecordBatch;
 
 use super::numbers::{fixed, significant, with_error};
 use super::rates::{intact, table_of};

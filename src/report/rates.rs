@@ -6,7 +6,7 @@
 use std::fmt::Write as _;
 
 use anyhow::{Context, Result, anyhow};
-use arrow::array::RecordBatch;
+use arrow_array::RecordBatch;
 
 use super::numbers::with_error;
 use super::show::current_artifact;

@@ -6,6 +6,10 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use anyhow::{Context, Result, bail};
+use arrow_array::cast::AsArray;
+use arrow_array::types::{Float32Type, Float64Type, Int32Type, Int64Type, UInt32Type, UInt64Type};
+use arrow_array::{ArrayRef, ArrowPrimitiveType};
+use arrow_schema::DataType;
 
 use crate::pipeline::executor::{self, Freshness, StatusLine};
 use crate::pipeline::store::{Depth, Store};
@@ -16,15 +20,25 @@ use super::read_frame;
 use super::status::size;
 
 /// Sum of a numeric column in row order (nulls skipped), `None` for text.
-fn column_sum(column: &arrow::array::ArrayRef) -> Option<f64> {
-    let as_f64 = arrow::compute::cast(column, &arrow::datatypes::DataType::Float64).ok()?;
-    if !column.data_type().is_numeric() {
-        return None;
+fn column_sum(column: &ArrayRef) -> Option<f64> {
+    /// The column's values of Arrow type `T`, widened to `f64`.
+    fn widened<T: ArrowPrimitiveType>(column: &ArrayRef, to_f64: fn(T::Native) -> f64) -> f64 {
+        column
+            .as_primitive::<T>()
+            .iter()
+            .flatten()
+            .map(to_f64)
+            .sum()
     }
-    let values = as_f64
-        .as_any()
-        .downcast_ref::<arrow::array::Float64Array>()?;
-    Some(values.iter().flatten().sum())
+    Some(match column.data_type() {
+        DataType::Float64 => widened::<Float64Type>(column, |v| v),
+        DataType::Float32 => widened::<Float32Type>(column, f64::from),
+        DataType::UInt32 => widened::<UInt32Type>(column, f64::from),
+        DataType::Int32 => widened::<Int32Type>(column, f64::from),
+        DataType::UInt64 => widened::<UInt64Type>(column, |v| v as f64),
+        DataType::Int64 => widened::<Int64Type>(column, |v| v as f64),
+        _ => return None,
+    })
 }
 
 /// Metadata, schema with units, and the first rows of a Parquet file.

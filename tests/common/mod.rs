@@ -9,7 +9,7 @@ pub const BINARY: &str = env!("CARGO_BIN_EXE_ternary");
 
 /// The table `name` of the artifact a ref of `store` names
 /// (`<stage>/<instance>`).
-pub fn table(store: &Path, stage: &str, instance: &str, name: &str) -> arrow::array::RecordBatch {
+pub fn table(store: &Path, stage: &str, instance: &str, name: &str) -> arrow_array::RecordBatch {
     let reference: serde_json::Value = serde_json::from_str(
         &fs::read_to_string(store.join(format!("refs/{stage}/{instance}.json"))).unwrap(),
     )

@@ -3,7 +3,7 @@
 use super::*;
 use crate::kernel::model::{Knots, Part, SideCurve, Warp};
 use crate::pipeline::StageError;
-use arrow::array::RecordBatch;
+use arrow_array::RecordBatch;
 
 /// The stage, as named in instance ids and the store.
 pub const STAGE: &str = "fit";

@@ -8,7 +8,7 @@ use std::io::IsTerminal;
 use std::ops::Range;
 use std::path::Path;
 
-use arrow::array::RecordBatch;
+use arrow_array::RecordBatch;
 use indicatif::{ProgressBar, ProgressStyle};
 
 use super::*;

@@ -311,7 +311,7 @@ mod tests {
             let column = inputs[0].tables["value"].column(0).clone();
             let values = column
                 .as_any()
-                .downcast_ref::<arrow::array::Float64Array>()
+                .downcast_ref::<arrow_array::Float64Array>()
                 .ok_or_else(|| StageError::Input("x is not float64".into()))?;
             let doubled = values.iter().map(|v| v.map(|v| 2.0 * v)).collect();
             Ok(vec![Table::new(
@@ -390,7 +390,7 @@ mod tests {
         let values = batch
             .column(0)
             .as_any()
-            .downcast_ref::<arrow::array::Float64Array>()
+            .downcast_ref::<arrow_array::Float64Array>()
             .unwrap();
         assert_eq!(values.value(0), 6.0);
         assert_eq!(metadata["ternary.key"], key);
