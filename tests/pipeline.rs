@@ -841,7 +841,7 @@ fn dag_draws_stages_and_graphviz() {
         "fit (1)         <- kernel",
         "table (1)       <- moments, fit, scan",
         "paper (1)       <- moments, fit, scan",
-        "figures (4)     <- kernel, fit, moments, scan",
+        "figures (4)     <- kernel, fit, scan, moments",
     ];
     assert_eq!(stages.lines().collect::<Vec<_>>(), expected, "{stages}");
     let instances: Vec<String> = stdout(&ternary(&config, &["dag"]))

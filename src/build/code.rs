@@ -15,8 +15,10 @@
 //! * the items its tokens name (paths through `use` imports, globs and
 //!   re-exports; macros by name; names inside format strings);
 //! * every trait impl of a reached type (and, for types outside the crate or
-//!   generic ones, of a reached trait), except impls of the root trait
-//!   itself, which the executor calls only for their own stage;
+//!   generic ones, of a reached trait; for a trait reached as `dyn Trait`,
+//!   every impl of it, since a call through the object may run any), except
+//!   impls of the root trait itself, which the executor calls only for their
+//!   own stage;
 //! * every inherent method or associated item of a reached type whose name a
 //!   reached item uses (method calls are not resolved by type);
 //! * the files `include_bytes!`/`include_str!` read, the `CARGO_PKG_*`
@@ -183,6 +185,9 @@ struct Node {
 #[derive(Default)]
 struct Scan {
     paths: Vec<Vec<String>>,
+    /// Paths written after `dyn`: traits called through an object, so any
+    /// of their impls may run.
+    dyn_paths: Vec<Vec<String>>,
     macros: BTreeSet<String>,
     names: BTreeSet<String>,
     local_imports: Vec<(String, Vec<String>)>,
@@ -206,6 +211,8 @@ struct Graph {
     /// impl's trait.
     self_types: Vec<Vec<usize>>,
     traits: Vec<Vec<usize>>,
+    /// Trait nodes each node names after `dyn`.
+    dyn_traits: Vec<Vec<usize>>,
 }
 
 const PATH_KEYWORDS: [&str; 4] = ["crate", "self", "super", "Self"];
@@ -262,6 +269,7 @@ impl Graph {
     fn closure(&self, start: &[usize], root_trait: &str) -> BTreeSet<usize> {
         let mut reached: BTreeSet<usize> = BTreeSet::new();
         let mut names: BTreeSet<&str> = BTreeSet::new();
+        let mut dynamic: BTreeSet<usize> = BTreeSet::new();
         let mut work: Vec<usize> = start.to_vec();
         loop {
             while let Some(n) = work.pop() {
@@ -269,6 +277,7 @@ impl Graph {
                     continue;
                 }
                 names.extend(self.nodes[n].scan.names.iter().map(String::as_str));
+                dynamic.extend(&self.dyn_traits[n]);
                 for target in &self.edges[n] {
                     match target {
                         Target::Node(m) => work.push(*m),
@@ -288,6 +297,7 @@ impl Graph {
                     Kind::TraitImpl { .. } if self.implements(node, root_trait) => false,
                     Kind::TraitImpl { .. } => {
                         own_type_reached
+                            || self.traits[index].iter().any(|t| dynamic.contains(t))
                             || (self.self_types[index].is_empty()
                                 && self.traits[index].iter().any(|t| reached.contains(t)))
                     }

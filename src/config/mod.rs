@@ -28,6 +28,7 @@ mod limits;
 mod md;
 mod potentials;
 mod publication;
+mod rings;
 mod scan;
 mod slurm;
 mod spectrum;

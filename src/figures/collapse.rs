@@ -4,13 +4,17 @@ use polars::prelude::DataFrame;
 use serde::Serialize;
 
 use super::frames::{failed, frame, rows_where, series, stack};
-use super::{Axis, DU_AXIS, FigureKind, Layout, Panel, Style};
+use super::planning::{compared, ring_label};
+use super::{Axis, DU_AXIS, Drawn, FigureKind, Layout, Panel, Style, Topic};
+use crate::config::Study;
 use crate::contract;
-use crate::pipeline::{Input, StageError};
+use crate::contract::instances;
+use crate::pipeline::{Input, InstanceId, StageError};
 
 /// The scaling collapse: tagged `h(u, t_f)` of rings with one `N` at
 /// different `rho` and `T` (the same `rho^2 l v_th t_f`), with Boltzmann.
 #[derive(Clone, Debug, PartialEq, Serialize)]
+#[serde(tag = "kind", rename = "collapse")]
 pub struct Collapse {
     /// The rings (rows of the comparison table), the first also gives Boltzmann.
     pub rings: Vec<String>,
@@ -18,7 +22,27 @@ pub struct Collapse {
     pub labels: Vec<String>,
 }
 
+impl Collapse {
+    /// The collapse of the rings that make it (more than one), when
+    /// `compare` is planned.
+    pub fn planned(study: &Study, present: &dyn Fn(&InstanceId) -> bool) -> Vec<Drawn> {
+        let collapsing = study.collapse_rings();
+        if compared(study, present).is_none() || collapsing.len() < 2 {
+            return Vec::new();
+        }
+        let figure = Collapse {
+            rings: collapsing.iter().map(|r| r.name.clone()).collect(),
+            labels: collapsing.iter().map(ring_label).collect(),
+        };
+        vec![Drawn::new(figure, vec![instances::compare()])]
+    }
+}
+
 impl FigureKind for Collapse {
+    fn topic(&self) -> Topic {
+        Topic::MolecularDynamics
+    }
+
     fn name(&self) -> String {
         "collapse".into()
     }

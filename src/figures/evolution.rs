@@ -4,14 +4,18 @@ use polars::prelude::{ChunkCompareEq, DataFrame};
 use serde::Serialize;
 
 use super::frames::{failed, frame, series, series_of, stack, standard_normal};
-use super::{Axis, FigureKind, Layout, Panel, Style};
+use super::planning::spread;
+use super::{Axis, Drawn, FigureKind, Layout, Panel, Style, Topic};
+use crate::config::Study;
 use crate::contract;
-use crate::pipeline::{Input, StageError};
+use crate::contract::instances;
+use crate::pipeline::{Input, InstanceId, StageError};
 
 /// The tagged particle's `h(u, t)` approaching `f0` (a), the early
 /// variance growing as `t kappa_2` (b), and the early `h` scaled to unit
 /// variance against the standard normal (c).
 #[derive(Clone, Debug, PartialEq, Serialize)]
+#[serde(tag = "kind", rename = "evolution")]
 pub struct Evolution {
     /// The evolved kernel's instance (`ipp-6_u0_rho0`).
     pub instance: String,
@@ -19,7 +23,30 @@ pub struct Evolution {
     pub times: Vec<f64>,
 }
 
+/// Curves of `h(u, t)` in the evolution figure, at most.
+const EVOLUTION_CURVES: usize = 5;
+
+impl Evolution {
+    /// `h(u, t)` at up to `EVOLUTION_CURVES` of the evolution's times.
+    pub fn planned(study: &Study, present: &dyn Fn(&InstanceId) -> bool) -> Vec<Drawn> {
+        let Some(evolve) = study.evolve_params() else {
+            return Vec::new();
+        };
+        let instance = instances::target(&evolve.kernel);
+        let id = InstanceId::new(contract::evolve::STAGE, &instance);
+        if !present(&id) || evolve.times.is_empty() {
+            return Vec::new();
+        }
+        let times = spread(&evolve.times, EVOLUTION_CURVES);
+        vec![Drawn::new(Evolution { instance, times }, vec![id])]
+    }
+}
+
 impl FigureKind for Evolution {
+    fn topic(&self) -> Topic {
+        Topic::Relaxation
+    }
+
     fn name(&self) -> String {
         format!("evolution_{}", self.instance)
     }

@@ -4,16 +4,35 @@ use polars::prelude::{ChunkCompareIneq, DataFrame};
 use serde::Serialize;
 
 use super::frames::{failed, frame, numbers, series_by, stack};
-use super::{Axis, FigureKind, Layout, Panel};
+use super::planning::compared;
+use super::{Axis, Drawn, FigureKind, Layout, Panel, Topic};
+use crate::config::Study;
 use crate::contract;
-use crate::pipeline::{Input, StageError};
+use crate::contract::instances;
+use crate::pipeline::{Input, InstanceId, StageError};
 
 /// MD over Boltzmann window variances against `rho l`, one series per `N`:
 /// tagged (a) and thermal (b) estimators.
 #[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct FiniteSize;
+#[serde(tag = "kind", rename = "finite_size")]
+pub struct FiniteSize {}
+
+impl FiniteSize {
+    /// The finite-size table's rings, when `compare` is planned and compares
+    /// rings at `u' = 0`.
+    pub fn planned(study: &Study, present: &dyn Fn(&InstanceId) -> bool) -> Vec<Drawn> {
+        if compared(study, present).is_none() || study.compared_rings().is_empty() {
+            return Vec::new();
+        }
+        vec![Drawn::new(FiniteSize {}, vec![instances::compare()])]
+    }
+}
 
 impl FigureKind for FiniteSize {
+    fn topic(&self) -> Topic {
+        Topic::MolecularDynamics
+    }
+
     fn name(&self) -> String {
         "finite_size".into()
     }

@@ -4,16 +4,40 @@ use polars::prelude::DataFrame;
 use serde::Serialize;
 
 use super::frames::{frame, numbers, series_of, stack};
-use super::{Axis, FigureKind, Layout, Panel, Style};
+use super::{Axis, Drawn, FigureKind, Layout, Panel, Style, Topic};
+use crate::config::Study;
 use crate::contract;
-use crate::pipeline::{Input, StageError};
+use crate::contract::instances;
+use crate::pipeline::{Input, InstanceId, StageError};
 
 /// The relaxation gaps of every inverse power law with a spectrum against
 /// `n`: over `Gamma` (a) and in rate units beside `Gamma` (b).
 #[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct Gaps;
+#[serde(tag = "kind", rename = "gaps")]
+pub struct Gaps {}
+
+impl Gaps {
+    /// The gaps against `n`, when at least two inverse power laws (without
+    /// a `theta`) have a spectrum; from the `table` stage's rows.
+    pub fn planned(study: &Study, present: &dyn Fn(&InstanceId) -> bool) -> Vec<Drawn> {
+        let with_spectrum = study
+            .potentials()
+            .iter()
+            .filter(|p| p.family().theta().is_none() && present(&instances::spectrum(p)))
+            .count();
+        let table = instances::table();
+        if with_spectrum < 2 || !present(&table) {
+            return Vec::new();
+        }
+        vec![Drawn::new(Gaps {}, vec![table])]
+    }
+}
 
 impl FigureKind for Gaps {
+    fn topic(&self) -> Topic {
+        Topic::Rates
+    }
+
     fn name(&self) -> String {
         "gaps".into()
     }

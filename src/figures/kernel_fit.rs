@@ -6,15 +6,18 @@ use serde::Serialize;
 
 use super::frames::{failed, frame, series_of, stack};
 use super::kernel_groups::{GROUPS_PER_DECADE, positive_kernel};
-use super::{Axis, DU_AXIS, FigureKind, G_AXIS, Layout, Panel, Style};
+use super::planning::{dilute, main_potential};
+use super::{Axis, DU_AXIS, Drawn, FigureKind, G_AXIS, Layout, Panel, Style, Topic};
+use crate::config::Study;
 use crate::contract;
 use crate::kernel::model::Part;
-use crate::pipeline::{Input, StageError};
+use crate::pipeline::{Input, InstanceId, StageError};
 
 /// `G(0 -> u)` of one potential with its fitted shape `alpha x^-beta
 /// exp(-x^2/2 sigma^2)` and its model (`kernel::model`), and the model's
 /// normalized residuals.
 #[derive(Clone, Debug, PartialEq, Serialize)]
+#[serde(tag = "kind", rename = "kernel_fit")]
 pub struct KernelFit {
     /// The potential's id (the figure's name).
     pub id: String,
@@ -22,7 +25,29 @@ pub struct KernelFit {
     pub label: String,
 }
 
+impl KernelFit {
+    /// The main potential's kernel with its fit.
+    pub fn planned(study: &Study, _present: &dyn Fn(&InstanceId) -> bool) -> Vec<Drawn> {
+        let Some(p) = main_potential(study) else {
+            return Vec::new();
+        };
+        let figure = KernelFit {
+            id: p.id(),
+            label: p.family().label(),
+        };
+        let inputs = vec![
+            dilute(study, contract::kernel::STAGE, &p),
+            dilute(study, contract::fit::STAGE, &p),
+        ];
+        vec![Drawn::new(figure, inputs)]
+    }
+}
+
 impl FigureKind for KernelFit {
+    fn topic(&self) -> Topic {
+        Topic::MainKernel
+    }
+
     fn name(&self) -> String {
         format!("kernel_fit_{}", self.id)
     }

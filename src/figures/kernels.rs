@@ -5,17 +5,45 @@ use serde::Serialize;
 
 use super::frames::stack;
 use super::kernel_groups::{GROUPS_PER_DECADE, positive_kernel, resolved};
-use super::{Axis, DU_AXIS, FigureKind, G_AXIS, Layout, Panel, Style};
-use crate::pipeline::{Input, StageError};
+use super::planning::{dilute, kicked};
+use super::{Axis, DU_AXIS, Drawn, FigureKind, G_AXIS, Layout, Panel, Style, Topic};
+use crate::config::Study;
+use crate::contract;
+use crate::pipeline::{Input, InstanceId, StageError};
 
 /// `G(0 -> u)` of every inverse power law on log axes (paper: the kernel for every n).
 #[derive(Clone, Debug, PartialEq, Serialize)]
+#[serde(tag = "kind", rename = "kernels_every_n")]
 pub struct KernelsEveryN {
     /// Legend label of each kernel input.
     pub labels: Vec<String>,
 }
 
+impl KernelsEveryN {
+    /// The kernels of every scale-free potential with kicks (the inverse
+    /// power laws) in one figure.
+    pub fn planned(study: &Study, _present: &dyn Fn(&InstanceId) -> bool) -> Vec<Drawn> {
+        let scale_free: Vec<_> = kicked(study)
+            .into_iter()
+            .filter(|p| p.family().theta().is_none())
+            .collect();
+        if scale_free.is_empty() {
+            return Vec::new();
+        }
+        let labels = scale_free.iter().map(|p| p.family().label()).collect();
+        let inputs = scale_free
+            .iter()
+            .map(|p| dilute(study, contract::kernel::STAGE, p))
+            .collect();
+        vec![Drawn::new(KernelsEveryN { labels }, inputs)]
+    }
+}
+
 impl FigureKind for KernelsEveryN {
+    fn topic(&self) -> Topic {
+        Topic::Kernels
+    }
+
     fn name(&self) -> String {
         "kernels".into()
     }

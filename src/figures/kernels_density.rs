@@ -5,9 +5,12 @@ use serde::Serialize;
 
 use super::frames::{failed, numbers, series_of, stack};
 use super::kernel_groups::{GROUPS_PER_DECADE, positive_kernel, resolved};
-use super::{Axis, DU_AXIS, FigureKind, G_AXIS, Layout, Panel, Style};
+use super::planning::kt_mev;
+use super::{Axis, DU_AXIS, Drawn, FigureKind, G_AXIS, Layout, Panel, Style, Topic};
+use crate::config::Study;
 use crate::contract;
-use crate::pipeline::{Input, StageError};
+use crate::contract::instances;
+use crate::pipeline::{Input, InstanceId, StageError};
 use crate::stats::Estimate;
 
 /// `G(0 -> u)` of one potential in the dilute limit and at finite `rho l`
@@ -15,6 +18,7 @@ use crate::stats::Estimate;
 /// rule: an artifact of its observation region `L`, not the gas's
 /// density dependence), and each against the dilute one.
 #[derive(Clone, Debug, PartialEq, Serialize)]
+#[serde(tag = "kind", rename = "kernels_at_density")]
 pub struct KernelsAtDensity {
     /// The potential's id.
     pub id: String,
@@ -22,7 +26,55 @@ pub struct KernelsAtDensity {
     pub labels: Vec<String>,
 }
 
+impl KernelsAtDensity {
+    /// `G(0 -> u)` of the collapse rings' potential in the dilute limit and
+    /// at each of those rings' own `rho l` (the kernel instances the plan
+    /// adds for them), when the potential kicks.
+    pub fn planned(study: &Study, _present: &dyn Fn(&InstanceId) -> bool) -> Vec<Drawn> {
+        let rings = study.collapse_rings();
+        let Some(first) = rings.first() else {
+            return Vec::new();
+        };
+        let potential = first.potential;
+        if potential.family().is_integrable() {
+            return Vec::new();
+        }
+        let instance =
+            |density: f64| instances::kernel(&study.kernel_params(potential, 0.0, density));
+        // Densities relative to the first ring's, as the paper names its
+        // rings: (rho, 100 meV), (2 rho, 100 meV), (2 rho, 800 meV).
+        let rho = first.gas.density_per_um;
+        let mut labels = vec![DILUTE.to_string()];
+        let mut inputs = vec![instance(0.0)];
+        for ring in &rings {
+            let id = instance(ring.scaled_density());
+            if !inputs.contains(&id) {
+                let factor = (ring.gas.density_per_um / rho * 1e6).round() / 1e6;
+                let density = if factor == 1.0 {
+                    "ρ".to_string()
+                } else {
+                    format!("{factor}ρ")
+                };
+                labels.push(format!("{density}, {} meV", kt_mev(ring)));
+                inputs.push(id);
+            }
+        }
+        if inputs.len() < 2 {
+            return Vec::new();
+        }
+        let figure = KernelsAtDensity {
+            id: potential.id(),
+            labels,
+        };
+        vec![Drawn::new(figure, inputs)]
+    }
+}
+
 impl FigureKind for KernelsAtDensity {
+    fn topic(&self) -> Topic {
+        Topic::MainKernel
+    }
+
     fn name(&self) -> String {
         format!("kernels_density_{}", self.id)
     }

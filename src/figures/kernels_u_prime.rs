@@ -5,14 +5,18 @@ use serde::Serialize;
 
 use super::frames::{log_groups, stack};
 use super::kernel_groups::{GROUPS_PER_DECADE, resolved};
-use super::{Axis, FigureKind, G_AXIS, Layout, Panel, Style};
+use super::planning::main_potential;
+use super::{Axis, Drawn, FigureKind, G_AXIS, Layout, Panel, Style, Topic};
+use crate::config::Study;
 use crate::contract;
-use crate::pipeline::{Input, StageError};
+use crate::contract::instances;
+use crate::pipeline::{Input, InstanceId, StageError};
 
 /// `G(u' -> u)` of one potential at each configured `u'` (dilute), above
 /// and below `u'` in two panels, on log axes of `|u - u'|` (paper: `u' = 0,
 /// -0.25, -3`).
 #[derive(Clone, Debug, PartialEq, Serialize)]
+#[serde(tag = "kind", rename = "kernels_at_u_prime")]
 pub struct KernelsAtUPrime {
     /// The potential's id.
     pub id: String,
@@ -20,7 +24,39 @@ pub struct KernelsAtUPrime {
     pub u_primes: Vec<f64>,
 }
 
+impl KernelsAtUPrime {
+    /// The main potential's kernels at each dilute `u'`, when there is more
+    /// than one.
+    pub fn planned(study: &Study, _present: &dyn Fn(&InstanceId) -> bool) -> Vec<Drawn> {
+        let Some(p) = main_potential(study) else {
+            return Vec::new();
+        };
+        let u_primes: Vec<f64> = study
+            .kernel_targets()
+            .into_iter()
+            .filter(|(_, density)| *density == 0.0)
+            .map(|(u_prime, _)| u_prime)
+            .collect();
+        if u_primes.len() < 2 {
+            return Vec::new();
+        }
+        let inputs = u_primes
+            .iter()
+            .map(|&u| instances::kernel(&study.kernel_params(p, u, 0.0)))
+            .collect();
+        let figure = KernelsAtUPrime {
+            id: p.id(),
+            u_primes,
+        };
+        vec![Drawn::new(figure, inputs)]
+    }
+}
+
 impl FigureKind for KernelsAtUPrime {
+    fn topic(&self) -> Topic {
+        Topic::MainKernel
+    }
+
     fn name(&self) -> String {
         format!("kernels_u_prime_{}", self.id)
     }

@@ -4,19 +4,37 @@ use polars::prelude::DataFrame;
 use serde::Serialize;
 
 use super::frames::{frame, series_by, stack};
-use super::{Axis, FigureKind, Layout, Panel, Style};
+use super::planning::main_potential;
+use super::{Axis, Drawn, FigureKind, Layout, Panel, Style, Topic};
+use crate::config::Study;
 use crate::contract;
-use crate::pipeline::{Input, StageError};
+use crate::contract::instances;
+use crate::physics::potential::Potential;
+use crate::pipeline::{Input, InstanceId, StageError};
 
 /// The special particle's final velocity against the launch delay, one
 /// curve per scanned launch pair (mono-energetic collisions).
 #[derive(Clone, Debug, PartialEq, Serialize)]
+#[serde(tag = "kind", rename = "kicks")]
 pub struct Kicks {
     /// The potential's id.
     pub id: String,
 }
 
+impl Kicks {
+    /// The main potential's kicks, with a scan.
+    pub fn planned(study: &Study, present: &dyn Fn(&InstanceId) -> bool) -> Vec<Drawn> {
+        let kicks =
+            |p: Potential| Drawn::if_present(Kicks { id: p.id() }, instances::scan(&p), present);
+        main_potential(study).into_iter().flat_map(kicks).collect()
+    }
+}
+
 impl FigureKind for Kicks {
+    fn topic(&self) -> Topic {
+        Topic::MainKernel
+    }
+
     fn name(&self) -> String {
         format!("kicks_{}", self.id)
     }

@@ -4,18 +4,37 @@ use polars::prelude::DataFrame;
 use serde::Serialize;
 
 use super::frames::{frame, rows_where, series, stack};
-use super::{Axis, DU_AXIS, FigureKind, Layout, Panel, Style};
+use super::planning::compared;
+use super::{Axis, DU_AXIS, Drawn, FigureKind, Layout, Panel, Style, Topic};
+use crate::config::Study;
 use crate::contract;
-use crate::pipeline::{Input, StageError};
+use crate::contract::instances;
+use crate::pipeline::{Input, InstanceId, StageError};
 
 /// MD against Boltzmann on one ring: `h(u, t_f)` by both estimators.
 #[derive(Clone, Debug, PartialEq, Serialize)]
+#[serde(tag = "kind", rename = "md_boltzmann")]
 pub struct MdBoltzmann {
     /// The ring (a row label of the comparison table).
     pub ring: String,
 }
 
+impl MdBoltzmann {
+    /// The first ring against Boltzmann, when `compare` is planned.
+    pub fn planned(study: &Study, present: &dyn Fn(&InstanceId) -> bool) -> Vec<Drawn> {
+        let Some(first) = compared(study, present) else {
+            return Vec::new();
+        };
+        let figure = MdBoltzmann { ring: first.name };
+        vec![Drawn::new(figure, vec![instances::compare()])]
+    }
+}
+
 impl FigureKind for MdBoltzmann {
+    fn topic(&self) -> Topic {
+        Topic::MolecularDynamics
+    }
+
     fn name(&self) -> String {
         format!("md_boltzmann_{}", self.ring)
     }

@@ -11,6 +11,7 @@
 mod draw;
 pub mod frames;
 mod kernel_groups;
+mod planning;
 mod text;
 
 pub mod catalogue;
@@ -32,7 +33,7 @@ pub mod rates;
 pub mod spectrum;
 pub mod truncation;
 
-pub use catalogue::{Figure, FigureKind};
+pub use catalogue::{Drawn, FigureKind, Keyed, PLANS, Plan, Topic};
 pub use draw::{PALETTE, Size, render, series_colours};
 pub use frames::{FigureRows, Point};
 

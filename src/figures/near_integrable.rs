@@ -5,17 +5,31 @@ use serde::Serialize;
 
 use super::frames::{failed, series_of, stack};
 use super::gaps::{GAS, ONE_PARTICLE};
-use super::{Axis, FigureKind, Layout, Panel, Style};
+use super::{Axis, Drawn, FigureKind, Layout, Panel, Style, Topic};
+use crate::config::Study;
 use crate::contract;
-use crate::pipeline::{Input, StageError};
+use crate::contract::instances;
+use crate::pipeline::{Input, InstanceId, StageError};
 
 /// How the rates of `r^-n` vanish as `n -> 2+`: `Gamma` and the gaps
 /// against `n - 2` with their fitted near-integrable laws (a), the gaps
 /// over `Gamma` (b).
 #[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct NearIntegrable;
+#[serde(tag = "kind", rename = "near_integrable")]
+pub struct NearIntegrable {}
+
+impl NearIntegrable {
+    /// The exponents near `n = 2`, when the study computes them.
+    pub fn planned(_study: &Study, present: &dyn Fn(&InstanceId) -> bool) -> Vec<Drawn> {
+        Drawn::if_present(NearIntegrable {}, instances::near_integrable(), present)
+    }
+}
 
 impl FigureKind for NearIntegrable {
+    fn topic(&self) -> Topic {
+        Topic::Rates
+    }
+
     fn name(&self) -> String {
         "near_integrable".into()
     }

@@ -4,16 +4,30 @@ use polars::prelude::DataFrame;
 use serde::Serialize;
 
 use super::frames::{frame, numbers, series_of, stack, standard_normal};
-use super::{Axis, FigureKind, Layout, Panel, Style};
+use super::{Axis, Drawn, FigureKind, Layout, Panel, Style, Topic};
+use crate::config::Study;
 use crate::contract;
-use crate::pipeline::{Input, StageError};
+use crate::contract::instances;
+use crate::pipeline::{Input, InstanceId, StageError};
 
 /// The pulls of the study's cross-checks (the `pulls` stage) against
 /// the standard normal they follow when the errors are right.
 #[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct Pulls;
+#[serde(tag = "kind", rename = "pulls")]
+pub struct Pulls {}
+
+impl Pulls {
+    /// The pulls of the study's cross-checks, when the study computes them.
+    pub fn planned(_study: &Study, present: &dyn Fn(&InstanceId) -> bool) -> Vec<Drawn> {
+        Drawn::if_present(Pulls {}, instances::pulls(), present)
+    }
+}
 
 impl FigureKind for Pulls {
+    fn topic(&self) -> Topic {
+        Topic::Checks
+    }
+
     fn name(&self) -> String {
         "pulls".into()
     }

@@ -4,12 +4,16 @@ use polars::prelude::DataFrame;
 use serde::Serialize;
 
 use super::frames::{frame, series, stack};
-use super::{Axis, FigureKind, Layout, Panel, Style};
+use super::planning::main_potential;
+use super::{Axis, Drawn, FigureKind, Layout, Panel, Style, Topic};
+use crate::config::Study;
 use crate::contract;
-use crate::pipeline::{Input, StageError};
+use crate::physics::potential::Potential;
+use crate::pipeline::{Input, InstanceId, StageError};
 
 /// Self drift and variance rates against `u'`, and the Fokker-Planck drift.
 #[derive(Clone, Debug, PartialEq, Serialize)]
+#[serde(tag = "kind", rename = "rates")]
 pub struct Rates {
     /// The potential's id.
     pub id: String,
@@ -17,7 +21,26 @@ pub struct Rates {
     pub label: String,
 }
 
+impl Rates {
+    /// The main potential's rates against `u'`, with a sweep.
+    pub fn planned(study: &Study, present: &dyn Fn(&InstanceId) -> bool) -> Vec<Drawn> {
+        let rates = |p: Potential| {
+            let figure = Rates {
+                id: p.id(),
+                label: p.family().label(),
+            };
+            let sweep = InstanceId::new(contract::sweep::STAGE, &p.id());
+            Drawn::if_present(figure, sweep, present)
+        };
+        main_potential(study).into_iter().flat_map(rates).collect()
+    }
+}
+
 impl FigureKind for Rates {
+    fn topic(&self) -> Topic {
+        Topic::Rates
+    }
+
     fn name(&self) -> String {
         format!("rates_{}", self.id)
     }

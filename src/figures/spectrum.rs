@@ -4,15 +4,20 @@ use polars::prelude::DataFrame;
 use serde::Serialize;
 
 use super::frames::{failed, series_of, stack};
-use super::{Axis, FigureKind, Layout, Panel, Style};
+use super::planning::main_potential;
+use super::{Axis, Drawn, FigureKind, Layout, Panel, Style, Topic};
+use crate::config::Study;
 use crate::contract;
-use crate::pipeline::{Input, StageError};
+use crate::contract::instances;
+use crate::physics::potential::Potential;
+use crate::pipeline::{Input, InstanceId, StageError};
 use crate::stats::Estimate;
 
 /// The relaxation spectrum of one potential: the slowest rates over
 /// `Gamma` (a), the shapes of the slowest modes (b), the slowest rate
 /// against the randomizations it is estimated from (c).
 #[derive(Clone, Debug, PartialEq, Serialize)]
+#[serde(tag = "kind", rename = "spectrum")]
 pub struct Spectrum {
     /// The potential's id.
     pub id: String,
@@ -20,7 +25,28 @@ pub struct Spectrum {
     pub label: String,
 }
 
+impl Spectrum {
+    /// The main potential's relaxation spectrum, with a spectrum.
+    pub fn planned(study: &Study, present: &dyn Fn(&InstanceId) -> bool) -> Vec<Drawn> {
+        let spectrum = |p: Potential| {
+            let figure = Spectrum {
+                id: p.id(),
+                label: p.family().label(),
+            };
+            Drawn::if_present(figure, instances::spectrum(&p), present)
+        };
+        main_potential(study)
+            .into_iter()
+            .flat_map(spectrum)
+            .collect()
+    }
+}
+
 impl FigureKind for Spectrum {
+    fn topic(&self) -> Topic {
+        Topic::Relaxation
+    }
+
     fn name(&self) -> String {
         format!("spectrum_{}", self.id)
     }

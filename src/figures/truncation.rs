@@ -4,13 +4,16 @@ use polars::prelude::DataFrame;
 use serde::Serialize;
 
 use super::frames::{failed, frame, series};
-use super::{Axis, FigureKind, Layout, Mark, Panel, Style};
+use super::planning::{dilute, main_potential};
+use super::{Axis, Drawn, FigureKind, Layout, Mark, Panel, Style, Topic};
+use crate::config::Study;
 use crate::contract;
-use crate::pipeline::{Input, StageError};
+use crate::pipeline::{Input, InstanceId, StageError};
 
 /// `a_n(X)`: the self variance rate against the truncation `X`, with the
 /// paper's `X = 0.04` marked.
 #[derive(Clone, Debug, PartialEq, Serialize)]
+#[serde(tag = "kind", rename = "truncation")]
 pub struct Truncation {
     /// The potential's id.
     pub id: String,
@@ -18,7 +21,28 @@ pub struct Truncation {
     pub label: String,
 }
 
+impl Truncation {
+    /// The main potential's `a_n(X)`.
+    pub fn planned(study: &Study, _present: &dyn Fn(&InstanceId) -> bool) -> Vec<Drawn> {
+        let Some(p) = main_potential(study) else {
+            return Vec::new();
+        };
+        let figure = Truncation {
+            id: p.id(),
+            label: p.family().label(),
+        };
+        vec![Drawn::new(
+            figure,
+            vec![dilute(study, contract::moments::STAGE, &p)],
+        )]
+    }
+}
+
 impl FigureKind for Truncation {
+    fn topic(&self) -> Topic {
+        Topic::MainKernel
+    }
+
     fn name(&self) -> String {
         format!("truncation_{}", self.id)
     }

@@ -8,7 +8,6 @@
 mod collisions;
 mod figures;
 mod paper;
-mod rings;
 
 pub use collisions::wide_collisions;
 
@@ -222,7 +221,7 @@ fn push_gases(stages: &mut Vec<Box<dyn Stage>>, study: &Study) {
             Box::new(moments::MomentsStage::new(dense, truncations)),
         );
     }
-    for ring in rings::collapse_rings(study) {
+    for ring in study.collapse_rings() {
         let dense = study.kernel_params(ring.potential, 0.0, ring.scaled_density());
         push_once(stages, Box::new(kernel::KernelStage::new(dense)));
     }
@@ -263,7 +262,7 @@ fn push_rings(stages: &mut Vec<Box<dyn Stage>>, study: &Study) {
     let Some(first) = rings.first() else {
         return;
     };
-    let other_systems = rings::other_compared_rings(study);
+    let other_systems = study.other_compared_rings();
     let mut other_kernels = Vec::new();
     for ring in &other_systems {
         let kernel = study.kernel_params(ring.potential, 0.0, 0.0);
@@ -274,7 +273,7 @@ fn push_rings(stages: &mut Vec<Box<dyn Stage>>, study: &Study) {
     stages.push(Box::new(CompareStage::new(CompareParams {
         kernel: study.kernel_params(first.potential, 0.0, 0.0),
         thermal_collisions: wide_collisions(study, first.potential).0,
-        systems: rings::compared_rings(study),
+        systems: study.compared_rings(),
         other_kernels,
         other_systems,
     })));

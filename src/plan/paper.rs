@@ -5,7 +5,6 @@
 use std::collections::HashSet;
 
 use super::collisions::tuned_collisions;
-use super::rings::collapse_rings;
 use crate::config::{CollisionsParams, MdParams, Study};
 use crate::contract::instances;
 use crate::paper::published::*;
@@ -178,7 +177,8 @@ fn scaling_ring(study: &Study, r: &MdParams) -> ScalingRing {
 /// The `n = 6` rings of the scaling collapse (the same `N` and
 /// `rho^2 l v_th t_f`) when they span two densities and two temperatures.
 fn exponent_rings(study: &Study) -> Option<Vec<ScalingRing>> {
-    let rings: Vec<MdParams> = collapse_rings(study)
+    let rings: Vec<MdParams> = study
+        .collapse_rings()
         .into_iter()
         .filter(|r| r.potential == IPP_6)
         .collect();
@@ -195,7 +195,7 @@ fn exponent_rings(study: &Study) -> Option<Vec<ScalingRing>> {
 /// temperatures differ by the paper's factor 8 (the rest of the gas equal),
 /// colder first.
 fn scaling_rings(study: &Study) -> Option<(ScalingRing, ScalingRing)> {
-    let rings = collapse_rings(study);
+    let rings = study.collapse_rings();
     let ring = |r: &MdParams| scaling_ring(study, r);
     let pair = |cold: &MdParams, hot: &MdParams| {
         let apart_from_temperature = PhysicalGas {

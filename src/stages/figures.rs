@@ -6,7 +6,7 @@
 use serde_json::{Value, json};
 
 use crate::contract::{self, TableSpec};
-use crate::figures::{Figure, FigureRows, Size, frames, render};
+use crate::figures::{Drawn, FigureKind, FigureRows, Size, frames, render};
 use crate::pipeline::code::{self, Code};
 use crate::pipeline::{Input, InstanceId, Progress, Stage, StageError, Table};
 
@@ -19,13 +19,14 @@ const AXES: &str = "ternary.axes";
 
 /// The `figures` stage for one figure.
 pub struct FiguresStage {
-    figure: Figure,
+    figure: Box<dyn FigureKind>,
     inputs: Vec<InstanceId>,
 }
 
 impl FiguresStage {
-    /// The stage drawing `figure` from `inputs` (in the figure's input order).
-    pub fn new(figure: Figure, inputs: Vec<InstanceId>) -> FiguresStage {
+    /// The stage drawing a figure from its inputs (in the figure's input
+    /// order).
+    pub fn new(Drawn { figure, inputs }: Drawn) -> FiguresStage {
         FiguresStage { figure, inputs }
     }
 
@@ -43,7 +44,7 @@ const CODE: &Code = code::of(file!());
 
 impl Stage for FiguresStage {
     fn id(&self) -> InstanceId {
-        InstanceId::new(contract::figures::STAGE, &self.figure.kind().name())
+        InstanceId::new(contract::figures::STAGE, &self.figure.name())
     }
 
     fn code(&self) -> &'static Code {
@@ -51,7 +52,7 @@ impl Stage for FiguresStage {
     }
 
     fn params(&self) -> Value {
-        json!({ "figure": self.figure, "layout": self.figure.kind().layout() })
+        json!({ "figure": self.figure.keyed(), "layout": self.figure.layout() })
     }
 
     fn tables(&self) -> &'static [&'static str] {
@@ -59,7 +60,7 @@ impl Stage for FiguresStage {
     }
 
     fn files(&self) -> Vec<String> {
-        let name = self.figure.kind().name();
+        let name = self.figure.name();
         [Size::COLUMN_SVG.suffix, Size::SCREEN.suffix]
             .iter()
             .flat_map(|suffix| [format!("{name}{suffix}.svg"), format!("{name}{suffix}.png")])
@@ -75,7 +76,7 @@ impl Stage for FiguresStage {
     }
 
     fn run(&self, inputs: &[Input], progress: &Progress) -> Result<Vec<Table>, StageError> {
-        let figure = self.figure.kind();
+        let figure = &self.figure;
         let frame = figure.frame(inputs)?;
         let points = frames::points(&frame)?;
         progress.advance(1);
@@ -87,7 +88,7 @@ impl Stage for FiguresStage {
     }
 
     fn render(&self, tables: &[Table]) -> Result<Vec<(String, Vec<u8>)>, StageError> {
-        let (figure, points) = (self.figure.kind(), FigureRows::read(&tables[0])?);
+        let (figure, points) = (&self.figure, FigureRows::read(&tables[0])?);
         render(&figure.name(), &figure.layout(), &points)
             .map_err(|error| StageError::Input(format!("drawing {}: {error}", figure.name())))
     }

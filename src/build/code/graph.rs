@@ -24,6 +24,7 @@ impl Graph {
             macro_edges: Vec::new(),
             self_types: Vec::new(),
             traits: Vec::new(),
+            dyn_traits: Vec::new(),
         };
         let items = parse(sources, "src/lib.rs")?;
         graph.add_module(sources, "crate".into(), "src/lib.rs", "src", None, items)?;

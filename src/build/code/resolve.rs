@@ -21,6 +21,7 @@ impl Graph {
         let mut macro_edges = Vec::with_capacity(self.nodes.len());
         let mut self_types = Vec::with_capacity(self.nodes.len());
         let mut traits = Vec::with_capacity(self.nodes.len());
+        let mut dyn_traits = Vec::with_capacity(self.nodes.len());
         let mut macros: BTreeMap<&str, Vec<usize>> = BTreeMap::new();
         for (index, node) in self.nodes.iter().enumerate() {
             if let Kind::Macro { name } = &node.kind {
@@ -93,11 +94,19 @@ impl Graph {
             };
             self_types.push(own);
             traits.push(trait_nodes);
+            dyn_traits.push(
+                node.scan
+                    .dyn_paths
+                    .iter()
+                    .flat_map(|p| nodes_of(&Some(p.clone())))
+                    .collect(),
+            );
         }
         self.edges = edges;
         self.macro_edges = macro_edges;
         self.self_types = self_types;
         self.traits = traits;
+        self.dyn_traits = dyn_traits;
     }
 
     /// The targets of `path` as written in `scope`.

@@ -211,6 +211,8 @@ pub(super) fn scan_tokens(tokens: TokenStream, scan: &mut Scan) {
                 let lifetime = i > 0 && punct(i - 1, '\'');
                 if name == "use" {
                     i = scan_use(&trees, i + 1, scan);
+                } else if name == "dyn" && matches!(trees.get(i + 1), Some(TokenTree::Ident(_))) {
+                    i = scan_object(&trees, i + 1, scan, &joint_colons);
                 } else if punct(i + 1, '!') && matches!(trees.get(i + 2), Some(TokenTree::Group(_)))
                 {
                     if let Some(TokenTree::Group(g)) = trees.get(i + 2) {
@@ -232,6 +234,22 @@ pub(super) fn scan_tokens(tokens: TokenStream, scan: &mut Scan) {
             TokenTree::Punct(_) => i += 1,
         }
     }
+}
+
+/// The trait path after `dyn` at `trees[start]` (an identifier): a path, and
+/// a trait whose impls a call through the object may run. Returns the index
+/// after it.
+fn scan_object(
+    trees: &[TokenTree],
+    start: usize,
+    scan: &mut Scan,
+    joint_colons: &dyn Fn(usize) -> bool,
+) -> usize {
+    let first = trees[start].to_string();
+    scan.names.insert(first.clone());
+    let end = scan_path(trees, start, first, scan, joint_colons);
+    scan.dyn_paths.extend(scan.paths.last().cloned());
+    end
 }
 
 /// The path starting at `trees[start]` (`a::b::c`, stopping before a
