@@ -5,7 +5,9 @@
 use ternary::physics::potential::{Family, Morse, PairPotential, Potential};
 use ternary::physics::scan::LaunchPair;
 use ternary::physics::scan::thermal_scenes;
-use ternary::physics::scene::{Collision, EngineSettings, FreeLine, Method, Outcome, collide};
+use ternary::physics::scene::{
+    Collision, EngineSettings, FreeLine, Method, Outcome, collide, collide_all,
+};
 
 fn engine(method: Method, tolerance: f64) -> EngineSettings {
     EngineSettings::new(method, tolerance, 100_000)
@@ -320,5 +322,63 @@ fn morse_bound_pair_length_agrees_with_a_direct_quadrature() {
             (simpson / direct - 1.0).abs() < 1e-6,
             "theta = {theta}: {simpson} against {direct}"
         );
+    }
+}
+
+/// Scenes integrated together on interleaved steps (as the pipeline integrates them) are the
+/// scenes integrated one by one, to the last bit of every outgoing velocity and every counter:
+/// thermal scenes of a steep and a soft power law, a deep Lennard-Jones well that recombines
+/// pairs, and a step budget that some scenes exhaust, in any order of the batch.
+#[test]
+fn interleaved_scenes_are_the_scenes_alone_to_the_bit() {
+    let bits = |c: &Collision| {
+        let floats = [
+            c.outgoing,
+            c.incoming,
+            [c.energy_error, c.binding_energy, 0.0],
+        ];
+        (
+            floats.map(|v| v.map(f64::to_bits)),
+            c.outcome,
+            c.steps,
+            c.rejected_steps,
+            c.jumps,
+            c.evaluations,
+        )
+    };
+    let scenes = thermal_scenes(203, 11);
+    let cases = [
+        (ipp(12.0), default_engine()),
+        (ipp(3.0), engine(Method::Dprkn12, 1e-8)),
+        (Potential::lennard_jones(0.05), default_engine()),
+        (ipp(6.0), EngineSettings::new(Method::Dprkn12, 1e-12, 60)),
+    ];
+    for (potential, settings) in cases {
+        let alone: Vec<Collision> = scenes
+            .iter()
+            .map(|&lines| collide(&potential, &settings, lines))
+            .collect();
+        let outcomes = |want: Outcome| alone.iter().filter(|c| c.outcome == want).count();
+        let together = collide_all(&potential, &settings, &scenes);
+        let reversed: Vec<[FreeLine; 3]> = scenes.iter().rev().copied().collect();
+        let backwards = collide_all(&potential, &settings, &reversed);
+        for (k, collision) in alone.iter().enumerate() {
+            let what = format!("{} scene {k}", potential.id());
+            assert_eq!(bits(collision), bits(&together[k]), "{what}");
+            assert_eq!(
+                bits(collision),
+                bits(&backwards[scenes.len() - 1 - k]),
+                "{what}"
+            );
+        }
+        // Every ending the batch must keep apart: the deep well recombines some scenes, the
+        // short budget ends some and not others.
+        assert!(outcomes(Outcome::Scattered) > 0, "{}", potential.id());
+        if potential.id() == "lj-0.05" {
+            assert!(outcomes(Outcome::Recombined) > 0);
+        }
+        if settings.max_steps < 100 {
+            assert!(outcomes(Outcome::StepBudgetExhausted) > 0);
+        }
     }
 }

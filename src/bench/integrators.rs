@@ -7,7 +7,7 @@ use std::time::Instant;
 use ternary::figures::{Layout, Style};
 use ternary::physics::potential::Potential;
 use ternary::physics::scan::{TIGHTEST_TOLERANCE, thermal_scenes};
-use ternary::physics::scene::{Collision, EngineSettings, FreeLine, Method, collide};
+use ternary::physics::scene::{Collision, EngineSettings, FreeLine, Method, collide, collide_all};
 
 use super::*;
 
@@ -42,22 +42,62 @@ struct Measurement {
     failures: usize,
 }
 
+/// The scenes' collisions, and the best of [`REPEATS`] wall times of `integrate`.
+fn timed(integrate: impl Fn() -> Vec<Collision>) -> (Vec<Collision>, f64) {
+    let mut best = f64::INFINITY;
+    let mut collisions = Vec::new();
+    for _ in 0..REPEATS {
+        let started = Instant::now();
+        collisions = integrate();
+        best = best.min(started.elapsed().as_secs_f64());
+    }
+    (collisions, best)
+}
+
+/// All scenes as the pipeline integrates them: interleaved ([`collide_all`]).
 fn integrate_all(
     potential: &Potential,
     settings: &EngineSettings,
     scenes: &[[FreeLine; 3]],
 ) -> (Vec<Collision>, f64) {
-    let mut best = f64::INFINITY;
-    let mut collisions = Vec::new();
-    for _ in 0..REPEATS {
-        let started = Instant::now();
-        collisions = scenes
-            .iter()
-            .map(|&lines| collide(potential, settings, lines))
-            .collect();
-        best = best.min(started.elapsed().as_secs_f64());
+    timed(|| collide_all(potential, settings, scenes))
+}
+
+/// Tolerances at which the interleaved scenes are timed against the same scenes one by one.
+const INTERLEAVING_TOLERANCES: [f64; 3] = [1e-6, 1e-10, 1e-12];
+
+/// DPRKN12's scenes interleaved ([`collide_all`]) against one by one ([`collide`]), in one
+/// run: the time ratio, and whether every outgoing velocity agrees to the bit.
+fn interleaving(potential: &Potential, scenes: &[[FreeLine; 3]]) -> String {
+    let mut out = String::from(
+        "\nDPRKN12 scenes interleaved (as the pipeline integrates them) against one by one:\n\n\
+         | tolerance | one by one us/scene | interleaved us/scene | ratio | same bits |\n\
+         |---|---|---|---|---|\n",
+    );
+    for tolerance in INTERLEAVING_TOLERANCES {
+        let settings = EngineSettings::new(Method::Dprkn12, tolerance, MAX_STEPS);
+        let (alone, alone_seconds) = timed(|| {
+            scenes
+                .iter()
+                .map(|&lines| collide(potential, &settings, lines))
+                .collect()
+        });
+        let (together, together_seconds) = integrate_all(potential, &settings, scenes);
+        let same = alone.iter().zip(&together).all(|(a, b)| {
+            let bits = |c: &Collision| c.outgoing.map(f64::to_bits);
+            bits(a) == bits(b) && a.evaluations == b.evaluations
+        });
+        let per_scene = |seconds: f64| 1e6 * seconds / scenes.len() as f64;
+        let _ = writeln!(
+            out,
+            "| {tolerance:.0e} | {:.2} | {:.2} | {:.2} | {} |",
+            per_scene(alone_seconds),
+            per_scene(together_seconds),
+            together_seconds / alone_seconds,
+            if same { "yes" } else { "no" }
+        );
     }
-    (collisions, best)
+    out
 }
 
 /// Largest outgoing-velocity difference between two results of one scene.
@@ -152,6 +192,7 @@ pub fn integrators(options: &WorkPrecisionOptions) -> (String, BenchFigure) {
     for challenger in [Method::Dprkn12, Method::Dop853] {
         out.push_str(&speedups(&measurements, challenger, Method::Dopri5));
     }
+    out.push_str(&interleaving(&potential, &scenes));
     let figure = BenchFigure {
         name: "work_precision_integrators",
         layout: Layout {

@@ -23,7 +23,9 @@
 //! step costs sixteen stage accelerations plus one at `y_new` (returned as [`Step::a`] for the
 //! next step's `a0`): seventeen in all.
 
-use super::{Acceleration, Integrator, Step, Vector, rms_norm, scaled_square_sum, weighted_sum};
+use super::{
+    Acceleration, Integrator, Step, Trial, Vector, rms_norm, scaled_square_sum, weighted_sum,
+};
 
 /// Dormand-El-Mikkawy-Prince RKN 12(10) pair for `y'' = a(y)`.
 pub struct Dprkn12;
@@ -325,65 +327,108 @@ impl Integrator for Dprkn12 {
         position_scale: &V,
         velocity_scale: &V,
     ) -> Step<V> {
-        let forces = stage_accelerations(acceleration, y, v, a0, h);
-        let position_increment = weighted_sum(h, &POSITION_WEIGHTS, &forces);
-        let velocity_increment = weighted_sum(h, &VELOCITY_WEIGHTS, &forces);
-        let mut new_y = y.clone();
-        let mut new_v = v.clone();
-        {
-            let positions = new_y.components_mut().iter_mut();
-            let increments = v.components().iter().zip(position_increment.components());
-            for (y, (vk, increment)) in positions.zip(increments) {
-                *y += h * (vk + increment);
+        let trial = Trial {
+            y,
+            v,
+            a0,
+            h,
+            position_scale,
+            velocity_scale,
+        };
+        let [step] = Self::steps(acceleration, [trial]);
+        step
+    }
+
+    /// The trials' stages advance together, stage `i` of every trial before stage `i + 1` of
+    /// any: each stage's force waits on the one before (the step is latency-bound on the
+    /// force's division and the stage sums), so independent trials fill each other's waits.
+    /// Every trial takes exactly the operations of a step of its own: the same bits.
+    #[inline(always)]
+    fn steps<V: Vector, A: Acceleration<V>, const L: usize>(
+        acceleration: &A,
+        trials: [Trial<'_, V>; L],
+    ) -> [Step<V>; L] {
+        let forces = stage_accelerations(acceleration, &trials);
+        let ends: [(V, V); L] = std::array::from_fn(|lane| end_state(&trials[lane], &forces[lane]));
+        std::array::from_fn(|lane| {
+            let (trial, (y, v)) = (&trials[lane], &ends[lane]);
+            let position_error =
+                weighted_sum(trial.h * trial.h, &POSITION_ERROR_WEIGHTS, &forces[lane]);
+            let velocity_error = weighted_sum(trial.h, &VELOCITY_ERROR_WEIGHTS, &forces[lane]);
+            Step {
+                a: acceleration.acceleration(y),
+                error: rms_norm(
+                    y.components().len(),
+                    scaled_square_sum(&position_error, trial.position_scale),
+                    scaled_square_sum(&velocity_error, trial.velocity_scale),
+                ),
+                y: y.clone(),
+                v: v.clone(),
             }
-            let velocities = new_v.components_mut().iter_mut();
-            for (v, increment) in velocities.zip(velocity_increment.components()) {
-                *v += increment;
-            }
-        }
-        let position_error = weighted_sum(h * h, &POSITION_ERROR_WEIGHTS, &forces);
-        let velocity_error = weighted_sum(h, &VELOCITY_ERROR_WEIGHTS, &forces);
-        Step {
-            a: acceleration.acceleration(&new_y),
-            error: rms_norm(
-                y.components().len(),
-                scaled_square_sum(&position_error, position_scale),
-                scaled_square_sum(&velocity_error, velocity_scale),
-            ),
-            y: new_y,
-            v: new_v,
-        }
+        })
     }
 }
 
-/// Stage accelerations `F_i = a(y + c_i h v + h^2 sum_j a_ij F_j)`, with `F_1 = a0` given.
+/// Positions and velocities at the end of `trial`, from its stage accelerations `forces`.
 #[inline(always)]
-fn stage_accelerations<V: Vector, A: Acceleration<V>>(
+fn end_state<V: Vector>(trial: &Trial<'_, V>, forces: &[V; STAGES]) -> (V, V) {
+    let h = trial.h;
+    let position_increment = weighted_sum(h, &POSITION_WEIGHTS, forces);
+    let velocity_increment = weighted_sum(h, &VELOCITY_WEIGHTS, forces);
+    let mut new_y = trial.y.clone();
+    let mut new_v = trial.v.clone();
+    let positions = new_y.components_mut().iter_mut();
+    let increments = trial
+        .v
+        .components()
+        .iter()
+        .zip(position_increment.components());
+    for (y, (vk, increment)) in positions.zip(increments) {
+        *y += h * (vk + increment);
+    }
+    let velocities = new_v.components_mut().iter_mut();
+    for (v, increment) in velocities.zip(velocity_increment.components()) {
+        *v += increment;
+    }
+    (new_y, new_v)
+}
+
+/// Stage accelerations `F_i = a(y + c_i h v + h^2 sum_j a_ij F_j)` of every trial, with
+/// `F_1 = a0` given, stage by stage across the trials.
+#[inline(always)]
+fn stage_accelerations<V: Vector, A: Acceleration<V>, const L: usize>(
     acceleration: &A,
-    y: &V,
-    v: &V,
-    a0: &V,
-    h: f64,
-) -> [V; STAGES] {
-    let mut forces: [V; STAGES] = std::array::from_fn(|_| a0.clone());
+    trials: &[Trial<'_, V>; L],
+) -> [[V; STAGES]; L] {
+    let mut forces: [[V; STAGES]; L] =
+        std::array::from_fn(|lane| std::array::from_fn(|_| trials[lane].a0.clone()));
     for (i, (row, c)) in COUPLING.iter().zip(NODES).enumerate().skip(1) {
-        let mut position = y.clone();
-        {
-            let mut coupling_sum = y.zeros_like();
-            let sums = coupling_sum.components_mut();
-            for (&a_ij, force) in row.iter().zip(&forces) {
-                for (s, f) in sums.iter_mut().zip(force.components()) {
-                    *s += a_ij * f;
-                }
-            }
-            let position_components = position.components_mut().iter_mut();
-            for ((p, vk), sum) in position_components.zip(v.components()).zip(sums.iter()) {
-                *p += h * (c * vk + h * sum);
-            }
+        let positions: [V; L] =
+            std::array::from_fn(|lane| stage_position(&trials[lane], row, c, &forces[lane]));
+        for (lane_forces, position) in forces.iter_mut().zip(&positions) {
+            lane_forces[i] = acceleration.acceleration(position);
         }
-        forces[i] = acceleration.acceleration(&position);
     }
     forces
+}
+
+/// The position `y + c_i h v + h^2 sum_j a_ij F_j` of a stage with coupling `row` and node `c`.
+#[inline(always)]
+fn stage_position<V: Vector>(trial: &Trial<'_, V>, row: &[f64], c: f64, forces: &[V; STAGES]) -> V {
+    let (y, v, h) = (trial.y, trial.v, trial.h);
+    let mut position = y.clone();
+    let mut coupling_sum = y.zeros_like();
+    let sums = coupling_sum.components_mut();
+    for (&a_ij, force) in row.iter().zip(forces) {
+        for (s, f) in sums.iter_mut().zip(force.components()) {
+            *s += a_ij * f;
+        }
+    }
+    let position_components = position.components_mut().iter_mut();
+    for ((p, vk), sum) in position_components.zip(v.components()).zip(sums.iter()) {
+        *p += h * (c * vk + h * sum);
+    }
+    position
 }
 
 #[cfg(test)]

@@ -14,7 +14,7 @@
 //! positive; a NaN estimate (forces overflowing at a stage that nearly closed a gap) is rejected.
 //! All quantities are in the caller's scaled units.
 
-use super::{Acceleration, Integrator, Step, Vector};
+use super::{Acceleration, Integrator, Step, Trial, Vector};
 
 /// Fraction of the free-flight time to contact that one step may cover: a step never carries
 /// two approaching neighbours past each other.
@@ -88,6 +88,7 @@ pub struct Drive<T> {
 /// Integrates `gaps'' = acceleration(gaps)` from `(gaps, rates)` on adaptive steps of `I` for
 /// `span.duration`, leaving the final state in `gaps` and `rates` (the last accepted one when
 /// the drive fails). `after_step(gaps, rates, h)` runs after every accepted step of size `h`.
+#[inline(always)]
 pub fn drive<I: Integrator, V: Vector, A: Acceleration<V>, T>(
     acceleration: &A,
     scales: &impl ErrorScales<V>,
@@ -96,72 +97,277 @@ pub fn drive<I: Integrator, V: Vector, A: Acceleration<V>, T>(
     span: Span,
     mut after_step: impl FnMut(&mut V, &mut V, f64) -> AfterStep<T>,
 ) -> Drive<T> {
-    let mut work = Work {
-        evaluations: 1,
-        ..Work::default()
-    };
-    let mut accelerations = acceleration.acceleration(gaps);
-    // The controller adapts the step in units of the local time scale, the quantity the
-    // error actually depends on (see `local_time_scale`).
-    let mut control = StepControl::new::<I>(INITIAL_STEP_RATIO);
-    let mut elapsed = 0.0;
-    while elapsed < span.duration {
-        if work.steps + work.rejected >= span.max_attempts {
-            return Drive {
-                ending: Ending::BudgetExhausted,
-                work,
-            };
-        }
-        let remaining = span.duration - elapsed;
-        let (g, w) = (gaps.components(), rates.components());
-        let step = (control.ratio * local_time_scale(g, w, accelerations.components()))
-            .min(approach_limit(g, w))
-            .min(remaining);
-        let trial = I::step(
-            acceleration,
-            gaps,
-            rates,
-            &accelerations,
-            step,
-            &scales.gap_scale(gaps),
-            scales.rate_scale(),
-        );
-        work.evaluations += u64::from(I::EVALUATIONS_PER_STEP);
-        if !admissible(&trial) {
-            work.rejected += 1;
-            if control.reject(trial.error).is_err() {
-                return Drive {
-                    ending: Ending::Collapse,
-                    work,
-                };
-            }
-            continue;
-        }
-        work.steps += 1;
-        elapsed = if step == remaining {
-            span.duration
-        } else {
-            elapsed + step
+    let mut driving = Driving::start::<I, A>(acceleration, gaps.clone(), rates.clone());
+    let ending = loop {
+        let step = match driving.next_step::<T>(span) {
+            Ok(step) => step,
+            Err(ending) => break ending,
         };
-        (*gaps, *rates, accelerations) = (trial.y, trial.v, trial.a);
-        control.accept(trial.error);
-        match after_step(gaps, rates, step) {
-            AfterStep::Continue => {}
-            AfterStep::Moved => {
-                accelerations = acceleration.acceleration(gaps);
-                work.evaluations += 1;
+        let gap_scale = scales.gap_scale(&driving.gaps);
+        let [attempt] = I::steps(
+            acceleration,
+            [driving.trial(step, &gap_scale, scales.rate_scale())],
+        );
+        let settled = driving.settle::<I, A, T>(acceleration, span, step, attempt, &mut after_step);
+        if let Some(ending) = settled {
+            break ending;
+        }
+    };
+    (*gaps, *rates) = (driving.gaps, driving.rates);
+    Drive {
+        ending,
+        work: driving.work,
+    }
+}
+
+/// A trajectory driven by [`drive_lanes`]: the scales of its errors and what happens after each
+/// of its accepted steps (the `after_step` of [`drive`]).
+pub trait Trajectory<V>: ErrorScales<V> {
+    /// The value a stop carries.
+    type Stop;
+    /// Runs after every accepted step of size `step`.
+    fn after_step(&mut self, gaps: &mut V, rates: &mut V, step: f64) -> AfterStep<Self::Stop>;
+}
+
+/// Drives every trajectory that `queue` yields (with its start gaps and rates), up to `LANES`
+/// at a time, and hands each to `finish` with its drive and final gaps and rates when it ends,
+/// in the order they end. While `LANES` trajectories are under way, their attempts are taken
+/// in one [`Integrator::steps`] call, which interleaves their stages (a step alone is bound by
+/// the latency of its chain of stages); fewer take their steps one by one. Each trajectory
+/// takes exactly the steps and operations it takes in [`drive`]: the same bits for any `LANES`
+/// and any order of the queue.
+pub fn drive_lanes<I, V, A, R, const LANES: usize>(
+    acceleration: &A,
+    span: Span,
+    mut queue: impl Iterator<Item = (R, V, V)>,
+    mut finish: impl FnMut(R, Drive<R::Stop>, V, V),
+) where
+    I: Integrator,
+    V: Vector,
+    A: Acceleration<V>,
+    R: Trajectory<V>,
+{
+    let mut lanes: Vec<Lane<R, V>> = Vec::with_capacity(LANES);
+    loop {
+        while lanes.len() < LANES {
+            let Some((trajectory, gaps, rates)) = queue.next() else {
+                break;
+            };
+            let mut lane = Lane::start::<I, A>(acceleration, trajectory, gaps, rates);
+            lane.prepare(span);
+            lanes.push(lane);
+            end_finished(&mut lanes, &mut finish);
+        }
+        if lanes.is_empty() {
+            return;
+        }
+        if lanes.len() == LANES {
+            let trials: [Trial<'_, V>; LANES] = std::array::from_fn(|k| lanes[k].trial());
+            let attempts = I::steps(acceleration, trials);
+            for (lane, attempt) in lanes.iter_mut().zip(attempts) {
+                lane.advance::<I, A>(acceleration, span, attempt);
             }
-            AfterStep::Stop(value) => {
-                return Drive {
-                    ending: Ending::Stopped(value),
-                    work,
-                };
+        } else {
+            for lane in &mut lanes {
+                let [attempt] = I::steps(acceleration, [lane.trial()]);
+                lane.advance::<I, A>(acceleration, span, attempt);
             }
+        }
+        end_finished(&mut lanes, &mut finish);
+    }
+}
+
+/// Hands every ended lane of `lanes` to `finish` and removes it.
+fn end_finished<R: Trajectory<V>, V>(
+    lanes: &mut Vec<Lane<R, V>>,
+    finish: &mut impl FnMut(R, Drive<R::Stop>, V, V),
+) {
+    let mut k = 0;
+    while k < lanes.len() {
+        if let Some(ending) = lanes[k].ended.take() {
+            let Lane {
+                trajectory,
+                driving,
+                ..
+            } = lanes.swap_remove(k);
+            let drive = Drive {
+                ending,
+                work: driving.work,
+            };
+            finish(trajectory, drive, driving.gaps, driving.rates);
+        } else {
+            k += 1;
         }
     }
-    Drive {
-        ending: Ending::Elapsed,
-        work,
+}
+
+/// One trajectory of [`drive_lanes`] under way: its drive, the attempt it takes next (`step`
+/// and the gap scale there), or how it ended.
+struct Lane<R: Trajectory<V>, V> {
+    trajectory: R,
+    driving: Driving<V>,
+    step: f64,
+    gap_scale: V,
+    ended: Option<Ending<R::Stop>>,
+}
+
+impl<R: Trajectory<V>, V: Vector> Lane<R, V> {
+    /// A lane starting `trajectory` at `(gaps, rates)`.
+    #[inline(always)]
+    fn start<I: Integrator, A: Acceleration<V>>(
+        acceleration: &A,
+        trajectory: R,
+        gaps: V,
+        rates: V,
+    ) -> Self {
+        let gap_scale = gaps.zeros_like();
+        Lane {
+            trajectory,
+            driving: Driving::start::<I, A>(acceleration, gaps, rates),
+            step: 0.0,
+            gap_scale,
+            ended: None,
+        }
+    }
+
+    /// Sizes the next attempt, or ends the lane when its drive is over.
+    #[inline(always)]
+    fn prepare(&mut self, span: Span) {
+        match self.driving.next_step::<R::Stop>(span) {
+            Ok(step) => {
+                self.step = step;
+                self.gap_scale = self.trajectory.gap_scale(&self.driving.gaps);
+            }
+            Err(ending) => self.ended = Some(ending),
+        }
+    }
+
+    /// The attempt sized by [`Lane::prepare`].
+    #[inline(always)]
+    fn trial(&self) -> Trial<'_, V> {
+        let rate_scale = self.trajectory.rate_scale();
+        self.driving.trial(self.step, &self.gap_scale, rate_scale)
+    }
+
+    /// Takes the outcome `attempt` of [`Lane::trial`] and sizes the next one.
+    #[inline(always)]
+    fn advance<I: Integrator, A: Acceleration<V>>(
+        &mut self,
+        acceleration: &A,
+        span: Span,
+        attempt: Step<V>,
+    ) {
+        let Lane {
+            trajectory,
+            driving,
+            step,
+            ..
+        } = self;
+        let mut after_step = |gaps: &mut V, rates: &mut V, h| trajectory.after_step(gaps, rates, h);
+        match driving.settle::<I, A, R::Stop>(acceleration, span, *step, attempt, &mut after_step) {
+            Some(ending) => self.ended = Some(ending),
+            None => self.prepare(span),
+        }
+    }
+}
+
+/// A drive under way: the state, its acceleration, the step controller and the clock.
+struct Driving<V> {
+    gaps: V,
+    rates: V,
+    accelerations: V,
+    control: StepControl,
+    elapsed: f64,
+    work: Work,
+}
+
+impl<V: Vector> Driving<V> {
+    /// A drive starting at `(gaps, rates)`, its acceleration evaluated there.
+    #[inline(always)]
+    fn start<I: Integrator, A: Acceleration<V>>(acceleration: &A, gaps: V, rates: V) -> Self {
+        Driving {
+            accelerations: acceleration.acceleration(&gaps),
+            gaps,
+            rates,
+            // The controller adapts the step in units of the local time scale, the quantity
+            // the error actually depends on (see `local_time_scale`).
+            control: StepControl::new::<I>(INITIAL_STEP_RATIO),
+            elapsed: 0.0,
+            work: Work {
+                evaluations: 1,
+                ..Work::default()
+            },
+        }
+    }
+
+    /// The size of the next attempt of integrator `I`, or how the drive ends before it: the
+    /// duration integrated, or the attempt budget spent.
+    #[inline(always)]
+    fn next_step<T>(&self, span: Span) -> Result<f64, Ending<T>> {
+        if self.elapsed >= span.duration {
+            return Err(Ending::Elapsed);
+        }
+        if self.work.steps + self.work.rejected >= span.max_attempts {
+            return Err(Ending::BudgetExhausted);
+        }
+        let (g, w) = (self.gaps.components(), self.rates.components());
+        let scale = local_time_scale(g, w, self.accelerations.components());
+        Ok((self.control.ratio * scale)
+            .min(approach_limit(g, w))
+            .min(span.duration - self.elapsed))
+    }
+
+    /// The attempt of size `step` from the current state.
+    #[inline(always)]
+    fn trial<'a>(&'a self, step: f64, gap_scale: &'a V, rate_scale: &'a V) -> Trial<'a, V> {
+        Trial {
+            y: &self.gaps,
+            v: &self.rates,
+            a0: &self.accelerations,
+            h: step,
+            position_scale: gap_scale,
+            velocity_scale: rate_scale,
+        }
+    }
+
+    /// Takes the `attempt` of size `step`: rejects it, or accepts it and runs `after_step`.
+    /// Returns how the drive ends, if it does here.
+    #[inline(always)]
+    fn settle<I: Integrator, A: Acceleration<V>, T>(
+        &mut self,
+        acceleration: &A,
+        span: Span,
+        step: f64,
+        attempt: Step<V>,
+        after_step: &mut impl FnMut(&mut V, &mut V, f64) -> AfterStep<T>,
+    ) -> Option<Ending<T>> {
+        self.work.evaluations += u64::from(I::EVALUATIONS_PER_STEP);
+        if !admissible(&attempt) {
+            self.work.rejected += 1;
+            return self
+                .control
+                .reject(attempt.error)
+                .err()
+                .map(|StepCollapse| Ending::Collapse);
+        }
+        self.work.steps += 1;
+        let remaining = span.duration - self.elapsed;
+        self.elapsed = if step == remaining {
+            span.duration
+        } else {
+            self.elapsed + step
+        };
+        (self.gaps, self.rates, self.accelerations) = (attempt.y, attempt.v, attempt.a);
+        self.control.accept(attempt.error);
+        match after_step(&mut self.gaps, &mut self.rates, step) {
+            AfterStep::Continue => None,
+            AfterStep::Moved => {
+                self.accelerations = acceleration.acceleration(&self.gaps);
+                self.work.evaluations += 1;
+                None
+            }
+            AfterStep::Stop(value) => Some(Ending::Stopped(value)),
+        }
     }
 }
 
@@ -420,6 +626,92 @@ mod tests {
         (gaps[0] - (REST + libm::cos(t)))
             .abs()
             .max((rates[0] + libm::sin(t)).abs())
+    }
+
+    /// A spring released at a given gap that stops after a given number of steps, for
+    /// [`drive_lanes`].
+    struct Released {
+        index: u32,
+        scales: Absolute,
+        stop_after: u32,
+        steps: u32,
+    }
+
+    impl ErrorScales<[f64; 1]> for Released {
+        fn gap_scale(&self, gaps: &[f64; 1]) -> [f64; 1] {
+            self.scales.gap_scale(gaps)
+        }
+
+        fn rate_scale(&self) -> &[f64; 1] {
+            self.scales.rate_scale()
+        }
+    }
+
+    impl Trajectory<[f64; 1]> for Released {
+        type Stop = u32;
+        fn after_step(&mut self, _: &mut [f64; 1], _: &mut [f64; 1], _: f64) -> AfterStep<u32> {
+            self.steps += 1;
+            if self.steps == self.stop_after {
+                AfterStep::Stop(self.steps)
+            } else {
+                AfterStep::Continue
+            }
+        }
+    }
+
+    /// Trajectories driven three at a time are the trajectories driven one by one, to the
+    /// bit: the same end state, ending and work, whether they stop, run out of time or of
+    /// budget, handed over with their own state.
+    #[test]
+    fn lanes_drive_each_trajectory_as_alone() {
+        let span = Span {
+            duration: 6.0,
+            max_attempts: 7,
+        };
+        let released = |k: u32| {
+            let trajectory = Released {
+                index: k,
+                scales: Absolute([libm::pow(10.0, -4.0 - f64::from(k))]),
+                stop_after: if k.is_multiple_of(3) { 3 + k } else { u32::MAX },
+                steps: 0,
+            };
+            (trajectory, [REST + 0.1 * f64::from(k + 1)], [0.0])
+        };
+        let mut together = Vec::new();
+        drive_lanes::<Dprkn12, _, _, _, 3>(
+            &Spring,
+            span,
+            (0..8).map(released),
+            |lane, drive, gaps, rates| {
+                together.push((lane.index, drive, gaps[0].to_bits(), rates[0].to_bits()));
+            },
+        );
+        together.sort_by_key(|&(index, ..)| index);
+        let alone: Vec<_> = (0..8)
+            .map(|k| {
+                let (mut trajectory, mut gaps, mut rates) = released(k);
+                let scales = Absolute(trajectory.scales.0);
+                let drive = drive::<Dprkn12, _, _, _>(
+                    &Spring,
+                    &scales,
+                    &mut gaps,
+                    &mut rates,
+                    span,
+                    |g, r, h| trajectory.after_step(g, r, h),
+                );
+                (
+                    trajectory.index,
+                    drive,
+                    gaps[0].to_bits(),
+                    rates[0].to_bits(),
+                )
+            })
+            .collect();
+        assert_eq!(together, alone);
+        let endings: Vec<_> = alone.iter().map(|(_, drive, ..)| drive.ending).collect();
+        assert!(endings.contains(&Ending::Stopped(3)), "{endings:?}");
+        assert!(endings.contains(&Ending::Elapsed), "{endings:?}");
+        assert!(endings.contains(&Ending::BudgetExhausted), "{endings:?}");
     }
 
     /// Over three periods the spring stays on its closed form within the local tolerance

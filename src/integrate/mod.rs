@@ -33,7 +33,9 @@ mod driver;
 pub use dop853::Dop853;
 pub use dopri5::Dopri5;
 pub use dprkn12::Dprkn12;
-pub use driver::{AfterStep, Drive, Ending, ErrorScales, Span, Work, drive};
+pub use driver::{
+    AfterStep, Drive, Ending, ErrorScales, Span, Trajectory, Work, drive, drive_lanes,
+};
 
 /// A state vector of `len` components: `[f64; D]` or `Vec<f64>`.
 pub trait Vector: Clone {
@@ -119,6 +121,44 @@ pub trait Integrator {
         position_scale: &V,
         velocity_scale: &V,
     ) -> Step<V>;
+
+    /// `L` independent steps in one call, one per trial, each the same to the last bit as
+    /// [`Integrator::step`] of that trial. One after the other unless the method interleaves
+    /// them.
+    #[inline(always)]
+    fn steps<V: Vector, A: Acceleration<V>, const L: usize>(
+        acceleration: &A,
+        trials: [Trial<'_, V>; L],
+    ) -> [Step<V>; L] {
+        trials.map(|trial| {
+            Self::step(
+                acceleration,
+                trial.y,
+                trial.v,
+                trial.a0,
+                trial.h,
+                trial.position_scale,
+                trial.velocity_scale,
+            )
+        })
+    }
+}
+
+/// The arguments of one attempted step ([`Integrator::step`]).
+#[derive(Clone, Copy, Debug)]
+pub struct Trial<'a, V> {
+    /// Positions at the start.
+    pub y: &'a V,
+    /// Velocities at the start.
+    pub v: &'a V,
+    /// `a(y)`.
+    pub a0: &'a V,
+    /// Step size.
+    pub h: f64,
+    /// Allowed error of each position.
+    pub position_scale: &'a V,
+    /// Allowed error of each velocity.
+    pub velocity_scale: &'a V,
 }
 
 /// Stages of an explicit Runge-Kutta method applied to the first-order system

@@ -27,7 +27,7 @@ use rayon::prelude::*;
 
 use super::potential::{PairPotential, Potential, PotentialVisitor, bound_weight};
 use super::quasi_random::{ScrambledSobol, standard_normal_cdf, standard_normal_quantile};
-use super::scene::{Collision, EngineSettings, Outcome, SceneState, collide_from};
+use super::scene::{Collision, EngineSettings, Outcome, SceneState, collide_all_from};
 
 /// Cells of the bound-gap proposal on the unit interval of `t` (gap
 /// `x = x0 / (1 - t^2)`, `U(x0) = 0`).
@@ -323,6 +323,10 @@ pub fn dissociation_scenes(
     })
 }
 
+/// Scenes integrated together in one task ([`collide_all_from`] interleaves them): enough to
+/// keep its lanes full, few enough to share the scenes of a randomization among the threads.
+const SCENES_PER_TASK: usize = 16;
+
 struct Scenes<'a, F> {
     settings: &'a EngineSettings,
     points: &'a [[f64; 3]],
@@ -336,13 +340,19 @@ impl<F: Fn() + Sync> PotentialVisitor for Scenes<'_, F> {
         let epsilon = self.settings.tail_level();
         let scenes = self
             .points
-            .par_iter()
-            .map(|point| {
-                let pair = pairs.draw([point[0], point[1]]);
-                let state = pairs.hit(&pair, meeting_speed_draw(point[2]), epsilon);
-                let collision = collide_from(potential, self.settings, state);
-                (self.done)();
-                (pair, collision)
+            .par_chunks(SCENES_PER_TASK)
+            .flat_map_iter(|chunk| {
+                let (pairs, states): (Vec<BoundPair>, Vec<SceneState>) = chunk
+                    .iter()
+                    .map(|point| {
+                        let pair = pairs.draw([point[0], point[1]]);
+                        let state = pairs.hit(&pair, meeting_speed_draw(point[2]), epsilon);
+                        (pair, state)
+                    })
+                    .unzip();
+                let collisions = collide_all_from(potential, self.settings, &states);
+                chunk.iter().for_each(|_| (self.done)());
+                pairs.into_iter().zip(collisions)
             })
             .collect();
         Some(scenes)

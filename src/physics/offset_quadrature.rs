@@ -25,7 +25,7 @@
 
 use super::potential::Potential;
 use super::scan::LaunchPair;
-use super::scene::{Collision, EngineSettings, collide};
+use super::scene::{Collision, EngineSettings, collide_all};
 use crate::thresholds::DEFAULT_KICK_FLOOR;
 
 /// Nested trapezoid rule on `tau = T sinh(s)`, `|s| <= half_range`.
@@ -139,28 +139,18 @@ impl OffsetRule {
         shift: f64,
     ) -> OffsetIntegral {
         let time = launch.collision_time();
-        let scene = |s: f64| {
-            let offset = time * libm::sinh(s);
-            let collision = collide(potential, engine, launch.lines(offset));
-            (s, collision)
-        };
-        let mut scenes: Vec<(f64, Collision)> =
-            self.coarse_nodes(shift).into_iter().map(scene).collect();
-        let mut step = self.coarse_step;
-        let mut integral = self.sum(&scenes, step, time);
-        let mut error = f64::INFINITY;
-        for _ in 0..self.halvings {
-            let midpoints: Vec<(f64, Collision)> = scenes[1..]
+        let scenes_at = |nodes: &[f64]| {
+            let lines: Vec<_> = nodes
                 .iter()
-                .map(|&(s, _)| scene(s - 0.5 * step))
+                .map(|&s| launch.lines(time * libm::sinh(s)))
                 .collect();
-            scenes = interleave(scenes, midpoints);
-            step *= 0.5;
-            let refined = self.sum(&scenes, step, time);
-            error = (refined - integral).abs();
-            integral = refined;
-        }
-        let scenes = self.extend(scenes, step, scene);
+            let collisions = collide_all(potential, engine, &lines);
+            nodes.iter().copied().zip(collisions).collect::<Vec<_>>()
+        };
+        let (nodes, step) = self.finest_nodes(shift);
+        let scenes = scenes_at(&nodes);
+        let error = self.last_change(&scenes, step, time);
+        let scenes = self.extend(scenes, step, scenes_at);
         let integral = self.sum(&scenes, step, time);
         let at = |node: &(f64, Collision)| integrand(node, time);
         let ends = scenes.len().saturating_sub(2);
@@ -185,32 +175,64 @@ impl OffsetRule {
         }
     }
 
+    /// The nodes in `s` of the finest rule, ascending, and its step: the coarse nodes
+    /// ([`OffsetRule::coarse_nodes`]) with the midpoints of each halving between them.
+    fn finest_nodes(&self, shift: f64) -> (Vec<f64>, f64) {
+        let mut nodes = self.coarse_nodes(shift);
+        let mut step = self.coarse_step;
+        for _ in 0..self.halvings {
+            let midpoints = nodes[1..].iter().map(|&s| s - 0.5 * step).collect();
+            nodes = interleave(nodes, midpoints);
+            step *= 0.5;
+        }
+        (nodes, step)
+    }
+
+    /// The change of the trapezoid sum at the last halving, between the finest rule's
+    /// `scenes` (`step` apart) and every other one of them (infinite without a halving).
+    fn last_change(&self, scenes: &[(f64, Collision)], step: f64, time: f64) -> f64 {
+        if self.halvings == 0 {
+            return f64::INFINITY;
+        }
+        let coarser: Vec<(f64, Collision)> = scenes.iter().step_by(2).copied().collect();
+        (self.sum(scenes, step, time) - self.sum(&coarser, 2.0 * step, time)).abs()
+    }
+
     /// `scenes` (ascending in `s`, `step` apart) grown at each end by one
     /// `step` at a time while a kick at that end exceeds `end_kick`, by at
     /// most `half_range` in `s` per end. The range then depends on the pair,
     /// but only through its own outer kicks: what stays beyond is below
     /// `end_kick` (the trapezoid sum over the grown nodes keeps the grid's move).
+    /// `scenes_at(nodes)` integrates the scenes at `nodes`: both ends' next ones together.
     fn extend(
         &self,
         scenes: Vec<(f64, Collision)>,
         step: f64,
-        scene: impl Fn(f64) -> (f64, Collision),
+        scenes_at: impl Fn(&[f64]) -> Vec<(f64, Collision)>,
     ) -> Vec<(f64, Collision)> {
         let limit = (self.half_range / step).round() as usize;
-        let grow = |from: &(f64, Collision), direction: f64| {
-            let mut added = Vec::new();
-            let mut last = *from;
-            while added.len() < limit && largest_kick(&last.1) > self.end_kick {
-                last = scene(last.0 + direction * step);
-                added.push(last);
-            }
-            added
-        };
-        let (Some(first), Some(last)) = (scenes.first(), scenes.last()) else {
+        let (Some(&first), Some(&last)) = (scenes.first(), scenes.last()) else {
             return scenes;
         };
-        let mut below = grow(first, -1.0);
-        let above = grow(last, 1.0);
+        // Each end: its outermost scene, its direction in `s` and the scenes added beyond.
+        let mut ends = [(first, -1.0, Vec::new()), (last, 1.0, Vec::new())];
+        loop {
+            let growing: Vec<usize> = (0..ends.len())
+                .filter(|&k| ends[k].2.len() < limit && largest_kick(&ends[k].0.1) > self.end_kick)
+                .collect();
+            if growing.is_empty() {
+                break;
+            }
+            let nodes: Vec<f64> = growing
+                .iter()
+                .map(|&k| ends[k].0.0 + ends[k].1 * step)
+                .collect();
+            for (&k, scene) in growing.iter().zip(scenes_at(&nodes)) {
+                ends[k].0 = scene;
+                ends[k].2.push(scene);
+            }
+        }
+        let [(_, _, mut below), (_, _, above)] = ends;
         below.reverse();
         below.extend(scenes);
         below.extend(above);
