@@ -8,7 +8,10 @@
 //! allocation, fully unrolled), `Vec<f64>` for systems sized at run time (the ring).
 //!
 //! The driver ([`drive`], `driver.rs`) integrates systems of gaps (ordered particles: the
-//! three-body scene, the ring and its clusters) over a duration or until the caller stops it.
+//! three-body scene, the ring and its clusters) over a duration or until the caller stops it;
+//! [`drive_lanes`] drives several independent ones at once, their steps taken together
+//! ([`Integrator::steps`]: a step alone is a latency-bound chain of stages), each to the same
+//! bits as alone.
 //!
 //! Owned here: the tableaus (published coefficients as `const` tables, one method per file),
 //! the arithmetic of one step, and in the driver the attempt loop, the step budget, the

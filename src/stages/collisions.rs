@@ -42,9 +42,10 @@ impl CollisionsStage {
 }
 
 /// CPU seconds per integrated scene of an inverse power law at the engine
-/// tolerance [`SCENE_TOLERANCE`]: 19-22 us in the default study's sets of 1.6
-/// to 3.2 million scenes (2026-12-01, the 2-core VM, `ternary status --costs`).
-const CPU_PER_SCENE: f64 = 2.0e-5;
+/// tolerance [`SCENE_TOLERANCE`]: 13.8-16.9 us in the default study's sets of 1.6
+/// to 3.2 million scenes, four integrated at a time (2026-12-03, the 2-core VM,
+/// `ternary status --costs`; 19-22 us one at a time, 2026-12-01).
+const CPU_PER_SCENE: f64 = 1.47e-5;
 
 /// The tolerance [`CPU_PER_SCENE`] holds at. The order-12 integrator takes
 /// `tolerance^(-1/12)` steps: 1.47x at 1e-12 (measured 1.46x), 0.83x at 1e-9
@@ -52,10 +53,10 @@ const CPU_PER_SCENE: f64 = 2.0e-5;
 const SCENE_TOLERANCE: f64 = 1e-10;
 
 /// A well of depth `D` (in kT) makes a scene `1 + WELL_COST D^(1/4)` times
-/// dearer (bound and orbiting pairs): the default study's Lennard-Jones sets
-/// at 27, 37 and 51 us per scene for theta = 100, 1 and 0.05 (`D = 1/(4
-/// theta)`), within 10%.
-const WELL_COST: f64 = 1.2;
+/// dearer (bound and orbiting pairs): the default study's Lennard-Jones main
+/// sets at 15.1, 17.0, 22.5 and 35.9 us per scene for theta = 100, 20, 1 and
+/// 0.05 (`D = 1/(4 theta)`; 2026-12-03), the model 17.6, 19.1, 24.1 and 34.5.
+const WELL_COST: f64 = 0.9;
 
 /// Bytes of one scene's row in the events table (the same study: 52.6).
 const BYTES_PER_SCENE: f64 = 53.0;

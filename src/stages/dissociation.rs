@@ -91,10 +91,11 @@ impl Stage for DissociationStage {
 
     /// One scene per point, its CPU time growing with the well depth `D`
     /// (`kT`; a deep well oscillates many times while the atom approaches):
-    /// `1.7e-4 s (4D)^0.75` for `4D > 1`, `(4D)^0.4` below at the engine
+    /// `1.35e-4 s (4D)^0.75` for `4D > 1`, `(4D)^0.4` below at the engine
     /// tolerance 1e-12, within 30% of the default study's Lennard-Jones
     /// scenes (measured 2026-11-27 on 2 cores: 1.84 ms at `D = 5` (`theta =
-    /// 0.05`), 0.17 ms at `D = 1/4`, 0.031 ms at `D = 1/400`). A looser
+    /// 0.05`), 0.17 ms at `D = 1/4`, 0.031 ms at `D = 1/400`; 0.79x that
+    /// since 2026-12-03, sixteen scenes integrated four at a time per task). A looser
     /// tolerance starts the atom closer (`tolerance^(-1/12)`, the `r^-6` tail
     /// at the level `0.1 sqrt(tolerance)`) and takes as many fewer steps per
     /// unit time: `tolerance^(-1/6)` in all (0.46x at 1e-10, measured 0.48x).
@@ -104,7 +105,7 @@ impl Stage for DissociationStage {
         let exponent = if depth > 1.0 { 0.75 } else { 0.4 };
         let tolerance = libm::pow(self.params.engine.tolerance / 1e-12, -1.0 / 6.0);
         Cost {
-            cpu_seconds: scenes * 1.7e-4 * libm::pow(depth, exponent) * tolerance,
+            cpu_seconds: scenes * 1.35e-4 * libm::pow(depth, exponent) * tolerance,
             bytes: 200.0,
             rows: 1.0,
         }
