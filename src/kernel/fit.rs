@@ -77,32 +77,57 @@ pub struct ShapeFit {
 /// Parameters in the fit's coordinates `(ln alpha, beta, 1/sigma^2)`.
 type Coordinates = [f64; 3];
 
-fn model(p: &Coordinates, x: f64) -> f64 {
-    libm::exp(p[0] - p[1] * libm::log(x.abs()) - 0.5 * p[2] * x * x)
+/// The model at `x`, given `log = ln|x|`.
+fn model(p: &Coordinates, x: f64, log: f64) -> f64 {
+    libm::exp(p[0] - p[1] * log - 0.5 * p[2] * x * x)
 }
 
-/// Gradient of the model in the fit coordinates.
-fn gradient(p: &Coordinates, x: f64) -> [f64; 3] {
-    let g = model(p, x);
-    [g, -g * libm::log(x.abs()), -0.5 * g * x * x]
+/// A point's bins: their offsets `x` and `ln|x|`, taken once per fit (the iterations
+/// evaluate the model at the same bins over and over).
+struct PointBins<'a> {
+    x: &'a [f64],
+    log: Vec<f64>,
 }
 
-/// The model averaged over a point's bins.
-fn point_model(p: &Coordinates, members: &[f64]) -> f64 {
-    members.iter().map(|&x| model(p, x)).sum::<f64>() / members.len() as f64
-}
+impl PointBins<'_> {
+    /// The bins of every point of `data`.
+    fn of<'a>(data: &FitData<'a>) -> Vec<PointBins<'a>> {
+        data.members
+            .iter()
+            .map(|x| PointBins {
+                x,
+                log: x.iter().map(|x| libm::log(x.abs())).collect(),
+            })
+            .collect()
+    }
 
-/// The gradient averaged over a point's bins.
-fn point_gradient(p: &Coordinates, members: &[f64]) -> [f64; 3] {
-    let count = members.len() as f64;
-    members.iter().fold([0.0; 3], |sum, &x| {
-        let g = gradient(p, x);
-        [
-            sum[0] + g[0] / count,
-            sum[1] + g[1] / count,
-            sum[2] + g[2] / count,
-        ]
-    })
+    /// The model averaged over the bins.
+    fn model(&self, p: &Coordinates) -> f64 {
+        let models = self
+            .x
+            .iter()
+            .zip(&self.log)
+            .map(|(&x, &log)| model(p, x, log));
+        models.sum::<f64>() / self.x.len() as f64
+    }
+
+    /// The model and its gradient in the fit coordinates averaged over the bins, one
+    /// exponential per bin for both.
+    fn model_and_gradient(&self, p: &Coordinates) -> (f64, [f64; 3]) {
+        let count = self.x.len() as f64;
+        let mut sum = -0.0;
+        let mut gradient = [0.0; 3];
+        for (&x, &log) in self.x.iter().zip(&self.log) {
+            let g = model(p, x, log);
+            sum += g;
+            gradient = [
+                gradient[0] + g / count,
+                gradient[1] + -g * log / count,
+                gradient[2] + -0.5 * g * x * x / count,
+            ];
+        }
+        (sum / count, gradient)
+    }
 }
 
 /// Geometric mean of `|x|` over a point's bins (for the log-linear start).
@@ -139,9 +164,9 @@ fn log_linear_start(data: &FitData, bins: &[usize]) -> Option<Coordinates> {
     solve3(&normal, &right)
 }
 
-fn chi2(data: &FitData, bins: &[usize], p: &Coordinates) -> f64 {
+fn chi2(data: &FitData, points: &[PointBins], bins: &[usize], p: &Coordinates) -> f64 {
     bins.iter()
-        .map(|&k| ((data.values[k] - point_model(p, &data.members[k])) / data.errors[k]).powi(2))
+        .map(|&k| ((data.values[k] - points[k].model(p)) / data.errors[k]).powi(2))
         .sum()
 }
 
@@ -153,17 +178,22 @@ const ITERATIONS: usize = 200;
 /// chi-square by at most 1e-12 of it, or no step improves it at any damping
 /// up to 1e12 (a minimum to rounding). Not converged: [`ITERATIONS`] spent,
 /// or singular normal equations.
-fn refine(data: &FitData, bins: &[usize], start: Coordinates) -> (Coordinates, bool) {
+fn refine(
+    data: &FitData,
+    points: &[PointBins],
+    bins: &[usize],
+    start: Coordinates,
+) -> (Coordinates, bool) {
     let mut p = start;
-    let mut current = chi2(data, bins, &p);
+    let mut current = chi2(data, points, bins, &p);
     let mut damping = 1e-3;
     for _ in 0..ITERATIONS {
         let mut normal = [[0.0; 3]; 3];
         let mut right = [0.0; 3];
         for &k in bins {
-            let members = &data.members[k];
-            let residual = (data.values[k] - point_model(&p, members)) / data.errors[k];
-            let grad = point_gradient(&p, members).map(|g| g / data.errors[k]);
+            let (model, gradient) = points[k].model_and_gradient(&p);
+            let residual = (data.values[k] - model) / data.errors[k];
+            let grad = gradient.map(|g| g / data.errors[k]);
             for i in 0..3 {
                 right[i] += grad[i] * residual;
                 for j in 0..3 {
@@ -178,7 +208,7 @@ fn refine(data: &FitData, bins: &[usize], start: Coordinates) -> (Coordinates, b
             return (p, false);
         };
         let trial = [p[0] + step[0], p[1] + step[1], p[2] + step[2]];
-        let value = chi2(data, bins, &trial);
+        let value = chi2(data, points, bins, &trial);
         if value < current {
             let converged = current - value <= 1e-12 * current;
             (p, current, damping) = (trial, value, damping * 0.3);
@@ -201,7 +231,8 @@ pub fn fit_shape(data: &FitData) -> Option<ShapeFit> {
     if bins.len() < 4 {
         return None;
     }
-    let (p, converged) = refine(data, &bins, log_linear_start(data, &bins)?);
+    let points = PointBins::of(data);
+    let (p, converged) = refine(data, &points, &bins, log_linear_start(data, &bins)?);
     if p.iter().any(|v| !v.is_finite()) || p[2] <= 0.0 {
         return None;
     }
@@ -217,7 +248,7 @@ pub fn fit_shape(data: &FitData) -> Option<ShapeFit> {
     }
     Some(ShapeFit {
         shape,
-        chi2_per_dof: chi2(data, &bins, &p) / (bins.len() - 3) as f64,
+        chi2_per_dof: chi2(data, &points, &bins, &p) / (bins.len() - 3) as f64,
         bins: bins.len(),
         converged,
     })
@@ -455,7 +486,13 @@ mod tests {
             .into_iter()
             .map(|group| group.into_iter().map(|k| offsets[k]).collect())
             .collect();
-        let values: Vec<f64> = members.iter().map(|m| point_model(&truth, m)).collect();
+        let values: Vec<f64> = members
+            .iter()
+            .map(|x| {
+                let log = x.iter().map(|x| libm::log(x.abs())).collect();
+                PointBins { x, log }.model(&truth)
+            })
+            .collect();
         let errors: Vec<f64> = values.iter().map(|v| 0.01 * v).collect();
         let data = FitData {
             members: &members,
@@ -479,7 +516,11 @@ mod tests {
             errors: &errors[..5],
         };
         let start = [0.0, 1.0, 100.0];
-        assert_eq!(refine(&data, &[0, 1, 2, 3, 4], start), (start, false));
+        let points = PointBins::of(&data);
+        assert_eq!(
+            refine(&data, &points, &[0, 1, 2, 3, 4], start),
+            (start, false)
+        );
     }
 
     /// Replicates of a shape on bins of 5e-5 out to 0.1, each a multiple of
@@ -491,7 +532,10 @@ mod tests {
             .map(|scale| {
                 offsets
                     .iter()
-                    .map(|&x| scale * model(truth, x) * (1.0 + distortion * x.abs() / 0.01))
+                    .map(|&x| {
+                        let g = model(truth, x, libm::log(x.abs()));
+                        scale * g * (1.0 + distortion * x.abs() / 0.01)
+                    })
                     .collect()
             })
             .collect();
