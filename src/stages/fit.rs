@@ -14,6 +14,7 @@
 //! residuals; for the whole kernel and for its self part (`part`), whose
 //! difference is the bath part.
 
+use rayon::prelude::*;
 use serde_json::Value;
 
 use crate::config::FitParams;
@@ -95,7 +96,7 @@ impl Stage for FitStage {
         let (fine, offsets) = read(input, G)?;
         let fits: Vec<ProtocolFit> = self
             .protocols()
-            .into_iter()
+            .into_par_iter()
             .map(|(role, protocol)| ProtocolFit {
                 role,
                 protocol,
@@ -104,7 +105,7 @@ impl Stage for FitStage {
             .collect();
         let self_part = read(input, G_SELF)?.0;
         let models: Vec<PartModel> = Part::MODELLED
-            .into_iter()
+            .into_par_iter()
             .zip([&fine, &self_part])
             .map(|(part, replicates)| {
                 let [below, above] =
