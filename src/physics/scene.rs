@@ -217,9 +217,17 @@ impl PotentialVisitor for ScenesRun<'_> {
             }
         }
         ended.extend(drive_scenes(potential, self.settings, starts));
-        ended.sort_by_key(|&(index, _)| index);
-        ended.into_iter().map(|(_, collision)| collision).collect()
+        in_batch_order(ended)
     }
+}
+
+/// The collisions of a batch in the order of their indices, without them.
+fn in_batch_order(mut collisions: Vec<(usize, Collision)>) -> Vec<Collision> {
+    collisions.sort_by_key(|&(index, _)| index);
+    collisions
+        .into_iter()
+        .map(|(_, collision)| collision)
+        .collect()
 }
 
 /// Relative acceleration of the two gaps `g1 = x_b - x_a`, `g2 = x_c - x_b`
@@ -541,12 +549,7 @@ pub fn collide_all_from<P: PairPotential>(
             relative_energy(potential, centre, &gaps, &rates),
         )
     });
-    let mut collisions = drive_scenes(potential, settings, starts.collect());
-    collisions.sort_by_key(|&(index, _)| index);
-    collisions
-        .into_iter()
-        .map(|(_, collision)| collision)
-        .collect()
+    in_batch_order(drive_scenes(potential, settings, starts.collect()))
 }
 
 /// Integrates scenes from their start states (each with its index and relative-motion energy)
