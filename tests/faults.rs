@@ -59,8 +59,10 @@ fn recovers(config: &Path, store: &Path, damaged_allowed: bool, what: &str) {
     assert_eq!(debris(store), Vec::<PathBuf>::new(), "{what}");
 }
 
-/// `ternary --config <config> run --quiet` under strace with `injection`,
-/// tracing only the main thread (which does every store write).
+/// `ternary --config <config> run --quiet --jobs 1` under strace with
+/// `injection`, tracing only the main thread (which, one instance at a time,
+/// does every store write; with more jobs each instance's thread writes
+/// through the same staging, and strace would count per thread).
 fn run_under_strace(config: &Path, trace: &str, injection: Option<String>) -> Output {
     let mut command = Command::new("strace");
     command.args(["-qq", "-o", "/dev/null", "-e", &format!("trace={trace}")]);
@@ -70,7 +72,7 @@ fn run_under_strace(config: &Path, trace: &str, injection: Option<String>) -> Ou
     command
         .args([BINARY, "--config"])
         .arg(config)
-        .args(["run", "--quiet"])
+        .args(["run", "--quiet", "--jobs", "1"])
         .output()
         .unwrap()
 }
@@ -84,7 +86,7 @@ fn calls_in_a_clean_run(syscall: &str) -> usize {
         .arg(&log)
         .args([BINARY, "--config"])
         .arg(&config)
-        .args(["run", "--quiet"])
+        .args(["run", "--quiet", "--jobs", "1"])
         .output()
         .unwrap();
     assert!(output.status.success(), "{}", stderr(&output));
@@ -192,7 +194,7 @@ fn kill_at_random_times_recovers() {
         let mut child = Command::new(BINARY)
             .arg("--config")
             .arg(&config)
-            .args(["run", "--quiet"])
+            .args(["run", "--quiet", "--jobs", "1"])
             .stdout(Stdio::null())
             .stderr(Stdio::null())
             .spawn()

@@ -72,6 +72,7 @@ fn a_clock_dependent_stage_is_caught_by_the_recompute_audit() {
         force: Vec::new(),
         verbosity: Verbosity::Quiet,
         sharding: Sharding::default(),
+        jobs: 1,
     };
     executor::run(&store, &plan, &options, &mut |_| {}).unwrap();
     let audits = executor::recompute(&store, &plan, &[], Verbosity::Quiet, &mut |_| {}).unwrap();

@@ -95,6 +95,12 @@ pub(super) struct RunArgs {
     /// Worker threads (default: all cores; at most 4 per core). Results do not depend on it.
     #[arg(long, value_name = "N")]
     pub(super) threads: Option<usize>,
+    /// Instances computed at once, each with all worker threads: a stage
+    /// whose instances cannot fill the cores alone shares them (1: one at a
+    /// time, in plan order). Results do not depend on it.
+    #[arg(long, value_name = "N", default_value_t = 2,
+          value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..=64))]
+    pub(super) jobs: usize,
     /// Print only errors.
     #[arg(long)]
     pub(super) quiet: bool,

@@ -69,6 +69,7 @@ pub(super) fn run(config: &Path, args: RunArgs) -> Result<ExitCode> {
             shards: args.shards,
             task: args.shard,
         },
+        jobs: args.jobs,
     };
     let reports = executor::run(&store, &plan, &options, &mut print_event)?;
     if !args.quiet {

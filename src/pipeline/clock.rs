@@ -1,5 +1,7 @@
 //! The process's CPU time, for the manifests' measured cost.
 
+use std::collections::BTreeMap;
+use std::sync::Mutex;
 use std::time::Instant;
 
 /// Clock ticks per second of `/proc/<pid>/stat`'s times (Linux's `USER_HZ`,
@@ -19,19 +21,102 @@ pub fn process_cpu_seconds() -> Option<f64> {
     Some((ticks(14)? + ticks(15)?) as f64 / TICKS_PER_SECOND)
 }
 
-/// Wall and CPU time since it started.
+/// The process's CPU time shared out among the instances computed at once.
+/// Between two changes of who runs, each of the `n` running accounts is
+/// credited `1/n` of the CPU time the process spent: run one at a time, an
+/// account holds exactly the process's CPU time while it was open.
+#[derive(Debug, Default)]
+pub struct CpuLedger {
+    shares: Mutex<Shares>,
+}
+
+/// The ledger's books: the process's CPU time when they were last settled,
+/// and each open account's credit (seconds) by its number.
+#[derive(Debug, Default)]
+struct Shares {
+    settled_at: Option<f64>,
+    credit: BTreeMap<u64, f64>,
+    opened: u64,
+}
+
+impl Shares {
+    /// Credits the CPU time spent since the last settlement to the open
+    /// accounts in equal parts.
+    fn settle(&mut self) {
+        let now = process_cpu_seconds();
+        if let (Some(now), Some(then)) = (now, self.settled_at)
+            && !self.credit.is_empty()
+        {
+            let each = (now - then) / self.credit.len() as f64;
+            self.credit.values_mut().for_each(|credit| *credit += each);
+        }
+        self.settled_at = now;
+    }
+}
+
+impl CpuLedger {
+    /// Opens an account for one instance, credited from now until it is dropped.
+    pub fn open(&self) -> CpuAccount<'_> {
+        let mut shares = self.books();
+        shares.settle();
+        let number = shares.opened;
+        shares.opened += 1;
+        shares.credit.insert(number, 0.0);
+        CpuAccount {
+            ledger: self,
+            number,
+        }
+    }
+
+    /// The books (a thread that panicked while holding them left them whole:
+    /// every update is a single assignment).
+    fn books(&self) -> std::sync::MutexGuard<'_, Shares> {
+        self.shares
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner)
+    }
+}
+
+/// One instance's share of the process's CPU time (see [`CpuLedger`]).
+#[derive(Debug)]
+pub struct CpuAccount<'a> {
+    ledger: &'a CpuLedger,
+    number: u64,
+}
+
+impl CpuAccount<'_> {
+    /// CPU seconds credited so far; `None` where `/proc` cannot be read.
+    pub fn seconds(&self) -> Option<f64> {
+        let mut shares = self.ledger.books();
+        shares.settle();
+        shares.settled_at?;
+        shares.credit.get(&self.number).copied()
+    }
+}
+
+impl Drop for CpuAccount<'_> {
+    fn drop(&mut self) {
+        let mut shares = self.ledger.books();
+        shares.settle();
+        shares.credit.remove(&self.number);
+    }
+}
+
+/// Wall time and an account's CPU time since it started.
 #[derive(Clone, Copy, Debug)]
-pub struct Stopwatch {
+pub struct Stopwatch<'a> {
     wall: Instant,
+    account: &'a CpuAccount<'a>,
     cpu: Option<f64>,
 }
 
-impl Stopwatch {
-    /// Starts now.
-    pub fn start() -> Stopwatch {
+impl<'a> Stopwatch<'a> {
+    /// Starts now, on `account`'s CPU time.
+    pub fn start(account: &'a CpuAccount<'a>) -> Stopwatch<'a> {
         Stopwatch {
             wall: Instant::now(),
-            cpu: process_cpu_seconds(),
+            account,
+            cpu: account.seconds(),
         }
     }
 
@@ -40,10 +125,10 @@ impl Stopwatch {
         self.wall.elapsed().as_secs_f64()
     }
 
-    /// CPU seconds of the whole process since the start (every thread, so
-    /// only the instance's own while the executor runs one at a time).
+    /// CPU seconds credited to the account since the start: the whole
+    /// process's while its instance runs alone, a share while others run.
     pub fn cpu_seconds(&self) -> Option<f64> {
-        Some(process_cpu_seconds()? - self.cpu?)
+        Some(self.account.seconds()? - self.cpu?)
     }
 }
 
@@ -53,7 +138,9 @@ mod tests {
 
     #[test]
     fn busy_work_advances_the_cpu_clock() {
-        let watch = Stopwatch::start();
+        let ledger = CpuLedger::default();
+        let account = ledger.open();
+        let watch = Stopwatch::start(&account);
         let mut sum = 0.0_f64;
         // Spin until the clock has ticked five times (10 ms each), or give up.
         while watch.cpu_seconds().expect("Linux /proc") < 0.05 && watch.wall_seconds() < 30.0 {
@@ -61,5 +148,25 @@ mod tests {
         }
         assert!(sum > 0.0);
         assert!(watch.cpu_seconds().unwrap() >= 0.05, "{watch:?}");
+    }
+
+    #[test]
+    fn accounts_open_together_share_the_cpu_time_equally() {
+        let ledger = CpuLedger::default();
+        let first = ledger.open();
+        let second = ledger.open();
+        let start = process_cpu_seconds().expect("Linux /proc");
+        let mut sum = 0.0_f64;
+        while process_cpu_seconds().unwrap() < start + 0.1 {
+            sum = std::hint::black_box(sum + 1.0);
+        }
+        assert!(sum > 0.0);
+        // Each holds half of the 0.1 s spent since both were open; the
+        // first also holds what it was credited alone.
+        let (b, a) = (second.seconds().unwrap(), first.seconds().unwrap());
+        assert!(b >= 0.05 - 1e-12 && a >= b, "{a} {b}");
+        drop(second);
+        let later = ledger.open();
+        assert_eq!(later.seconds(), Some(0.0));
     }
 }

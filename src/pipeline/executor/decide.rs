@@ -182,6 +182,7 @@ mod tests {
                 force: Vec::new(),
                 verbosity: Verbosity::Quiet,
                 sharding: Sharding::default(),
+                jobs: 1,
             };
             let stages: Vec<Box<dyn Stage>> = vec![Box::new(Value { units: 0 })];
             super::super::run(&store, &stages, &options, &mut |_| {}).unwrap();

@@ -2,28 +2,35 @@
 //! manifests, the stage run (whole or by shards), its tables and files
 //! written and committed.
 
-use std::cell::RefCell;
 use std::collections::{BTreeMap, VecDeque};
 use std::io::IsTerminal;
 use std::ops::Range;
 use std::path::Path;
+use std::sync::Mutex;
 
 use arrow_array::RecordBatch;
-use indicatif::{ProgressBar, ProgressStyle};
+use indicatif::{MultiProgress, ProgressBar, ProgressStyle};
 
 use super::*;
-use crate::pipeline::clock::Stopwatch;
+use crate::pipeline::clock::{CpuAccount, Stopwatch};
 use crate::pipeline::key::sha256_hex;
 use crate::pipeline::shards;
 use crate::pipeline::store::{FileRecord, InstanceRef, Manifest, Staging, Store, table_files};
 use crate::pipeline::table::{TableError, is_table_file, read_parquet_bytes};
 use crate::pipeline::{Input, InstanceId, Progress, Stage, StageError, Table};
 
-pub(super) fn progress_for(stage: &dyn Stage, verbosity: Verbosity) -> Progress {
-    if verbosity == Verbosity::Quiet || !std::io::stderr().is_terminal() {
+/// The progress bars of a run's instances under way, on a terminal unless
+/// the run is quiet.
+pub(super) fn progress_bars(verbosity: Verbosity) -> Option<MultiProgress> {
+    (verbosity != Verbosity::Quiet && std::io::stderr().is_terminal()).then(MultiProgress::new)
+}
+
+/// The progress of computing `stage`: a bar among `bars`, if any.
+pub(super) fn progress_for(stage: &dyn Stage, bars: Option<&MultiProgress>) -> Progress {
+    let Some(bars) = bars else {
         return Progress::hidden();
-    }
-    let bar = ProgressBar::new(stage.work_units());
+    };
+    let bar = bars.add(ProgressBar::new(stage.work_units()));
     let style =
         ProgressStyle::with_template("{prefix:<24} [{bar:30}] {pos}/{len} {elapsed} eta {eta}")
             .unwrap_or_else(|_| ProgressStyle::default_bar());
@@ -37,9 +44,11 @@ pub(super) fn progress_for(stage: &dyn Stage, verbosity: Verbosity) -> Progress 
 /// moments at every `u'` and density) is hashed and decoded once. The most
 /// recently read are kept, up to [`DECODED_BUDGET`] bytes in all. Only bytes
 /// that matched their manifest's hash are decoded, so a hit is such bytes.
+/// Instances computed at once take turns: one that waits while another
+/// decodes the table it reads finds it decoded.
 #[derive(Default)]
 pub(super) struct DecodedTables {
-    recent: RefCell<VecDeque<(String, RecordBatch)>>,
+    recent: Mutex<VecDeque<(String, RecordBatch)>>,
 }
 
 /// Memory the decoded tables of a run may keep: a few event sets of the
@@ -54,7 +63,12 @@ impl DecodedTables {
         dir: &Path,
         file: &FileRecord,
     ) -> Result<RecordBatch, ExecError> {
-        let mut recent = self.recent.borrow_mut();
+        // A thread that panicked while holding the list left it whole (each
+        // change is one push, remove or retain).
+        let mut recent = self
+            .recent
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
         if let Some(at) = recent.iter().position(|(sha, _)| sha == &file.sha256) {
             let entry = recent.remove(at).expect("position is inside");
             recent.push_front(entry.clone());
@@ -149,6 +163,10 @@ pub(super) struct Job<'a> {
     pub(super) resolved: &'a BTreeMap<InstanceId, Manifest>,
     pub(super) options: &'a RunOptions,
     pub(super) decoded: &'a DecodedTables,
+    /// The run's progress bars, if shown.
+    pub(super) bars: Option<&'a MultiProgress>,
+    /// The instance's share of the process's CPU time.
+    pub(super) cpu: &'a CpuAccount<'a>,
 }
 
 impl Job<'_> {
@@ -162,7 +180,7 @@ impl Job<'_> {
         replace: bool,
     ) -> Result<(Manifest, f64), ExecError> {
         let id = self.stage.id();
-        let started = Stopwatch::start();
+        let started = Stopwatch::start(self.cpu);
         let mut staging = self.store.begin(&id.stage, &entry.key)?;
         let shards = shards::ranges(self.stage.shard_units(), self.options.sharding.shards);
         let tables = if shards.len() > 1 {
@@ -235,7 +253,7 @@ impl Job<'_> {
         if units.is_empty() || matches!(self.stored_shard(entry, &units), Stored::Intact(_)) {
             return Ok(None);
         }
-        let started = Stopwatch::start();
+        let started = Stopwatch::start(self.cpu);
         self.compute_shard(entry, &units)?;
         Ok(Some(started.wall_seconds()))
     }
@@ -257,7 +275,7 @@ impl Job<'_> {
             &shards::shard_stage(&id.stage),
             &shards::shard_instance(&id.instance, units),
         );
-        let started = Stopwatch::start();
+        let started = Stopwatch::start(self.cpu);
         let mut staging = self.store.begin(&shard_id.stage, &shard.key)?;
         let loaded = load_inputs(self.store, self.stage, self.resolved, self.decoded)?;
         let tables = self.produce(self.stage.shard_tables(), |progress| {
@@ -299,7 +317,7 @@ impl Job<'_> {
         compute: impl FnOnce(&Progress) -> Result<Vec<Table>, StageError>,
     ) -> Result<Vec<Table>, ExecError> {
         let id = self.stage.id();
-        let progress = progress_for(self.stage, self.options.verbosity);
+        let progress = progress_for(self.stage, self.bars);
         let tables = compute(&progress).map_err(|source| ExecError::Stage {
             id: id.clone(),
             source,
@@ -321,7 +339,7 @@ impl Job<'_> {
         id: &InstanceId,
         entry: &InstanceRef,
         tables: &[Table],
-        started: Stopwatch,
+        started: Stopwatch<'_>,
     ) -> Result<Manifest, ExecError> {
         for table in encoded_tables(id, entry, tables).map_err(stage_failure(id))? {
             staging.write_file(&table.file, &table.bytes, table.rows, table.content_sha256)?;

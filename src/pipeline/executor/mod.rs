@@ -16,6 +16,7 @@ mod job;
 mod plan;
 mod recompute;
 mod run;
+mod schedule;
 mod status;
 
 pub use plan::{check_plan, check_stage_names, estimate};
@@ -103,6 +104,8 @@ pub struct RunOptions {
     pub verbosity: Verbosity,
     /// How shardable stages are split.
     pub sharding: Sharding,
+    /// Instances computed at once, at most (each with the whole thread pool).
+    pub jobs: usize,
 }
 
 /// What the executor did with one instance.

@@ -4,8 +4,9 @@
 use std::collections::BTreeMap;
 use std::time::Instant;
 
-use super::job::{DecodedTables, Job};
+use super::job::{DecodedTables, Job, progress_bars};
 use super::*;
+use crate::pipeline::clock::CpuLedger;
 use crate::pipeline::key::sha256_hex;
 use crate::pipeline::shards::Sharding;
 use crate::pipeline::store::{Manifest, Store};
@@ -44,8 +45,11 @@ pub fn recompute(
         force: Vec::new(),
         verbosity,
         sharding: Sharding::default(),
+        jobs: 1,
     };
     let decoded = DecodedTables::default();
+    let bars = progress_bars(verbosity);
+    let ledger = CpuLedger::default();
     let mut resolved: BTreeMap<InstanceId, Manifest> = BTreeMap::new();
     let mut audits = Vec::new();
     for stage in stages {
@@ -83,6 +87,8 @@ pub fn recompute(
                 resolved: &resolved,
                 options: &options,
                 decoded: &decoded,
+                bars: bars.as_ref(),
+                cpu: &ledger.open(),
             };
             let started = Instant::now();
             let files = job.recomputed_files(&entry)?;

@@ -1,12 +1,18 @@
-//! `ternary run`: resolves every instance in order, computing the stale
-//! ones it is asked to.
+//! `ternary run`: resolves every instance, computing the stale ones it is
+//! asked to, several at once when they do not read each other.
 
 use std::collections::BTreeMap;
 use std::io::ErrorKind;
+use std::panic::AssertUnwindSafe;
+use std::sync::mpsc;
+
+use indicatif::MultiProgress;
 
 use super::decide::{Candidate, Decision, decide};
-use super::job::{DecodedTables, Job};
+use super::job::{DecodedTables, Job, progress_bars};
+use super::schedule::Schedule;
 use super::*;
+use crate::pipeline::clock::CpuLedger;
 use crate::pipeline::store::{InstanceRef, Manifest, Store, StoreError, StoreLock};
 use crate::pipeline::{InstanceId, Stage};
 
@@ -39,10 +45,14 @@ impl Access {
     }
 }
 
-/// Executes the stale instances in order. Every artifact is checked down to
-/// its file hashes before it is trusted; a damaged one is recomputed under
-/// the same key. Each instance is reported to `on_event` as it is dealt
-/// with (as the verbosity asks).
+/// Executes the stale instances, up to `options.jobs` at once (each on a
+/// thread of its own; one at a time on the caller's), each once all its
+/// inputs have been dealt with (the first such in plan order first).
+/// Every artifact is checked down to its file hashes before it is trusted; a
+/// damaged one is recomputed under the same key. Each instance is reported to
+/// `on_event` as it is dealt with (as the verbosity asks). After a failure no
+/// instance is started; those under way are finished and the first failure
+/// is returned.
 pub fn run(
     store: &Store,
     stages: &[Box<dyn Stage>],
@@ -58,50 +68,191 @@ pub fn run(
         Access::Locked { .. } => Ok(()),
         Access::ReadOnly(reason) => Err(reason.as_str()),
     };
-    let mut resolved: BTreeMap<InstanceId, Manifest> = BTreeMap::new();
-    let mut reports = Vec::new();
-    let decoded = DecodedTables::default();
-    let width = id_width(stages);
-    for stage in stages {
-        let id = stage.id();
-        let decision = decide(
-            candidate(stage.as_ref(), options, &resolved),
-            store,
-            writable,
-        )?;
+    let shared = Shared {
+        store,
+        options,
+        writable,
+        decoded: DecodedTables::default(),
+        bars: progress_bars(options.verbosity),
+        ledger: CpuLedger::default(),
+    };
+    let mut dispatch = Dispatch {
+        schedule: Schedule::new(stages),
+        resolved: BTreeMap::new(),
+        reports: vec![None; stages.len()],
+        failure: None,
+        width: id_width(stages),
+        verbosity: options.verbosity,
+    };
+    dispatch.deal_with_all(stages, &shared, &mut |event| {
+        let mut show = || on_event(event);
+        match &shared.bars {
+            Some(bars) => bars.suspend(show),
+            None => show(),
+        }
+    });
+    dispatch.finish()
+}
+
+/// What every job of a run shares.
+struct Shared<'a> {
+    store: &'a Store,
+    options: &'a RunOptions,
+    /// Why the store cannot be written, if it cannot.
+    writable: Result<(), &'a str>,
+    decoded: DecodedTables,
+    bars: Option<MultiProgress>,
+    ledger: CpuLedger,
+}
+
+/// An instance dealt with: its key, what was done and the manifest it
+/// resolves to; `None` for an instance without a key.
+type Outcome = Option<(String, Action, Option<Manifest>)>;
+
+impl Shared<'_> {
+    /// Decides what to do with `stage` and does it, with its `inputs`' manifests.
+    fn deal_with(
+        &self,
+        stage: &dyn Stage,
+        candidate: Candidate<'_>,
+        inputs: &BTreeMap<InstanceId, Manifest>,
+    ) -> Result<Outcome, ExecError> {
+        let decision = decide(candidate, self.store, self.writable)?;
+        let cpu = self.ledger.open();
         let job = Job {
-            store,
-            stage: stage.as_ref(),
-            resolved: &resolved,
-            options,
-            decoded: &decoded,
+            store: self.store,
+            stage,
+            resolved: inputs,
+            options: self.options,
+            decoded: &self.decoded,
+            bars: self.bars.as_ref(),
+            cpu: &cpu,
         };
-        let Some((key, action, manifest)) = carry_out(decision, &job, writable.is_ok())? else {
-            reports.push(InstanceReport {
-                id,
-                key: None,
-                action: Action::Skipped,
-            });
-            continue;
+        carry_out(decision, &job, self.writable.is_ok())
+    }
+}
+
+/// The run's bookkeeping, kept by the thread that starts the jobs.
+struct Dispatch {
+    schedule: Schedule,
+    /// The manifest of every instance whose artifact is in the store.
+    resolved: BTreeMap<InstanceId, Manifest>,
+    /// What was done with each instance of the plan, by its index.
+    reports: Vec<Option<InstanceReport>>,
+    /// The first failure.
+    failure: Option<ExecError>,
+    /// Width of the id column of the run's lines.
+    width: usize,
+    /// Which instances are reported.
+    verbosity: Verbosity,
+}
+
+impl Dispatch {
+    /// `stage` as [`decide`] sees it, and the manifests of its inputs.
+    fn candidate<'a>(
+        &self,
+        stage: &'a dyn Stage,
+        options: &RunOptions,
+    ) -> (Candidate<'a>, BTreeMap<InstanceId, Manifest>) {
+        let inputs = stage
+            .inputs()
+            .into_iter()
+            .filter_map(|input| Some((input.clone(), self.resolved.get(&input)?.clone())))
+            .collect();
+        (candidate(stage, options, &self.resolved), inputs)
+    }
+
+    /// Deals with every instance of `stages`, up to the run's jobs at once,
+    /// until all are done or one failed (then those under way are finished).
+    fn deal_with_all(
+        &mut self,
+        stages: &[Box<dyn Stage>],
+        shared: &Shared<'_>,
+        on_event: &mut dyn FnMut(Event<'_>),
+    ) {
+        let jobs = shared.options.jobs.max(1);
+        std::thread::scope(|scope| {
+            let (sender, receiver) = mpsc::channel();
+            let mut running = 0;
+            loop {
+                while self.failure.is_none() && running < jobs {
+                    let Some(at) = self.schedule.next() else {
+                        break;
+                    };
+                    let stage = stages[at].as_ref();
+                    let (candidate, inputs) = self.candidate(stage, shared.options);
+                    let sender = sender.clone();
+                    let job = move || {
+                        let outcome = std::panic::catch_unwind(AssertUnwindSafe(|| {
+                            shared.deal_with(stage, candidate, &inputs)
+                        }));
+                        // The receiver outlives every job.
+                        let _ = sender.send((at, outcome));
+                    };
+                    // One at a time, on this thread (as a traced run expects).
+                    if jobs > 1 {
+                        scope.spawn(job);
+                    } else {
+                        job();
+                    }
+                    running += 1;
+                }
+                if running == 0 {
+                    break;
+                }
+                let (at, outcome) = receiver.recv().expect("a job is under way");
+                running -= 1;
+                let outcome = outcome.unwrap_or_else(|panic| std::panic::resume_unwind(panic));
+                self.record(&stages[at].id(), at, outcome, on_event);
+            }
+        });
+    }
+
+    /// Records the `outcome` of instance `id` (plan index `at`), reporting it
+    /// to `on_event` as the verbosity asks.
+    fn record(
+        &mut self,
+        id: &InstanceId,
+        at: usize,
+        outcome: Result<Outcome, ExecError>,
+        on_event: &mut dyn FnMut(Event<'_>),
+    ) {
+        self.schedule.done(at);
+        let (key, action) = match outcome {
+            Err(error) => {
+                self.failure.get_or_insert(error);
+                return;
+            }
+            Ok(None) => (None, Action::Skipped),
+            Ok(Some((key, action, manifest))) => {
+                if let Some(manifest) = manifest {
+                    self.resolved.insert(id.clone(), manifest);
+                }
+                if shown(self.verbosity, &action) {
+                    on_event(Event::Ran {
+                        id,
+                        key: &key,
+                        action: &action,
+                        width: self.width,
+                    });
+                }
+                (Some(key), action)
+            }
         };
-        if let Some(manifest) = manifest {
-            resolved.insert(id.clone(), manifest);
-        }
-        if shown(options.verbosity, &action) {
-            on_event(Event::Ran {
-                id: &id,
-                key: &key,
-                action: &action,
-                width,
-            });
-        }
-        reports.push(InstanceReport {
-            id,
-            key: Some(key),
+        self.reports[at] = Some(InstanceReport {
+            id: id.clone(),
+            key,
             action,
         });
     }
-    Ok(reports)
+
+    /// Every instance's report in plan order, or the first failure.
+    fn finish(self) -> Result<Vec<InstanceReport>, ExecError> {
+        match self.failure {
+            Some(error) => Err(error),
+            None => Ok(self.reports.into_iter().flatten().collect()),
+        }
+    }
 }
 
 /// Whether a run at `verbosity` reports an instance it dealt with so.
@@ -254,16 +405,19 @@ mod tests {
 
     /// A source whose `label` does not change its output bytes.
     struct Source {
+        instance: &'static str,
         label: &'static str,
         value: f64,
     }
 
-    /// Doubles the source's value.
-    struct Double;
+    /// Doubles the value of the source of the same instance name.
+    struct Double {
+        instance: &'static str,
+    }
 
     impl Stage for Source {
         fn id(&self) -> InstanceId {
-            InstanceId::new("source", "a")
+            InstanceId::new("source", self.instance)
         }
         fn code(&self) -> &'static Code {
             &TEST_CODE
@@ -290,7 +444,7 @@ mod tests {
 
     impl Stage for Double {
         fn id(&self) -> InstanceId {
-            InstanceId::new("double", "a")
+            InstanceId::new("double", self.instance)
         }
         fn code(&self) -> &'static Code {
             &TEST_CODE
@@ -302,7 +456,7 @@ mod tests {
             &["value"]
         }
         fn inputs(&self) -> Vec<InstanceId> {
-            vec![InstanceId::new("source", "a")]
+            vec![InstanceId::new("source", self.instance)]
         }
         fn work_units(&self) -> u64 {
             1
@@ -322,16 +476,29 @@ mod tests {
     }
 
     fn plan(label: &'static str, value: f64) -> Vec<Box<dyn Stage>> {
-        vec![Box::new(Source { label, value }), Box::new(Double)]
+        let instance = "a";
+        vec![
+            Box::new(Source {
+                instance,
+                label,
+                value,
+            }),
+            Box::new(Double { instance }),
+        ]
     }
 
-    fn computed(store: &Store, stages: &[Box<dyn Stage>], force: &[&str]) -> Vec<String> {
-        let options = RunOptions {
+    fn options(force: &[&str], jobs: usize) -> RunOptions {
+        RunOptions {
             only: Vec::new(),
             force: force.iter().map(ToString::to_string).collect(),
             verbosity: Verbosity::Quiet,
             sharding: Sharding::default(),
-        };
+            jobs,
+        }
+    }
+
+    fn computed(store: &Store, stages: &[Box<dyn Stage>], force: &[&str]) -> Vec<String> {
+        let options = options(force, 2);
         run(store, stages, &options, &mut |_| {})
             .unwrap()
             .into_iter()
@@ -378,6 +545,45 @@ mod tests {
     }
 
     #[test]
+    fn instances_computed_at_once_are_the_instances_computed_one_by_one() {
+        let instances = ["a", "b", "c", "d"];
+        let mut stages: Vec<Box<dyn Stage>> = Vec::new();
+        for (instance, value) in instances.into_iter().zip([1.0, 2.0, 3.0, 4.0]) {
+            stages.push(Box::new(Source {
+                instance,
+                label: "x",
+                value,
+            }));
+        }
+        for instance in instances {
+            stages.push(Box::new(Double { instance }));
+        }
+        let outcome = |jobs: usize| {
+            let store = temporary_store(&format!("jobs-{jobs}"));
+            let mut lines = 0;
+            let reports = run(&store, &stages, &options(&[], jobs), &mut |_| lines += 1).unwrap();
+            let manifests: Vec<(String, Vec<String>)> = reports
+                .iter()
+                .map(|report| {
+                    let id = &report.id;
+                    let manifest = store.latest_manifest_of(&id.stage, &id.instance).unwrap();
+                    assert_eq!(report.key.as_ref(), Some(&manifest.key));
+                    let files = manifest.files.into_iter().map(|file| file.sha256);
+                    (manifest.key, files.collect())
+                })
+                .collect();
+            assert_eq!(lines, 0, "a quiet run reports nothing");
+            let ids: Vec<String> = reports.iter().map(|r| r.id.to_string()).collect();
+            (ids, manifests)
+        };
+        let (ids, one_by_one) = outcome(1);
+        assert_eq!(ids.len(), 8);
+        assert_eq!(ids[0], "source[a]", "reports come in plan order");
+        assert_eq!(ids[7], "double[d]");
+        assert_eq!(outcome(3), (ids, one_by_one));
+    }
+
+    #[test]
     fn downstream_reads_upstream_tables() {
         let store = temporary_store("read");
         computed(&store, &plan("x", 3.0), &[]);
@@ -401,9 +607,7 @@ mod tests {
         let store = temporary_store("unknown");
         let options = RunOptions {
             only: vec!["sorce".into()],
-            force: Vec::new(),
-            verbosity: Verbosity::Quiet,
-            sharding: Sharding::default(),
+            ..options(&[], 2)
         };
         let error = run(&store, &plan("x", 1.0), &options, &mut |_| {}).unwrap_err();
         assert!(
