@@ -9,67 +9,13 @@
 
 use std::fmt::Write as _;
 
-use ternary::binning::Bins;
-use ternary::kernel::tail::{group_mean, sided_log_groups};
-use ternary::kernel::{Histogram, Target};
+use ternary::kernel::Target;
 use ternary::physics::sampling::OffsetIntegration;
-use ternary::stats::Estimate;
 
-use super::kernel::{KernelBenchOptions, KernelRun, Variant, plan_for, run_sampler};
+use super::sampler::{KernelBenchOptions, KernelRun, Variant, plan_for, run_sampler};
 
 /// Shares of the slow component compared (0: the launch density alone).
 const SHARES: [f64; 4] = [0.0, 1.0 / 64.0, 1.0 / 32.0, 1.0 / 16.0];
-
-/// The far band of `|du|`, `v_th`.
-const FAR: (f64, f64) = (0.01, 0.05);
-
-/// Bands of `|du|` whose per-randomization sums show heavy tails.
-const TAIL_BANDS: [(f64, f64); 3] = [(0.01, 0.02), (0.02, 0.03), (0.03, 0.05)];
-
-/// Median relative error of the log-spaced groups (`kernel::tail`, as
-/// `kernel_log.parquet` has them) lying within [`FAR`], both sides of `u'`.
-pub(super) fn far_group_error(replicates: &[Histogram], bins: &Bins) -> f64 {
-    let totals: Vec<Vec<f64>> = replicates.iter().map(Histogram::total).collect();
-    let centres: Vec<f64> = (0..bins.len()).map(|k| bins.centre(k)).collect();
-    let in_band = |k: usize| (FAR.0..=FAR.1).contains(&centres[k].abs());
-    let mut errors: Vec<f64> = sided_log_groups(&centres)
-        .into_iter()
-        .filter(|(_, members)| members.iter().all(|&k| in_band(k)))
-        .map(|(_, members)| {
-            let group = group_mean(&totals, &members);
-            group.stderr / group.mean.abs()
-        })
-        .collect();
-    errors.sort_by(f64::total_cmp);
-    errors.get(errors.len() / 2).copied().unwrap_or(f64::NAN)
-}
-
-/// The largest `|z|` of a randomization's sum over a band of
-/// [`TAIL_BANDS`] (both sides) against the randomizations' mean and spread.
-/// Gaussian sums give ~2.5 for 16 randomizations and 3 bands; `R`
-/// randomizations cannot exceed `(R - 1) / sqrt(R)` (3.75 for 16), which one
-/// outlier carrying the whole spread reaches.
-pub(super) fn largest_tail_z(replicates: &[Histogram], bins: &Bins) -> f64 {
-    let mut largest: f64 = 0.0;
-    for (low, high) in TAIL_BANDS {
-        let sums: Vec<f64> = replicates
-            .iter()
-            .map(|h| {
-                let total = h.total();
-                (0..bins.len())
-                    .filter(|&k| (low..high).contains(&bins.centre(k).abs()))
-                    .map(|k| total[k])
-                    .sum()
-            })
-            .collect();
-        let estimate = Estimate::from_replicates(&sums);
-        let spread = estimate.stderr * (sums.len() as f64).sqrt();
-        for sum in sums {
-            largest = largest.max((sum - estimate.mean).abs() / spread);
-        }
-    }
-    largest
-}
 
 /// One row of the table.
 fn row(share: f64, pairs: u32, run: &KernelRun) -> String {

@@ -4,8 +4,9 @@
 //! the command line, not of the library; the kernel benchmark takes the
 //! study's engine, offset proposal, bins and fit range from `--config`.
 //!
-//! One benchmark per file (integrators, kernel, quadrature, far kernel, md, balance);
-//! this file holds the work-precision figure they share.
+//! One benchmark per file (integrators, kernel, quadrature, far kernel, md, balance),
+//! the sampler runs of the kernel benchmarks in `sampler.rs`; this file holds the
+//! work-precision figure they share.
 
 use std::path::{Path, PathBuf};
 
@@ -17,12 +18,14 @@ mod integrators;
 mod kernel;
 mod md;
 mod quadrature;
+mod sampler;
 
 pub use balance::{BalanceBenchOptions, balance};
 pub use far_kernel::far_kernel;
 pub use integrators::{WorkPrecisionOptions, integrators};
-pub use kernel::{KernelBenchOptions, StudySettings, kernel};
+pub use kernel::kernel;
 pub use md::{MdBenchOptions, md};
+pub use sampler::{KernelBenchOptions, StudySettings};
 
 /// A benchmark's work-precision figure: error against cost, drawn like the
 /// study's figures (SVG and PNG, one column and screen size).

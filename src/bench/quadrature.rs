@@ -12,7 +12,7 @@ use ternary::physics::potential::Potential;
 use ternary::physics::sampling::{LaunchProposal, OffsetIntegration, SamplingPlan};
 use ternary::physics::scan::LaunchPair;
 
-use super::kernel::{KernelRun, StudySettings, Variant, plan_for, precision_cells, run_sampler};
+use super::sampler::{KernelRun, StudySettings, Variant, plan_for, precision_cells, run_sampler};
 use super::*;
 
 /// A quadrature run and the time its pilot took (included in `run.seconds`).
