@@ -581,7 +581,7 @@ fn expected(store: &Path, figure: &Artifact) -> Vec<Row> {
             use contract::spectrum::study::{
                 GAP, GAP_OVER_VARIANCE_RATE, PARTICLE_GAP, PARTICLE_GAP_OVER_VARIANCE_RATE,
             };
-            use contract::table::{A_N_UNTRUNCATED, N, THETA};
+            use contract::table::{A_N, N, THETA};
             let table = figure.input(store, 0).table("table");
             let n = N.optional(&table).unwrap();
             let theta = THETA.optional(&table).unwrap();
@@ -601,7 +601,7 @@ fn expected(store: &Path, figure: &Artifact) -> Vec<Row> {
                 ),
                 ("rates", "gas (linearized operator)", GAP, true),
                 ("rates", "one particle", PARTICLE_GAP, true),
-                ("rates", "a_n untruncated (Γ)", A_N_UNTRUNCATED, true),
+                ("rates", "a_n (Γ)", A_N, true),
             ] {
                 for (i, value) in pair.read(&table).unwrap().into_iter().enumerate() {
                     let drawn = theta[i].is_none()

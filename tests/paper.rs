@@ -154,8 +154,8 @@ fn paper_rows_recompute_from_their_sources() {
             .unwrap_or_else(|| panic!("no row `{start}` in {quantities:?}"))
     };
     // a_n and the Lennard-Jones rate: the moments at X = 0.04 and where
-    // they have converged: the window edge, untruncated for Lennard-Jones
-    // (free-atom kicks reach O(v_th); the window's rate is in the note).
+    // they have converged: untruncated (kicks reach past the window's edge;
+    // the window's rate is in the note).
     for (start, instance) in [
         ("a_2", "ipp-2_u0_rho0"),
         ("a_6", "ipp-6_u0_rho0"),
@@ -168,23 +168,15 @@ fn paper_rows_recompute_from_their_sources() {
             rate_at(&moments, 0.04),
             "{start}"
         );
-        if start.starts_with("a: self") {
-            let untruncated = rate_at(&moments, f64::INFINITY);
-            assert_eq!((converged[k].mean, converged[k].stderr), untruncated);
-            assert_eq!(converged_state[k], "differs");
-            let (window, _) = rate_at(&moments, 0.1);
-            assert!(
-                notes[k].contains(&format!("X = 0.1 gives {window:.4e}")),
-                "{window:.4e}: {}",
-                notes[k]
-            );
-        } else {
-            assert_eq!(
-                (converged[k].mean, converged[k].stderr),
-                rate_at(&moments, 0.1),
-                "{start}"
-            );
-        }
+        let untruncated = rate_at(&moments, f64::INFINITY);
+        assert_eq!((converged[k].mean, converged[k].stderr), untruncated);
+        assert_eq!(converged_state[k], "differs");
+        let (window, _) = rate_at(&moments, 0.1);
+        assert!(
+            notes[k].contains(&format!("X = 0.1, the window's edge, gives {window:.4e}")),
+            "{window:.4e}: {}",
+            notes[k]
+        );
     }
     // The integrable n = 2: no kick, a_2 = 0 exactly (z = 0).
     assert_eq!(ours[row("a_2")].mean, 0.0);

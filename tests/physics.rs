@@ -382,3 +382,53 @@ fn interleaved_scenes_are_the_scenes_alone_to_the_bit() {
         }
     }
 }
+
+/// Scaling invariance of an inverse power law `r^-n`: launches `lambda` times
+/// faster at offsets `lambda^-(n+2)/n` as long give `lambda` times the
+/// outgoing velocities (lengths scale as `lambda^-2/n`). So the largest kick
+/// of the symmetric pair `(1, -1)` (`n = 6`: 0.0308 `v_th`, the paper's
+/// `|u1f,max|`) becomes 0.12 at `(4, -4)`: thermal launches near 4 `v_th`
+/// kick the special particle past the default window's edge (0.1), which is
+/// why `a_n` is read without truncation.
+#[test]
+fn kicks_scale_with_the_launch_speeds_and_reach_past_the_window_edge() {
+    use ternary::config::KernelConfig;
+    use ternary::physics::scan::{refine_peak, special_final_velocity};
+    let (n, lambda) = (6.0, 4.0);
+    let potential = ipp(n);
+    let settings = default_engine();
+    let unit = LaunchPair { u2: 1.0, u3: -1.0 };
+    let kick = |launch: LaunchPair, offset: f64| {
+        let collision = collide(&potential, &settings, launch.lines(offset));
+        assert_conserved(&collision, &format!("{launch:?} at {offset}"));
+        special_final_velocity(&collision)
+    };
+    let grid: Vec<f64> = (-200..=200).map(|k| f64::from(k) * 0.01).collect();
+    let best = (1..grid.len() - 1)
+        .max_by(|&a, &b| {
+            kick(unit, grid[a])
+                .abs()
+                .total_cmp(&kick(unit, grid[b]).abs())
+        })
+        .unwrap();
+    let peak = refine_peak(&potential, &settings, unit, grid[best - 1], grid[best + 1]);
+    assert!((peak.kick - 0.0308).abs() < 5e-4, "{peak:?}");
+    let fast = LaunchPair {
+        u2: lambda,
+        u3: -lambda,
+    };
+    let time_scale = libm::pow(lambda, -(n + 2.0) / n);
+    for offset in [peak.offset, peak.offset + 0.3, -1.0] {
+        let (slow, scaled) = (kick(unit, offset), kick(fast, offset * time_scale));
+        assert!(
+            (scaled - lambda * slow).abs() <= 1e-9 * scaled.abs(),
+            "offset {offset}: {scaled} against {lambda} x {slow}"
+        );
+    }
+    let edge = 0.5 * KernelConfig::default().window;
+    let largest = kick(fast, peak.offset * time_scale).abs();
+    assert!(
+        largest > 1.1 * edge,
+        "{largest} within the window's edge {edge}"
+    );
+}

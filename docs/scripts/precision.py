@@ -47,7 +47,7 @@ T = {r: table(r, 'table', 'study', 'table.parquet') for r in (rd, rp)}
 T = {r: (t.set_index('potential') if t is not None else None) for r, t in T.items()}
 POTS = T[rp].index if T[rp] is not None else [p for p in T[rd].index if p in ('ipp-2','ipp-4','ipp-6','ipp-8','ipp-10','ipp-12','lj-0.1','lj-0.1052','lj-0.8','lj-10')]
 for pot in (T[rp].index.intersection(T[rd].index) if T[rp] is not None else []):
-    for col in ['a_n', 'a_n_untruncated', 'recombination_rate', 'thermal_recombination_rate',
+    for col in ['a_n', 'recombination_rate', 'thermal_recombination_rate',
                 'dissociation_rate']:
         a, b = T[rd].loc[pot], T[rp].loc[pot]
         if np.isnan(a[col]) or np.isnan(b[col]) or a[col + '_stderr'] == 0:

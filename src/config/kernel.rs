@@ -111,22 +111,13 @@ impl KernelParams {
     }
 
     /// The window's edge: the largest `|u - u'|` the kernel's window holds,
-    /// half the window, `v_th`. Self rates summed within it are the
-    /// untruncated ones of an inverse power law.
+    /// half the window, `v_th`. Kicks reach past it: an inverse power law's
+    /// rarely (`n = 6`: up to ~0.12 `v_th` from launches near 4 `v_th`, 1.5e-4
+    /// of `a_6` beyond 0.1), a well's free atoms often (Lennard-Jones at
+    /// `theta = 0.1`: `a(X)` grows 16-fold from `X = 0.1` and levels off near
+    /// `X = 1.6`), so `a_n` is read untruncated.
     pub fn edge(&self) -> f64 {
         0.5 * self.window
-    }
-
-    /// The truncation `X` at which `a_n` has converged and is read: the
-    /// window's [`edge`](Self::edge); none for a family with a well, whose free-atom kicks
-    /// reach O(v_th) beyond any window (Lennard-Jones at `theta = 0.1`:
-    /// `a(X)` grows 16-fold from `X = 0.1` and levels off near `X = 1.6`).
-    pub fn converged_truncation(&self) -> f64 {
-        if self.potential.family().has_well() {
-            f64::INFINITY
-        } else {
-            self.edge()
-        }
     }
 }
 

@@ -71,7 +71,7 @@ impl FigureKind for Gaps {
         use contract::spectrum::study::{
             GAP, GAP_OVER_VARIANCE_RATE, PARTICLE_GAP, PARTICLE_GAP_OVER_VARIANCE_RATE,
         };
-        use contract::table::{A_N_UNTRUNCATED, N, TABLE, THETA};
+        use contract::table::{A_N, N, TABLE, THETA};
         let table = frame(TABLE.of(&inputs[0])?)?;
         let (n, theta) = (numbers(&table, N.name)?, numbers(&table, THETA.name)?);
         let power_law = |i: usize| n[i].is_finite() && theta[i].is_nan();
@@ -103,7 +103,7 @@ impl FigureKind for Gaps {
             )?,
             panel("rates", GAS, GAP, true)?,
             panel("rates", ONE_PARTICLE, PARTICLE_GAP, true)?,
-            panel("rates", "a_n untruncated (Γ)", A_N_UNTRUNCATED, true)?,
+            panel("rates", "a_n (Γ)", A_N, true)?,
         ])
     }
 }

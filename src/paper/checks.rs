@@ -229,29 +229,33 @@ const MISSING: Estimate = Estimate {
     stderr: f64::NAN,
 };
 
-/// `a_n` at the paper's truncation; ours converged (the window edge; for a
-/// family with a well, whose free-atom kicks reach O(v_th), the rate without
-/// truncation); and a note saying which.
+/// `a_n` at the paper's truncation; ours converged (the rate without
+/// truncation: kicks reach past the window's edge, a well's free atoms' to
+/// O(v_th)); and a note with the window's rate.
 fn rates(
     inputs: &[Input],
     params: &KernelParams,
 ) -> Result<(Estimate, Converged, String), StageError> {
     let moments = contract::moments::TABLE.find(inputs, &instances::moments(params))?;
     let paper = self_variance_at(moments, PAPER_TRUNCATION)?;
+    let untruncated = self_variance_at(moments, f64::INFINITY)?;
     let edge = params.edge();
     let window = self_variance_at(moments, edge)?;
     let truncated = "ours counts |u - u'| <= 0.04 like the paper";
-    if params.potential.family().has_well() {
-        let untruncated = self_variance_at(moments, params.converged_truncation())?;
+    let converged = format!(
+        "converged: the rate without truncation (X = {edge}, the window's edge, gives {:.4e} +- {:.1e})",
+        window.mean, window.stderr
+    );
+    let note = if params.potential.family().has_well() {
         let recombination = contract::moments::RECOMBINATION_RATE.read(moments)?[0];
-        let note = format!(
-            "{truncated}, from scenes whose three atoms leave free; converged: the free-atom rate without truncation (its kicks reach O(v_th): X = {edge} gives {:.4e} +- {:.1e}); scenes leaving a bound pair and a free atom are no part of it (recombination rate {:.4e} +- {:.1e})",
-            window.mean, window.stderr, recombination.mean, recombination.stderr
-        );
-        return Ok((paper, Converged::Differs(untruncated), note));
-    }
-    let note = format!("{truncated}; converged: the whole window (X = {edge}), our a_n");
-    Ok((paper, Converged::Differs(window), note))
+        format!(
+            "{truncated}, from scenes whose three atoms leave free; {converged}; scenes leaving a bound pair and a free atom are no part of it (recombination rate {:.4e} +- {:.1e})",
+            recombination.mean, recombination.stderr
+        )
+    } else {
+        format!("{truncated}; {converged}, our a_n")
+    };
+    Ok((paper, Converged::Differs(untruncated), note))
 }
 
 /// A shape parameter under the paper's protocol with its statistical and

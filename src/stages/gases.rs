@@ -27,11 +27,11 @@ impl GasesStage {
     }
 }
 
-/// `a_n` of `params` (the self variance rate where it has converged) from
-/// its moments table.
+/// `a_n` of `params` (the self variance rate, untruncated: where it has
+/// converged) from its moments table.
 fn variance_rate(inputs: &[Input], params: &KernelParams) -> Result<Estimate, StageError> {
     let table = contract::moments::TABLE.find(inputs, &instances::moments(params))?;
-    self_variance_at(table, params.converged_truncation())
+    self_variance_at(table, f64::INFINITY)
 }
 
 /// One gas's rates.

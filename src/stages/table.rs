@@ -62,8 +62,8 @@ impl TableStage {
 /// One potential's row.
 struct PotentialRow {
     params: KernelParams,
+    /// The self variance rate at `u' = 0`, dilute, untruncated.
     a_n: Estimate,
-    a_n_untruncated: Estimate,
     /// Rate of encounters leaving a bound pair and a free atom.
     recombination: Estimate,
     /// `alpha`, `beta`, `sigma` of the fit.
@@ -96,8 +96,7 @@ impl TableStage {
         let maxima = contract::scan::peak::U1_FINAL_MAX_ABS.read(peaks)?;
         Ok(PotentialRow {
             params: *params,
-            a_n: self_variance_at(moments, params.converged_truncation())?,
-            a_n_untruncated: self_variance_at(moments, f64::INFINITY)?,
+            a_n: self_variance_at(moments, f64::INFINITY)?,
             recombination: contract::moments::RECOMBINATION_RATE.read(moments)?[0],
             shape: [
                 first(contract::fit::ALPHA, contract::fit::ALPHA_SYSTEMATIC)?,
@@ -217,7 +216,6 @@ impl Stage for TableStage {
                 r.params.potential.family().theta().unwrap_or(f64::NAN)
             })
             .estimate(A_N, |r| r.a_n)
-            .estimate(A_N_UNTRUNCATED, |r| r.a_n_untruncated)
             .estimate(RECOMBINATION_RATE, |r| r.recombination)
             .estimate(ALPHA, |r| r.shape[0])
             .estimate(BETA, |r| r.shape[1])

@@ -31,7 +31,7 @@ pub const A_N: Pair = Pair {
     value: Col::f64(
         super::A_N,
         RATE,
-        "self variance rate at u' = 0, dilute limit, of scenes whose three atoms leave free, where it has converged: |u - u'| <= window/2, or untruncated for a family with a well (its free-atom kicks reach O(v_th))",
+        "self variance rate at u' = 0, dilute limit, of scenes whose three atoms leave free, untruncated (where it has converged: an inverse power law's kicks reach past the window's edge, n = 6 up to ~0.12 v_th from launches near 4 v_th; a well's, O(v_th))",
     ),
     stderr: Col::f64(
         "a_n_stderr",
@@ -39,13 +39,6 @@ pub const A_N: Pair = Pair {
         "standard error of a_n (spread of randomizations)",
     ),
 };
-/// `a_n` without truncation.
-pub const A_N_UNTRUNCATED: Pair = pair!(
-    "a_n_untruncated",
-    RATE,
-    "self variance rate without truncation",
-    "standard error of a_n_untruncated"
-);
 /// The recombination rate at `u' = 0`.
 pub const RECOMBINATION_RATE: Pair = pair!(
     "recombination_rate",
@@ -87,14 +80,13 @@ pub const FAILED_EVENTS: Col<u32> = Col::u32(super::FAILED_EVENTS, "1", "scenes 
 /// What `ternary run` and the HTML report print of the table, first.
 pub const PRINTOUT: Printout = Printout {
     table: TABLE,
-    title: "thermalization constants a_n = self variance rate at u' = 0, dilute limit, of scenes whose three atoms leave free, where converged: |u-u'| <= window/2, untruncated with a well [rho^2 l v_th]; recombination: rate of encounters leaving a bound pair [rho^2 l v_th]; dissociation: rate at which atoms break a bound pair, per pair; kernel shape near u' (+- standard errors; shape: statistical and fit-protocol errors combined); relaxation gap of the gas (linearized operator) and of one particle over Gamma (the tagged variance rate at u' = 0, untruncated)",
+    title: "thermalization constants a_n = self variance rate at u' = 0, dilute limit, of scenes whose three atoms leave free, untruncated (converged) [rho^2 l v_th]; recombination: rate of encounters leaving a bound pair [rho^2 l v_th]; dissociation: rate at which atoms break a bound pair, per pair; kernel shape near u' (+- standard errors; shape: statistical and fit-protocol errors combined); relaxation gap of the gas (linearized operator) and of one particle over Gamma (a_n)",
     layout: Layout::Joined,
     rows: Selection::All,
     columns: &[
         Printed::new(POTENTIAL.name, Shown::Text(POTENTIAL)),
         Printed::new("a_n (converged)", Shown::Estimate(A_N, "-")),
         Printed::new("rel.err", Shown::Relative(A_N)),
-        Printed::new("a_n untruncated", Shown::Estimate(A_N_UNTRUNCATED, "-")),
         Printed::new(
             "recombination",
             Shown::Unless(
