@@ -688,8 +688,12 @@ fn shipped_studies_are_valid() {
 
 /// `publication.toml` integrates every potential's offsets by quadrature
 /// (the inverse power laws and, wells and all, Lennard-Jones), and it gives
-/// every estimate at least 3x smaller errors than `pipeline.toml` (9x the
-/// launch pairs, 9x the simulated MD time: runs times duration).
+/// every estimate at least 3x smaller errors than `pipeline.toml`: 9x the
+/// launch pairs (errors falling as `N^-1/2`), or for an inverse power law,
+/// whose quasi-random errors per randomization fall as `N^-1` (`n = 6`'s
+/// main set doubled: 2.7x, docs/benchmarks.md), the pairs per
+/// randomization times the root of the randomizations at least 3x; 9x the
+/// simulated MD time (runs times duration).
 #[test]
 fn the_publication_study_integrates_every_potential_by_quadrature() {
     use ternary::physics::sampling::OffsetIntegration;
@@ -700,10 +704,15 @@ fn the_publication_study_integrates_every_potential_by_quadrature() {
         let id = potential.id();
         let params = publication.collisions_params(potential);
         let base = default.collisions_params(potential);
-        let pairs = |p: &ternary::config::CollisionsParams| {
-            f64::from(p.points) * f64::from(p.sampling.randomizations)
+        let points = f64::from(params.points) / f64::from(base.points);
+        let randomizations =
+            f64::from(params.sampling.randomizations) / f64::from(base.sampling.randomizations);
+        let error_ratio = if potential.family().has_well() {
+            (points * randomizations).sqrt()
+        } else {
+            points * randomizations.sqrt()
         };
-        assert!(pairs(&params) >= 9.0 * pairs(&base), "{id}: fewer than 9x");
+        assert!(error_ratio >= 3.0, "{id}: errors {error_ratio:.2}x smaller");
         for (study, p) in [("publication", &params), ("default", &base)] {
             assert!(
                 matches!(p.sampling.offsets, OffsetIntegration::Quadrature(_)),
