@@ -806,11 +806,20 @@ fn status_counts_instances_and_check_fails_until_all_are_fresh() {
         format!("{n} instances: {n} fresh, 0 stale, 0 missing"),
         "{text}"
     );
-    // Nothing to list between the count and the estimate.
+    // Nothing to list between the count and the estimate, which names the
+    // factor it scaled the calibration machine's times by (this machine's
+    // time per scene over that machine's).
     assert!(
         lines.len() == 2 && lines[1].starts_with("estimate: "),
         "{text}"
     );
+    let slowness: f64 = lines[1]
+        .split("this machine takes ")
+        .nth(1)
+        .and_then(|rest| rest.split('x').next())
+        .and_then(|factor| factor.parse().ok())
+        .unwrap_or_else(|| panic!("no factor in {text}"));
+    assert!(slowness > 0.05 && slowness < 50.0, "{text}");
     let finer = small_study("data").replace("points = 7", "points = 9");
     write_config(&dir, &finer);
     let changed = ternary(&config, &["status", "--changed", "--check"]);

@@ -5,7 +5,8 @@
 //! study's engine, offset proposal, bins and fit range from `--config`.
 //!
 //! One benchmark per file (integrators, kernel, quadrature, far kernel, md, balance),
-//! the sampler runs of the kernel benchmarks in `sampler.rs`; this file holds the
+//! the sampler runs of the kernel benchmarks in `sampler.rs`, this machine's speed
+//! for `status`'s estimate in `speed.rs`; this file holds the
 //! work-precision figure they share.
 
 use std::path::{Path, PathBuf};
@@ -19,6 +20,7 @@ mod kernel;
 mod md;
 mod quadrature;
 mod sampler;
+mod speed;
 
 pub use balance::{BalanceBenchOptions, balance};
 pub use far_kernel::far_kernel;
@@ -26,6 +28,7 @@ pub use integrators::{WorkPrecisionOptions, integrators};
 pub use kernel::kernel;
 pub use md::{MdBenchOptions, md};
 pub use sampler::{KernelBenchOptions, StudySettings};
+pub use speed::machine_slowness;
 
 /// A benchmark's work-precision figure: error against cost, drawn like the
 /// study's figures (SVG and PNG, one column and screen size).

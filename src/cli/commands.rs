@@ -30,6 +30,7 @@ use ternary::physics::species::{self, MassChoice, Particle, Reading};
 use ternary::physics::units::{Mass, PhysicalGas};
 use ternary::pipeline::executor::{self, Action, Freshness, RunOptions, Verbosity};
 use ternary::pipeline::shards::Sharding;
+use ternary::pipeline::{Cost, InstanceId};
 use ternary::plan::plan;
 use ternary::rates::gas_rates;
 use ternary::report::{self, DagFormat};
@@ -114,13 +115,26 @@ pub(super) fn status(config: &Path, args: StatusArgs) -> Result<ExitCode> {
     let (study, store) = load(config, Opening::View)?;
     let plan = plan(&study);
     let lines = executor::status(&store, &plan, args.shards)?;
-    let costs = executor::estimate(&plan);
+    let slowness = crate::bench::machine_slowness();
+    let costs: Vec<(InstanceId, Cost)> = executor::estimate(&plan)
+        .into_iter()
+        .map(|(id, cost)| {
+            let cpu_seconds = cost.cpu_seconds * slowness;
+            (
+                id,
+                Cost {
+                    cpu_seconds,
+                    ..cost
+                },
+            )
+        })
+        .collect();
     if args.costs {
         emit(&report::costs_by_stage(&costs, &lines));
     } else {
         emit(&report::status(&lines, args.shards, args.changed));
     }
-    emit(&report::cost_estimate(&costs, &lines));
+    emit(&report::cost_estimate(&costs, &lines, slowness));
     let all_fresh = lines.iter().all(|line| line.freshness == Freshness::Fresh);
     Ok(exit_code(usize::from(args.check && !all_fresh)))
 }

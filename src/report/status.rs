@@ -77,8 +77,9 @@ fn status_summary(lines: &[StatusLine]) -> String {
 
 /// The closing line of `status`: the estimated CPU time and store size of
 /// the whole study and of its instances in `lines` that are not fresh
-/// (still to compute).
-pub fn cost_estimate(costs: &[(InstanceId, Cost)], lines: &[StatusLine]) -> String {
+/// (still to compute); `slowness`, how many times longer this machine takes
+/// than the calibration machine, has scaled the CPU times in `costs`.
+pub fn cost_estimate(costs: &[(InstanceId, Cost)], lines: &[StatusLine], slowness: f64) -> String {
     let unfresh: BTreeSet<&InstanceId> = lines
         .iter()
         .filter(|line| line.freshness != Freshness::Fresh)
@@ -92,7 +93,7 @@ pub fn cost_estimate(costs: &[(InstanceId, Cost)], lines: &[StatusLine]) -> Stri
             .map(|(_, cost)| cost),
     );
     format!(
-        "estimate: {} CPU-hours and {} of store for the whole study; {} CPU-hours of it still to compute (calibrated on the default study, 2-core VM){}\n",
+        "estimate: {} CPU-hours and {} of store for the whole study; {} CPU-hours of it still to compute (calibrated on the default study, 2-core VM; this machine takes {slowness:.2}x its time per scene){}\n",
         hours(whole.cpu_seconds),
         size(whole.bytes),
         hours(pending.cpu_seconds),
@@ -281,10 +282,10 @@ mod tests {
             line("moments", Freshness::Fresh, None),
             line("sweep", Freshness::Stale(vec!["code".into()]), Some(9000.0)),
         ];
-        let estimate = cost_estimate(&costs, &lines);
+        let estimate = cost_estimate(&costs, &lines, 1.0);
         assert!(
             estimate.ends_with(
-                "still to compute (calibrated on the default study, 2-core VM); measured: 1.7 CPU-hours for the 2 fresh instances estimated at 1.5\n"
+                "still to compute (calibrated on the default study, 2-core VM; this machine takes 1.00x its time per scene); measured: 1.7 CPU-hours for the 2 fresh instances estimated at 1.5\n"
             ),
             "{estimate}"
         );
@@ -307,7 +308,7 @@ mod tests {
     #[test]
     fn no_record_no_measured_line() {
         let lines = [line("kernel", Freshness::Fresh, None)];
-        let estimate = cost_estimate(&[cost("kernel", 10.0)], &lines);
+        let estimate = cost_estimate(&[cost("kernel", 10.0)], &lines, 1.0);
         assert!(!estimate.contains("measured"), "{estimate}");
     }
 }

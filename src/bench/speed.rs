@@ -1,0 +1,52 @@
+//! This machine's speed against the machine the stages' cost estimates were
+//! calibrated on, so that `ternary status` estimates this machine's CPU time.
+
+use std::time::Instant;
+
+use ternary::physics::potential::Potential;
+use ternary::physics::scan::thermal_scenes;
+use ternary::physics::scene::{EngineSettings, FreeLine, Method, collide, collide_all};
+
+/// Microseconds per scene on the machine whose default study calibrated the
+/// stages' costs (2026-12-03, a498217): DPRKN12 at tolerance 1e-6 on the 2000
+/// thermal scenes of `n = 6` (seed 1), one by one and interleaved (`ternary
+/// bench integrators --n 6 --scenes 2000 --seed 1`, docs/benchmarks.md).
+const CALIBRATION_MICROSECONDS: [f64; 2] = [8.11, 4.38];
+
+/// Timed runs of each way; the fastest counts (other work on the cores only slows).
+const RUNS: usize = 5;
+
+/// How many times longer this machine takes than the calibration machine:
+/// the geometric mean of the two ways' ratios, the fastest of [`RUNS`] runs
+/// of the calibration's scenes each, on the calling thread (0.2-0.3 s in
+/// all). Both count: `collisions`, the largest stage, integrates interleaved
+/// scenes, the rest of the study runs scalar code that follows the scenes
+/// one by one (on a slower machine of 2026-12-03 the ratios were 1.90 and
+/// 2.33, the default study's CPU time 2.09x).
+pub fn machine_slowness() -> f64 {
+    let scenes = thermal_scenes(2000, 1);
+    let settings = EngineSettings::new(Method::Dprkn12, 1e-6, 100_000);
+    let potential = Potential::inverse_power(6.0);
+    let one_by_one = microseconds_per_scene(&scenes, |scenes| {
+        for &lines in scenes {
+            std::hint::black_box(collide(&potential, &settings, lines));
+        }
+    });
+    let interleaved = microseconds_per_scene(&scenes, |scenes| {
+        std::hint::black_box(collide_all(&potential, &settings, scenes));
+    });
+    let [alone, together] = CALIBRATION_MICROSECONDS;
+    (one_by_one / alone * interleaved / together).sqrt()
+}
+
+/// The fastest of [`RUNS`] runs of `integrate` over `scenes`, microseconds per scene.
+fn microseconds_per_scene(scenes: &[[FreeLine; 3]], integrate: impl Fn(&[[FreeLine; 3]])) -> f64 {
+    let fastest = (0..RUNS)
+        .map(|_| {
+            let started = Instant::now();
+            integrate(scenes);
+            started.elapsed().as_secs_f64()
+        })
+        .fold(f64::INFINITY, f64::min);
+    1e6 * fastest / scenes.len() as f64
+}
