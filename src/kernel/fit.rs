@@ -363,7 +363,10 @@ pub fn systematic<'a>(
 pub struct KernelFit {
     /// Fit to the replicate mean (`None` when nothing could be fitted).
     pub mean: Option<ShapeFit>,
-    /// Fits of the replicates that gave a shape.
+    /// Fits of the replicates that converged to a shape: a refit stopped
+    /// at the iteration limit or on singular normal equations lies wherever
+    /// its last iterate did, no sample of the error (the default study's
+    /// `lj-50` at `u' = -3`: one such refit made a standard error of 1e52).
     pub replicates: Vec<Shape>,
     /// Groups of bins with a nonzero standard error.
     pub measured: usize,
@@ -465,7 +468,11 @@ pub fn fit_kernel(fine: &[Vec<f64>], offsets: &[f64], protocol: Protocol) -> Ker
     let unconverged = std::iter::once(&mean).chain(&fits);
     KernelFit {
         mean: Some(mean),
-        replicates: fits.iter().map(|f| f.shape).collect(),
+        replicates: fits
+            .iter()
+            .filter(|f| f.converged)
+            .map(|f| f.shape)
+            .collect(),
         measured,
         unconverged: unconverged.filter(|f| !f.converged).count(),
     }

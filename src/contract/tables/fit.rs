@@ -115,7 +115,7 @@ pub const BINS: Col<u32> = Col::u32(
 pub const REPLICATES_FITTED: Col<u32> = Col::u32(
     "replicates_fitted",
     "1",
-    "randomizations whose own fit gave a shape",
+    "randomizations whose own fit converged to a shape (the standard errors' samples)",
 );
 /// Fits that stopped before converging.
 pub const UNCONVERGED_FITS: Col<u32> = Col::u32(
