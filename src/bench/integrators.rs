@@ -42,11 +42,14 @@ struct Measurement {
     failures: usize,
 }
 
-/// The scenes' collisions, and the best of [`REPEATS`] wall times of `integrate`.
-fn timed(integrate: impl Fn() -> Vec<Collision>) -> (Vec<Collision>, f64) {
+/// The scenes' collisions, and the best of `repeats` wall times of `integrate`.
+pub(super) fn timed(
+    repeats: usize,
+    integrate: impl Fn() -> Vec<Collision>,
+) -> (Vec<Collision>, f64) {
     let mut best = f64::INFINITY;
     let mut collisions = Vec::new();
-    for _ in 0..REPEATS {
+    for _ in 0..repeats {
         let started = Instant::now();
         collisions = integrate();
         best = best.min(started.elapsed().as_secs_f64());
@@ -60,7 +63,19 @@ fn integrate_all(
     settings: &EngineSettings,
     scenes: &[[FreeLine; 3]],
 ) -> (Vec<Collision>, f64) {
-    timed(|| collide_all(potential, settings, scenes))
+    timed(REPEATS, || collide_all(potential, settings, scenes))
+}
+
+/// The scenes integrated one by one ([`collide`]), in order.
+pub(super) fn one_by_one(
+    potential: &Potential,
+    settings: &EngineSettings,
+    scenes: &[[FreeLine; 3]],
+) -> Vec<Collision> {
+    scenes
+        .iter()
+        .map(|&lines| collide(potential, settings, lines))
+        .collect()
 }
 
 /// Tolerances at which the interleaved scenes are timed against the same scenes one by one.
@@ -76,12 +91,7 @@ fn interleaving(potential: &Potential, scenes: &[[FreeLine; 3]]) -> String {
     );
     for tolerance in INTERLEAVING_TOLERANCES {
         let settings = EngineSettings::new(Method::Dprkn12, tolerance, MAX_STEPS);
-        let (alone, alone_seconds) = timed(|| {
-            scenes
-                .iter()
-                .map(|&lines| collide(potential, &settings, lines))
-                .collect()
-        });
+        let (alone, alone_seconds) = timed(REPEATS, || one_by_one(potential, &settings, scenes));
         let (together, together_seconds) = integrate_all(potential, &settings, scenes);
         let same = alone.iter().zip(&together).all(|(a, b)| {
             let bits = |c: &Collision| c.outgoing.map(f64::to_bits);

@@ -1,11 +1,11 @@
 //! This machine's speed against the machine the stages' cost estimates were
 //! calibrated on, so that `ternary status` estimates this machine's CPU time.
 
-use std::time::Instant;
-
 use ternary::physics::potential::Potential;
 use ternary::physics::scan::thermal_scenes;
-use ternary::physics::scene::{EngineSettings, FreeLine, Method, collide, collide_all};
+use ternary::physics::scene::{EngineSettings, Method, collide_all};
+
+use super::integrators::{one_by_one, timed};
 
 /// Microseconds per scene on the machine whose default study calibrated the
 /// stages' costs (2026-12-03, a498217): DPRKN12 at tolerance 1e-6 on the 2000
@@ -27,26 +27,9 @@ pub fn machine_slowness() -> f64 {
     let scenes = thermal_scenes(2000, 1);
     let settings = EngineSettings::new(Method::Dprkn12, 1e-6, 100_000);
     let potential = Potential::inverse_power(6.0);
-    let one_by_one = microseconds_per_scene(&scenes, |scenes| {
-        for &lines in scenes {
-            std::hint::black_box(collide(&potential, &settings, lines));
-        }
-    });
-    let interleaved = microseconds_per_scene(&scenes, |scenes| {
-        std::hint::black_box(collide_all(&potential, &settings, scenes));
-    });
-    let [alone, together] = CALIBRATION_MICROSECONDS;
-    (one_by_one / alone * interleaved / together).sqrt()
-}
-
-/// The fastest of [`RUNS`] runs of `integrate` over `scenes`, microseconds per scene.
-fn microseconds_per_scene(scenes: &[[FreeLine; 3]], integrate: impl Fn(&[[FreeLine; 3]])) -> f64 {
-    let fastest = (0..RUNS)
-        .map(|_| {
-            let started = Instant::now();
-            integrate(scenes);
-            started.elapsed().as_secs_f64()
-        })
-        .fold(f64::INFINITY, f64::min);
-    1e6 * fastest / scenes.len() as f64
+    let (_, alone) = timed(RUNS, || one_by_one(&potential, &settings, &scenes));
+    let (_, together) = timed(RUNS, || collide_all(&potential, &settings, &scenes));
+    let per_scene = |seconds: f64| 1e6 * seconds / scenes.len() as f64;
+    let [alone_calibration, together_calibration] = CALIBRATION_MICROSECONDS;
+    (per_scene(alone) / alone_calibration * per_scene(together) / together_calibration).sqrt()
 }
