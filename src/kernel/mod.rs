@@ -548,6 +548,9 @@ impl<'a> NodeFold<'a> {
                     self.track.clear();
                     self.track
                         .extend(run.iter().map(|(_, c)| c[image].outgoing[rank]));
+                    if segments::lays_nothing(self.bins, matched, &self.track) {
+                        continue;
+                    }
                     let laid = segments::lay_track(
                         self.bins,
                         self.histogram.part(rank, first.self_rank),

@@ -99,6 +99,17 @@ pub fn lay_track(
             j += 1;
         }
     }
+    // ln |kick| of each node, computed when a segment first asks (NaN: not yet).
+    let mut logs = vec![f64::NAN; outgoing.len()];
+    let mut node = |j: usize| {
+        if logs[j].is_nan() {
+            logs[j] = libm::log((outgoing[j] - matched).abs());
+        }
+        Node {
+            velocity: outgoing[j],
+            log_kick: logs[j],
+        }
+    };
     for i in 0..last {
         if inner(i) && inner(i + 1) {
             continue;
@@ -106,20 +117,41 @@ pub fn lay_track(
         let halves = segment_masses(weights[i], weights[i + 1]);
         let ends = [outgoing[i], outgoing[i + 1]];
         let beside_core = inner(i) || inner(i + 1);
+        let mut monotone = |part: &mut [f64]| {
+            let around = [
+                i.checked_sub(1).map(&mut node),
+                Some(node(i)),
+                Some(node(i + 1)),
+                (i + 2 <= last).then(|| node(i + 2)),
+            ];
+            Segment::monotone(matched, around, halves).spread_tail(bins, part)
+        };
         laid += if monotone_around(outgoing, i) {
-            Segment::monotone(matched, ends, halves, neighbours(outgoing, i))
-                .spread_tail(bins, part)
+            monotone(part)
         } else if turns_once(outgoing, i) {
             Segment::turning(matched, ends, halves, neighbours(outgoing, i))
                 .spread_turning(bins, part)
         } else if beside_core {
-            Segment::monotone(matched, ends, halves, neighbours(outgoing, i))
-                .spread_tail(bins, part)
+            monotone(part)
         } else {
             add_point(bins, part, ends[0], halves[0]) + add_point(bins, part, ends[1], halves[1])
         };
     }
     laid
+}
+
+/// `true` when [`lay_track`] would put nothing into `bins` and the loss at
+/// `matched` would fall outside them too, so the track can be skipped: every
+/// measure a track spreads lies within `CORE_KICK` of its matched velocity
+/// (the tails, the windows through zero and the tail pieces of turning
+/// segments are all cut at `|kick| = CORE_KICK`), the rest sits at its
+/// nodes. So a track whose matched velocity is more than `CORE_KICK` (and a
+/// bin, for the rounding of the cuts) beyond the bins and whose every node
+/// is outside them leaves the histogram exactly as it was: a bath particle
+/// far from `u'`, most of every launch pair's tracks.
+pub fn lays_nothing(bins: &Bins, matched: f64, outgoing: &[f64]) -> bool {
+    matched.abs() > bins.half_width() + CORE_KICK + bins.width
+        && outgoing.iter().all(|&v| bins.index(v).is_none())
 }
 
 /// Lays the `mass` of a window's nodes (the trapezoid's estimate of the
@@ -225,6 +257,17 @@ fn monotone_around(track: &[f64], i: usize) -> bool {
     !(rising && falling)
 }
 
+/// A node of a velocity track as its segments see it: the outgoing
+/// velocity and `ln |kick|`, the kick measured from the matched incoming
+/// velocity (computed once per node: each node bends up to four segments).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Node {
+    /// Outgoing velocity, `v_th` (relative to `u'`).
+    pub velocity: f64,
+    /// `ln |velocity - matched|`.
+    pub log_kick: f64,
+}
+
 /// How a segment's track is interpolated: in `ln |kick|` (both end kicks of
 /// one sign) or in the kick itself.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -254,35 +297,46 @@ pub struct Segment {
     pub curvature: f64,
     /// Coefficient of `t^2 (t - 1)` in `g` (0: a parabola).
     pub cubic: f64,
+    /// `g` at the two nodes, computed once (every use of the segment asks).
+    gauges: [f64; 2],
 }
 
 impl Segment {
     /// A segment over which the track is monotone: `ln |kick|` bent like the
-    /// parabolas through the nodes on either side (`neighbours`: the
-    /// velocities one step before and after, where they exist and kick the
-    /// same way), averaged, and left straight when that bend would turn it
-    /// within the segment; the kick linear when it changes sign.
-    pub fn monotone(
-        matched: f64,
-        ends: [f64; 2],
-        halves: [f64; 2],
-        neighbours: [Option<f64>; 2],
-    ) -> Segment {
-        let [a, b] = ends.map(|v| v - matched);
-        let same_sign = a * b > 0.0;
-        let scale = if same_sign {
-            Scale::Logarithmic
-        } else {
-            Scale::Linear
+    /// parabolas through the nodes on either side, averaged, and left
+    /// straight when that bend would turn it within the segment; the kick
+    /// linear when it changes sign. `around`: the node one step before the
+    /// segment (where it exists), its two ends, and the node one step after;
+    /// a neighbour bends the segment where it kicks the same way.
+    pub fn monotone(matched: f64, around: [Option<Node>; 4], halves: [f64; 2]) -> Segment {
+        let [before, Some(first), Some(second), after] = around else {
+            unreachable!("a segment has both its ends")
         };
-        let mut segment = Segment::straight(matched, ends, halves, scale);
+        let [a, b] = [first, second].map(|n| n.velocity - matched);
+        let same_sign = a * b > 0.0;
+        let mut segment = if same_sign {
+            Segment::logarithmic(matched, [first, second], halves)
+        } else {
+            Segment::straight(
+                matched,
+                [first.velocity, second.velocity],
+                halves,
+                Scale::Linear,
+            )
+        };
         // Every tail segment asks: summed without allocating.
-        let (bent, bends) = neighbours
-            .iter()
+        let (bent, bends) = [before, after]
+            .into_iter()
             .zip([-1.0, 2.0])
-            .filter_map(|(&v, at)| v.map(|v| (v - matched, at)))
-            .filter(|&(kick, _)| !same_sign || kick * a > 0.0)
-            .map(|(kick, at)| segment.curvature_through(segment.gauge(kick), at))
+            .filter_map(|(n, at)| n.map(|n| (n, at)))
+            .filter(|&(n, _)| !same_sign || (n.velocity - matched) * a > 0.0)
+            .map(|(n, at)| {
+                let g = match segment.scale {
+                    Scale::Logarithmic => n.log_kick,
+                    Scale::Linear => n.velocity - matched,
+                };
+                segment.curvature_through(g, at)
+            })
             .fold((0.0, 0_u32), |(sum, count), bend| (sum + bend, count + 1));
         if bends > 0 {
             segment.curvature = bent / f64::from(bends);
@@ -295,13 +349,38 @@ impl Segment {
 
     /// A segment whose `g` is linear in `t`.
     fn straight(matched: f64, ends: [f64; 2], halves: [f64; 2], scale: Scale) -> Segment {
+        Segment::bent(matched, ends, halves, scale, [0.0, 0.0])
+    }
+
+    /// A straight segment in `ln |kick|` between two nodes whose kicks have one sign.
+    fn logarithmic(matched: f64, [first, second]: [Node; 2], halves: [f64; 2]) -> Segment {
+        Segment {
+            matched,
+            ends: [first.velocity, second.velocity],
+            halves,
+            scale: Scale::Logarithmic,
+            curvature: 0.0,
+            cubic: 0.0,
+            gauges: [first.log_kick, second.log_kick],
+        }
+    }
+
+    /// A segment whose `g` has the `bends` `[curvature, cubic]`.
+    fn bent(
+        matched: f64,
+        ends: [f64; 2],
+        halves: [f64; 2],
+        scale: Scale,
+        [curvature, cubic]: [f64; 2],
+    ) -> Segment {
         Segment {
             matched,
             ends,
             halves,
             scale,
-            curvature: 0.0,
-            cubic: 0.0,
+            curvature,
+            cubic,
+            gauges: ends.map(|v| gauge(scale, v - matched)),
         }
     }
 
@@ -350,12 +429,7 @@ impl Segment {
 
     /// `g` at the two nodes.
     fn end_values(&self) -> [f64; 2] {
-        self.ends.map(|v| self.gauge(v - self.matched))
-    }
-
-    /// `g` of a kick.
-    fn gauge(&self, kick: f64) -> f64 {
-        gauge(self.scale, kick)
+        self.gauges
     }
 
     /// What locating velocities and masses along the segment needs, computed once.
@@ -403,10 +477,11 @@ impl Segment {
         if turns.iter().all(Option::is_none) {
             return self.spread_tail(bins, part);
         }
+        let profile = self.profile();
         let mut laid = 0.0;
         let mut from = 0.0;
         for to in turns.into_iter().flatten().chain(std::iter::once(1.0)) {
-            laid += self.restricted(from, to).spread_tail(bins, part);
+            laid += self.restricted(&profile, from, to).spread_tail(bins, part);
             from = to;
         }
         laid
@@ -423,9 +498,10 @@ impl Segment {
             (true, true) => 0.0,
             _ => {
                 let core = if a_core { a } else { b };
-                let edge = self.position(self.matched + CORE_KICK.copysign(core));
+                let profile = self.profile();
+                let edge = profile.position(self.matched + CORE_KICK.copysign(core));
                 let (from, to) = if a_core { (edge, 1.0) } else { (0.0, edge) };
-                self.restricted(from, to).spread(bins, part)
+                self.restricted(&profile, from, to).spread(bins, part)
             }
         }
     }
@@ -481,9 +557,8 @@ impl Segment {
     /// The part of the segment between positions `from <= to` in `[0, 1]`:
     /// the same interpolated track and mass density (both families are
     /// closed under restriction), with the mass that part carries.
-    fn restricted(&self, from: f64, to: f64) -> Segment {
+    fn restricted(&self, profile: &Profile, from: f64, to: f64) -> Segment {
         let [first, second] = self.halves;
-        let profile = self.profile();
         let mass = (first + second) * (profile.mass_fraction(to) - profile.mass_fraction(from));
         let ratio = libm::pow(second / first, to - from);
         let ratio = if ratio.is_finite() { ratio } else { 1.0 };
@@ -491,20 +566,13 @@ impl Segment {
         let length = to - from;
         let cubic = self.cubic * length.powi(3);
         let quadratic = self.curvature - self.cubic + 3.0 * self.cubic * from;
-        Segment {
-            matched: self.matched,
-            ends: [self.velocity_at(from), self.velocity_at(to)],
-            halves: [mass / (1.0 + ratio), mass * ratio / (1.0 + ratio)],
-            scale: self.scale,
-            curvature: cubic + quadratic * length * length,
-            cubic,
-        }
-    }
-
-    /// Position `t` in `[0, 1]` along the segment where the track has the
-    /// outgoing velocity `velocity` ([`Profile::position`]).
-    fn position(&self, velocity: f64) -> f64 {
-        self.profile().position(velocity)
+        Segment::bent(
+            self.matched,
+            [self.velocity_at(from), self.velocity_at(to)],
+            [mass / (1.0 + ratio), mass * ratio / (1.0 + ratio)],
+            self.scale,
+            [cubic + quadratic * length * length, cubic],
+        )
     }
 }
 
@@ -642,14 +710,12 @@ mod tests {
             // Node masses in the ratio of dtau/ds, summing to the segment's exact measure.
             let exact = libm::exp(pair[1]) - libm::exp(pair[0]);
             let scale = exact / (libm::exp(pair[0]) + libm::exp(pair[1]));
-            Segment {
-                matched: 0.0,
-                ends: [kick(pair[0]), kick(pair[1])],
-                halves: [scale * libm::exp(pair[0]), scale * libm::exp(pair[1])],
-                scale: Scale::Logarithmic,
-                curvature: 0.0,
-                cubic: 0.0,
-            }
+            Segment::straight(
+                0.0,
+                [kick(pair[0]), kick(pair[1])],
+                [scale * libm::exp(pair[0]), scale * libm::exp(pair[1])],
+                Scale::Logarithmic,
+            )
             .spread(&bins, &mut spread);
             points[bins.index(kick(pair[0])).unwrap()] += weight(pair[0]);
         }
@@ -709,18 +775,12 @@ mod tests {
             ([0.2e-4, 1.0e-4], [1.0, 1.0]),
         ] {
             let mut part = vec![0.0; bins.len()];
-            let segment = Segment {
-                matched: 0.0,
-                ends,
-                halves,
-                scale: if ends[0] * ends[1] > 0.0 {
-                    Scale::Logarithmic
-                } else {
-                    Scale::Linear
-                },
-                curvature: 0.0,
-                cubic: 0.0,
+            let scale = if ends[0] * ends[1] > 0.0 {
+                Scale::Logarithmic
+            } else {
+                Scale::Linear
             };
+            let segment = Segment::straight(0.0, ends, halves, scale);
             segment.spread(&bins, &mut part);
             let total: f64 = part.iter().sum();
             assert!(

@@ -207,3 +207,55 @@ fn peaks_near_the_core_edge_are_cut_where_they_cross_it() {
         assert!(error.abs() < 6e-3, "|kick| from {low:.2e}: {error:+.4}");
     }
 }
+
+/// A bath particle's track far from `u'` ([`lays_nothing`]): where its
+/// matched velocity lies more than `CORE_KICK` and a bin beyond the bins
+/// and every node outside them, laying it leaves every bin exactly as it
+/// was (compared bit for bit), for kicks toward the bins and away from
+/// them that change sign through a core, peak just above `CORE_KICK` and
+/// stay in the tails, on either side of `u'`, over the grid's move. A
+/// track just inside that reach, its tail kicked toward the bins, is not
+/// skipped, and lays measure into them.
+#[test]
+fn tracks_far_from_the_bins_lay_nothing_there() {
+    let bins = test_bins();
+    let reach = bins.half_width() + CORE_KICK + bins.width;
+    let shapes: [&dyn Fn(f64) -> f64; 3] = [
+        &|s| 1e-2 * libm::tanh(9.0 * s + 0.4) / libm::cosh(3.0 * s).powi(7),
+        &|s| 2.5e-3 / libm::cosh(2.0 * s).powi(3),
+        &|s| 1.5e-3 / libm::cosh(2.0 * s).powi(3),
+    ];
+    let step = 0.125;
+    let span = half_span(step);
+    let lay = |matched: f64, kick: &dyn Fn(f64) -> f64, moved: f64| {
+        let nodes: Vec<f64> = (-span..=span)
+            .map(|j| (f64::from(j) + moved) * step)
+            .collect();
+        let outgoing: Vec<f64> = nodes.iter().map(|&s| matched + kick(s)).collect();
+        let weights: Vec<f64> = nodes.iter().map(|&s| step * libm::cosh(s)).collect();
+        let mut part = vec![0.0; bins.len()];
+        lay_track(&bins, &mut part, matched, &outgoing, &weights);
+        (lays_nothing(&bins, matched, &outgoing), part)
+    };
+    let mut skipped = 0;
+    for side in [-1.0, 1.0] {
+        for toward in [-1.0, 1.0] {
+            for shape in shapes {
+                for k in 0..16 {
+                    let kick = |s: f64| toward * side * shape(s);
+                    let (skips, part) = lay(side * (reach + 1e-9), &kick, f64::from(k) / 16.0);
+                    if skips {
+                        skipped += 1;
+                        assert!(part.iter().all(|&g| g == 0.0), "{side} {toward} {k}");
+                    }
+                }
+            }
+        }
+    }
+    // Skipped: the bump and the tail kicked away from the bins, the tail
+    // toward them (its nodes stay outside); not: the kick through a core
+    // (1e-2 either way) and the bump toward the bins, whose nodes land inside.
+    assert_eq!(skipped, 2 * 3 * 16);
+    let (skips, part) = lay(bins.half_width() + 1e-3, &|s| -shapes[2](s), 0.5);
+    assert!(!skips && part.iter().any(|&g| g > 0.0));
+}
