@@ -29,6 +29,9 @@ offset_min = -1.0
 offset_max = 1.0
 points = 3
 
+[engine.tolerance_per_potential]
+"<id>" = 1e-10
+
 [collisions.points_per_potential]
 "<id>" = 64
 
@@ -502,7 +505,65 @@ fn engine_section_rejects_bad_values() {
             "engine.tolerance",
         ),
         ("max_steps = 100000", "max_steps = 0", "engine.max_steps"),
+        (
+            "[collisions]",
+            "[engine.tolerance_per_potential]\n\"ipp-7\" = 1e-10\n\n[collisions]",
+            "engine.tolerance_per_potential.ipp-7",
+        ),
+        (
+            "[collisions]",
+            "[engine.tolerance_per_potential]\n\"ipp-6\" = 0.01\n\n[collisions]",
+            "engine.tolerance_per_potential.ipp-6",
+        ),
     ]);
+}
+
+/// The test study with `table` inserted before `anchor`, and the study as it is.
+fn with_and_without(anchor: &str, table: &str) -> (Study, Study) {
+    let changed = STUDY.replace(anchor, &format!("{table}\n\n{anchor}"));
+    assert_ne!(changed, STUDY);
+    let path = std::path::Path::new("pipeline.toml");
+    (
+        Study::parse(path, &changed).expect("valid"),
+        Study::parse(path, STUDY).expect("valid"),
+    )
+}
+
+/// `engine.tolerance_per_potential` sets the tolerance of every scene of
+/// one potential (its main and sweep sets, its scans, its dissociation) and
+/// of nothing else: the other potentials keep `engine.tolerance`, and the
+/// convergence study varies its own tolerances around the potential's.
+#[test]
+fn tolerance_per_potential_sets_every_scene_of_that_potential() {
+    let (study, global) = with_and_without(
+        "[collisions]",
+        "[engine.tolerance_per_potential]\n\"lj-0.1\" = 1e-9",
+    );
+    let own = Potential::lennard_jones(0.1);
+    let wide = |study: &Study, potential| ternary::plan::wide_collisions(study, potential).1;
+    let tolerances = |study: &Study, potential| {
+        [
+            study.collisions_params(potential).engine.tolerance,
+            wide(study, potential)
+                .expect("a sweep set")
+                .engine
+                .tolerance,
+            study.scan_params(potential).engine.tolerance,
+            study
+                .dissociation_params(potential)
+                .map_or(0.0, |d| d.engine.tolerance),
+        ]
+    };
+    assert_eq!(tolerances(&study, own), [1e-9; 4]);
+    assert_ne!(global.collisions_params(own).engine.tolerance, 1e-9);
+    for other in study.potentials().into_iter().filter(|p| *p != own) {
+        assert_eq!(
+            tolerances(&study, other),
+            tolerances(&global, other),
+            "{}",
+            other.id()
+        );
+    }
 }
 
 #[test]
@@ -659,8 +720,8 @@ fn methods_can_differ_per_potential() {
             "\"lj-0.1\" = 512\n\n[collisions.method_per_potential]\n\"lj-0.1\" = \"sampled\"",
         );
     let study = Study::parse(std::path::Path::new("pipeline.toml"), &text).expect("valid");
-    let engine = study.engine();
     for potential in &study.potentials() {
+        let engine = study.engine(*potential);
         let plan = study.config.collisions.params(*potential, engine).sampling;
         let sampled = potential.family().has_well();
         assert_eq!(plan.offsets.is_sampled(), sampled, "{}", potential.id());
@@ -763,15 +824,9 @@ fn sweep_points_share_sizes_only_the_sweep_set() {
 /// to one `u'` keep the pilot and their points.
 #[test]
 fn strata_per_potential_fix_only_the_main_set() {
-    let fixed = STUDY.replace(
+    let (study, piloted) = with_and_without(
         "[collisions.proposal]",
-        "[collisions.strata_per_potential]\n\"ipp-6\" = { opposite = 128, same_side = 64 }\n\n[collisions.proposal]",
-    );
-    assert_ne!(fixed, STUDY);
-    let path = std::path::Path::new("pipeline.toml");
-    let (study, piloted) = (
-        Study::parse(path, &fixed).expect("valid"),
-        Study::parse(path, STUDY).expect("valid"),
+        "[collisions.strata_per_potential]\n\"ipp-6\" = { opposite = 128, same_side = 64 }",
     );
     let potential = Potential::inverse_power(6.0);
     let main = study.collisions_params(potential);
@@ -801,15 +856,9 @@ fn strata_per_potential_fix_only_the_main_set() {
 /// potentials keep the global one.
 #[test]
 fn slow_launch_per_potential_sets_only_the_main_set() {
-    let widened = STUDY.replace(
+    let (study, global) = with_and_without(
         "[collisions.proposal]",
-        "[collisions.slow_launch_per_potential]\n\"ipp-6\" = { share = 0.25, speed = 0.5 }\n\n[collisions.proposal]",
-    );
-    assert_ne!(widened, STUDY);
-    let path = std::path::Path::new("pipeline.toml");
-    let (study, global) = (
-        Study::parse(path, &widened).expect("valid"),
-        Study::parse(path, STUDY).expect("valid"),
+        "[collisions.slow_launch_per_potential]\n\"ipp-6\" = { share = 0.25, speed = 0.5 }",
     );
     let potential = Potential::inverse_power(6.0);
     let launch = study.collisions_params(potential).sampling.launch;

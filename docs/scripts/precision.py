@@ -1,14 +1,19 @@
 """Precision of every quantity two studies share: the default study against the publication
-study (docs/benchmarks.md, "The publication study"), from one store.
-usage: python3 docs/scripts/precision.py pipeline.toml publication.toml   (from the repository,
-store `data`; each artifact is the one `ternary show --config C 'stage[instance]'` names;
+study (docs/benchmarks.md, "The publication study"), or a study against itself at other
+settings, each read from its own configuration's store.
+usage: python3 docs/scripts/precision.py pipeline.toml publication.toml   (from the repository;
+each artifact is the one `ternary show --config C 'stage[instance]'` names, in C's `store.path`;
 $TERNARY names the binary, default ./target/release/ternary). Prints one markdown row per
 quantity (values with standard errors, the error ratio default/publication, z of the
 difference; kernels: median relative errors) and a summary per group."""
-import json, os, sys, glob, subprocess
+import json, os, sys, glob, subprocess, tomllib
 import numpy as np, pyarrow.parquet as pq
 rd, rp = sys.argv[1:3]
-store = 'data'
+
+def store_of(config):
+    with open(config, 'rb') as f:
+        path = tomllib.load(f)['store']['path']
+    return path if os.path.isabs(path) else os.path.join(os.path.dirname(config) or '.', path)
 
 def table(config, stage, inst, f):
     out = subprocess.run([os.environ.get('TERNARY', './target/release/ternary'), 'show', '--config', config, f'{stage}[{inst}]'],
@@ -16,7 +21,7 @@ def table(config, stage, inst, f):
     if out.returncode != 0 or not out.stdout.startswith('{'):
         return None
     key = json.loads(out.stdout[:out.stdout.index('\n}') + 2])['key']
-    path = f'{store}/artifacts/{stage}/{key}/{f}'
+    path = f'{store_of(config)}/artifacts/{stage}/{key}/{f}'
     return pq.read_table(path).to_pandas() if os.path.exists(path) else None
 
 rows = []  # (group, quantity, default value, default err, pub value, pub err)
@@ -78,7 +83,7 @@ for pot in POTS:
             a.gap_over_variance_rate_stderr, b.gap_over_variance_rate, b.gap_over_variance_rate_stderr)
 
 # 5. MD rings: window variance rate per estimator
-for f in sorted(glob.glob(f'{store}/refs/md/*.json')):
+for f in sorted(glob.glob(f'{store_of(rd)}/refs/md/*.json')):
     inst = os.path.basename(f)[:-5]
     md, mp = (table(r, 'md', inst, 'summary.parquet') for r in (rd, rp))
     if md is None or mp is None:
@@ -87,7 +92,8 @@ for f in sorted(glob.glob(f'{store}/refs/md/*.json')):
         add('md', f'{inst} {a.estimator} window variance', a.window_variance, a.window_variance_stderr,
             b.window_variance, b.window_variance_stderr)
 
-print(f"| group | quantity | default | publication | error ratio | z (pub - default) |")
+first, second = (os.path.basename(r) for r in (rd, rp))
+print(f"| group | quantity | {first} | {second} | error ratio | z (second - first) |")
 print("|---|---|---|---|---|---|")
 ratios = {}
 for g, q, d, de, p, pe in rows:

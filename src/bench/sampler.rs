@@ -58,7 +58,7 @@ impl StudySettings {
         let kernel = study.map_or_else(KernelConfig::default, |s| s.config.kernel.clone());
         let engine = study.map_or_else(
             || EngineSettings::new(Method::Dprkn12, 1e-12, MAX_STEPS),
-            Study::engine,
+            |s| s.config.engine.study_settings(),
         );
         StudySettings {
             engine: EngineSettings {

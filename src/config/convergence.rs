@@ -3,9 +3,8 @@
 use serde::{Deserialize, Serialize};
 
 use super::check::{Invalid, check, check_length, check_unique};
-use super::{CollisionsConfig, CollisionsParams, KernelConfig, KernelParams};
+use super::{CollisionsConfig, CollisionsParams, EngineConfig, KernelConfig, KernelParams};
 use crate::physics::potential::Potential;
-use crate::physics::scene::EngineSettings;
 
 /// `[convergence]`.
 #[derive(Clone, Debug, Deserialize, Serialize)]
@@ -67,7 +66,7 @@ pub(super) struct Context<'a> {
     /// `[kernel]`.
     pub kernel: &'a KernelConfig,
     /// The study's engine.
-    pub engine: EngineSettings,
+    pub engine: &'a EngineConfig,
 }
 
 /// The convergence stage's parameters and the collisions it re-integrates at
@@ -116,7 +115,9 @@ impl ConvergenceConfig {
             .tolerances
             .iter()
             .map(|&tolerance| {
-                let mut params = context.collisions.params(potential, context.engine);
+                let mut params = context
+                    .collisions
+                    .params(potential, context.engine.settings(&potential));
                 params.engine.tolerance = tolerance;
                 params.launch_share = (self.tolerance_share < 1.0).then_some(self.tolerance_share);
                 params

@@ -274,7 +274,7 @@ impl Study {
     fn resolve(file: &Path, config: Config) -> Result<Study, Invalid> {
         config.store.validate()?;
         let potentials = config.potentials.resolve()?;
-        config.engine.validate()?;
+        config.engine.validate(&potentials)?;
         config.scan.validate(&potentials)?;
         config.collisions.validate(&potentials)?;
         let launch = config.collisions.launch();
@@ -297,7 +297,7 @@ impl Study {
             potentials: &potentials,
             collisions: &config.collisions,
             kernel: &config.kernel,
-            engine: config.engine.settings(),
+            engine: &config.engine,
         })?;
         let evolve = config.evolve.resolve(&evolve::Context {
             potentials: &potentials,
@@ -333,14 +333,16 @@ impl Study {
         self.potentials.clone()
     }
 
-    /// Engine settings as the physics sees them.
-    pub fn engine(&self) -> EngineSettings {
-        self.config.engine.settings()
+    /// Engine settings of the scenes of `potential` as the physics sees them.
+    pub fn engine(&self, potential: Potential) -> EngineSettings {
+        self.config.engine.settings(&potential)
     }
 
     /// Resolved parameters of the collision scenes of `potential`.
     pub fn collisions_params(&self, potential: Potential) -> CollisionsParams {
-        self.config.collisions.params(potential, self.engine())
+        self.config
+            .collisions
+            .params(potential, self.engine(potential))
     }
 
     /// Every `(u', density)` the kernel is evaluated at, with `(0, 0)` (which
@@ -368,7 +370,9 @@ impl Study {
     /// Resolved parameters of the dissociation of `potential`, if enabled
     /// and its family has a well.
     pub fn dissociation_params(&self, potential: Potential) -> Option<DissociationParams> {
-        self.config.dissociation.params(potential, self.engine())
+        self.config
+            .dissociation
+            .params(potential, self.engine(potential))
     }
 
     /// Resolved parameters of the spectrum of `potential`, if enabled.
@@ -399,7 +403,7 @@ impl Study {
 
     /// Resolved parameters of the scan of `potential`.
     pub fn scan_params(&self, potential: Potential) -> ScanParams {
-        self.config.scan.params(potential, self.engine())
+        self.config.scan.params(potential, self.engine(potential))
     }
 }
 

@@ -118,13 +118,12 @@ pub fn lay_track(
         let ends = [outgoing[i], outgoing[i + 1]];
         let beside_core = inner(i) || inner(i + 1);
         let mut monotone = |part: &mut [f64]| {
-            let around = [
+            let ends = [node(i), node(i + 1)];
+            let neighbours = [
                 i.checked_sub(1).map(&mut node),
-                Some(node(i)),
-                Some(node(i + 1)),
                 (i + 2 <= last).then(|| node(i + 2)),
             ];
-            Segment::monotone(matched, around, halves).spread_tail(bins, part)
+            Segment::monotone(matched, ends, neighbours, halves).spread_tail(bins, part)
         };
         laid += if monotone_around(outgoing, i) {
             monotone(part)
@@ -305,13 +304,15 @@ impl Segment {
     /// A segment over which the track is monotone: `ln |kick|` bent like the
     /// parabolas through the nodes on either side, averaged, and left
     /// straight when that bend would turn it within the segment; the kick
-    /// linear when it changes sign. `around`: the node one step before the
-    /// segment (where it exists), its two ends, and the node one step after;
-    /// a neighbour bends the segment where it kicks the same way.
-    pub fn monotone(matched: f64, around: [Option<Node>; 4], halves: [f64; 2]) -> Segment {
-        let [before, Some(first), Some(second), after] = around else {
-            unreachable!("a segment has both its ends")
-        };
+    /// linear when it changes sign. `neighbours`: the nodes one step before
+    /// and after the segment, where they exist; each bends the segment where
+    /// it kicks the same way.
+    pub fn monotone(
+        matched: f64,
+        [first, second]: [Node; 2],
+        neighbours: [Option<Node>; 2],
+        halves: [f64; 2],
+    ) -> Segment {
         let [a, b] = [first, second].map(|n| n.velocity - matched);
         let same_sign = a * b > 0.0;
         let mut segment = if same_sign {
@@ -325,7 +326,7 @@ impl Segment {
             )
         };
         // Every tail segment asks: summed without allocating.
-        let (bent, bends) = [before, after]
+        let (bent, bends) = neighbours
             .into_iter()
             .zip([-1.0, 2.0])
             .filter_map(|(n, at)| n.map(|n| (n, at)))

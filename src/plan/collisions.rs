@@ -46,7 +46,7 @@ pub fn wide_collisions(study: &Study, potential: Potential) -> (String, Option<C
     let params = (sweep.launch_spread > 0.0).then(|| {
         let mut params = study.config.collisions.params_with_share(
             potential,
-            study.engine(),
+            study.engine(potential),
             sweep.points_share,
         );
         params.sampling.launch.spread = sweep.launch_spread;
@@ -75,7 +75,7 @@ pub(super) fn tuned_collisions(
     let mut params = study
         .config
         .collisions
-        .piloted_params(potential, study.engine());
+        .piloted_params(potential, study.engine(potential));
     params.sampling.launch.shift = u_prime;
     params.sampling.launch.spread = 0.0;
     one_halving_finer(&mut params);
