@@ -84,32 +84,11 @@ pub fn lay_track(
             laid += add_point(bins, part, velocity, 0.5 * weight);
         }
     }
+    let mut track = Track::new(matched, outgoing, weights);
     if let (Some(first), Some(last_core)) = (first_core, last_core) {
-        // Windows: runs of nodes between core nodes that kick less than CORE_KICK.
-        let mut j = first;
-        while j < last_core {
-            let start = j;
-            while !in_core(outgoing[j]) {
-                j += 1;
-            }
-            if j > start {
-                let mass = weights[start..j].iter().sum();
-                laid += lay_window(bins, part, matched, &outgoing[start - 1..=j], mass);
-            }
-            j += 1;
-        }
+        track.lay_windows(bins, part, [first, last_core], &mut laid);
     }
-    // ln |kick| of each node, computed when a segment first asks (NaN: not yet).
-    let mut logs = vec![f64::NAN; outgoing.len()];
-    let mut node = |j: usize| {
-        if logs[j].is_nan() {
-            logs[j] = libm::log((outgoing[j] - matched).abs());
-        }
-        Node {
-            velocity: outgoing[j],
-            log_kick: logs[j],
-        }
-    };
+    let mut node = |j: usize| track.node(j);
     for i in 0..last {
         if inner(i) && inner(i + 1) {
             continue;
@@ -137,6 +116,67 @@ pub fn lay_track(
         };
     }
     laid
+}
+
+/// A track's nodes as [`lay_track`] walks them: outgoing velocities, node
+/// weights, and each node's `ln |kick|` taken when a segment first asks
+/// (NaN: not yet).
+struct Track<'a> {
+    matched: f64,
+    outgoing: &'a [f64],
+    weights: &'a [f64],
+    logs: Vec<f64>,
+}
+
+impl<'a> Track<'a> {
+    fn new(matched: f64, outgoing: &'a [f64], weights: &'a [f64]) -> Track<'a> {
+        Track {
+            matched,
+            outgoing,
+            weights,
+            logs: Vec::new(),
+        }
+    }
+
+    /// Node `j` with its `ln |kick|`.
+    fn node(&mut self, j: usize) -> Node {
+        if self.logs.is_empty() {
+            self.logs = vec![f64::NAN; self.outgoing.len()];
+        }
+        if self.logs[j].is_nan() {
+            self.logs[j] = libm::log((self.outgoing[j] - self.matched).abs());
+        }
+        Node {
+            velocity: self.outgoing[j],
+            log_kick: self.logs[j],
+        }
+    }
+
+    /// Adds to `laid`, one window after another, the measure of the windows
+    /// between the first and the last core node (`core`): runs of nodes that
+    /// kick less than `CORE_KICK` ([`lay_window`]).
+    fn lay_windows(
+        &self,
+        bins: &Bins,
+        part: &mut [f64],
+        [first, last_core]: [usize; 2],
+        laid: &mut f64,
+    ) {
+        let in_core = |j: usize| (self.outgoing[j] - self.matched).abs() >= CORE_KICK;
+        let mut j = first;
+        while j < last_core {
+            let start = j;
+            while !in_core(j) {
+                j += 1;
+            }
+            if j > start {
+                let mass = self.weights[start..j].iter().sum();
+                let window = &self.outgoing[start - 1..=j];
+                *laid += lay_window(bins, part, self.matched, window, mass);
+            }
+            j += 1;
+        }
+    }
 }
 
 /// `true` when [`lay_track`] would put nothing into `bins` and the loss at
