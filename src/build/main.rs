@@ -1,8 +1,10 @@
 //! Build script: fingerprints the code every stage runs (`code.rs`) and
 //! writes the table `src/pipeline/code.rs` includes, so that a stage's key
-//! changes exactly when the source its computation reaches changes; and
-//! lists the figure kinds (`src/figures/catalogue.rs` includes the list), so
-//! that a figure is its file.
+//! changes exactly when the source its computation reaches changes; lists
+//! the figure kinds (`src/figures/catalogue.rs` includes the list), so that a
+//! figure is its file; and lists the stages' printouts
+//! (`src/contract/tables/mod.rs` includes the list), so that what a table
+//! prints is declared beside it and nowhere else.
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
@@ -29,6 +31,8 @@ fn main() {
     std::fs::write(&out, table(&fingerprints)).expect("writing the stage code table");
     let plans = Path::new(&std::env::var("OUT_DIR").expect("OUT_DIR")).join("figure_plans.rs");
     std::fs::write(&plans, figure_plans(&files)).expect("writing the figure plans");
+    let details = Path::new(&std::env::var("OUT_DIR").expect("OUT_DIR")).join("details.rs");
+    std::fs::write(&details, detail_printouts(&files)).expect("writing the printouts");
 }
 
 /// The Rust source of `PLANS` (`src/figures/catalogue.rs`): `<Kind>::planned`
@@ -39,16 +43,7 @@ fn figure_plans(files: &BTreeMap<String, Vec<u8>>) -> String {
         "/// Every figure kind's plan, one per file of `src/figures/` (generated).\n\
          pub const PLANS: &[Plan] = &[\n",
     );
-    for (path, bytes) in files {
-        let Some(stem) = path
-            .strip_prefix("src/figures/")
-            .and_then(|p| p.strip_suffix(".rs"))
-            .filter(|stem| !stem.contains('/'))
-        else {
-            continue;
-        };
-        let text = String::from_utf8_lossy(bytes);
-        let file = syn::parse_file(&text).unwrap_or_else(|e| panic!("{path}: {e}"));
+    for (stem, file) in modules_in(files, "src/figures/") {
         for item in file.items {
             let syn::Item::Impl(imp) = item else {
                 continue;
@@ -67,6 +62,55 @@ fn figure_plans(files: &BTreeMap<String, Vec<u8>>) -> String {
     }
     out.push_str("];\n");
     out
+}
+
+/// The Rust source of `DETAILS` (`src/contract/tables/mod.rs`): every
+/// `const PRINTOUT` of a file of `src/contract/tables/`, at its top level or
+/// in one of its inline modules, in file order and within a file in order,
+/// so that a stage's printout is declared beside its table and nothing lists
+/// it by hand.
+fn detail_printouts(files: &BTreeMap<String, Vec<u8>>) -> String {
+    let mut out = String::from(
+        "/// Every stage table's `PRINTOUT`, in file order (generated).\n\
+         pub const DETAILS: &[&Printout] = &[\n",
+    );
+    for (stem, file) in modules_in(files, "src/contract/tables/") {
+        for item in &file.items {
+            if is_printout(item) {
+                let _ = writeln!(out, "    &{stem}::PRINTOUT,");
+            } else if let syn::Item::Mod(m) = item
+                && m.content
+                    .iter()
+                    .flat_map(|(_, items)| items)
+                    .any(is_printout)
+            {
+                let _ = writeln!(out, "    &{stem}::{}::PRINTOUT,", m.ident);
+            }
+        }
+    }
+    out.push_str("];\n");
+    out
+}
+
+/// Whether `item` is a `const PRINTOUT`.
+fn is_printout(item: &syn::Item) -> bool {
+    matches!(item, syn::Item::Const(c) if c.ident == "PRINTOUT")
+}
+
+/// Every file directly in `dir` but `mod.rs`, by its stem, parsed.
+fn modules_in<'a>(
+    files: &'a BTreeMap<String, Vec<u8>>,
+    dir: &'a str,
+) -> impl Iterator<Item = (&'a str, syn::File)> + 'a {
+    files.iter().filter_map(move |(path, bytes)| {
+        let stem = path
+            .strip_prefix(dir)
+            .and_then(|p| p.strip_suffix(".rs"))
+            .filter(|stem| !stem.contains('/') && *stem != "mod")?;
+        let text = String::from_utf8_lossy(bytes);
+        let file = syn::parse_file(&text).unwrap_or_else(|e| panic!("{path}: {e}"));
+        Some((stem, file))
+    })
 }
 
 /// Every file under `dir` by its path relative to the package.

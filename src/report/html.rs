@@ -178,7 +178,7 @@ fn page(
         ("missing", "Not fresh", not_fresh(instances)),
         ("summary", "Thermalization constants", {
             let mut tables = Tables::default();
-            let table = &contract::table::PRINTOUT;
+            let table = &contract::table::HEADLINE;
             print(
                 &mut tables,
                 store,
@@ -191,7 +191,7 @@ fn page(
         ("paper", "The paper's numbers", {
             let mut tables = Tables::default();
             let kick_floor = study.config.kernel.kick_floor;
-            for printout in contract::paper::PRINTOUTS {
+            for printout in contract::paper::HEADLINES {
                 print(&mut tables, store, &reports, printout, kick_floor)?;
             }
             tables.html
@@ -199,7 +199,7 @@ fn page(
         ("crosschecks", "Cross-checks: are the errors calibrated?", {
             let mut tables = Tables::default();
             let kick_floor = study.config.kernel.kick_floor;
-            for printout in [&pulls::summary::PRINTOUT, &pulls::checks::PRINTOUT] {
+            for printout in [&pulls::summary::HEADLINE, &pulls::checks::LARGEST] {
                 print(&mut tables, store, &reports, printout, kick_floor)?;
             }
             tables.html

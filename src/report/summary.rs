@@ -30,18 +30,18 @@ pub fn summary(
         &mut out,
         store,
         reports,
-        &contract::table::PRINTOUT,
+        &contract::table::HEADLINE,
         kick_floor,
     )?;
-    print(&mut out, store, reports, &fits::PRINTOUT, kick_floor)?;
-    for printout in contract::paper::PRINTOUTS {
+    print(&mut out, store, reports, &fits::HEADLINE, kick_floor)?;
+    for printout in contract::paper::HEADLINES {
         print(&mut out, store, reports, printout, kick_floor)?;
     }
     print(
         &mut out,
         store,
         reports,
-        &pulls::summary::PRINTOUT,
+        &pulls::summary::HEADLINE,
         kick_floor,
     )?;
     figures_line(&mut out, store, reports);
@@ -50,7 +50,7 @@ pub fn summary(
             &mut out,
             store,
             reports,
-            &pulls::checks::PRINTOUT,
+            &pulls::checks::LARGEST,
             kick_floor,
         )?;
         stage_tables(&mut out, store, reports, kick_floor)?;

@@ -30,23 +30,11 @@ use super::printout::{Footnote, Layout, Printed, Printout, Selection, Shown};
 use super::study_column::StudyColumn;
 use super::{Col, Pair, TableSpec, UNIT_PER_PANEL, UNIT_PER_ROW};
 
-/// The stages' tables that `ternary run --details` and the HTML report print
-/// after the study's own (`a_n`, the paper's, the pulls'), in order.
-pub const DETAILS: [&Printout; 13] = [
-    &gases::PRINTOUT,
-    &fit::model_fit::PRINTOUT,
-    &interpolation::coordinates::PRINTOUT,
-    &convergence::PRINTOUT,
-    &evolve::evolution_summary::PRINTOUT,
-    &spectrum::summary::PRINTOUT,
-    &md::summary::PRINTOUT,
-    &md::pairs::PRINTOUT,
-    &compare::goodness::PRINTOUT,
-    &compare::finite_size::PRINTOUT,
-    &scan::peak::PRINTOUT,
-    &sweep::stationarity::PRINTOUT,
-    &sweep::balance_tests::PRINTOUT,
-];
+// `DETAILS: &[&Printout]`, every `PRINTOUT` of this directory's files in
+// file order (the build script's): the stages' tables that `ternary run
+// --details` and the HTML report print after the study's own (`a_n`, the
+// paper's, the pulls', each a `HEADLINE` that `report::summary` places).
+include!(concat!(env!("OUT_DIR"), "/details.rs"));
 
 /// The study table's columns that other stages supply (`table` reads each
 /// from the supplying stage's instance of the row's potential, where the

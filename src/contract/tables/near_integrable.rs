@@ -164,8 +164,8 @@ pub mod fits {
     )
     .or_null(TOO_FEW);
 
-    /// What `ternary run --details` and the HTML report print of the table.
-    pub const PRINTOUT: Printout = Printout {
+    /// What `ternary run` and the HTML report print of the table, after the study table.
+    pub const HEADLINE: Printout = Printout {
         table: TABLE,
         title: "near the Calogero point n = 2: rate = A (n - 2)^p exp(q (n - 2)), generalized least squares with the rates' covariance across n over the resolved rates (positive by 3 standard errors; four needed) [A: rho^2 l v_th, or 1 for a ratio] (+- fit errors; z: p against first-order perturbation theory with the law's truncation error, |p - p with s (n - 2)^2|, added; docs/spectrum.md)",
         layout: Layout::Joined,

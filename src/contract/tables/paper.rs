@@ -93,7 +93,7 @@ pub const TABLE_I: Printout = Printout {
 };
 
 /// The paper's other numbers, each row with its note.
-pub const PRINTOUT: Printout = Printout {
+pub const OTHER_NUMBERS: Printout = Printout {
     table: TABLE,
     title: "the paper (Phys. Rev. E 110, 014114), its other numbers: published against ours under its definition (+- standard errors; published: +- as printed, else rounding); converged: ours under our definition where it differs",
     layout: Layout::Joined,
@@ -115,4 +115,4 @@ pub const PRINTOUT: Printout = Printout {
 };
 
 /// What the summary and the report print of the paper table, in order.
-pub const PRINTOUTS: [&Printout; 2] = [&TABLE_I, &PRINTOUT];
+pub const HEADLINES: [&Printout; 2] = [&TABLE_I, &OTHER_NUMBERS];

@@ -45,8 +45,9 @@ pub mod checks {
     )
     .or_null("neither estimate has an error");
 
-    /// What `ternary run --details` and the HTML report print of the table.
-    pub const PRINTOUT: Printout = Printout {
+    /// What `ternary run --details` and the HTML report print of the table,
+    /// after the summary's verdict (not among the stages' tables).
+    pub const LARGEST: Printout = Printout {
         table: TABLE,
         title: "the {count} largest pulls (a: first estimate, b: second or exact; units per check)",
         layout: Layout::Joined,
@@ -109,8 +110,9 @@ pub mod summary {
         "calibrated (at least 50 pulls, |mean| < 0.3, spread in [0.7, 1.3]), else what is wrong",
     );
 
-    /// What `ternary run --details` and the HTML report print of the table.
-    pub const PRINTOUT: Printout = Printout {
+    /// What `ternary run` and the HTML report print of the table, after
+    /// the paper's numbers.
+    pub const HEADLINE: Printout = Printout {
         table: TABLE,
         title: "cross-checks: pulls (a - b) / combined error of every quantity computed two independent ways or held against an exact value (recombination three ways, detailed balance); N(0, 1) when the errors are right (pulls.parquet lists each)",
         layout: Layout::Joined,

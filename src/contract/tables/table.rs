@@ -78,7 +78,7 @@ pub const EVENTS: Col<u32> = Col::u32(super::EVENTS, "1", "scenes drawn for the 
 pub const FAILED_EVENTS: Col<u32> = Col::u32(super::FAILED_EVENTS, "1", "scenes that failed");
 
 /// What `ternary run` and the HTML report print of the table, first.
-pub const PRINTOUT: Printout = Printout {
+pub const HEADLINE: Printout = Printout {
     table: TABLE,
     title: "thermalization constants a_n = self variance rate at u' = 0, dilute limit, of scenes whose three atoms leave free, untruncated (converged) [rho^2 l v_th]; recombination: rate of encounters leaving a bound pair [rho^2 l v_th]; dissociation: rate at which atoms break a bound pair, per pair; kernel shape near u' (+- standard errors; shape: statistical and fit-protocol errors combined); relaxation gap of the gas (linearized operator) and of one particle over Gamma (a_n)",
     layout: Layout::Joined,
