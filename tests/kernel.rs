@@ -8,7 +8,7 @@ use ternary::binning::Bins;
 use ternary::config::DEFAULT_KICK_FLOOR;
 use ternary::kernel::{
     Draws, Event, Histogram, MomentSums, Target, contributions, histograms, moments,
-    pilot_same_side_fraction, recombination_rates, self_bin,
+    pilot_same_side_fraction, recombination_rates, self_bin, self_histograms,
 };
 use ternary::physics::dissociation::{
     balanced_recombination, dissociation_rate, dissociation_scenes,
@@ -524,6 +524,33 @@ fn single_bin_self_kernel_equals_the_histogram() {
             .count();
         assert!(landed > 3, "only {landed} off-centre bins received a kick");
     }
+}
+
+/// Under the offset quadrature the self part alone (`self_histograms`, which
+/// lays no bath track) is the whole histogram's self part, bit for bit, at
+/// `u' = 0` and reweighted to `u' = -2.5`, and its bath part is zero (bins
+/// over `|u - u'| <= 4`, which the bath tracks reach).
+#[test]
+fn the_self_part_alone_is_the_histograms_self_part() {
+    let events = draw(
+        Potential::inverse_power(6.0),
+        &quadrature_plan(5, 3, OffsetRule::default()),
+    );
+    let draws = replicates(&events);
+    let bins = Bins::for_window(8.0, 0.01);
+    let bits = |part: &[f64]| part.iter().map(|g| g.to_bits()).collect::<Vec<_>>();
+    let mut bath_bins = 0;
+    for target in [dilute(0.0), dilute(-2.5)] {
+        let whole = histograms(&events, &target, &bins, &draws);
+        let alone = self_histograms(&events, &target, &bins, &draws);
+        for (h, a) in whole.iter().zip(&alone) {
+            assert_eq!(bits(&h.self_part), bits(&a.self_part));
+            assert!(a.bath_part.iter().all(|&g| g == 0.0));
+            bath_bins += h.bath_part.iter().filter(|&&g| g != 0.0).count();
+        }
+    }
+    // The bath tracks it leaves out do lay measure in the bins.
+    assert!(bath_bins > 100, "{bath_bins}");
 }
 
 /// Under the offset quadrature the single-bin self kernel of a bin in the

@@ -271,7 +271,7 @@ pub fn self_bin(
         "the centre bin also holds the incoming velocity"
     );
     if !takes_point_masses(events, bins, k) {
-        return node_histograms(events, target, bins, draws)
+        return node_histograms(events, target, bins, draws, Parts::SelfOnly)
             .into_iter()
             .map(|h| h.self_part[k])
             .collect();
@@ -470,7 +470,7 @@ fn integrates_offsets(events: &[Event]) -> bool {
 /// ([`segments`]); sampled scenes are point masses.
 pub fn histograms(events: &[Event], target: &Target, bins: &Bins, draws: &Draws) -> Vec<Histogram> {
     if integrates_offsets(events) {
-        return node_histograms(events, target, bins, draws);
+        return node_histograms(events, target, bins, draws, Parts::Both);
     }
     per_replicate(
         events,
@@ -482,6 +482,31 @@ pub fn histograms(events: &[Event], target: &Target, bins: &Bins, draws: &Draws)
             }
         },
     )
+}
+
+/// [`histograms`]' self part alone (the bath part stays zero), bit for bit:
+/// under the offset quadrature the special particle's tracks are laid as
+/// there and the two bath tracks of every launch pair are not (two thirds of
+/// the laying), for readers of `G_self` only.
+pub fn self_histograms(
+    events: &[Event],
+    target: &Target,
+    bins: &Bins,
+    draws: &Draws,
+) -> Vec<Histogram> {
+    if integrates_offsets(events) {
+        return node_histograms(events, target, bins, draws, Parts::SelfOnly);
+    }
+    histograms(events, target, bins, draws)
+}
+
+/// Which parts of the kernel a quadrature histogram lays.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Parts {
+    /// The self and the bath part.
+    Both,
+    /// The self part; the bath part stays zero.
+    SelfOnly,
 }
 
 /// `true` when `next` is the node after `previous` of the same launch pair.
@@ -496,6 +521,8 @@ fn is_next_node(previous: &Event, next: &Event) -> bool {
 /// launch pair at a time.
 struct NodeFold<'a> {
     bins: &'a Bins,
+    /// The parts laid.
+    parts: Parts,
     histogram: Histogram,
     /// The nodes of the current launch pair: each node's event and contributions.
     pair: Vec<(Event, Vec<Contribution>)>,
@@ -506,9 +533,10 @@ struct NodeFold<'a> {
 }
 
 impl<'a> NodeFold<'a> {
-    fn new(bins: &'a Bins) -> Self {
+    fn new(bins: &'a Bins, parts: Parts) -> Self {
         NodeFold {
             bins,
+            parts,
             histogram: Histogram::new(bins),
             pair: Vec::new(),
             track: Vec::new(),
@@ -545,6 +573,9 @@ impl<'a> NodeFold<'a> {
                 self.weights
                     .extend(run.iter().map(|(_, c)| c[image].weight));
                 for (rank, matched) in first.sorted_incoming().into_iter().enumerate() {
+                    if self.parts == Parts::SelfOnly && rank != first.self_rank {
+                        continue;
+                    }
                     self.track.clear();
                     self.track
                         .extend(run.iter().map(|(_, c)| c[image].outgoing[rank]));
@@ -579,11 +610,12 @@ fn node_histograms(
     target: &Target,
     bins: &Bins,
     draws: &Draws,
+    parts: Parts,
 ) -> Vec<Histogram> {
     per_replicate(
         events,
         draws,
-        || NodeFold::new(bins),
+        || NodeFold::new(bins, parts),
         |fold, event, scale| {
             let scaled = contributions(event, target)
                 .map(|c| Contribution {

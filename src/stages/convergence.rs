@@ -20,7 +20,7 @@ use crate::contract::instances;
 use crate::contract::readers::collision_events;
 use crate::contract::{self, Rows};
 use crate::kernel::equilibrium::self_rates;
-use crate::kernel::{Draws, Event, Target, histograms};
+use crate::kernel::{Draws, Event, Target, self_histograms};
 use crate::pipeline::code::{self, Code};
 use crate::pipeline::{Input, InstanceId, Progress, Stage, StageError, Table};
 use crate::stats::Estimate;
@@ -44,7 +44,7 @@ impl ConvergenceStage {
     /// `a_n` per replicate from the binned self kernel: `sum_k G_self,k x_k^2 dx`.
     fn binned_self_variance(&self, events: &[Event], draws: &Draws, width: f64) -> Vec<f64> {
         let bins = Bins::for_window(self.params.kernel.window, width);
-        histograms(events, &self.params.kernel.target(), &bins, draws)
+        self_histograms(events, &self.params.kernel.target(), &bins, draws)
             .iter()
             .map(|h| {
                 (0..bins.len())
