@@ -695,7 +695,12 @@ pub fn moments(
             let squares = |v: &[f64; 3]| v.iter().map(|x| x * x).sum::<f64>();
             let energy_change =
                 weight * (squares(&contribution.outgoing) - squares(&contribution.incoming)).abs();
+            let nearest = nearest_velocity(&contribution);
             for (slot, &limit) in sums.iter_mut().zip(truncations) {
+                if limit < nearest {
+                    // Every term is a signed zero: adding it changes no sum.
+                    continue;
+                }
                 if limit.is_infinite() {
                     slot.energy_change += energy_change;
                 }
@@ -711,6 +716,20 @@ pub fn moments(
             }
         }
     })
+}
+
+/// The smallest nonzero `|velocity|` (relative to `u'`) of a contribution,
+/// incoming or outgoing (infinite when every one is zero): a truncation below
+/// it counts none of its velocities, and a zero velocity counts nothing at
+/// any truncation.
+fn nearest_velocity(contribution: &Contribution) -> f64 {
+    contribution
+        .outgoing
+        .iter()
+        .chain(&contribution.incoming)
+        .map(|v| v.abs())
+        .filter(|&v| v > 0.0)
+        .fold(f64::INFINITY, f64::min)
 }
 
 /// Engine of every pilot, fixed so that a study's engine settings do not
