@@ -484,10 +484,11 @@ pub fn histograms(events: &[Event], target: &Target, bins: &Bins, draws: &Draws)
     )
 }
 
-/// [`histograms`]' self part alone (the bath part stays zero), bit for bit:
-/// under the offset quadrature the special particle's tracks are laid as
+/// [`histograms`] for readers of `G_self` only: its self part bit for bit.
+/// Under the offset quadrature the special particle's tracks are laid as
 /// there and the two bath tracks of every launch pair are not (two thirds of
-/// the laying), for readers of `G_self` only.
+/// the laying), so the bath part stays zero; sampled scenes (point masses,
+/// no tracks) fill both parts as there.
 pub fn self_histograms(
     events: &[Event],
     target: &Target,
