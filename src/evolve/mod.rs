@@ -11,6 +11,7 @@
 //! kernel and once with each randomization left out. Pure math: no IO.
 
 pub mod convolution;
+pub mod dirichlet;
 pub mod early;
 pub mod fourier;
 pub mod grid;

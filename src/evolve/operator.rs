@@ -14,6 +14,7 @@
 
 use rayon::prelude::*;
 
+use super::dirichlet::DirichletForms;
 use super::grid::{Stencil, VelocityGrid};
 use super::propagate::Generator;
 use crate::kernel::{Contribution, Draws, Event, images};
@@ -215,7 +216,9 @@ pub fn balanced_generators(
                 let scale = draws.scale(event);
                 for image in images(event, kick_floor) {
                     if let Some(placed) = Placed::new(&image, replicate, scale, grid) {
-                        forms.add(grid, &placed);
+                        let moves: Vec<[Stencil; 2]> =
+                            placed.moves.iter().flatten().copied().collect();
+                        forms.add(grid, &placed.weights, &moves);
                         placed.deposit_move(grid, centre, placed.self_rank, &mut centre_column);
                     }
                 }
@@ -224,206 +227,6 @@ pub fn balanced_generators(
             (forms.generators(), centre_column)
         })
         .unzip()
-}
-
-/// The sums `A = sum mu Delta Delta^T` of the full and tagged generators,
-/// upper triangles (`A` is symmetric) stored by diagonal: `form[d * n + a] =
-/// A[a][a + d]`, so that a change's pattern shifted along the nodes adds to
-/// contiguous runs.
-struct DirichletForms {
-    equilibrium: Vec<f64>,
-    full: Vec<f64>,
-    tagged: Vec<f64>,
-    merger: Merger,
-}
-
-impl DirichletForms {
-    fn new(grid: &VelocityGrid) -> DirichletForms {
-        let n = grid.len();
-        DirichletForms {
-            equilibrium: grid.maxwellian(),
-            full: vec![0.0; n * n],
-            tagged: vec![0.0; n * n],
-            merger: Merger::new(n),
-        }
-    }
-
-    /// Adds `placed` at every node: to the full form its whole change, to the
-    /// tagged form each particle's own change. Where every deposit of the
-    /// image lies inside the grid, its change is one pattern shifted with
-    /// the node, added per pair of entries along the nodes; near the ends,
-    /// where deposits reflect, node by node.
-    fn add(&mut self, grid: &VelocityGrid, placed: &Placed) {
-        let n = grid.len();
-        let measures: Vec<f64> = (0..n)
-            .map(|j| self.equilibrium[j] * placed.weights[j])
-            .collect();
-        let moves = || placed.moves.iter().flatten();
-        let interior = moves().flatten().fold(0..=n as i64 - 1, |nodes, stencil| {
-            let inside = grid.interior_nodes(stencil);
-            *nodes.start().max(inside.start())..=*nodes.end().min(inside.end())
-        });
-        if !interior.is_empty() {
-            let (lo, hi) = (*interior.start() as usize, *interior.end() as usize);
-            let runs = Runs {
-                first: lo,
-                measures: &measures[lo..=hi],
-                n,
-            };
-            self.add_changes(
-                moves().map(|[from, to]| {
-                    let mut own = [(0, 0.0); 6];
-                    own[..3].copy_from_slice(&from.relative_entries().map(|(k, w)| (k, -w)));
-                    own[3..].copy_from_slice(&to.relative_entries());
-                    own
-                }),
-                |form, change| runs.add(form, change),
-            );
-        }
-        for node in (0..n).filter(|&j| !interior.contains(&(j as i64))) {
-            let measure = measures[node];
-            if measure == 0.0 {
-                continue;
-            }
-            self.add_changes(
-                moves().map(|[from, to]| {
-                    let mut own = [(0, 0.0); 6];
-                    let from = grid
-                        .stencil_entries(node, from)
-                        .map(|(k, w)| (k as i64, -w));
-                    own[..3].copy_from_slice(&from);
-                    let to = grid.stencil_entries(node, to).map(|(k, w)| (k as i64, w));
-                    own[3..].copy_from_slice(&to);
-                    own
-                }),
-                |form, change| add_at(form, n, change, measure),
-            );
-        }
-    }
-
-    /// Adds each particle's change (node, weight entries, unmerged) to the
-    /// tagged form and their sum to the full form, by `add`.
-    fn add_changes(
-        &mut self,
-        changes: impl Iterator<Item = [(i64, f64); 6]>,
-        add: impl Fn(&mut [f64], &[(i64, f64)]),
-    ) {
-        let (mut all, mut count) = ([(0, 0.0); 18], 0);
-        for mut own in changes {
-            all[count..count + 6].copy_from_slice(&own);
-            count += 6;
-            let merged = self.merger.merged(&mut own);
-            add(&mut self.tagged, &own[..merged]);
-        }
-        let merged = self.merger.merged(&mut all[..count]);
-        add(&mut self.full, &all[..merged]);
-    }
-
-    /// `M = -A D^(-1) / 6` of both forms.
-    fn generators(&self) -> Generators {
-        let n = self.equilibrium.len();
-        let generator = |form: &[f64]| {
-            let columns: Vec<Vec<f64>> = (0..n)
-                .map(|j| {
-                    (0..n)
-                        .map(|i| {
-                            let (a, d) = (i.min(j), i.abs_diff(j));
-                            -form[d * n + a] / (6.0 * self.equilibrium[j])
-                        })
-                        .collect()
-                })
-                .collect();
-            Generator::from_columns(&columns)
-        };
-        Generators {
-            full: generator(&self.full),
-            tagged: generator(&self.tagged),
-        }
-    }
-}
-
-/// A pattern's placements at the consecutive nodes `first ..`, with their
-/// measures.
-struct Runs<'a> {
-    first: usize,
-    measures: &'a [f64],
-    n: usize,
-}
-
-impl Runs<'_> {
-    /// Adds `mu_j Delta_j Delta_j^T` for every node `j` of the run to the
-    /// diagonal-stored `form`, `Delta_j` the `change` (node offsets from `j`
-    /// and weights, distinct) shifted to `j`.
-    fn add(&self, form: &mut [f64], change: &[(i64, f64)]) {
-        for (p, &(a, x)) in change.iter().enumerate() {
-            for &(b, y) in &change[p..] {
-                let start = (self.first as i64 + a.min(b)) as usize;
-                let diagonal = a.abs_diff(b) as usize * self.n + start;
-                let run = &mut form[diagonal..diagonal + self.measures.len()];
-                let product = x * y;
-                for (slot, measure) in run.iter_mut().zip(self.measures) {
-                    *slot += measure * product;
-                }
-            }
-        }
-    }
-}
-
-/// Adds `measure Delta Delta^T` to the diagonal-stored `n x n` `form`,
-/// `Delta` given as (node, weight) entries with distinct nodes: the edge
-/// nodes' form of [`Runs::add`], where reflected deposits change the pattern
-/// from node to node (a run of one node through `Runs` cost the stage 1.3x:
-/// 7.8 s against 6.0 s on tests/spectrum.rs's study).
-fn add_at(form: &mut [f64], n: usize, change: &[(i64, f64)], measure: f64) {
-    for (p, &(a, x)) in change.iter().enumerate() {
-        let scaled = measure * x;
-        for &(b, y) in &change[p..] {
-            form[a.abs_diff(b) as usize * n + a.min(b) as usize] += scaled * y;
-        }
-    }
-}
-
-/// Sums (node, weight) entries by node in place, the nodes in the order
-/// they first appear (no sorting: a change has at most 18 entries, and it is
-/// merged at every node it is placed on).
-struct Merger {
-    /// Per node (offset by `offset`), the call that last saw it.
-    seen: Vec<u64>,
-    /// Per node, where its sum stands.
-    slot: Vec<usize>,
-    call: u64,
-    /// Added to a node (or a node offset, from `-n`) to index `seen`.
-    offset: i64,
-}
-
-impl Merger {
-    fn new(n: usize) -> Merger {
-        Merger {
-            seen: vec![0; 3 * n],
-            slot: vec![0; 3 * n],
-            call: 0,
-            offset: n as i64,
-        }
-    }
-
-    /// Merges `entries` into their leading part, whose length it returns.
-    fn merged(&mut self, entries: &mut [(i64, f64)]) -> usize {
-        self.call += 1;
-        let mut merged = 0;
-        for i in 0..entries.len() {
-            let (node, weight) = entries[i];
-            let key = (node + self.offset) as usize;
-            if self.seen[key] == self.call {
-                entries[self.slot[key]].1 += weight;
-            } else {
-                self.seen[key] = self.call;
-                self.slot[key] = merged;
-                entries[merged] = (node, weight);
-                merged += 1;
-            }
-        }
-        merged
-    }
 }
 
 /// Drift `sum_i M_ij (u_i - u_j)` and variance rate `sum_i M_ij (u_i - u_j)^2`
