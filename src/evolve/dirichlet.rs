@@ -28,7 +28,7 @@ const ENTRIES: usize = 3 * DEPOSITS;
 
 /// A deposit of one image: its stencil and its sign (`-1` for an incoming
 /// velocity, `+1` for an outgoing one).
-pub type Deposit = (Stencil, f64);
+type Deposit = (Stencil, f64);
 
 /// (node or node offset, weight) entries of a change, with their count.
 struct Entries {
@@ -66,6 +66,8 @@ pub struct DirichletForms {
     /// `A` of the particles' own changes, by diagonal.
     tagged: Vec<f64>,
     merger: Merger,
+    /// The measure of the image being added, per node (kept for reuse).
+    measures: Vec<f64>,
 }
 
 impl DirichletForms {
@@ -77,36 +79,48 @@ impl DirichletForms {
             full: vec![0.0; n * n],
             tagged: vec![0.0; n * n],
             merger: Merger::new(n),
+            measures: Vec::with_capacity(n),
         }
     }
 
     /// Adds an image with launch weight `weights` at every node's `u'` and
     /// the moves of its particles (`[from, to]` stencils, relative to the
-    /// node): its measure at node `j` is `f0_j weights_j`.
-    pub fn add(&mut self, grid: &VelocityGrid, weights: &[f64], moves: &[[Stencil; 2]]) {
-        let measures: Vec<f64> = self
-            .equilibrium
-            .iter()
-            .zip(weights)
-            .map(|(f0, weight)| f0 * weight)
-            .collect();
+    /// node; `None` for a particle whose velocity is unchanged): its measure
+    /// at node `j` is `f0_j weights_j`.
+    pub fn add(&mut self, grid: &VelocityGrid, weights: &[f64], moves: &[Option<[Stencil; 2]>]) {
+        let mut measures = std::mem::take(&mut self.measures);
+        measures.clear();
+        measures.extend(self.equilibrium.iter().zip(weights).map(|(f0, w)| f0 * w));
         self.add_measured(grid, &measures, moves);
+        self.measures = measures;
     }
 
     /// Adds an image of measure `measures` (one per node): to the tagged
     /// form each particle's own change, to the full form their sum.
-    fn add_measured(&mut self, grid: &VelocityGrid, measures: &[f64], moves: &[[Stencil; 2]]) {
-        let Some(&[first, _]) = moves.first() else {
+    fn add_measured(
+        &mut self,
+        grid: &VelocityGrid,
+        measures: &[f64],
+        moves: &[Option<[Stencil; 2]>],
+    ) {
+        let Some([first, _]) = moves.iter().flatten().next() else {
             return;
         };
-        let mut all = [(first, 0.0); DEPOSITS];
-        for (k, &[from, to]) in moves.iter().enumerate() {
+        let mut all = [(*first, 0.0); DEPOSITS];
+        let mut count = 0;
+        for &[from, to] in moves.iter().flatten() {
             let own = [(from, -1.0), (to, 1.0)];
-            all[2 * k..2 * k + 2].copy_from_slice(&own);
+            all[count..count + 2].copy_from_slice(&own);
+            count += 2;
             add_pattern(&mut self.tagged, grid, &own, measures, &mut self.merger);
         }
-        let all = &all[..2 * moves.len()];
-        add_pattern(&mut self.full, grid, all, measures, &mut self.merger);
+        add_pattern(
+            &mut self.full,
+            grid,
+            &all[..count],
+            measures,
+            &mut self.merger,
+        );
     }
 
     /// `M = -A D^(-1) / 6` of both forms.
@@ -213,8 +227,7 @@ impl Segment<'_> {
         }
         let shifted = shifted.merged(merger);
         self.add_shifted(form, shifted);
-        let mut fixed_entries = fixed;
-        let fixed = fixed_entries.merged(merger);
+        let fixed = fixed.merged(merger);
         if !fixed.is_empty() {
             add_at(form, self.n, fixed, self.measures.iter().sum());
             self.add_cross(form, shifted, fixed);
@@ -355,17 +368,18 @@ mod tests {
         let mut rng = rand::rngs::StdRng::seed_from_u64(7);
         let measures: Vec<f64> = (0..n).map(|_| rng.random_range(0.1..1.0)).collect();
         for _ in 0..200 {
-            let moves: Vec<[Stencil; 2]> = (0..rng.random_range(1..=3))
+            let moves: Vec<Option<[Stencil; 2]>> = (0..rng.random_range(1..=3))
                 .map(|_| {
                     let from = rng.random_range(-3.2..3.2);
                     let to = from + rng.random_range(-0.4..0.4);
-                    [grid.stencil(from), grid.stencil(to)]
+                    Some([grid.stencil(from), grid.stencil(to)])
                 })
                 .collect();
             let mut forms = DirichletForms::new(&grid);
             forms.add_measured(&grid, &measures, &moves);
             let all: Vec<Deposit> = moves
                 .iter()
+                .flatten()
                 .flat_map(|&[from, to]| [(from, -1.0), (to, 1.0)])
                 .collect();
             let full = node_by_node(&grid, &all, &measures);

@@ -216,9 +216,7 @@ pub fn balanced_generators(
                 let scale = draws.scale(event);
                 for image in images(event, kick_floor) {
                     if let Some(placed) = Placed::new(&image, replicate, scale, grid) {
-                        let moves: Vec<[Stencil; 2]> =
-                            placed.moves.iter().flatten().copied().collect();
-                        forms.add(grid, &placed.weights, &moves);
+                        forms.add(grid, &placed.weights, &placed.moves);
                         placed.deposit_move(grid, centre, placed.self_rank, &mut centre_column);
                     }
                 }
