@@ -681,56 +681,79 @@ pub struct MomentSums {
     pub energy_change: f64,
 }
 
-/// Moment sums per replicate for each truncation half-width.
+/// Moment sums per replicate for each truncation half-width (`truncations`
+/// ascending, as the stage builds them).
 pub fn moments(
     events: &[Event],
     target: &Target,
     truncations: &[f64],
     draws: &Draws,
 ) -> Vec<Vec<MomentSums>> {
+    debug_assert!(truncations.is_sorted(), "truncations ascending");
     let start = || vec![MomentSums::default(); truncations.len()];
     per_replicate(events, draws, start, |sums, event, scale| {
         for contribution in contributions(event, target) {
-            let weight = contribution.weight * scale;
-            let kick = contribution.self_kick();
-            let squares = |v: &[f64; 3]| v.iter().map(|x| x * x).sum::<f64>();
-            let energy_change =
-                weight * (squares(&contribution.outgoing) - squares(&contribution.incoming)).abs();
-            let nearest = nearest_velocity(&contribution);
-            for (slot, &limit) in sums.iter_mut().zip(truncations) {
-                if limit < nearest {
-                    // Every term is a signed zero: adding it changes no sum.
-                    continue;
-                }
-                if limit.is_infinite() {
-                    slot.energy_change += energy_change;
-                }
-                let inside = |x: f64| if x.abs() <= limit { 1.0 } else { 0.0 };
-                slot.self_drift += weight * kick * inside(kick);
-                slot.self_variance += weight * kick * kick * inside(kick);
-                for (out, incoming) in contribution.outgoing.iter().zip(contribution.incoming) {
-                    slot.window_drift +=
-                        weight * (out * inside(*out) - incoming * inside(incoming));
-                    slot.window_variance += weight
-                        * (out * out * inside(*out) - incoming * incoming * inside(incoming));
-                }
-            }
+            add_moments(
+                sums,
+                truncations,
+                &contribution,
+                contribution.weight * scale,
+            );
         }
     })
 }
 
-/// The smallest nonzero `|velocity|` (relative to `u'`) of a contribution,
-/// incoming or outgoing (infinite when every one is zero): a truncation below
-/// it counts none of its velocities, and a zero velocity counts nothing at
-/// any truncation.
-fn nearest_velocity(contribution: &Contribution) -> f64 {
-    contribution
-        .outgoing
-        .iter()
-        .chain(&contribution.incoming)
-        .map(|v| v.abs())
-        .filter(|&v| v > 0.0)
-        .fold(f64::INFINITY, f64::min)
+/// Adds one contribution of weight `weight` to the moment sums of every
+/// truncation `X` (ascending), counting a velocity `x` where `|x| <= X`.
+/// Each term enters the sums from the first truncation that counts it on,
+/// so no sum sees the zeros of the velocities it leaves out; a particle's
+/// window terms are its outgoing less its incoming value, each where it is
+/// counted (either alone, then both). Every sum adds the same terms in the
+/// same order as the truncation-by-truncation definition, so the same bits.
+fn add_moments(
+    sums: &mut [MomentSums],
+    truncations: &[f64],
+    contribution: &Contribution,
+    weight: f64,
+) {
+    // The truncations below `|x|` counted, not searched: a branch-free pass
+    // over a few dozen values beats a binary search's dependent steps.
+    let counted_from = |x: f64| {
+        let size = x.abs();
+        truncations.iter().filter(|&&limit| limit < size).count()
+    };
+    let kick = contribution.self_kick();
+    let (drift, variance) = (weight * kick, weight * kick * kick);
+    for slot in &mut sums[counted_from(kick)..] {
+        slot.self_drift += drift;
+        slot.self_variance += variance;
+    }
+    for (&out, &incoming) in contribution.outgoing.iter().zip(&contribution.incoming) {
+        let (out_from, in_from) = (counted_from(out), counted_from(incoming));
+        let alone = if out_from <= in_from {
+            [weight * out, weight * (out * out)]
+        } else {
+            [weight * -incoming, weight * -(incoming * incoming)]
+        };
+        let both = [
+            weight * (out - incoming),
+            weight * (out * out - incoming * incoming),
+        ];
+        let (first, second) = (out_from.min(in_from), out_from.max(in_from));
+        let (one_counted, both_counted) = sums[first..].split_at_mut(second - first);
+        for (slots, [drift, variance]) in [(one_counted, alone), (both_counted, both)] {
+            for slot in slots {
+                slot.window_drift += drift;
+                slot.window_variance += variance;
+            }
+        }
+    }
+    let squares = |v: &[f64; 3]| v.iter().map(|x| x * x).sum::<f64>();
+    let energy_change =
+        weight * (squares(&contribution.outgoing) - squares(&contribution.incoming)).abs();
+    for slot in &mut sums[truncations.partition_point(|limit| limit.is_finite())..] {
+        slot.energy_change += energy_change;
+    }
 }
 
 /// Engine of every pilot, fixed so that a study's engine settings do not
