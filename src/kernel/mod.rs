@@ -852,3 +852,6 @@ pub fn pilot_same_side_fraction(
     let fraction = same / (opposite + same);
     fraction.is_finite().then(|| fraction.clamp(0.02, 0.5))
 }
+
+#[cfg(test)]
+mod moment_tests;
