@@ -722,14 +722,16 @@ fn add_moments(
         let size = x.abs();
         truncations.iter().filter(|&&limit| limit < size).count()
     };
+    let outgoing_from = contribution.outgoing.map(counted_from);
     let kick = contribution.self_kick();
     let (drift, variance) = (weight * kick, weight * kick * kick);
-    for slot in &mut sums[counted_from(kick)..] {
+    for slot in &mut sums[outgoing_from[contribution.self_rank]..] {
         slot.self_drift += drift;
         slot.self_variance += variance;
     }
-    for (&out, &incoming) in contribution.outgoing.iter().zip(&contribution.incoming) {
-        let (out_from, in_from) = (counted_from(out), counted_from(incoming));
+    let particles = contribution.outgoing.iter().zip(&contribution.incoming);
+    for ((&out, &incoming), out_from) in particles.zip(outgoing_from) {
+        let in_from = counted_from(incoming);
         let alone = if out_from <= in_from {
             [weight * out, weight * (out * out)]
         } else {
@@ -751,7 +753,7 @@ fn add_moments(
     let squares = |v: &[f64; 3]| v.iter().map(|x| x * x).sum::<f64>();
     let energy_change =
         weight * (squares(&contribution.outgoing) - squares(&contribution.incoming)).abs();
-    for slot in &mut sums[truncations.partition_point(|limit| limit.is_finite())..] {
+    for slot in &mut sums[counted_from(f64::INFINITY)..] {
         slot.energy_change += energy_change;
     }
 }
