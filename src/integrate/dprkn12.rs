@@ -348,7 +348,11 @@ impl Integrator for Dprkn12 {
         acceleration: &A,
         trials: [Trial<'_, V>; L],
     ) -> [Step<V>; L] {
-        let forces = stage_accelerations(acceleration, &trials);
+        let mut forces: [[V; STAGES]; L] = trials[0].a0.zeros_table();
+        for (lane_forces, trial) in forces.iter_mut().zip(&trials) {
+            lane_forces[0].clone_from(trial.a0);
+        }
+        add_stage_accelerations(acceleration, &trials, &mut forces);
         let ends: [(V, V); L] = std::array::from_fn(|lane| end_state(&trials[lane], &forces[lane]));
         std::array::from_fn(|lane| {
             let (trial, (y, v)) = (&trials[lane], &ends[lane]);
@@ -393,23 +397,22 @@ fn end_state<V: Vector>(trial: &Trial<'_, V>, forces: &[V; STAGES]) -> (V, V) {
     (new_y, new_v)
 }
 
-/// Stage accelerations `F_i = a(y + c_i h v + h^2 sum_j a_ij F_j)` of every trial, with
-/// `F_1 = a0` given, stage by stage across the trials.
+/// Stage accelerations `F_i = a(y + c_i h v + h^2 sum_j a_ij F_j)` of every trial into
+/// `forces[lane][i]`, `i >= 1`, from `F_1 = forces[lane][0] = a0`, stage by stage across the
+/// trials.
 #[inline(always)]
-fn stage_accelerations<V: Vector, A: Acceleration<V>, const L: usize>(
+fn add_stage_accelerations<V: Vector, A: Acceleration<V>, const L: usize>(
     acceleration: &A,
     trials: &[Trial<'_, V>; L],
-) -> [[V; STAGES]; L] {
-    let mut forces: [[V; STAGES]; L] =
-        std::array::from_fn(|lane| std::array::from_fn(|_| trials[lane].a0.clone()));
-    for (i, (row, c)) in COUPLING.iter().zip(NODES).enumerate().skip(1) {
+    forces: &mut [[V; STAGES]; L],
+) {
+    for (i, (row, c)) in COUPLING.iter().zip(&NODES).enumerate().skip(1) {
         let positions: [V; L] =
-            std::array::from_fn(|lane| stage_position(&trials[lane], row, c, &forces[lane]));
+            std::array::from_fn(|lane| stage_position(&trials[lane], row, *c, &forces[lane]));
         for (lane_forces, position) in forces.iter_mut().zip(&positions) {
             lane_forces[i] = acceleration.acceleration(position);
         }
     }
-    forces
 }
 
 /// The position `y + c_i h v + h^2 sum_j a_ij F_j` of a stage with coupling `row` and node `c`.
