@@ -352,7 +352,7 @@ impl Integrator for Dprkn12 {
         for (lane_forces, trial) in forces.iter_mut().zip(&trials) {
             lane_forces[0].clone_from(trial.a0);
         }
-        add_stage_accelerations(acceleration, &trials, &mut forces);
+        fill_stage_accelerations(acceleration, &trials, &mut forces);
         let ends: [(V, V); L] = std::array::from_fn(|lane| end_state(&trials[lane], &forces[lane]));
         std::array::from_fn(|lane| {
             let (trial, (y, v)) = (&trials[lane], &ends[lane]);
@@ -401,7 +401,7 @@ fn end_state<V: Vector>(trial: &Trial<'_, V>, forces: &[V; STAGES]) -> (V, V) {
 /// `forces[lane][i]`, `i >= 1`, from `F_1 = forces[lane][0] = a0`, stage by stage across the
 /// trials.
 #[inline(always)]
-fn add_stage_accelerations<V: Vector, A: Acceleration<V>, const L: usize>(
+fn fill_stage_accelerations<V: Vector, A: Acceleration<V>, const L: usize>(
     acceleration: &A,
     trials: &[Trial<'_, V>; L],
     forces: &mut [[V; STAGES]; L],

@@ -61,8 +61,8 @@ impl<const D: usize> Vector for [f64; D] {
     }
 
     /// Zeroed in place: `array::from_fn` built the table of stage accelerations of
-    /// `Dprkn12::steps` elsewhere and copied it (`memcpy`) three times, 5% of the three-body
-    /// scenes' time.
+    /// `Dprkn12::steps` elsewhere and copied it (`memcpy`) three times: 7.3% of the collisions
+    /// stage's time in `perf` before this (docs/benchmarks.md).
     #[inline(always)]
     fn zeros_table<const S: usize, const L: usize>(&self) -> [[Self; S]; L] {
         [[[0.0; D]; S]; L]
