@@ -28,13 +28,8 @@ pub struct Generators {
     pub tagged: Generator,
 }
 
-/// Events are placed in blocks of this many (memory stays bounded: each
-/// placed image holds a weight per node).
-const BLOCK: usize = 1 << 13;
-
 /// An event image with its launch weight at every node's `u'`.
 struct Placed {
-    replicate: usize,
     /// The launch weight at `u' = u_j` for every node `j`: `weight |u2| |u3| /
     /// (2 pi) exp(-((u' + u2)^2 + (u' + u3)^2) / 2)`, written as the Gaussian
     /// `exp(-(u2 - u3)^2 / 4) exp(-(u' + (u2 + u3) / 2)^2)` of `u'`.
@@ -47,12 +42,7 @@ struct Placed {
 
 impl Placed {
     /// The image placed on `grid`, or `None` when it moves no velocity.
-    fn new(
-        image: &Contribution,
-        replicate: usize,
-        scale: f64,
-        grid: &VelocityGrid,
-    ) -> Option<Placed> {
+    fn new(image: &Contribution, scale: f64, grid: &VelocityGrid) -> Option<Placed> {
         let [_, u2, u3] = image.incoming;
         let incoming = image.sorted_incoming();
         let moves: [Option<[Stencil; 2]>; 3] = std::array::from_fn(|rank| {
@@ -67,7 +57,6 @@ impl Placed {
         let mut weights = grid.gaussian(-0.5 * (u2 + u3));
         weights.iter_mut().for_each(|w| *w *= factor);
         Some(Placed {
-            replicate,
             weights,
             moves,
             self_rank: image.self_rank,
@@ -84,85 +73,77 @@ impl Placed {
             grid.deposit_stencil(column, node, to, weight);
         }
     }
-}
 
-/// Per-replicate sums of one column.
-struct ColumnSums {
-    full: Vec<Vec<f64>>,
-    tagged: Vec<Vec<f64>>,
-}
-
-impl ColumnSums {
-    fn add(&mut self, grid: &VelocityGrid, node: usize, placed: &Placed) {
+    /// Adds the image to column `node` of both generators: every rank's
+    /// move to `full`, the special particle's to `tagged`.
+    fn deposit_column(
+        &self,
+        grid: &VelocityGrid,
+        node: usize,
+        full: &mut [f64],
+        tagged: &mut [f64],
+    ) {
         for rank in 0..3 {
-            placed.deposit_move(grid, node, rank, &mut self.full[placed.replicate]);
-            if rank == placed.self_rank {
-                placed.deposit_move(grid, node, rank, &mut self.tagged[placed.replicate]);
+            self.deposit_move(grid, node, rank, full);
+            if rank == self.self_rank {
+                self.deposit_move(grid, node, rank, tagged);
             }
         }
     }
 }
 
+/// The events of each replicate, in their stored order.
+fn by_replicate<'a>(events: &'a [Event], draws: &Draws) -> Vec<Vec<&'a Event>> {
+    let mut grouped: Vec<Vec<&Event>> = vec![Vec::new(); draws.replicates()];
+    for event in events {
+        grouped[event.randomization as usize].push(event);
+    }
+    grouped
+}
+
+/// The images of one replicate's `events` that move a velocity, placed on
+/// `grid`, in the events' order.
+fn placed_images<'a>(
+    events: &'a [&'a Event],
+    draws: &'a Draws,
+    grid: &'a VelocityGrid,
+    kick_floor: f64,
+) -> impl Iterator<Item = Placed> + 'a {
+    events.iter().flat_map(move |event| {
+        let scale = draws.scale(event);
+        images(event, kick_floor).filter_map(move |image| Placed::new(&image, scale, grid))
+    })
+}
+
 /// The full and tagged generators of every replicate, from the events in the
-/// dilute limit (velocity changes within `kick_floor` count as zero). Each
-/// column adds the events in their stored order: bit-identical for any thread
-/// count. `progress` receives the number of events placed so far.
+/// dilute limit (velocity changes within `kick_floor` count as zero), built
+/// column by column. Each replicate adds its events in their stored order:
+/// bit-identical for any thread count. `progress` receives the
+/// events of each replicate as it finishes.
 pub fn kernel_generators(
     events: &[Event],
     draws: &Draws,
     grid: &VelocityGrid,
     kick_floor: f64,
-    progress: impl Fn(usize),
+    progress: impl Fn(usize) + Sync,
 ) -> Vec<Generators> {
-    let nodes: Vec<usize> = (0..grid.len()).collect();
-    let columns = column_sums(events, draws, grid, kick_floor, &nodes, progress);
-    (0..draws.replicates())
-        .map(|r| {
-            let gather = |part: fn(&ColumnSums) -> &Vec<Vec<f64>>| {
-                let picked: Vec<Vec<f64>> = columns.iter().map(|c| part(c)[r].clone()).collect();
-                Generator::from_columns(&picked)
-            };
+    let n = grid.len();
+    by_replicate(events, draws)
+        .par_iter()
+        .map(|events| {
+            let (mut full, mut tagged) = (vec![vec![0.0; n]; n], vec![vec![0.0; n]; n]);
+            for placed in placed_images(events, draws, grid, kick_floor) {
+                for (node, (full, tagged)) in full.iter_mut().zip(&mut tagged).enumerate() {
+                    placed.deposit_column(grid, node, full, tagged);
+                }
+            }
+            progress(events.len());
             Generators {
-                full: gather(|c| &c.full),
-                tagged: gather(|c| &c.tagged),
+                full: Generator::from_columns(&full),
+                tagged: Generator::from_columns(&tagged),
             }
         })
         .collect()
-}
-
-/// The per-replicate sums of the columns `nodes`.
-fn column_sums(
-    events: &[Event],
-    draws: &Draws,
-    grid: &VelocityGrid,
-    kick_floor: f64,
-    nodes: &[usize],
-    progress: impl Fn(usize),
-) -> Vec<ColumnSums> {
-    let (size, replicates) = (grid.len(), draws.replicates());
-    let mut columns: Vec<ColumnSums> = nodes
-        .iter()
-        .map(|_| ColumnSums {
-            full: vec![vec![0.0; size]; replicates],
-            tagged: vec![vec![0.0; size]; replicates],
-        })
-        .collect();
-    for (k, block) in events.chunks(BLOCK).enumerate() {
-        let placed: Vec<Placed> = block
-            .par_iter()
-            .flat_map_iter(|event| {
-                let (replicate, scale) = (event.randomization as usize, draws.scale(event));
-                images(event, kick_floor)
-                    .filter_map(move |image| Placed::new(&image, replicate, scale, grid))
-            })
-            .collect();
-        columns
-            .par_iter_mut()
-            .zip(nodes)
-            .for_each(|(sums, &node)| placed.iter().for_each(|p| sums.add(grid, node, p)));
-        progress(k * BLOCK + block.len());
-    }
-    columns
 }
 
 /// The full and tagged generators of every replicate in detailed-balance
@@ -202,24 +183,14 @@ pub fn balanced_generators(
     centre: usize,
     progress: impl Fn(usize) + Sync,
 ) -> (Vec<Generators>, Vec<Vec<f64>>) {
-    let mut by_replicate: Vec<Vec<&Event>> = vec![Vec::new(); draws.replicates()];
-    for event in events {
-        by_replicate[event.randomization as usize].push(event);
-    }
-    by_replicate
+    by_replicate(events, draws)
         .par_iter()
-        .enumerate()
-        .map(|(replicate, events)| {
+        .map(|events| {
             let mut forms = DirichletForms::new(grid);
             let mut centre_column = vec![0.0; grid.len()];
-            for event in events {
-                let scale = draws.scale(event);
-                for image in images(event, kick_floor) {
-                    if let Some(placed) = Placed::new(&image, replicate, scale, grid) {
-                        forms.add(grid, &placed.weights, &placed.moves);
-                        placed.deposit_move(grid, centre, placed.self_rank, &mut centre_column);
-                    }
-                }
+            for placed in placed_images(events, draws, grid, kick_floor) {
+                forms.add(grid, &placed.weights, &placed.moves);
+                placed.deposit_move(grid, centre, placed.self_rank, &mut centre_column);
             }
             progress(events.len());
             (forms.generators(), centre_column)

@@ -219,10 +219,8 @@ impl Stage for SpectrumStage {
             .ok_or_else(|| StageError::Input("u = 0 is no grid node".into()))?;
         let (generators, centre_columns) = match self.params.estimator {
             SpectrumEstimator::Columns => {
-                let placed = std::sync::atomic::AtomicUsize::new(0);
                 let generators = kernel_generators(&events, &draws, &grid, floor, |done| {
-                    let before = placed.swap(done, std::sync::atomic::Ordering::Relaxed);
-                    progress.advance((done - before) as u64);
+                    progress.advance(done as u64)
                 });
                 let columns = generators.iter().map(|g| g.tagged.column(centre)).collect();
                 (generators, columns)
