@@ -10,8 +10,8 @@ use std::time::{Duration, Instant};
 mod common;
 
 use common::{
-    BINARY, SMALL_STUDY_INSTANCES, run_counts, small_study, stderr, stdout, ternary, workspace,
-    write_config,
+    BINARY, SMALL_STUDY_INSTANCES, run_counts, run_stages, small_study, stderr, stdout, ternary,
+    workspace, write_config,
 };
 
 fn config(points: u32, extra: &str) -> String {
@@ -44,6 +44,12 @@ points = 64
 {extra}
 "#
     )
+}
+
+/// `text` with `ipp-6` its only potential, for tests that read one
+/// potential's instances alone.
+fn only_ipp6(text: &str) -> String {
+    text.replace("inverse_power = [2, 6]", "inverse_power = [6]")
 }
 
 /// Runs a pyarrow check script on an artifact directory; it must exit 0.
@@ -530,10 +536,13 @@ print("ok")
 /// Fokker-Planck evolution of the same rates (within four standard errors).
 #[test]
 fn evolve_stage_from_a_moving_special_particle_conserves() {
-    let extra = "[collisions.points_per_potential]\nipp-6 = 16384\n\n[evolve]\nenabled = true\npotential = \"ipp-6\"\nu_prime = 0.5\ntimes = [0.1, 1.0]\nearly_times = [1e-3]\nvelocity_range = 2.5\ngrid_step = 0.1\n";
-    let text = config(7, extra).replace("randomizations = 2", "randomizations = 8");
+    let extra = "[collisions.points_per_potential]\nipp-6 = 16384\n\n[sweep]\nenabled = false\n\n[evolve]\nenabled = true\npotential = \"ipp-6\"\nu_prime = 0.5\ntimes = [0.1, 1.0]\nearly_times = [1e-3]\nvelocity_range = 2.5\ngrid_step = 0.1\n";
+    let text = only_ipp6(&config(7, extra)).replace("randomizations = 2", "randomizations = 8");
     let dir = workspace("evolve-moving");
-    run_counts(&write_config(&dir, &text), &[]);
+    run_stages(
+        &write_config(&dir, &text),
+        &["launches", "collisions", "evolve"],
+    );
     let artifact = &stage_dirs(&dir.join("data"), "evolve")[0];
     let script = r#"
 import sys, pyarrow.parquet as pq
@@ -652,9 +661,12 @@ name = "N41"
 gas = "ring"
 final_time_ns = 800.0
 "#;
-    let text = config(7, extra).replace("randomizations = 2", "randomizations = 8");
+    let text = only_ipp6(&config(7, extra)).replace("randomizations = 2", "randomizations = 8");
     let dir = workspace("md-boltzmann");
-    run_counts(&write_config(&dir, &text), &[]);
+    run_stages(
+        &write_config(&dir, &text),
+        &["launches", "collisions", "md", "compare"],
+    );
     let compare = &stage_dirs(&dir.join("data"), "compare")[0];
     let script = r#"
 import sys, pyarrow.parquet as pq
@@ -757,7 +769,7 @@ final_time_ns = 15.0
         "inverse_power = [2, 6]\nlennard_jones = [0.1]",
     );
     let dir = workspace("lennard-jones-ring");
-    run_counts(&write_config(&dir, &text), &[]);
+    run_stages(&write_config(&dir, &text), &["md"]);
     let artifact = &stage_dirs(&dir.join("data"), "md")[0];
     let script = r#"
 import sys, pyarrow.parquet as pq

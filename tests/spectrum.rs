@@ -17,7 +17,7 @@ use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
 use arrow_array::RecordBatch;
-use common::{SYMMETRIC_SCAN, stderr, ternary, workspace, write_config};
+use common::{SYMMETRIC_SCAN, run_stages, workspace, write_config};
 use ternary::contract;
 use ternary::pipeline::table::read_parquet;
 use ternary::stats::Estimate;
@@ -76,13 +76,7 @@ fn store() -> &'static Path {
     static STORE: OnceLock<PathBuf> = OnceLock::new();
     STORE.get_or_init(|| {
         let dir = workspace("spectrum");
-        let run = |text: &str, stages: &[&str]| {
-            let config = write_config(&dir, text);
-            let mut args = vec!["run", "--quiet"];
-            stages.iter().for_each(|s| args.extend(["--only", s]));
-            let output = ternary(&config, &args);
-            assert!(output.status.success(), "{}", stderr(&output));
-        };
+        let run = |text: &str, stages: &[&str]| run_stages(&write_config(&dir, text), stages);
         let scenes = ["scan", "launches", "collisions"];
         for (estimator, step, kept) in [
             ("detailed_balance", 0.05, BALANCED),
@@ -416,11 +410,10 @@ fn the_rates_vanish_quadratically_at_the_calogero_point() {
     use contract::near_integrable::fits::*;
     let dir = workspace("near-integrable");
     let config = write_config(&dir, &near_integrable_study());
-    let stages = ["launches", "collisions", "spectrum", "near_integrable"];
-    let mut args = vec!["run", "--quiet"];
-    stages.iter().for_each(|s| args.extend(["--only", s]));
-    let output = ternary(&config, &args);
-    assert!(output.status.success(), "{}", stderr(&output));
+    run_stages(
+        &config,
+        &["launches", "collisions", "spectrum", "near_integrable"],
+    );
     let artifact = artifact_dir(&dir.join("store"), "near_integrable", "study");
     let fits = read_parquet(&artifact.join(format!("{}.parquet", TABLE.name)))
         .unwrap()

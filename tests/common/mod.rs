@@ -37,6 +37,14 @@ pub fn write_config(dir: &Path, text: &str) -> PathBuf {
     path
 }
 
+/// `ternary run --quiet` of only the instances of `stages`; it must succeed.
+pub fn run_stages(config: &Path, stages: &[&str]) {
+    let mut args = vec!["run", "--quiet"];
+    stages.iter().for_each(|s| args.extend(["--only", s]));
+    let output = ternary(config, &args);
+    assert!(output.status.success(), "{}", stderr(&output));
+}
+
 pub fn ternary(config: &Path, args: &[&str]) -> Output {
     Command::new(BINARY)
         .arg("--config")
