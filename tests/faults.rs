@@ -10,6 +10,7 @@ use std::fs;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 use std::sync::OnceLock;
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
 
 mod common;
@@ -34,6 +35,26 @@ fn reference() -> &'static BTreeMap<PathBuf, String> {
 fn study(name: &str) -> (PathBuf, PathBuf) {
     let dir = workspace(name);
     (write_config(&dir, &small_study("data")), dir.join("data"))
+}
+
+/// Runs `check(worker, case)` for every case, on one worker per core
+/// (each case is a run of the binary and its recovery: independent of the
+/// others when each worker keeps its own workspace, named by `worker`).
+fn on_every_core<T: Sync>(cases: &[T], check: impl Fn(usize, &T) + Sync) {
+    let next = AtomicUsize::new(0);
+    let workers = std::thread::available_parallelism().map_or(1, |n| n.get());
+    std::thread::scope(|scope| {
+        for worker in 0..workers {
+            let (next, check) = (&next, &check);
+            scope.spawn(move || {
+                loop {
+                    let k = next.fetch_add(1, Ordering::Relaxed);
+                    let Some(case) = cases.get(k) else { break };
+                    check(worker, case);
+                }
+            });
+        }
+    });
 }
 
 /// The checks after any fault: no artifact in place is damaged unless the
@@ -108,20 +129,22 @@ fn kill_at_every_rename_and_fsync_recovers() {
         eprintln!("skipped: strace cannot trace here");
         return;
     }
-    let mut faults = 0;
-    for syscall in RENAMES_AND_SYNCS {
-        let calls = calls_in_a_clean_run(syscall);
-        for when in 1..=calls {
-            let what = format!("kill at {syscall} #{when} of {calls}");
-            let (config, store) = study("faults-kill-syscall");
-            let injection = format!("inject={syscall}:signal=KILL:when={when}");
-            let output = run_under_strace(&config, syscall, Some(injection));
-            assert!(!output.status.success(), "{what}: the run was not killed");
-            recovers(&config, &store, false, &what);
-            faults += 1;
-        }
-    }
-    assert!(faults >= 20, "only {faults} renames and syncs");
+    let cases: Vec<(&str, usize, usize)> = RENAMES_AND_SYNCS
+        .into_iter()
+        .flat_map(|syscall| {
+            let calls = calls_in_a_clean_run(syscall);
+            (1..=calls).map(move |when| (syscall, when, calls))
+        })
+        .collect();
+    assert!(cases.len() >= 20, "only {} renames and syncs", cases.len());
+    on_every_core(&cases, |worker, &(syscall, when, calls)| {
+        let what = format!("kill at {syscall} #{when} of {calls}");
+        let (config, store) = study(&format!("faults-kill-syscall-{worker}"));
+        let injection = format!("inject={syscall}:signal=KILL:when={when}");
+        let output = run_under_strace(&config, syscall, Some(injection));
+        assert!(!output.status.success(), "{what}: the run was not killed");
+        recovers(&config, &store, false, &what);
+    });
 }
 
 /// ENOSPC at writes spread over a run, and EIO at every fsync: the run fails with an error naming the file, and leaves
@@ -148,15 +171,15 @@ fn enospc_and_eio_fail_the_run_and_recover() {
             format!("inject=fsync:error=EIO:when={when}"),
         ));
     }
-    let mut failed = 0;
-    for (syscall, injection) in &cases {
-        let (config, store) = study("faults-errno");
+    let failed = AtomicUsize::new(0);
+    on_every_core(&cases, |worker, (syscall, injection)| {
+        let (config, store) = study(&format!("faults-errno-{worker}"));
         let output = run_under_strace(&config, syscall, Some(injection.clone()));
         if output.status.success() {
             // Only stdout writes were hit (a quiet run writes none) or the
             // error came after the last store write: the run is complete.
             assert_eq!(&result_bytes(&store), reference(), "{injection}");
-            continue;
+            return;
         }
         let message = stderr(&output);
         assert!(
@@ -164,8 +187,9 @@ fn enospc_and_eio_fail_the_run_and_recover() {
             "{injection}: {message}"
         );
         recovers(&config, &store, false, injection);
-        failed += 1;
-    }
+        failed.fetch_add(1, Ordering::Relaxed);
+    });
+    let failed = failed.into_inner();
     assert!(
         failed + 2 >= cases.len(),
         "only {failed} of {} injections failed the run",
@@ -230,34 +254,36 @@ fn damage_to_every_file_of_a_store_recovers() {
         ("truncated", |path| fs::write(path, b"").unwrap()),
         ("deleted", |path| fs::remove_file(path).unwrap()),
     ];
-    for file in &files {
-        for (damage, apply) in damages {
-            let what = format!("{damage} {}", file.display());
-            let (copy_config, copy) = study("faults-damage");
-            copy_tree(&store, &copy);
-            apply(&copy.join(file));
-            let in_artifact = file.starts_with("artifacts");
-            if in_artifact {
-                let key = file
-                    .components()
-                    .nth(2)
-                    .unwrap()
-                    .as_os_str()
-                    .to_string_lossy();
-                let status = stdout(&ternary(&copy_config, &["status"]));
-                let line = status
-                    .lines()
-                    .find(|line| line.contains(&format!("key {}", &key[..12])))
-                    .unwrap_or_else(|| panic!("{what}: no line with key {key}: {status}"));
-                assert!(line.contains("damaged"), "{what}: {line}");
-                assert!(
-                    !ternary(&copy_config, &["verify"]).status.success(),
-                    "{what}"
-                );
-            }
-            recovers(&copy_config, &copy, in_artifact, &what);
+    let cases: Vec<(&PathBuf, (&str, Damage))> = files
+        .iter()
+        .flat_map(|file| damages.map(|damage| (file, damage)))
+        .collect();
+    on_every_core(&cases, |worker, &(file, (damage, apply))| {
+        let what = format!("{damage} {}", file.display());
+        let (copy_config, copy) = study(&format!("faults-damage-{worker}"));
+        copy_tree(&store, &copy);
+        apply(&copy.join(file));
+        let in_artifact = file.starts_with("artifacts");
+        if in_artifact {
+            let key = file
+                .components()
+                .nth(2)
+                .unwrap()
+                .as_os_str()
+                .to_string_lossy();
+            let status = stdout(&ternary(&copy_config, &["status"]));
+            let line = status
+                .lines()
+                .find(|line| line.contains(&format!("key {}", &key[..12])))
+                .unwrap_or_else(|| panic!("{what}: no line with key {key}: {status}"));
+            assert!(line.contains("damaged"), "{what}: {line}");
+            assert!(
+                !ternary(&copy_config, &["verify"]).status.success(),
+                "{what}"
+            );
         }
-    }
+        recovers(&copy_config, &copy, in_artifact, &what);
+    });
 }
 
 /// A way to damage a file.
