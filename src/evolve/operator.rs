@@ -73,22 +73,68 @@ impl Placed {
             grid.deposit_stencil(column, node, to, weight);
         }
     }
+}
 
-    /// Adds the image to column `node` of both generators: every rank's
-    /// move to `full`, the special particle's to `tagged`.
-    fn deposit_column(
-        &self,
-        grid: &VelocityGrid,
-        node: usize,
-        full: &mut [f64],
-        tagged: &mut [f64],
-    ) {
-        for rank in 0..3 {
-            self.deposit_move(grid, node, rank, full);
-            if rank == self.self_rank {
-                self.deposit_move(grid, node, rank, tagged);
+/// One replicate's generator in the column form, stored by offset: entry
+/// `(k, j)` (node `k` of column `j`) at `(k + n - 1 - j) n + j`, so that a
+/// stencil seen from consecutive nodes adds along contiguous runs.
+struct ColumnForm {
+    n: usize,
+    by_offset: Vec<f64>,
+}
+
+impl ColumnForm {
+    fn new(n: usize) -> ColumnForm {
+        ColumnForm {
+            n,
+            by_offset: vec![0.0; (2 * n - 1) * n],
+        }
+    }
+
+    /// Adds an image's move (`[from, to]` stencils) to every column `j`,
+    /// weighted by the image's launch weight `weights[j]` there.
+    fn add_move(&mut self, grid: &VelocityGrid, [from, to]: &[Stencil; 2], weights: &[f64]) {
+        self.add_stencil(grid, from, weights, -1.0);
+        self.add_stencil(grid, to, weights, 1.0);
+    }
+
+    /// Adds `sign` times [`VelocityGrid::deposit_stencil`] of `stencil` seen
+    /// from every node `j`, scaled by `weights[j]`: the same products added
+    /// to each entry in the same order as column by column, the interior
+    /// nodes' along three contiguous runs.
+    fn add_stencil(&mut self, grid: &VelocityGrid, stencil: &Stencil, weights: &[f64], sign: f64) {
+        let n = self.n;
+        let interior = grid.interior_nodes(stencil);
+        let lo = (*interior.start()).clamp(0, n as i64) as usize;
+        let hi = (*interior.end() + 1).clamp(lo as i64, n as i64) as usize;
+        for j in (0..lo).chain(hi..n).filter(|&j| weights[j] != 0.0) {
+            let scale = sign * weights[j];
+            for (k, w) in grid.stencil_entries(j, stencil) {
+                self.by_offset[(k + n - 1 - j) * n + j] += scale * w;
             }
         }
+        // No run when no node sees the stencil inside the grid (its offsets
+        // may then lie beyond the grid).
+        for (offset, w) in stencil.relative_entries().into_iter().filter(|_| lo < hi) {
+            let row = (offset + n as i64 - 1) as usize * n;
+            let run = &mut self.by_offset[row + lo..row + hi];
+            for (entry, weight) in run.iter_mut().zip(&weights[lo..hi]) {
+                *entry += sign * weight * w;
+            }
+        }
+    }
+
+    /// The generator (columns of `n` entries).
+    fn generator(&self) -> Generator {
+        let n = self.n;
+        let columns: Vec<Vec<f64>> = (0..n)
+            .map(|j| {
+                (0..n)
+                    .map(|k| self.by_offset[(k + n - 1 - j) * n + j])
+                    .collect()
+            })
+            .collect();
+        Generator::from_columns(&columns)
     }
 }
 
@@ -116,9 +162,9 @@ fn placed_images<'a>(
 }
 
 /// The full and tagged generators of every replicate, from the events in the
-/// dilute limit (velocity changes within `kick_floor` count as zero), built
-/// column by column. Each replicate adds its events in their stored order:
-/// bit-identical for any thread count. `progress` receives the
+/// dilute limit (velocity changes within `kick_floor` count as zero). Each
+/// replicate adds its events in their stored order: bit-identical for any
+/// thread count. `progress` receives the
 /// events of each replicate as it finishes.
 pub fn kernel_generators(
     events: &[Event],
@@ -131,16 +177,20 @@ pub fn kernel_generators(
     by_replicate(events, draws)
         .par_iter()
         .map(|events| {
-            let (mut full, mut tagged) = (vec![vec![0.0; n]; n], vec![vec![0.0; n]; n]);
+            let (mut full, mut tagged) = (ColumnForm::new(n), ColumnForm::new(n));
             for placed in placed_images(events, draws, grid, kick_floor) {
-                for (node, (full, tagged)) in full.iter_mut().zip(&mut tagged).enumerate() {
-                    placed.deposit_column(grid, node, full, tagged);
+                for (rank, stencils) in placed.moves.iter().enumerate() {
+                    let Some(stencils) = stencils else { continue };
+                    full.add_move(grid, stencils, &placed.weights);
+                    if rank == placed.self_rank {
+                        tagged.add_move(grid, stencils, &placed.weights);
+                    }
                 }
             }
             progress(events.len());
             Generators {
-                full: Generator::from_columns(&full),
-                tagged: Generator::from_columns(&tagged),
+                full: full.generator(),
+                tagged: tagged.generator(),
             }
         })
         .collect()
