@@ -26,7 +26,8 @@
 
 use std::collections::BTreeMap;
 use std::fs;
-use std::path::Path;
+use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
 
 mod common;
 
@@ -166,16 +167,22 @@ fn stage_files() -> std::collections::BTreeSet<String> {
         .collect()
 }
 
+/// The workspace of the reduced study computed once for this file's tests,
+/// on this CPU: its `pipeline.toml` and its store `data`.
+fn native() -> &'static Path {
+    static NATIVE: OnceLock<PathBuf> = OnceLock::new();
+    NATIVE.get_or_init(|| {
+        let dir = workspace("golden");
+        let run = ternary(&write_config(&dir, REDUCED_STUDY), &["run", "--quiet"]);
+        assert!(run.status.success(), "{}", stderr(&run));
+        dir
+    })
+}
+
 #[test]
 fn every_stage_keeps_its_bytes() {
-    let dir = workspace("golden");
-    let config = write_config(&dir, REDUCED_STUDY);
-    let run = ternary(&config, &["run", "--quiet"]);
-    assert!(
-        run.status.success(),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
-    );
+    let dir = native();
+    let config = dir.join("pipeline.toml");
     let records = output_records(&dir.join("data"));
     let stages: std::collections::BTreeSet<String> = records
         .keys()
@@ -188,7 +195,7 @@ fn every_stage_keeps_its_bytes() {
         "recompute audit:\n{}",
         stdout(&audit)
     );
-    check_table_reference(&dir);
+    check_table_reference(dir);
     let golden = Path::new(env!("CARGO_MANIFEST_DIR")).join(GOLDEN);
     if std::env::var_os("TERNARY_BLESS").is_some() {
         fs::create_dir_all(golden.parent().unwrap()).unwrap();
@@ -231,30 +238,20 @@ fn every_stage_keeps_its_bytes() {
 /// FFT to `evolve::fourier`, 200 of the reduced study's 217 files differed.
 #[test]
 fn a_cpu_without_fma_or_avx_computes_the_same_bytes() {
-    let records = |name: &str, tunables: Option<&str>| {
-        let dir = workspace(name);
-        let config = write_config(&dir, REDUCED_STUDY);
-        let mut command = std::process::Command::new(BINARY);
-        command
-            .arg("--config")
-            .arg(&config)
-            .args(["run", "--quiet"]);
-        if let Some(tunables) = tunables {
-            command.env("GLIBC_TUNABLES", tunables);
-        }
-        let run = command.output().unwrap();
-        assert!(
-            run.status.success(),
-            "{}",
-            String::from_utf8_lossy(&run.stderr)
-        );
-        output_records(&dir.join("data"))
-    };
-    let native = records("cpu-native", None);
-    let baseline = records(
-        "cpu-baseline",
-        Some("glibc.cpu.hwcaps=-AVX2,-FMA,-AVX,-AVX512F,-FMA4"),
-    );
+    let dir = workspace("cpu-baseline");
+    let run = std::process::Command::new(BINARY)
+        .arg("--config")
+        .arg(write_config(&dir, REDUCED_STUDY))
+        .args(["run", "--quiet"])
+        .env(
+            "GLIBC_TUNABLES",
+            "glibc.cpu.hwcaps=-AVX2,-FMA,-AVX,-AVX512F,-FMA4",
+        )
+        .output()
+        .unwrap();
+    assert!(run.status.success(), "{}", stderr(&run));
+    let native = output_records(&native().join("data"));
+    let baseline = output_records(&dir.join("data"));
     let differing: Vec<&String> = native
         .keys()
         .filter(|name| native.get(*name) != baseline.get(*name))
