@@ -348,7 +348,7 @@ impl Integrator for Dprkn12 {
         acceleration: &A,
         trials: [Trial<'_, V>; L],
     ) -> [Step<V>; L] {
-        let mut forces: [[V; STAGES]; L] = trials[0].a0.zeros_table();
+        let mut forces: [[V; STAGES]; L] = trials[0].a0.stage_table();
         for (lane_forces, trial) in forces.iter_mut().zip(&trials) {
             lane_forces[0].clone_from(trial.a0);
         }

@@ -44,10 +44,9 @@ pub use driver::{
 pub trait Vector: Clone {
     /// A vector of zeros of the same length.
     fn zeros_like(&self) -> Self;
-    /// `L` rows of `S` vectors of zeros of the same length.
-    fn zeros_table<const S: usize, const L: usize>(&self) -> [[Self; S]; L] {
-        std::array::from_fn(|_| std::array::from_fn(|_| self.zeros_like()))
-    }
+    /// `L` rows of `S` slots for vectors of this length, each replaced whole before a
+    /// nonzero weight reads it (the stage accelerations of `Dprkn12::steps`).
+    fn stage_table<const S: usize, const L: usize>(&self) -> [[Self; S]; L];
     /// The components.
     fn components(&self) -> &[f64];
     /// The components, mutable.
@@ -64,7 +63,7 @@ impl<const D: usize> Vector for [f64; D] {
     /// `Dprkn12::steps` elsewhere and copied it (`memcpy`) three times: 7.3% of the collisions
     /// stage's time in `perf` before this (docs/benchmarks.md).
     #[inline(always)]
-    fn zeros_table<const S: usize, const L: usize>(&self) -> [[Self; S]; L] {
+    fn stage_table<const S: usize, const L: usize>(&self) -> [[Self; S]; L] {
         [[[0.0; D]; S]; L]
     }
 
@@ -82,6 +81,13 @@ impl<const D: usize> Vector for [f64; D] {
 impl Vector for Vec<f64> {
     fn zeros_like(&self) -> Self {
         vec![0.0; self.len()]
+    }
+
+    /// Empty slots, no allocation: a stage's position reads the slots not yet filled with
+    /// zero couplings only, over no components (as zeros would add nothing); zeroed slots
+    /// were 17 allocations a step, thrown away.
+    fn stage_table<const S: usize, const L: usize>(&self) -> [[Self; S]; L] {
+        std::array::from_fn(|_| std::array::from_fn(|_| Vec::new()))
     }
 
     fn components(&self) -> &[f64] {
