@@ -5,7 +5,9 @@
 //! explicit Runge-Kutta(-Nystrom) pair and returns the propagated solution together with the
 //! pair's error estimate, already reduced to one RMS number in units of the caller's scales.
 //! The state is any [`Vector`]: fixed-size arrays on the stack for three-body scenes (no
-//! allocation, fully unrolled), `Vec<f64>` for systems sized at run time (the ring).
+//! allocation, fully unrolled), [`StackVector`] for systems sized at run time up to a bound
+//! (a ring's clusters: no allocation, one compiled integrator for every size), `Vec<f64>`
+//! beyond it (the whole ring).
 //!
 //! The driver ([`drive`], `driver.rs`) integrates systems of gaps (ordered particles: the
 //! three-body scene, the ring and its clusters) over a duration or until the caller stops it;
@@ -40,7 +42,7 @@ pub use driver::{
     AfterStep, Drive, Ending, ErrorScales, Span, Trajectory, Work, drive, drive_lanes,
 };
 
-/// A state vector of `len` components: `[f64; D]` or `Vec<f64>`.
+/// A state vector of `len` components: `[f64; D]`, [`StackVector`] or `Vec<f64>`.
 pub trait Vector: Clone {
     /// A vector of zeros of the same length.
     fn zeros_like(&self) -> Self;
@@ -96,6 +98,52 @@ impl Vector for Vec<f64> {
 
     fn components_mut(&mut self) -> &mut [f64] {
         self
+    }
+}
+
+/// Up to `C` components, their number set at run time, on the stack: the state of a ring's
+/// clusters of a few to a dozen particles. `Vec<f64>` allocated every stage position and
+/// acceleration (about 50 allocations a step), and an array per size compiled the
+/// integrator once per size (docs/benchmarks.md).
+#[derive(Clone, Copy, Debug)]
+pub struct StackVector<const C: usize> {
+    len: usize,
+    values: [f64; C],
+}
+
+impl<const C: usize> StackVector<C> {
+    /// The components `values`, or `None` when there are more than `C`.
+    pub fn from_slice(values: &[f64]) -> Option<Self> {
+        let mut vector = StackVector {
+            len: values.len(),
+            values: [0.0; C],
+        };
+        vector
+            .values
+            .get_mut(..values.len())?
+            .copy_from_slice(values);
+        Some(vector)
+    }
+}
+
+impl<const C: usize> Vector for StackVector<C> {
+    fn zeros_like(&self) -> Self {
+        StackVector {
+            len: self.len,
+            values: [0.0; C],
+        }
+    }
+
+    fn stage_table<const S: usize, const L: usize>(&self) -> [[Self; S]; L] {
+        [[self.zeros_like(); S]; L]
+    }
+
+    fn components(&self) -> &[f64] {
+        &self.values[..self.len]
+    }
+
+    fn components_mut(&mut self) -> &mut [f64] {
+        &mut self.values[..self.len]
     }
 }
 

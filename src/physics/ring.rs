@@ -55,6 +55,7 @@ const SMALL_HALF_ANGLE: f64 = 1.0 / 16.0;
 /// (`x ~ 1e-4`), where libm's general `sin` and `cos` took a third of the
 /// molecular dynamics' time (docs/benchmarks.md): there the series through
 /// `x^9` and `x^8`, exact to rounding; elsewhere libm.
+#[inline]
 fn half_angle(x: f64) -> (f64, f64) {
     if x.abs() >= SMALL_HALF_ANGLE {
         return libm::sincos(x);
@@ -88,6 +89,7 @@ impl<P: PairPotential> RingForces<P> {
     /// Force along the ring that the leading particle of a pair `arc` apart
     /// exerts on the trailing one, negated: `f(d) cos(pi s / C)` with `d` the
     /// chord (`kT / l`).
+    #[inline]
     pub fn push(&self, arc: f64) -> f64 {
         let (sine, cosine) = half_angle(arc * (PI / self.circumference));
         self.potential.force(self.circumference / PI * sine) * cosine

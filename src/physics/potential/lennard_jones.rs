@@ -22,6 +22,7 @@ impl PairPotential for LennardJones {
         let inverse6 = x.recip().powi(6);
         (self.theta * inverse6 - 1.0) * inverse6
     }
+    #[inline]
     fn force(&self, x: f64) -> f64 {
         let inverse = x.recip();
         let inverse6 = inverse.powi(6);
